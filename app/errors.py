@@ -1,0 +1,40 @@
+"""Error types for mistakes a user can make; each renders as one clear line."""
+
+from __future__ import annotations
+
+
+class BosunError(Exception):
+    """Base class of user-facing errors: the CLI prints ``str(err)`` and exits 2."""
+
+
+class RobotXmlError(BosunError):
+    """A robot file that cannot be used: syntax, schema or a value out of range.
+
+    Parameters
+    ----------
+    path : str
+        The file (or ``"<string>"`` for text that came from no file).
+    line : int or None
+        1-based line of the offending element, when known.
+    message : str
+        What is wrong, naming the element and attribute.
+    """
+
+    def __init__(self, path: str, line: int | None, message: str) -> None:
+        self.path = path
+        self.line = line
+        self.message = message
+        where = f"{path}:{line}" if line else path
+        super().__init__(f"{where}: {message}")
+
+
+class RobotNotFoundError(BosunError):
+    """A robot name or path that names no robot file."""
+
+
+class RobotTypeError(BosunError):
+    """A robot whose mechanism type has no model for the requested operation."""
+
+
+class JointInputError(BosunError):
+    """Joint values that do not fit the robot: wrong count or not finite."""

@@ -1,0 +1,168 @@
+"""Serial chains from standard DH tables: forward kinematics and the geometric Jacobian.
+
+The DH variables are an affine function of the user's joint vector q:
+
+    θ = θ₀ + M_θ q,    d = d₀ + M_d q,
+
+where row i of M_θ (or M_d) carries the joint's sign and its coupling factors (robot
+XML format, ``robots/README.md``).  The geometric Jacobian with respect to q is
+therefore the chain rule of the Jacobian with respect to (θ, d):
+
+    J_q = J_θ M_θ + J_d M_d,
+
+with the columns of TAC paper eq. (47): [z_{i-1} × (o_n − o_{i-1}); z_{i-1}] for θ_i
+and [z_{i-1}; 0] for d_i.  Every function accepts a batch of configurations
+q with shape (..., n) so that a whole GA population is evaluated in one call.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.errors import JointInputError
+from app.geometry import dh_transform
+from app.models.spec import RobotSpec
+
+
+class SerialRobot:
+    """Kinematic model of a serial manipulator.
+
+    Parameters
+    ----------
+    spec : RobotSpec
+        A spec of type ``serial``.
+
+    Attributes
+    ----------
+    name : str
+    n_joints : int
+    lower, upper : ndarray, shape (n,)
+        Joint position limits [rad or m].
+    speed : ndarray, shape (n,)
+        Joint speed limits.
+    accel : ndarray, shape (n,)
+        Joint acceleration limits; ``inf`` where the file gives none.
+    """
+
+    def __init__(self, spec: RobotSpec) -> None:
+        if spec.serial is None:
+            raise TypeError(f"robot {spec.name} is of type {spec.type}, not serial")
+        self.spec = spec
+        s = spec.serial
+        self.name = spec.name
+        self.links = s.links
+        self.joints = s.joints
+        self.n_links = len(s.links)
+        self.n_joints = len(s.joints)
+        self.joint_names = [j.name for j in s.joints]
+        self.joint_kinds = [j.kind for j in s.joints]
+        self.lower = np.array([j.lower for j in s.joints])
+        self.upper = np.array([j.upper for j in s.joints])
+        self.speed = np.array([j.speed for j in s.joints])
+        self.accel = np.array([np.inf if j.accel is None else j.accel for j in s.joints])
+        self.T_world_base = np.array(s.T_world_base)
+        self.T_flange_tool = np.array(s.T_flange_tool)
+
+        self._theta0 = np.array([link.theta for link in s.links])
+        self._d0 = np.array([link.d for link in s.links])
+        self._a = np.array([link.a for link in s.links])
+        self._alpha = np.array([link.alpha for link in s.links])
+        self._M_theta = np.zeros((self.n_links, self.n_joints))
+        self._M_d = np.zeros((self.n_links, self.n_joints))
+        for j, joint in enumerate(s.joints):
+            M = self._M_theta if joint.kind == "revolute" else self._M_d
+            offset = self._theta0 if joint.kind == "revolute" else self._d0
+            M[joint.link, j] += joint.sign
+            offset[joint.link] += joint.offset
+            for k, factor in joint.coupling:
+                M[joint.link, k] += factor
+
+    # ------------------------------------------------------------------ input
+    def check_q(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Validate one configuration: n finite numbers. Returns a float array.
+
+        Raises
+        ------
+        JointInputError
+            Wrong count or a value that is NaN or infinite.
+        """
+        arr = np.asarray(q, dtype=float).reshape(-1)
+        if arr.size != self.n_joints:
+            raise JointInputError(
+                f"{self.name} has {self.n_joints} joints ({', '.join(self.joint_names)}); got {arr.size} value(s)"
+            )
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            names = ", ".join(self.joint_names[i] for i in np.flatnonzero(bad))
+            raise JointInputError(f"{self.name}: joint value for {names} is not a finite number")
+        return arr
+
+    def within_limits(self, q: ArrayLike, tol: float = 1e-12) -> NDArray[np.bool_]:
+        """Per-joint flag: is q inside [lower, upper] (with a tolerance)? Shape of q."""
+        q = np.asarray(q, dtype=float)
+        return (q >= self.lower - tol) & (q <= self.upper + tol)
+
+    def clip(self, q: ArrayLike) -> NDArray[np.float64]:
+        """q clipped into the joint limits."""
+        return np.clip(np.asarray(q, dtype=float), self.lower, self.upper)
+
+    # ------------------------------------------------------------ kinematics
+    def dh_variables(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """θ and d of every link, shapes (..., n_links), from q with shape (..., n_joints)."""
+        q = np.asarray(q, dtype=float)
+        theta = self._theta0 + q @ self._M_theta.T
+        d = self._d0 + q @ self._M_d.T
+        return theta, d
+
+    def frames(self, q: ArrayLike) -> NDArray[np.float64]:
+        """World poses of every DH frame and of the tool.
+
+        Returns
+        -------
+        ndarray, shape (..., n_links + 2, 4, 4)
+            Index 0 is frame 0 (the base, ``T_world_base``), index i the frame after
+            link i (TAC paper eq. 39, premultiplied by the base transform), and the
+            last index the tool frame (flange · ``T_flange_tool``).
+        """
+        theta, d = self.dh_variables(q)
+        A = dh_transform(theta, d, self._a, self._alpha)  # (..., L, 4, 4)
+        batch = A.shape[:-3]
+        out = np.empty(batch + (self.n_links + 2, 4, 4))
+        T = np.broadcast_to(self.T_world_base, batch + (4, 4))
+        out[..., 0, :, :] = T
+        for i in range(self.n_links):
+            T = T @ A[..., i, :, :]
+            out[..., i + 1, :, :] = T
+        out[..., -1, :, :] = T @ self.T_flange_tool
+        return out
+
+    def fk(self, q: ArrayLike) -> NDArray[np.float64]:
+        """World pose of the tool, shape (..., 4, 4)."""
+        return self.frames(q)[..., -1, :, :]
+
+    def position(self, q: ArrayLike) -> NDArray[np.float64]:
+        """World position of the tool point [m], shape (..., 3)."""
+        return self.fk(q)[..., :3, 3]
+
+    def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Geometric Jacobian of the tool with respect to q, in the world frame.
+
+        Rows are (v_x, v_y, v_z, ω_x, ω_y, ω_z): ξ = J q̇ (TAC paper eqs. 45–47),
+        with prismatic joints and couplings handled through M_θ and M_d.
+
+        Returns
+        -------
+        ndarray, shape (..., 6, n_joints)
+        """
+        F = self.frames(q)
+        z = F[..., :-2, :3, 2]  # z_{i-1} for links i = 1..L, shape (..., L, 3)
+        o = F[..., :-2, :3, 3]  # o_{i-1}
+        o_tool = F[..., -1:, :3, 3]
+        J_theta = np.concatenate([np.cross(z, o_tool - o), z], axis=-1)  # (..., L, 6)
+        J_d = np.concatenate([z, np.zeros_like(z)], axis=-1)
+        J = np.swapaxes(J_theta, -1, -2) @ self._M_theta + np.swapaxes(J_d, -1, -2) @ self._M_d
+        return J
+
+    def __repr__(self) -> str:
+        return f"SerialRobot({self.name!r}, joints={self.joint_names})"

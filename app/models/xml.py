@@ -1,0 +1,304 @@
+"""Parse robot XML text into a :class:`~app.models.spec.RobotSpec`.
+
+The text is checked against ``robots/robot.xsd`` (lxml's XML Schema validator), then
+for what XSD 1.0 cannot express: finite numbers, min < max, unique and known joint
+names, the mechanism element matching ``type``.  Every failure raises
+:class:`~app.errors.RobotXmlError` naming the file, the line and what is wrong.
+The format is documented in ``robots/README.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+from app.errors import RobotXmlError
+from app.geometry import euler_zyx_to_matrix, homogeneous
+from app.models.spec import (
+    STEWART_DOFS,
+    DeltaSpec,
+    JointSpec,
+    LinkSpec,
+    RobotSpec,
+    SerialSpec,
+    StewartSpec,
+)
+
+SCHEMA_PATH = Path(__file__).resolve().parents[2] / "robots" / "robot.xsd"
+MAX_FILE_BYTES = 1_000_000
+
+
+@lru_cache(maxsize=1)
+def _schema() -> etree.XMLSchema:
+    return etree.XMLSchema(etree.parse(str(SCHEMA_PATH)))
+
+
+def parse_robot_file(path: str | Path) -> RobotSpec:
+    """Read and parse a robot file; see :func:`parse_robot_xml`."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise RobotXmlError(str(path), None, f"cannot read file: {err.strerror or err}") from None
+    return parse_robot_xml(data, str(path))
+
+
+def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
+    """Parse and validate robot XML.
+
+    Parameters
+    ----------
+    text : str or bytes
+        The XML document.
+    path : str
+        Name used in error messages and stored as ``RobotSpec.path``.
+
+    Returns
+    -------
+    RobotSpec
+        All lengths in metres, all angles in radians.
+
+    Raises
+    ------
+    RobotXmlError
+        For a syntax error, a schema violation or a value that cannot be used.
+    """
+    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
+    if len(data) > MAX_FILE_BYTES:
+        raise RobotXmlError(path, None, f"file is {len(data)} bytes; a robot file is at most {MAX_FILE_BYTES}")
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, remove_comments=True, huge_tree=False)
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as err:
+        raise RobotXmlError(path, err.lineno, f"XML syntax error: {_strip_location(err.msg)}") from None
+    schema = _schema()
+    if not schema.validate(root):
+        first = schema.error_log[0]
+        raise RobotXmlError(path, first.line, f"schema: {first.message}")
+    return _Reader(path, root).robot()
+
+
+def _strip_location(msg: str) -> str:
+    # lxml appends ", line N, column M" to syntax messages; the line is reported already.
+    head, sep, _ = msg.rpartition(", line ")
+    return head if sep else msg
+
+
+class _Reader:
+    """Turns a schema-valid element tree into a spec, converting units."""
+
+    def __init__(self, path: str, root: etree._Element) -> None:
+        self.path = path
+        self.root = root
+        self.angle_scale = math.pi / 180.0 if root.get("angle_unit") == "deg" else 1.0
+
+    # ------------------------------------------------------------------ helpers
+    def fail(self, el: etree._Element, message: str) -> RobotXmlError:
+        return RobotXmlError(self.path, el.sourceline, message)
+
+    def num(self, el: etree._Element, attr: str, default: float | None = None, angle: bool = False) -> float:
+        raw = el.get(attr)
+        if raw is None:
+            if default is None:
+                raise self.fail(el, f"<{el.tag}> needs attribute '{attr}'")
+            value = default
+        else:
+            value = float(raw)  # the schema guarantees an xs:double
+            if not math.isfinite(value):
+                raise self.fail(el, f"<{el.tag}> attribute '{attr}' is {raw.strip()}; give a finite number")
+        return value * self.angle_scale if angle else value
+
+    def vec3(self, el: etree._Element, attr: str, angle: bool = False) -> np.ndarray:
+        raw = el.get(attr, "0 0 0")
+        v = np.array([float(x) for x in raw.split()])
+        if not np.all(np.isfinite(v)):
+            raise self.fail(el, f"<{el.tag}> attribute '{attr}' has a value that is not finite: '{raw}'")
+        return v * self.angle_scale if angle else v
+
+    def frame(self, el: etree._Element | None) -> np.ndarray:
+        if el is None:
+            return np.eye(4)
+        return homogeneous(euler_zyx_to_matrix(self.vec3(el, "rpy", angle=True)), self.vec3(el, "xyz"))
+
+    def ordered(self, el: etree._Element, lo: float, hi: float, what: str, strict: bool = True) -> None:
+        if lo > hi or (strict and lo == hi):
+            raise self.fail(el, f"{what}: min ({lo:g}) must be less than max ({hi:g})")
+
+    def limits(self, el: etree._Element, angular: bool, what: str) -> tuple[float, float, float, float | None]:
+        lo = self.num(el, "min", angle=angular)
+        hi = self.num(el, "max", angle=angular)
+        # Compare in file units so the message shows the numbers the user wrote.
+        self.ordered(el, self.num(el, "min"), self.num(el, "max"), what)
+        speed = self.num(el, "speed", angle=angular)
+        accel = self.num(el, "accel", angle=angular) if el.get("accel") is not None else None
+        return lo, hi, speed, accel
+
+    # ------------------------------------------------------------------ robot
+    def robot(self) -> RobotSpec:
+        root = self.root
+        kind = root.get("type")
+        mech = root.find(kind)
+        if mech is None:
+            other = next(el.tag for el in root if el.tag in ("serial", "delta", "stewart"))
+            raise self.fail(root.find(other), f"robot type is '{kind}' but the mechanism element is <{other}>")
+        common = dict(
+            name=root.get("name"),
+            type=kind,
+            description=" ".join((root.findtext("description") or "").split()),
+            source=" ".join((root.findtext("source") or "").split()),
+            assumptions=" ".join((root.findtext("assumptions") or "").split()),
+            path=self.path,
+        )
+        if kind == "serial":
+            return RobotSpec(**common, serial=self.serial(mech))
+        if kind == "delta":
+            return RobotSpec(**common, delta=self.delta(mech))
+        return RobotSpec(**common, stewart=self.stewart(mech))
+
+    # ------------------------------------------------------------------ serial
+    def serial(self, el: etree._Element) -> SerialSpec:
+        links: list[LinkSpec] = []
+        joints: list[dict] = []
+        for i, link_el in enumerate(el.findall("link")):
+            kind = link_el.get("joint")
+            name = link_el.get("name") or str(i + 1)
+            dh = link_el.find("dh")
+            joint_el = link_el.find("joint")
+            variable = {"revolute": "theta", "prismatic": "d"}.get(kind)
+            if variable and dh.get(variable) is not None:
+                raise self.fail(
+                    dh,
+                    f"link {name}: a {kind} joint drives '{variable}'; give its constant part as "
+                    f"<joint offset=...> instead of <dh {variable}=...>",
+                )
+            if kind == "fixed" and joint_el is not None:
+                raise self.fail(joint_el, f"link {name}: a fixed link has no <joint>")
+            if kind != "fixed" and joint_el is None:
+                raise self.fail(link_el, f"link {name}: a {kind} link needs a <joint> with limits")
+            joint_index = None
+            if joint_el is not None:
+                joint_index = len(joints)
+                joints.append(self.joint(joint_el, kind, i))
+            links.append(
+                LinkSpec(
+                    name=name,
+                    kind=kind,
+                    theta=self.num(dh, "theta", 0.0, angle=True),
+                    d=self.num(dh, "d", 0.0),
+                    a=self.num(dh, "a"),
+                    alpha=self.num(dh, "alpha", angle=True),
+                    joint=joint_index,
+                )
+            )
+        if not joints:
+            raise self.fail(el, "a serial robot needs at least one revolute or prismatic link")
+        names = [j["name"] for j in joints]
+        for j in joints:
+            if names.count(j["name"]) > 1:
+                raise self.fail(j["element"], f"joint name '{j['name']}' is used more than once")
+        joint_specs = []
+        for j in joints:
+            coupling = []
+            for c_el in j["element"].findall("coupling"):
+                other = c_el.get("joint")
+                if other not in names:
+                    raise self.fail(
+                        c_el, f"joint {j['name']}: coupling names unknown joint '{other}' (joints: {', '.join(names)})"
+                    )
+                if other == j["name"]:
+                    raise self.fail(c_el, f"joint {j['name']}: coupling to itself; use sign and offset instead")
+                coupling.append((names.index(other), self.num(c_el, "factor")))
+            del j["element"]
+            joint_specs.append(JointSpec(**j, coupling=tuple(coupling)))
+        return SerialSpec(
+            links=tuple(links),
+            joints=tuple(joint_specs),
+            T_world_base=self.frame(el.find("base")),
+            T_flange_tool=self.frame(el.find("tool")),
+        )
+
+    def joint(self, el: etree._Element, kind: str, link_index: int) -> dict:
+        name = el.get("name")
+        angular = kind == "revolute"
+        lo, hi, speed, accel = self.limits(el.find("limits"), angular, f"joint {name} limits")
+        return dict(
+            element=el,
+            name=name,
+            kind=kind,
+            link=link_index,
+            lower=lo,
+            upper=hi,
+            speed=speed,
+            accel=accel,
+            sign=float(el.get("sign", "1")),
+            offset=self.num(el, "offset", 0.0, angle=angular),
+        )
+
+    # ------------------------------------------------------------------ delta
+    def delta(self, el: etree._Element) -> DeltaSpec:
+        arms = el.findall("arm")
+        indices = [int(a.get("index")) for a in arms]
+        if sorted(indices) != [1, 2, 3]:
+            raise self.fail(arms[0], f"delta arms must have index 1, 2 and 3 once each, got {indices}")
+        rotations = np.zeros(3)
+        for a in arms:
+            rotations[int(a.get("index")) - 1] = self.num(a, "rot_x", angle=True)
+        lo, hi, speed, accel = self.limits(el.find("limits"), True, "delta arm limits")
+        motor = el.find("motor")
+        pid = el.find("pid")
+        spec = DeltaSpec(
+            l_k=self.num(el, "l_k"),
+            l_a=self.num(el, "l_a"),
+            l_r=self.num(el, "l_r"),
+            l_p=self.num(el, "l_p"),
+            arm_rotations=rotations,
+            alpha_min=lo,
+            alpha_max=hi,
+            speed=speed,
+            accel=accel,
+            motor_time_constant=self.num(motor, "time_constant") if motor is not None else None,
+            motor_gain=self.num(motor, "gain") if motor is not None else None,
+            pid=(self.num(pid, "kp"), self.num(pid, "ki"), self.num(pid, "kd")) if pid is not None else None,
+        )
+        if spec.l_r <= abs(spec.l_p - spec.l_k):
+            raise self.fail(
+                el, f"delta rod l_r ({spec.l_r:g} m) must be longer than |l_p - l_k| ({abs(spec.l_p - spec.l_k):g} m)"
+            )
+        return spec
+
+    # ------------------------------------------------------------------ stewart
+    def stewart(self, el: etree._Element) -> StewartSpec:
+        base = np.array([self.vec3(p, "xyz") for p in el.find("base_joints").findall("point")])
+        plat = np.array([self.vec3(p, "xyz") for p in el.find("platform_joints").findall("point")])
+        legs = el.find("legs")
+        leg_min, leg_max = self.num(legs, "min_length"), self.num(legs, "max_length")
+        self.ordered(legs, leg_min, leg_max, "leg length")
+        dofs = {}
+        for d in el.find("pose_limits").findall("dof"):
+            name = d.get("name")
+            if name in dofs:
+                raise self.fail(d, f"pose limit for '{name}' is given twice")
+            angular = name in ("roll", "pitch", "yaw")
+            lo, hi, speed, accel = self.limits(d, angular, f"{name} limits")
+            if not lo <= 0.0 <= hi:
+                raise self.fail(
+                    d, f"{name} limits [{self.num(d, 'min'):g}, {self.num(d, 'max'):g}] must contain the neutral pose 0"
+                )
+            dofs[name] = (lo, hi, speed, accel)
+        rows = np.array([dofs[n] for n in STEWART_DOFS], dtype=float)
+        return StewartSpec(
+            base_joints_n=base,
+            platform_joints_b=plat,
+            leg_min=leg_min,
+            leg_max=leg_max,
+            leg_speed=self.num(legs, "speed"),
+            leg_accel=self.num(legs, "accel") if legs.get("accel") is not None else None,
+            pose_min=rows[:, 0],
+            pose_max=rows[:, 1],
+            speed_max=rows[:, 2],
+            accel_max=rows[:, 3],
+        )

@@ -1,0 +1,137 @@
+"""The bosun command line: output, JSON, and one-line errors with exit status 2."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from tests.test_robot_xml import GOOD
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_robots_table(capsys):
+    code, out, err = run(capsys, "robots")
+    assert code == 0 and err == ""
+    assert "comau_smart5_3dof" in out and "stewart" in out and "9 robot(s)" in out
+
+
+def test_robots_json(capsys):
+    code, out, _ = run(capsys, "robots", "--json")
+    assert code == 0
+    data = json.loads(out)
+    by_name = {r["name"]: r for r in data["robots"]}
+    assert by_name["kuka_youbot"]["dof"] == 5 and by_name["tac_delta_head"]["type"] == "delta"
+
+
+def test_no_command_lists_robots(capsys):
+    code, out, _ = run(capsys)
+    assert code == 0 and "offshore_crane" in out
+
+
+def test_fk_comau_json_done_when(capsys):
+    # Issue acceptance: bosun fk comau_smart5_3dof --deg --q 0 20 -60 --json prints the tool point.
+    code, out, _ = run(capsys, "fk", "comau_smart5_3dof", "--deg", "--q", "0", "20", "-60", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["robot"] == "comau_smart5_3dof"
+    np.testing.assert_allclose(data["q"], np.deg2rad([0, 20, -60]))
+    q2, q3 = np.deg2rad([20, -60])
+    L = 1.492 + 0.210 + 0.567
+    r = 0.350 - L * np.sin(q3) - 0.250 * np.cos(q3) + 1.160 * np.sin(q2)  # Motion-Lab eq. (3)
+    z = 0.830 + L * np.cos(q3) + 1.160 * np.cos(q2) - 0.250 * np.sin(q3)
+    np.testing.assert_allclose(data["position"], [r, 0, z], atol=1e-12)
+    assert np.asarray(data["rotation"]).shape == (3, 3) and data["within_limits"] is True
+
+
+def test_fk_text_and_limit_warning(capsys):
+    code, out, err = run(capsys, "fk", "comau_smart5_3dof", "--deg", "--q", "0", "20", "0")
+    assert code == 0 and "position [m]" in out and "NO" in out
+    assert "q3 outside the joint limits" in err
+
+
+def test_prismatic_values_stay_in_metres_with_deg(capsys):
+    code, out, _ = run(capsys, "fk", "scara", "--deg", "--q", "0", "0", "0.1", "0", "--json")
+    assert code == 0
+    data = json.loads(out)
+    np.testing.assert_allclose(data["position"], [0.6, 0, 0.387 - 0.1], atol=1e-12)
+
+
+def test_jacobian_json(capsys):
+    code, out, _ = run(capsys, "jacobian", "offshore_crane", "--deg", "--q", "-90", "45", "-45", "--json")
+    data = json.loads(out)
+    J = np.asarray(data["matrix"])
+    assert code == 0 and J.shape == (6, 3) and data["columns"] == ["beta0", "beta1", "beta2"]
+    assert data["position_condition"] > 1
+
+
+def test_jacobian_text(capsys):
+    code, out, _ = run(capsys, "jacobian", "scara", "--q", "0", "0.5", "0.1", "0")
+    assert code == 0 and "condition" in out and "-0.00000" not in out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["fk", "nope", "--q", "1"], "unknown robot 'nope'"),
+        (["fk", "scara", "--q", "1", "2"], "scara has 4 joints (j1, j2, j3, j4); got 2 value(s)"),
+        (["fk", "scara", "--q", "1", "abc", "0", "0"], "argument --q: 'abc' is not a number"),
+        (["fk", "scara", "--q", "nan", "0", "0", "0"], "argument --q: 'nan' is not a finite number"),
+        (["jacobian", "scara", "--q", "inf", "0", "0", "0"], "'inf' is not a finite number"),
+        (["fk", "scara"], "the following arguments are required: --q"),
+        (["fk", "tac_delta_head", "--q", "0", "0", "0"], "no delta kinematics are available yet"),
+        (["fk", "missing/robot.xml", "--q", "0"], "robot file not found: missing/robot.xml"),
+        (["frobnicate"], "invalid choice: 'frobnicate'"),
+    ],
+)
+def test_errors_are_one_line_exit_2(capsys, argv, message):
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse usage errors
+        code = exc.code
+    assert code == 2
+    _, err = capsys.readouterr()
+    assert message in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_bad_xml_file_names_file_and_line(capsys, tmp_path):
+    f = tmp_path / "arm.xml"
+    f.write_text(GOOD.replace('min="-90" max="90"', 'min="90" max="-90"'))
+    code, _, err = run(capsys, "fk", str(f), "--q", "0", "0")
+    assert code == 2
+    assert err.strip() == f"bosun: error: {f}:9: joint q1 limits: min (90) must be less than max (-90)"
+
+
+def test_invalid_library_file_is_reported_not_fatal(capsys, tmp_path, monkeypatch):
+    (tmp_path / "good.xml").write_text(GOOD.replace('name="two_link"', 'name="good"'))
+    (tmp_path / "broken.xml").write_text("<robot>")
+    monkeypatch.setenv("BOSUN_ROBOTS_DIR", str(tmp_path))
+    code, out, err = run(capsys, "robots")
+    assert code == 2 and "good" in out and "broken.xml:1: XML syntax error" in err
+
+
+@pytest.mark.parametrize("entry", [["bosun"], [sys.executable, "-m", "app"]], ids=["console-script", "python-m-app"])
+def test_entry_points_in_a_real_process(entry):
+    exe = os.path.join(os.path.dirname(sys.executable), "bosun")
+    cmd = [exe, *entry[1:]] if entry == ["bosun"] else entry
+    ok = subprocess.run(
+        [*cmd, "fk", "comau_smart5_3dof", "--deg", "--q", "0", "20", "-60", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(ok.stdout)["position"][0] == pytest.approx(2.5868, abs=1e-4)
+    bad = subprocess.run(
+        [*cmd, "fk", "comau_smart5_3dof", "--q", "0", "x", "0"], capture_output=True, text=True, timeout=60
+    )
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and "'x' is not a number" in bad.stderr

@@ -1,0 +1,1 @@
+"""PyQt5 + pyqtgraph operator HMI.  Talks to the engine only through the protocol."""
