@@ -68,6 +68,7 @@ class SerialRobot:
         self._d0 = np.array([link.d for link in s.links])
         self._a = np.array([link.a for link in s.links])
         self._alpha = np.array([link.alpha for link in s.links])
+        self._cos_alpha, self._sin_alpha = np.cos(self._alpha), np.sin(self._alpha)
         self._M_theta = np.zeros((self.n_links, self.n_joints))
         self._M_d = np.zeros((self.n_links, self.n_joints))
         for j, joint in enumerate(s.joints):
@@ -142,8 +143,26 @@ class SerialRobot:
         return self.frames(q)[..., -1, :, :]
 
     def position(self, q: ArrayLike) -> NDArray[np.float64]:
-        """World position of the tool point [m], shape (..., 3)."""
-        return self.fk(q)[..., :3, 3]
+        """World position of the tool point [m], shape (..., 3).
+
+        Same result as ``fk(q)[..., :3, 3]`` but applies the links to the tool point as a
+        vector, last link first (A_i p = Rz(θ_i)(Tz(d_i)(Tx(a_i)(Rx(α_i) p)))), which skips
+        building 4×4 matrices: several times faster on a GA population.
+        """
+        theta, d = self.dh_variables(q)
+        ct, st = np.cos(theta), np.sin(theta)
+        p_tool = self.T_flange_tool[:3, 3]
+        x = np.full(theta.shape[:-1], p_tool[0])
+        y = np.full(theta.shape[:-1], p_tool[1])
+        z = np.full(theta.shape[:-1], p_tool[2])
+        for i in range(self.n_links - 1, -1, -1):
+            ca, sa = self._cos_alpha[i], self._sin_alpha[i]
+            y, z = ca * y - sa * z, sa * y + ca * z + d[..., i]
+            x = x + self._a[i]
+            c, s = ct[..., i], st[..., i]
+            x, y = c * x - s * y, s * x + c * y
+        p = np.stack([x, y, z], axis=-1)
+        return p @ self.T_world_base[:3, :3].T + self.T_world_base[:3, 3]
 
     def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
         """Geometric Jacobian of the tool with respect to q, in the world frame.

@@ -1,0 +1,209 @@
+"""Damped-least-squares Jacobian solver with joint-limit clamping and limit avoidance.
+
+Step (Wampler 1986; Nakamura & Hanafusa 1986; Maciejewski & Klein 1988 for the damping):
+
+    Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e  +  (I − J⁺J) (−k ∇H(q)),
+
+with the damping growing only near a singularity,
+λ² = λ_max² (1 − (σ_min/ε)²) when σ_min < ε, else 0, where σ_min is the smallest singular
+value of J, and fading with the remaining error, × min(1, (|e|/e_ref)²), so that close to the
+target (where the linearisation is good) the step becomes Gauss–Newton and converges
+quadratically even beside a singularity (Levenberg–Marquardt idea; Sugihara 2011).  Joints at a limit that the step would push further are taken out of the
+active set and the step recomputed (clamping); H(q) = Σ ((q − q_mid)/range)² pulls the
+other joints towards mid-range in the null space (limit avoidance, arms with more joints
+than task rows).  Position only for arms with fewer than 6 joints; arms with 6 or more
+can also be given a target orientation.  The velocity solve uses the same damped inverse:
+θ̇ = J⁺_λ ẋ, clamped so that q + θ̇Δt stays inside the limits and scaled to the speed
+limits.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
+
+
+class JacobianSolver(Solver):
+    """Damped least squares with restarts.
+
+    Parameters
+    ----------
+    robot : SerialRobot
+    tolerance : float
+        Success when the position error is below this [m]; default 1e-4 m.
+    max_iterations : int
+        Iterations per start; default 200.
+    restarts : int
+        Random restarts after the first start fails; default 20 (the time budget may end them sooner).
+    time_budget : float or None
+        Default 0.1 s.
+    """
+
+    name = "jacobian"
+    default_time_budget = 0.1
+
+    def __init__(
+        self,
+        robot,
+        *,
+        time_budget: float | object | None = DEFAULT,
+        rng: np.random.Generator | None = None,
+        tolerance: float = 1e-4,
+        max_iterations: int = 200,
+        restarts: int = 20,
+        limit_avoidance_gain: float = 0.05,
+    ) -> None:
+        super().__init__(robot, time_budget=time_budget, rng=rng)
+        self.tolerance = tolerance
+        self.max_iterations = max_iterations
+        self.restarts = restarts
+        self.k_avoid = limit_avoidance_gain
+        scale = 0.5 * self.box.diagonal
+        self.epsilon = 0.02 * scale  # singular region: σ_min below 2 % of the workspace half-diagonal
+        self.lambda_max = 0.1 * scale
+        self.e_ref = 0.05 * scale
+        self.max_step = np.where(np.array(robot.joint_kinds) == "revolute", 0.3, 0.1 * (robot.upper - robot.lower))
+        self.orientation_weight = scale  # metres per radian when orientation is asked for
+        self._target_R: NDArray[np.float64] | None = None
+
+    # ---------------------------------------------------------------- damped inverse
+    def damped_step(
+        self, J: NDArray[np.float64], e: NDArray[np.float64], q: NDArray[np.float64], avoid: bool = True
+    ) -> NDArray[np.float64]:
+        """One DLS step with active-set clamping at the joint limits."""
+        n = J.shape[1]
+        active = np.ones(n, dtype=bool)
+        lo, hi = self.robot.lower, self.robot.upper
+        dq = np.zeros(n)
+        for _ in range(n + 1):
+            Ja = J * active
+            U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
+            rank_rows = max(1, min(int(active.sum()), J.shape[0]))
+            s_min = s[:rank_rows].min()
+            lam2 = self.lambda_max**2 * (1.0 - (s_min / self.epsilon) ** 2) if s_min < self.epsilon else 0.0
+            lam2 *= min(1.0, float(e @ e) / self.e_ref**2)
+            denom = s**2 + lam2
+            s_inv = np.divide(s, denom, out=np.zeros_like(s), where=denom > 1e-24 * max(s.max(), 1.0) ** 2)
+            J_pinv = (Vt.T * s_inv) @ U.T
+            dq = J_pinv @ e
+            if avoid and self.k_avoid > 0:
+                # -k (span²/2) ∇H with H = Σ((q − q_mid)/span)², projected into the null space of J
+                N = np.eye(n) - J_pinv @ Ja
+                dq += N @ (-self.k_avoid * (q - 0.5 * (lo + hi)) * active)
+            dq *= active
+            # Step limit: keep the linearisation honest.
+            ratio = np.max(np.abs(dq) / self.max_step)
+            if ratio > 1:
+                dq /= ratio
+            pushing_out = ((q <= lo + 1e-12) & (dq < 0)) | ((q >= hi - 1e-12) & (dq > 0))
+            if not (pushing_out & active).any():
+                break
+            active &= ~pushing_out
+        return dq
+
+    # ---------------------------------------------------------------- errors
+    def _task_error(self, q: NDArray[np.float64], x_t: NDArray[np.float64]):
+        T = self.robot.fk(q)
+        J = self.robot.jacobian(q)
+        e_p = x_t - T[:3, 3]
+        if self._target_R is None:
+            return J[:3], e_p, float(np.linalg.norm(e_p))
+        e_o = Rotation.from_matrix(self._target_R @ T[:3, :3].T).as_rotvec()
+        w = self.orientation_weight
+        e = np.r_[e_p, w * e_o]
+        Jw = np.vstack([J[:3], w * J[3:]])
+        return Jw, e, float(np.linalg.norm(e))
+
+    def _descend(self, q: NDArray[np.float64], x_t: NDArray[np.float64], deadline: float):
+        best_q, best_err, iterations = q, math.inf, 0
+        stall = 0
+        while iterations < self.max_iterations:
+            iterations += 1
+            J, e, err = self._task_error(q, x_t)
+            if err < best_err - 1e-12:
+                stall = 0 if err < 0.999 * best_err else stall + 1
+                best_q, best_err = q, err
+            else:
+                stall += 1
+            if err <= self.tolerance or stall > 15 or time.perf_counter() >= deadline:
+                break
+            q = self.robot.clip(q + self.damped_step(J, e, q))
+        return best_q, best_err, iterations
+
+    def _search(self, x_t, q0, deadline) -> SearchOutcome:
+        starts = [q0 if q0 is not None else self.default_q0()]
+        best_q, best_err, total_it = starts[0], math.inf, 0
+        attempt = 0
+        reason = "iteration limit"
+        while True:
+            q, err, it = self._descend(starts[-1], x_t, deadline)
+            total_it += it
+            if err < best_err:
+                best_q, best_err = q, err
+            if best_err <= self.tolerance:
+                reason = "converged"
+                break
+            if time.perf_counter() >= deadline:
+                reason = "time budget spent"
+                break
+            if attempt >= self.restarts:
+                reason = "not reached after restarts (target may be outside the workspace)"
+                break
+            attempt += 1
+            starts.append(self.random_q())
+        return SearchOutcome(
+            q=best_q, iterations=total_it, converged=best_err <= self.tolerance, reason=reason, cost=best_err
+        )
+
+    # ---------------------------------------------------------------- interface
+    def solve_pose(
+        self,
+        target: ArrayLike,
+        rotation: ArrayLike,
+        q0: ArrayLike | None = None,
+        *,
+        time_budget: float | object | None = DEFAULT,
+    ) -> IKResult:
+        """Position and orientation (arms with 6 or more joints): tool rotation R_world_tool (3×3)."""
+        if self.robot.n_joints < 6:
+            raise IKError(f"{self.robot.name} has {self.robot.n_joints} joints; orientation needs 6")
+        R = np.asarray(rotation, dtype=float)
+        if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+            raise IKError("rotation must be a finite 3×3 matrix")
+        U, _, Vt = np.linalg.svd(R)
+        self._target_R = U @ Vt
+        try:
+            return self.solve_position(target, q0, time_budget=time_budget)
+        finally:
+            self._target_R = None
+
+    def solve_velocity(self, q_a, xdot, dt, *, time_budget: float | object | None = DEFAULT) -> IKResult:
+        """θ̇ = J⁺_λ ẋ with the same damped, clamped inverse (eq. 4)."""
+        start = time.perf_counter()
+        q_a = self.check_q0(q_a)
+        if q_a is None:
+            raise IKError("velocity solve needs the actual joint values")
+        v = self.check_target(xdot)
+        if not (dt > 0 and math.isfinite(dt)):
+            raise IKError(f"dt must be a positive number of seconds, got {dt}")
+        J = self.robot.jacobian(q_a)[:3]
+        dq = self.damped_step(J, v * dt, q_a, avoid=False)
+        q_new = self.robot.clip(q_a + dq)
+        qdot = self.limit_speed((q_new - q_a) / dt)
+        x_t = self.robot.position(q_a) + v * dt
+        q_next = self.robot.clip(q_a + qdot * dt)
+        miss = float(np.linalg.norm(self.robot.position(q_next) - x_t))
+        ok = miss <= 0.1 * float(np.linalg.norm(v)) * dt + self.tolerance
+        outcome = SearchOutcome(
+            q=q_next,
+            iterations=1,
+            converged=ok,
+            reason="damped least squares step" if ok else "step limited by limits or singularity",
+        )
+        return self._result(x_t, outcome, start, qdot=qdot)
