@@ -8,8 +8,9 @@ with the damping growing only near a singularity,
 λ² = λ_max² (1 − (σ_min/ε)²) when σ_min < ε, else 0, where σ_min is the smallest singular
 value of J, and fading with the remaining error, × min(1, (|e|/e_ref)²), so that close to the
 target (where the linearisation is good) the step becomes Gauss–Newton and converges
-quadratically even beside a singularity (Levenberg–Marquardt idea; Sugihara 2011).  Joints at a limit that the step would push further are taken out of the
-active set and the step recomputed (clamping); H(q) = Σ ((q − q_mid)/range)² pulls the
+quadratically even beside a singularity (Levenberg–Marquardt idea; Sugihara 2011).
+Joints at a limit that the step would push further are taken out of the active set and
+the step recomputed (clamping); H(q) = Σ ((q − q_mid)/range)² pulls the
 other joints towards mid-range in the null space (limit avoidance, arms with more joints
 than task rows).  Position only for arms with fewer than 6 joints; arms with 6 or more
 can also be given a target orientation.  The velocity solve uses the same damped inverse:
