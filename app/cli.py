@@ -13,6 +13,7 @@ import math
 import shutil
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
@@ -38,6 +39,13 @@ def _finite_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"'{text}' is not a finite number")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = _finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"'{text}' must be positive")
     return value
 
 
@@ -203,6 +211,197 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     return 0
 
 
+def _progress_bar(desc: str):
+    """A tqdm bar on stderr (hidden when stderr is not a terminal) as a progress(done, total) callback."""
+    from tqdm import tqdm
+
+    bar = None
+
+    def update(done: int, total: int) -> None:
+        nonlocal bar
+        if bar is None:
+            bar = tqdm(total=total, desc=desc, unit="target", file=sys.stderr, disable=None, leave=False)
+        bar.n = done
+        bar.refresh()
+        if done >= total:
+            bar.close()
+
+    return update
+
+
+def _solver_options(args: argparse.Namespace) -> dict[str, Any]:
+    opts: dict[str, Any] = {}
+    if getattr(args, "time_budget", None) is not None:
+        opts["time_budget"] = args.time_budget
+    if getattr(args, "elbow", None) is not None:
+        if args.solver != "analytic":
+            raise BosunError("--elbow applies to --solver analytic only")
+        opts["elbow"] = args.elbow
+    return opts
+
+
+def _out_dir(args: argparse.Namespace, kind: str) -> Path:
+    out = Path(args.out) if args.out else Path("out") / f"{kind}_{args.robot_name}_{args.solver}"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise BosunError(f"cannot create output folder {out}: {err.strerror or err}") from None
+    return out
+
+
+def cmd_ik(args: argparse.Namespace) -> int:
+    from app.ik import make_solver
+    from app.models.registry import load_robot
+
+    robot = load_robot(args.robot)
+    solver = make_solver(args.solver, robot, seed=args.seed, **_solver_options(args))
+    q0 = None
+    if args.q0 is not None:
+        q0 = robot.check_q(args.q0)
+        if args.deg:
+            q0 = np.where(np.array(robot.joint_kinds) == "revolute", np.deg2rad(q0), q0)
+    res = solver.solve_position(args.target, q0)
+    joints = _joint_report(robot, res.q)
+    if args.json:
+        _print_json(
+            {
+                "robot": robot.name,
+                "solver": args.solver,
+                "target": list(map(float, args.target)),
+                "joints": joints,
+                **res.to_dict(),
+            }
+        )
+    else:
+        status = "solved" if res.success else "NOT solved"
+        print(f"{robot.name} / {args.solver}: {status} ({res.reason})")
+        x, y, z = (_num(v, 4) for v in res.position)
+        print(f"  reached [m]  x = {x}   y = {y}   z = {z}   error = {res.error:.3g} m")
+        print(f"  {res.iterations} iteration(s) in {res.time_s * 1e3:.1f} ms")
+        print(_table(["joint", "value"], [[j["name"], _show_value(j["value"], j["unit"])] for j in joints]))
+    return 0 if res.success else 1
+
+
+def cmd_analyze(args: argparse.Namespace) -> int:
+    from app.analysis.ik_studies import error_distribution, plot_error_distribution, write_json
+    from app.models.registry import load_robot
+
+    robot = load_robot(args.robot)
+    args.robot_name = robot.name
+    opts = _solver_options(args)
+    from app.ik import make_solver
+
+    make_solver(args.solver, robot, **opts)  # fail fast on a solver that does not apply
+    out = _out_dir(args, "analyze")
+    result = error_distribution(
+        robot,
+        args.solver,
+        args.grid,
+        seed=args.seed,
+        solver_options=opts,
+        progress=_progress_bar(f"{robot.name}/{args.solver}"),
+    )
+    result.write_csv(out / "error_distribution.csv")
+    plot_error_distribution(result, out / "error_distribution.png")
+    summary = result.summary()
+    write_json(summary, out / "summary.json")
+    if args.json:
+        _print_json({**summary, "out": str(out)})
+    else:
+        e = summary["error_m"]
+        print(
+            f"{robot.name} / {args.solver}: {summary['targets']} targets ({args.grid}³), "
+            f"{summary['reachable']} reachable, {summary['success']} solved "
+            f"({summary['success_rate']:.0%}; {summary['success_rate_reachable'] or 0:.0%} of reachable)"
+        )
+        print(f"  error [m]  median {e['median']:.3g}   p95 {e['p95']:.3g}   max {e['max']:.3g}")
+        tm = summary["time_s"]
+        print(f"  time [ms]  median {tm['median'] * 1e3:.3g}   p95 {tm['p95'] * 1e3:.3g}")
+        print(f"  wrote {out}/error_distribution.csv, error_distribution.png, summary.json")
+    return 0
+
+
+def cmd_track(args: argparse.Namespace) -> int:
+    from app.analysis.ik_studies import plot_tracking, track, write_json
+    from app.ik import make_solver
+    from app.models.registry import load_robot
+
+    robot = load_robot(args.robot)
+    args.robot_name = robot.name
+    opts = _solver_options(args)
+    make_solver(args.solver, robot, **opts)
+    out = _out_dir(args, "track")
+    result = track(
+        robot,
+        args.solver,
+        duration=args.duration,
+        dt=args.dt,
+        seed=args.seed,
+        solver_options=opts,
+        progress=_progress_bar(f"{robot.name}/{args.solver}"),
+    )
+    result.write_csv(out / "tracking.csv")
+    plot_tracking(result, out / "tracking.png")
+    summary = result.summary()
+    write_json(summary, out / "summary.json")
+    if args.json:
+        _print_json({**summary, "out": str(out)})
+    else:
+        print(
+            f"{robot.name} / {args.solver}: {summary['samples']} targets over {summary['duration_s']:.1f} s, "
+            f"rms error {summary['rms_error_m']:.3g} m, max {summary['max_error_m']:.3g} m, "
+            f"solved {summary['success_rate']:.0%}"
+        )
+        print(f"  wrote {out}/tracking.csv, tracking.png, summary.json")
+    return 0
+
+
+def _machine() -> str:
+    import os
+    import platform
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), cpu)
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}"
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from app.analysis.ik_studies import bench_ik
+    from app.models.registry import list_robots, load_robot, load_spec
+
+    names = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
+    robots = [load_robot(n) for n in names]
+    rows = bench_ik(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik"))
+    if args.json:
+        _print_json(
+            {"benchmark": "ik", "machine": _machine(), "targets": args.targets, "seed": args.seed, "results": rows}
+        )
+        return 0
+    print(f"bosun bench ik: {args.targets} seeded reachable targets per robot, default time budget 100 ms")
+    print(f"machine: {_machine()}")
+    print(
+        _table(
+            ["robot", "solver", "median [ms]", "p95 [ms]", "success", "median error [m]"],
+            [
+                [
+                    r["robot"],
+                    r["solver"],
+                    f"{r['median_ms']:.2f}",
+                    f"{r['p95_ms']:.2f}",
+                    f"{r['success_rate']:.0%}",
+                    f"{r['median_error_m']:.2e}",
+                ]
+                for r in rows
+            ],
+        )
+    )
+    return 0
+
+
 # ---------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
@@ -233,6 +432,82 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--deg", action="store_true", help="revolute joint values are in degrees")
         p.add_argument("--json", action="store_true", help="machine-readable output")
         p.set_defaults(func=func)
+
+    from app.ik import solver_names
+
+    def add_solver_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("robot", help="robot name from the library or path to an XML file")
+        p.add_argument("--solver", choices=solver_names(), default="ga", help="IK solver (default: ga)")
+        p.add_argument("--seed", type=int, default=0, help="seed of the solver's random generator (default 0)")
+        p.add_argument(
+            "--time-budget",
+            type=_positive_float,
+            default=None,
+            metavar="S",
+            help="time budget of one solve [s] (default: the solver's, 0.1 s)",
+        )
+        p.add_argument(
+            "--elbow",
+            choices=["auto", "up", "down"],
+            default=None,
+            help="branch for --solver analytic (default auto: the valid one nearest the start)",
+        )
+        p.add_argument("--json", action="store_true", help="machine-readable output")
+
+    p = sub.add_parser(
+        "ik",
+        help="inverse kinematics: joint values reaching a tool position",
+        description="Solve one target. Exit 0 when solved, 1 when not (the closest solution is "
+        "printed), 2 on a usage error.",
+    )
+    add_solver_args(p)
+    p.add_argument(
+        "--target",
+        nargs=3,
+        type=_finite_float,
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="tool position in the world frame [m]",
+    )
+    p.add_argument(
+        "--q0",
+        nargs="+",
+        type=_finite_float,
+        default=None,
+        metavar="Q",
+        help="start configuration (rad/m, or degrees with --deg)",
+    )
+    p.add_argument("--deg", action="store_true", help="--q0 revolute values are in degrees")
+    p.set_defaults(func=cmd_ik)
+
+    p = sub.add_parser("analyze", help="error distribution over the grid³ targets of the workspace box (Fig. 5)")
+    add_solver_args(p)
+    p.add_argument(
+        "--grid",
+        type=int,
+        default=8,
+        choices=range(2, 41),
+        metavar="N",
+        help="targets per axis, 2..40 (default 8: 512 targets)",
+    )
+    p.add_argument("--out", default=None, help="output folder (default out/analyze_ROBOT_SOLVER)")
+    p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("track", help="trajectory tracking: X, Y, Z target vs reached (Fig. 4)")
+    add_solver_args(p)
+    p.add_argument("--duration", type=_positive_float, default=20.0, help="path duration [s] (default 20)")
+    p.add_argument("--dt", type=_positive_float, default=0.1, help="time between targets [s] (default 0.1)")
+    p.add_argument("--out", default=None, help="output folder (default out/track_ROBOT_SOLVER)")
+    p.set_defaults(func=cmd_track)
+
+    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik")
+    bench = p.add_subparsers(dest="bench", metavar="WHAT", parser_class=_Parser, required=True)
+    b = bench.add_parser("ik", help="median/p95 solve time and success per robot and solver")
+    b.add_argument("--targets", type=int, default=50, help="seeded reachable targets per robot (default 50)")
+    b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
+    b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench)
     return parser
 
 

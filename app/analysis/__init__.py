@@ -1,0 +1,1 @@
+"""Studies and benchmarks: error distribution, trajectory tracking, speed."""

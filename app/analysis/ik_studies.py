@@ -1,0 +1,404 @@
+"""The two studies of the universal-architecture paper §IV, and the IK benchmark.
+
+* Error distribution (Fig. 5): the n×n×n equally spaced targets of the box enclosing the
+  workspace, each solved; per target the reached point, error, time and success.
+* Trajectory tracking (Fig. 4): a smooth Cartesian path through the workspace followed
+  target by target with one solver instance (the GA keeps its elite between targets).
+* Benchmark: per robot and solver, median and p95 solve time and success rate over a
+  fixed seeded set of reachable targets.
+
+Qt-free; long runs take ``progress(done, total)`` and ``cancelled()`` callbacks so a GUI
+or a terminal progress bar can follow and stop them.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.ik import make_solver
+from app.models.workspace import workspace_box
+
+Progress = Callable[[int, int], None] | None
+Cancelled = Callable[[], bool] | None
+
+
+class _CancelledError(Exception):
+    """Internal signal: the caller asked to stop; never escapes this module."""
+
+
+def _tick(progress: Progress, cancelled: Cancelled, done: int, total: int) -> None:
+    if progress is not None:
+        progress(done, total)
+    if cancelled is not None and cancelled():
+        raise _CancelledError
+
+
+class ReachabilityReference:
+    """Is a target reachable at all?  Damped least squares from 1 + 10 starts gets within 1e-3 of the diagonal.
+
+    A solver-independent reference (a strong local method with restarts), so a study can
+    say how many targets of its grid the robot can reach, whatever solver is studied.
+    """
+
+    def __init__(self, robot, seed: int = 0) -> None:
+        self.solver = make_solver("jacobian", robot, seed=seed, time_budget=None, restarts=10, tolerance=1e-4)
+        self.tol = 1e-3 * self.solver.box.diagonal
+
+    def __call__(self, x: NDArray[np.float64]) -> bool:
+        return self.solver.solve_position(x).error <= self.tol
+
+
+# ----------------------------------------------------------------------------- error distribution
+@dataclass
+class ErrorDistribution:
+    """Result of :func:`error_distribution`; rows are targets."""
+
+    robot: str
+    solver: str
+    grid: int
+    targets: NDArray[np.float64]
+    reached: NDArray[np.float64]
+    error: NDArray[np.float64]
+    time_s: NDArray[np.float64]
+    success: NDArray[np.bool_]
+    reachable: NDArray[np.bool_]
+    box_lower: NDArray[np.float64]
+    box_upper: NDArray[np.float64]
+    complete: bool = True
+
+    def summary(self) -> dict[str, Any]:
+        n = len(self.error)
+        reach = self.reachable
+        return {
+            "robot": self.robot,
+            "solver": self.solver,
+            "grid": self.grid,
+            "targets": n,
+            "complete": self.complete,
+            "reachable": int(reach.sum()),
+            "success": int(self.success.sum()),
+            "success_rate": float(self.success.mean()) if n else 0.0,
+            "success_rate_reachable": float(self.success[reach].mean()) if reach.any() else None,
+            "error_m": _stats(self.error),
+            "error_reachable_m": _stats(self.error[reach]) if reach.any() else None,
+            "time_s": _stats(self.time_s),
+            "box_lower": self.box_lower.tolist(),
+            "box_upper": self.box_upper.tolist(),
+        }
+
+    def write_csv(self, path: Path) -> None:
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(
+                [
+                    "target_x",
+                    "target_y",
+                    "target_z",
+                    "reached_x",
+                    "reached_y",
+                    "reached_z",
+                    "error_m",
+                    "time_s",
+                    "success",
+                    "reachable",
+                ]
+            )
+            for i in range(len(self.error)):
+                w.writerow(
+                    [
+                        *(f"{v:.6f}" for v in self.targets[i]),
+                        *(f"{v:.6f}" for v in self.reached[i]),
+                        f"{self.error[i]:.6g}",
+                        f"{self.time_s[i]:.6g}",
+                        int(self.success[i]),
+                        int(self.reachable[i]),
+                    ]
+                )
+
+
+def _stats(x: NDArray[np.float64]) -> dict[str, float]:
+    if len(x) == 0:
+        return {"median": float("nan"), "p95": float("nan"), "max": float("nan")}
+    return {
+        "median": float(np.median(x)),
+        "p95": float(np.percentile(x, 95)),
+        "max": float(np.max(x)),
+        "mean": float(np.mean(x)),
+    }
+
+
+def error_distribution(
+    robot,
+    solver_name: str,
+    grid: int = 8,
+    *,
+    seed: int = 0,
+    solver_options: dict[str, Any] | None = None,
+    progress: Progress = None,
+    cancelled: Cancelled = None,
+) -> ErrorDistribution:
+    """Solve the grid³ targets of the workspace box (paper Fig. 5: 8³ = 512).
+
+    Targets are visited in grid order with one solver instance, as an operator sweeping
+    the box would.  A cancelled run returns the targets done so far with ``complete=False``.
+    """
+    if not 2 <= grid <= 40:
+        raise ValueError(f"grid must be between 2 and 40, got {grid}")
+    box = workspace_box(robot)
+    targets = box.grid(grid)
+    solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
+    reference = ReachabilityReference(robot, seed=seed)
+    n = len(targets)
+    reached = np.zeros((n, 3))
+    error, t = np.zeros(n), np.zeros(n)
+    success, reachable = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    done = 0
+    try:
+        for i, x in enumerate(targets):
+            res = solver.solve_position(x)
+            reached[i], error[i], t[i], success[i] = res.position, res.error, res.time_s, res.success
+            reachable[i] = res.error <= reference.tol or reference(x)
+            done = i + 1
+            _tick(progress, cancelled, done, n)
+    except _CancelledError:
+        pass
+    return ErrorDistribution(
+        robot.name,
+        solver_name,
+        grid,
+        targets[:done],
+        reached[:done],
+        error[:done],
+        t[:done],
+        success[:done],
+        reachable[:done],
+        box.lower,
+        box.upper,
+        complete=done == n,
+    )
+
+
+def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
+    """3D scatter of the targets coloured by error (paper Fig. 5), saved as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(7.5, 6.0), dpi=110)
+    ax = fig.add_subplot(projection="3d")
+    err = np.maximum(result.error, 1e-9)
+    sc = ax.scatter(*result.targets.T, c=np.log10(err), cmap="viridis", s=14, depthshade=False)
+    bad = ~result.reachable
+    if bad.any():
+        ax.scatter(
+            *result.targets[bad].T, facecolors="none", edgecolors="red", s=40, linewidths=0.6, label="not reachable"
+        )
+        ax.legend(loc="upper left", fontsize=8)
+    cb = fig.colorbar(sc, ax=ax, shrink=0.7, pad=0.1)
+    cb.set_label("log10 position error [m]")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    s = result.summary()
+    ax.set_title(
+        f"{result.robot} – {result.solver}: {s['targets']} targets, {s['success']} solved, {s['reachable']} reachable",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- tracking
+@dataclass
+class Tracking:
+    robot: str
+    solver: str
+    t: NDArray[np.float64]
+    target: NDArray[np.float64]
+    reached: NDArray[np.float64]
+    error: NDArray[np.float64]
+    time_s: NDArray[np.float64]
+    success: NDArray[np.bool_]
+    q: NDArray[np.float64] = field(repr=False)
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "robot": self.robot,
+            "solver": self.solver,
+            "samples": len(self.t),
+            "duration_s": float(self.t[-1]) if len(self.t) else 0.0,
+            "success_rate": float(self.success.mean()) if len(self.t) else 0.0,
+            "rms_error_m": float(np.sqrt(np.mean(self.error**2))) if len(self.t) else float("nan"),
+            "max_error_m": float(self.error.max()) if len(self.t) else float("nan"),
+            "time_s": _stats(self.time_s),
+        }
+
+    def write_csv(self, path: Path) -> None:
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(
+                [
+                    "t",
+                    "target_x",
+                    "target_y",
+                    "target_z",
+                    "reached_x",
+                    "reached_y",
+                    "reached_z",
+                    "error_m",
+                    "solve_time_s",
+                    "success",
+                ]
+                + [f"q{i + 1}" for i in range(self.q.shape[1])]
+            )
+            for i in range(len(self.t)):
+                w.writerow(
+                    [
+                        f"{self.t[i]:.3f}",
+                        *(f"{v:.6f}" for v in self.target[i]),
+                        *(f"{v:.6f}" for v in self.reached[i]),
+                        f"{self.error[i]:.6g}",
+                        f"{self.time_s[i]:.6g}",
+                        int(self.success[i]),
+                        *(f"{v:.6f}" for v in self.q[i]),
+                    ]
+                )
+
+
+def tracking_path(robot, duration: float, dt: float, amplitude: float = 0.25) -> tuple[NDArray, NDArray]:
+    """A smooth tool path inside the workspace: FK of a multi-sine joint motion about mid-range.
+
+    Each joint moves ±``amplitude`` of its range at its own frequency (one to three slow
+    cycles over the run), so every point of the path is reachable; the solver only sees
+    the Cartesian points.  Returns (t, points), shapes (m,) and (m, 3).
+    """
+    t = np.arange(0.0, duration + 1e-9, dt)
+    mid, span = 0.5 * (robot.lower + robot.upper), robot.upper - robot.lower
+    k = np.arange(robot.n_joints)
+    freq = (1.0 + 0.37 * k) / duration
+    q = mid + amplitude * span * np.sin(2 * np.pi * freq * t[:, None] + 0.7 * k)
+    return t, robot.position(q)
+
+
+def track(
+    robot,
+    solver_name: str,
+    *,
+    duration: float = 20.0,
+    dt: float = 0.1,
+    seed: int = 0,
+    solver_options: dict[str, Any] | None = None,
+    progress: Progress = None,
+    cancelled: Cancelled = None,
+) -> Tracking:
+    """Follow :func:`tracking_path` target by target, warm-starting from the previous answer."""
+    t, path = tracking_path(robot, duration, dt)
+    solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
+    m = len(t)
+    reached, q_all = np.zeros((m, 3)), np.zeros((m, robot.n_joints))
+    err, st, ok = np.zeros(m), np.zeros(m), np.zeros(m, dtype=bool)
+    q = None
+    done = 0
+    try:
+        for i, x in enumerate(path):
+            res = solver.solve_position(x, q)
+            q = res.q
+            reached[i], q_all[i], err[i], st[i], ok[i] = res.position, res.q, res.error, res.time_s, res.success
+            done = i + 1
+            _tick(progress, cancelled, done, m)
+    except _CancelledError:
+        pass
+    return Tracking(
+        robot.name, solver_name, t[:done], path[:done], reached[:done], err[:done], st[:done], ok[:done], q_all[:done]
+    )
+
+
+def plot_tracking(result: Tracking, path: Path) -> None:
+    """X, Y and Z of target and reached point against time (paper Fig. 4b), saved as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=110, sharex=True)
+    for k, label in enumerate("XYZ"):
+        ax = axes[k]
+        ax.plot(result.t, result.target[:, k], color="0.3", lw=2.0, label="target")
+        ax.plot(result.t, result.reached[:, k], color="tab:orange", lw=1.2, ls="--", label="reached")
+        ax.set_ylabel(f"{label} [m]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[3].semilogy(result.t, np.maximum(result.error, 1e-9), color="tab:red", lw=1.0)
+    axes[3].set_ylabel("error [m]")
+    axes[3].set_xlabel("time [s]")
+    axes[3].grid(alpha=0.3)
+    s = result.summary()
+    fig.suptitle(
+        f"{result.robot} – {result.solver}: rms error {s['rms_error_m']:.3g} m, max {s['max_error_m']:.3g} m",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- benchmark
+def bench_ik(
+    robots: list,
+    *,
+    targets: int = 50,
+    seed: int = 7,
+    progress: Progress = None,
+) -> list[dict[str, Any]]:
+    """Median and p95 solve time and success rate per robot and solver on seeded reachable targets.
+
+    Targets are FK of configurations drawn uniformly inside the joint limits (reachable by
+    construction) and solved in sequence by one solver instance with its default time
+    budget (100 ms).
+    """
+    from app.ik import solvers_for
+
+    jobs = [(r, s) for r in robots for s in solvers_for(r)]
+    rows = []
+    for j, (robot, name) in enumerate(jobs):
+        rng = np.random.default_rng(seed)
+        q = rng.uniform(robot.lower, robot.upper, size=(targets, robot.n_joints))
+        X = robot.position(q)
+        solver = make_solver(name, robot, seed=seed)
+        times, ok, err = [], [], []
+        for x in X:
+            t0 = time.perf_counter()
+            res = solver.solve_position(x)
+            times.append(time.perf_counter() - t0)
+            ok.append(res.success)
+            err.append(res.error)
+        times_a = np.array(times)
+        rows.append(
+            {
+                "robot": robot.name,
+                "solver": name,
+                "targets": targets,
+                "median_ms": float(np.median(times_a) * 1e3),
+                "p95_ms": float(np.percentile(times_a, 95) * 1e3),
+                "success_rate": float(np.mean(ok)),
+                "median_error_m": float(np.median(err)),
+            }
+        )
+        if progress is not None:
+            progress(j + 1, len(jobs))
+    return rows
+
+
+def write_json(obj: Any, path: Path) -> None:
+    path.write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n")
