@@ -201,18 +201,25 @@ class Solver(ABC):
         whole if any joint would exceed its speed limit.
         """
         start = time.perf_counter()
-        q_a = self.check_q0(q_a)
-        if q_a is None:
-            raise IKError("velocity solve needs the actual joint values")
-        v = self.check_target(xdot)
-        if not (dt > 0 and math.isfinite(dt)):
-            raise IKError(f"dt must be a positive number of seconds, got {dt}")
+        q_a, v = self.check_velocity_request(q_a, xdot, dt)
         x_t = self.robot.position(q_a) + v * dt  # eq. (7)
         outcome = self._search(x_t, q_a, self._deadline(time_budget))
         q_f = self.robot.clip(outcome.q)
         qdot = self.limit_speed((q_f - q_a) / dt)  # eq. (9)
         outcome.q = self.robot.clip(q_a + qdot * dt)
         return self._result(x_t, outcome, start, qdot=qdot)
+
+    def check_velocity_request(
+        self, q_a: ArrayLike, xdot: ArrayLike, dt: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Validated (θ_a clipped into the limits, ẋ_ds) of a velocity solve, else :class:`IKError`."""
+        q = self.check_q0(q_a)
+        if q is None:
+            raise IKError("velocity solve needs the actual joint values")
+        v = self.check_target(xdot)
+        if not (dt > 0 and math.isfinite(dt)):
+            raise IKError(f"dt must be a positive number of seconds, got {dt}")
+        return q, v
 
     def limit_speed(self, qdot: NDArray[np.float64]) -> NDArray[np.float64]:
         """Scale a joint-velocity vector uniformly so that no joint exceeds its speed limit."""

@@ -187,12 +187,7 @@ class JacobianSolver(Solver):
     def solve_velocity(self, q_a, xdot, dt, *, time_budget: float | object | None = DEFAULT) -> IKResult:
         """θ̇ = J⁺_λ ẋ with the same damped, clamped inverse (eq. 4)."""
         start = time.perf_counter()
-        q_a = self.check_q0(q_a)
-        if q_a is None:
-            raise IKError("velocity solve needs the actual joint values")
-        v = self.check_target(xdot)
-        if not (dt > 0 and math.isfinite(dt)):
-            raise IKError(f"dt must be a positive number of seconds, got {dt}")
+        q_a, v = self.check_velocity_request(q_a, xdot, dt)
         J = self.robot.jacobian(q_a)[:3]
         dq = self.damped_step(J, v * dt, q_a, avoid=False)
         q_new = self.robot.clip(q_a + dq)
