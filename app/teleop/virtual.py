@@ -51,7 +51,7 @@ class VirtualJoystick:
             raise RuntimeError("SDL could not open the virtual joystick")
 
     def set_axis(self, axis: int, value: float) -> None:
-        raw = int(round(max(-1.0, min(1.0, value)) * 32767))
+        raw = round(max(-1.0, min(1.0, value)) * 32767)
         self.sdl.SDL_JoystickSetVirtualAxis(self.handle, axis, raw)
 
     def set_button(self, button: int, pressed: bool) -> None:
