@@ -318,3 +318,17 @@ def test_property_any_finite_target_gives_finite_q_in_limits(pair, target):
     res = solver.solve_position(np.array(target))
     assert np.all(np.isfinite(res.q)) and np.all(solver.robot.within_limits(res.q))
     assert math.isfinite(res.error) and np.all(np.isfinite(res.position))
+
+
+def test_ga_without_any_limit_still_ends():
+    from app.ik import genetic
+
+    robot = load_robot("scara")
+    solver = GeneticSolver(robot, rng=np.random.default_rng(0), time_budget=None)
+    old = genetic.HARD_GENERATION_CAP
+    genetic.HARD_GENERATION_CAP = 50
+    try:
+        res = solver.solve_position([9.0, 9.0, 9.0])  # unreachable: only the cap ends it
+    finally:
+        genetic.HARD_GENERATION_CAP = old
+    assert not res.success and res.iterations == 50 and res.reason == "generation limit"

@@ -13,6 +13,8 @@ As published:
    the 10 % elite of the previous target's population is carried over (step 7: elitism
    "between successive iterations and consecutive target positions"), so continuous
    operator motion starts next to the answer while 90 % fresh individuals keep diversity;
+   a target within 5× the stop cost of the previous one is the same target still being
+   worked on (the engine's control ticks), and its population simply evolves on;
 3. parents by stochastic universal sampling (Baker 1987) on fitness 1/cost (the
    Watchmaker framework's rule for a cost to minimise);
 4. crossover: for each pair of parents, 50 % single-point, 50 % uniform;
@@ -44,6 +46,8 @@ MUTATION_PROBABILITY = 0.005
 MUTATION_AMPLITUDE = 0.05
 TARGET_COST = 0.01
 PENALTY_FACTOR = 100.0
+#: generations allowed when neither a time budget nor max_generations bounds a call
+HARD_GENERATION_CAP = 20_000
 
 
 def stochastic_universal_sampling(fitness: NDArray[np.float64], n: int, rng: np.random.Generator) -> NDArray[np.intp]:
@@ -161,9 +165,11 @@ class GeneticSolver(Solver):
         self.max_generations = max_generations
         self.span = robot.upper - robot.lower
         self.population: NDArray[np.float64] | None = None
+        self._last_target: NDArray[np.float64] | None = None
 
     def reset(self) -> None:
         self.population = None
+        self._last_target = None
 
     # ---------------------------------------------------------------- cost
     def cost(self, genes: NDArray[np.float64], x_t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -187,6 +193,10 @@ class GeneticSolver(Solver):
 
     def initial_population(self, x_t: NDArray[np.float64]) -> NDArray[np.float64]:
         """A fresh random population, with the previous call's elite (ranked for x_t) carried over."""
+        if self.population is not None and self._last_target is not None:
+            moved = np.linalg.norm(self.box.normalise(x_t) - self.box.normalise(self._last_target))
+            if moved < 5 * self.target_cost:
+                return self.population
         fresh = self.random_q(self.population_size)
         if self.population is None:
             return fresh
@@ -196,16 +206,20 @@ class GeneticSolver(Solver):
 
     def _search(self, x_t, q0, deadline) -> SearchOutcome:
         pop = self.initial_population(x_t)
+        self._last_target = np.array(x_t)
         cost = self.cost(pop, x_t)
         generations = 0
         reason = "time budget spent"
+        cap = self.max_generations
+        if cap is None and math.isinf(deadline):
+            cap = HARD_GENERATION_CAP
         while True:
             if cost.min() < self.target_cost:
                 reason = "converged"
                 break
             if time.perf_counter() >= deadline:
                 break
-            if self.max_generations is not None and generations >= self.max_generations:
+            if cap is not None and generations >= cap:
                 reason = "generation limit"
                 break
             pop = self.evolve(pop, cost)

@@ -1,0 +1,1 @@
+"""The Qt-free engine: session state, fixed-rate loop, server."""

@@ -1,0 +1,1 @@
+"""Simulated plants: actuators, cranes, Delta head, Stewart platforms, winch, pendulum."""

@@ -1,0 +1,200 @@
+"""Engine session: mapping to motion, safety rules, command errors, and the limits property."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from app.engine.session import CommandError, Session
+from app.sim.actuators import JointActuators
+from app.teleop.devices import InputSample
+from app.teleop.profiles import default_profile
+
+DT = 0.002  # 500 Hz
+
+
+def sample(x=0.0, y=0.0, z=0.0, enable=True, device="test stick"):
+    # default profile: axes 0,1,2 -> x, -y, z; deadman on button 0
+    return InputSample((x, -y, z), (enable, False), device)
+
+
+def run(session, seconds, s=None, t0=0.0, feed=True):
+    t = t0
+    for _ in range(int(round(seconds / DT))):
+        t += DT
+        if feed:
+            session.feed(s, t)
+        session.tick(t, DT)
+    return t
+
+
+def test_velocity_mode_moves_tool_along_the_stick():
+    ses = Session(robot_name="comau_smart5_3dof", solver_name="jacobian", mode="velocity")
+    p0 = np.array(ses.snapshot()["tool"])
+    run(ses, 1.0, sample(x=1.0))
+    p1 = np.array(ses.snapshot()["tool"])
+    d = p1 - p0
+    assert d[0] > 0.2 and abs(d[1]) < 0.02 * d[0] and abs(d[2]) < 0.02 * d[0]  # straight along +x
+
+
+def test_velocity_release_stops_and_holds():
+    ses = Session(mode="velocity")
+    t = run(ses, 0.5, sample(x=1.0))
+    q_ref = np.array(ses.snapshot()["q_ref"])
+    t = run(ses, 0.5, sample(), t0=t)  # stick released: the reference no longer moves
+    np.testing.assert_array_equal(ses.snapshot()["q_ref"], q_ref)
+    p_a = np.array(ses.snapshot()["tool"])
+    run(ses, 0.5, sample(), t0=t)
+    # the first-order servo (tau 50 ms) has settled onto the held reference
+    np.testing.assert_allclose(ses.snapshot()["tool"], p_a, atol=1e-5)
+    np.testing.assert_allclose(ses.snapshot()["q"], q_ref, atol=1e-6)
+    assert np.abs(ses.snapshot()["qdot"]).max() < 1e-4
+
+
+def test_position_mode_follows_and_returns_to_start():
+    ses = Session(mode="velocity")
+    ses.set_mode("position")
+    start = np.array(ses.scaling.x_w)
+    t = run(ses, 2.0, sample(z=0.5))
+    s = ses.snapshot()["signal"][2]
+    assert s == pytest.approx((0.5 - 0.1) / 0.9)  # default profile: deadzone 0.1, rescaled
+    np.testing.assert_allclose(ses.snapshot()["tool"], start + np.array([0, 0, s * ses.scaling.k_p[2]]), atol=1e-3)
+    run(ses, 3.0, sample(), t0=t)  # released: back to the starting point
+    np.testing.assert_allclose(ses.snapshot()["tool"], start, atol=1e-3)
+
+
+def test_deadman_released_holds():
+    ses = Session()
+    t = run(ses, 0.3, sample(x=1.0))
+    t = run(ses, 0.5, sample(x=1.0, enable=False), t0=t)
+    p = np.array(ses.snapshot()["tool"])
+    run(ses, 0.5, sample(x=1.0, enable=False), t0=t)
+    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-9)
+    assert not ses.snapshot()["flags"]["enabled"]
+
+
+def test_stale_input_stops_within_bound():
+    ses = Session()
+    t = run(ses, 0.5, sample(x=1.0))
+    v_before = np.abs(ses.actuators.qdot).max()
+    assert v_before > 0
+    # the device goes silent: no new samples are fed
+    t_silent = t
+    t = run(ses, 0.2, feed=False, t0=t)
+    assert ses.snapshot()["flags"]["stale_input"]
+    p = np.array(ses.snapshot()["tool"])
+    run(ses, 0.5, feed=False, t0=t)
+    # the stop started at 200 ms; braking at the acceleration limit (Comau has none: immediate)
+    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-6)
+    assert t - t_silent >= ses.stale_timeout
+
+
+def test_unplugged_device_holds_and_warns():
+    ses = Session()
+    t = run(ses, 0.3, sample(x=1.0))
+    ses.feed(None, t)
+    t = run(ses, 0.3, feed=False, t0=t)
+    p = np.array(ses.snapshot()["tool"])
+    run(ses, 0.3, feed=False, t0=t)
+    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-9)
+    assert any("disconnected" in e.text for e in ses.log) and not ses.snapshot()["flags"]["device"]
+
+
+def test_estop_stops_in_one_tick_and_latches():
+    ses = Session(robot_name="offshore_crane")
+    t = run(ses, 1.0, sample(x=1.0))
+    assert np.abs(ses.actuators.qdot).max() > 0
+    ses.estop()
+    t += DT
+    ses.feed(sample(x=1.0), t)
+    ses.tick(t, DT)
+    assert np.all(ses.actuators.qdot == 0)
+    p = np.array(ses.snapshot()["tool"])
+    t = run(ses, 0.5, sample(x=1.0), t0=t)  # input keeps pushing: nothing moves while latched
+    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=0)
+    assert ses.snapshot()["flags"]["estop"]
+    with pytest.raises(CommandError, match="E-STOP is latched"):
+        ses.set_robot("scara")
+    ses.reset()
+    run(ses, 0.5, sample(x=1.0), t0=t)
+    assert not ses.snapshot()["flags"]["estop"]
+    assert np.linalg.norm(np.array(ses.snapshot()["tool"]) - p) > 1e-3
+
+
+def test_bad_commands_leave_state_unchanged(tmp_path):
+    ses = Session(robot_name="scara")
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<robot>")
+    with pytest.raises(CommandError, match="bad.xml:1: XML syntax error"):
+        ses.set_robot(str(bad))
+    with pytest.raises(CommandError, match="unknown robot"):
+        ses.set_robot("nope")
+    with pytest.raises(CommandError, match="unknown solver"):
+        ses.set_solver("magic")
+    with pytest.raises(CommandError, match="mode must be"):
+        ses.set_mode("turbo")
+    with pytest.raises(CommandError, match="k_v must be 3 finite"):
+        ses.set_scaling(k_v=float("nan"))
+    assert ses.robot_name == "scara" and ses.solver_name == "jacobian" and ses.mode == "velocity"
+
+
+def test_switching_robot_and_solver_while_running():
+    ses = Session(robot_name="comau_smart5_3dof", solver_name="analytic")
+    t = run(ses, 0.2, sample(x=0.5))
+    ses.set_robot("kuka_youbot")  # no closed form: falls back to the Jacobian solver
+    assert ses.robot_name == "kuka_youbot" and ses.solver_name == "jacobian"
+    ses.set_solver("ga")
+    run(ses, 0.2, sample(z=0.5), t0=t)
+    assert len(ses.snapshot()["q"]) == 5
+
+
+def test_mode_button_toggles():
+    from app.teleop.profiles import parse_profile
+
+    ses = Session()
+    ses.set_profile(parse_profile("name='p'\nmode_button=1\n[axes.x]\nindex=0\n"))
+    ses.feed(InputSample((0.0,), (False, True), "x"), 0.001)
+    ses.tick(0.001, DT)
+    assert ses.mode == "position"
+    ses.feed(InputSample((0.0,), (False, True), "x"), 0.002)
+    ses.tick(0.002, DT)
+    assert ses.mode == "position"  # held: one toggle per press
+
+
+def test_actuator_braking_never_passes_limits():
+    act = JointActuators([-1.0], [1.0], [2.0], [4.0], tau=0.01, q0=[0.0])
+    prev_v = 0.0
+    for _ in range(2000):
+        act.step([5.0], 0.002)  # reference beyond the limit
+        assert act.q[0] <= 1.0 and abs(act.qdot[0]) <= 2.0 + 1e-12
+        assert abs(act.qdot[0] - prev_v) <= 4.0 * 0.002 + 1e-9
+        prev_v = act.qdot[0]
+    assert act.q[0] == pytest.approx(1.0, abs=1e-3)
+
+
+_axis = st.floats(min_value=-1.0, max_value=1.0, allow_nan=False)
+_event = st.tuples(_axis, _axis, _axis, st.booleans(), st.integers(min_value=1, max_value=60))
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(
+    robot=st.sampled_from(["comau_smart5_3dof", "offshore_crane", "knuckle_boom_crane", "scara", "kuka_youbot"]),
+    mode=st.sampled_from(["position", "velocity"]),
+    solver=st.sampled_from(["jacobian", "ga"]),
+    events=st.lists(_event, min_size=1, max_size=8),
+)
+def test_property_random_input_never_breaks_joint_limits(robot, mode, solver, events):
+    ses = Session(robot_name=robot, solver_name=solver, mode=mode)
+    ses.set_profile(default_profile())
+    act = ses.actuators
+    t, prev_v = 0.0, act.qdot.copy()
+    for x, y, z, en, n in events:
+        for _ in range(n):
+            t += DT
+            ses.feed(InputSample((x, y, z), (en,), "stick"), t)
+            ses.tick(t, DT, solve_budget=0.002)
+            q, v = act.q, act.qdot
+            assert np.all(np.isfinite(q)) and np.all(q >= act.lower - 1e-12) and np.all(q <= act.upper + 1e-12)
+            assert np.all(np.abs(v) <= act.speed * (1 + 1e-9))
+            assert np.all(np.abs(v - prev_v) <= act.accel * DT * (1 + 1e-6) + 1e-9)
+            prev_v = v.copy()
