@@ -20,7 +20,7 @@ def sample(x=0.0, y=0.0, z=0.0, enable=True, device="test stick"):
 
 def run(session, seconds, s=None, t0=0.0, feed=True):
     t = t0
-    for _ in range(int(round(seconds / DT))):
+    for _ in range(round(seconds / DT)):
         t += DT
         if feed:
             session.feed(s, t)
@@ -125,7 +125,7 @@ def test_bad_commands_leave_state_unchanged(tmp_path):
     ses = Session(robot_name="scara")
     bad = tmp_path / "bad.xml"
     bad.write_text("<robot>")
-    with pytest.raises(CommandError, match="bad.xml:1: XML syntax error"):
+    with pytest.raises(CommandError, match=r"bad\.xml:1: XML syntax error"):
         ses.set_robot(str(bad))
     with pytest.raises(CommandError, match="unknown robot"):
         ses.set_robot("nope")
