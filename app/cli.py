@@ -402,6 +402,99 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _make_session(args: argparse.Namespace):
+    from app.engine.session import Session
+
+    return Session(robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0)
+
+
+def cmd_server(args: argparse.Namespace) -> int:
+    import signal
+
+    from app.engine.server import EngineServer
+
+    session = _make_session(args)
+    server = EngineServer(session, bind=args.bind, rate=args.rate, publish_rate=args.publish_rate, token=args.token)
+    signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    print(
+        f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {args.rate:g} Hz", flush=True
+    )
+    print(f"  requests on {server.url}, state on {server.state_url}", flush=True)
+    try:
+        server.run(duration=args.duration)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.close()
+    st = server.stats.summary()
+    print(f"bosun server: stopped after {st['ticks']} ticks, {st['missed_deadlines']} missed deadlines", flush=True)
+    return 0
+
+
+def cmd_joystick(args: argparse.Namespace) -> int:
+    from app.net.transport import TransportError, check_url
+    from app.teleop.client import run_joystick_client
+
+    check_url(args.connect)
+    virtual = None
+    if args.virtual:
+        from app.teleop.devices import PygameJoysticks
+        from app.teleop.virtual import VirtualJoystick
+
+        PygameJoysticks()  # initialise SDL's joystick subsystem before attaching
+        virtual = VirtualJoystick(n_axes=4, n_buttons=8)
+        virtual.set_button(0, True)
+        virtual.set_axis(0, 0.5)
+        print("bosun joystick: a virtual joystick (x = 0.5, deadman held) stands in for hardware", flush=True)
+    try:
+        sent = run_joystick_client(
+            args.connect,
+            token=args.token,
+            device=args.device,
+            rate=args.rate,
+            duration=args.duration,
+            on_event=lambda t: print(f"bosun joystick: {t}", flush=True),
+        )
+    except TransportError as err:
+        raise BosunError(str(err)) from None
+    except RuntimeError as err:
+        raise BosunError(str(err)) from None
+    except KeyboardInterrupt:
+        sent = 0
+    finally:
+        if virtual is not None:
+            virtual.detach()
+    print(f"bosun joystick: sent {sent} input messages", flush=True)
+    return 0
+
+
+def cmd_bench_loop(args: argparse.Namespace) -> int:
+    from app.analysis.loop_bench import bench_loop
+
+    result = bench_loop(rate=args.rate, seconds=args.seconds, robot=args.robot, solver=args.solver)
+    result["machine"] = _machine()
+    if args.json:
+        _print_json(result)
+        return 0
+    print(
+        f"bosun bench loop: {args.robot} / {args.solver}, {args.rate:g} Hz for {args.seconds:g} s, one viewer and "
+        f"one input client at 500 Hz over tcp://127.0.0.1"
+    )
+    print(f"machine: {result['machine']}")
+    lp = result["loop"]
+    print(
+        f"  tick period  p50 {lp['period_p50_ms']:.3f} ms   p99 {lp['period_p99_ms']:.3f} ms   "
+        f"max {lp['period_max_ms']:.3f} ms   jitter p99 {lp['jitter_p99_ms']:.3f} ms"
+    )
+    print(f"  missed deadlines {lp['missed_deadlines']} of {lp['ticks']} ticks;  work p99 {lp['work_p99_ms']:.3f} ms")
+    print(
+        f"  input -> joint command latency  p50 {lp['latency_p50_ms']:.3f} ms   p99 {lp['latency_p99_ms']:.3f} ms "
+        f"({lp['latency_samples']} samples)"
+    )
+    print(f"  viewer received {result['viewer_states']} state messages ({result['viewer_rate_hz']:.1f} /s)")
+    return 0
+
+
 # ---------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
@@ -508,6 +601,41 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench)
+    b = bench.add_parser("loop", help="engine tick period, jitter, missed deadlines and input latency")
+    b.add_argument("--rate", type=float, choices=[500.0, 1000.0], default=500.0, help="loop rate [Hz] (500 or 1000)")
+    b.add_argument("--seconds", type=_positive_float, default=30.0, help="duration [s] (default 30)")
+    b.add_argument("--robot", default="comau_smart5_3dof", help="robot (default comau_smart5_3dof)")
+    b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_loop)
+
+    def add_engine_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--robot", default="comau_smart5_3dof", help="robot to load (default comau_smart5_3dof)")
+        p.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
+        p.add_argument("--mode", choices=["position", "velocity"], default="velocity", help="default velocity")
+
+    p = sub.add_parser("server", help="run the engine headless (fixed-rate loop, ZeroMQ protocol)")
+    p.add_argument(
+        "--bind",
+        default="tcp://127.0.0.1:5555",
+        help="request URL: tcp://HOST:PORT or ipc://PATH (default tcp://127.0.0.1:5555); "
+        "a non-local address needs --token",
+    )
+    add_engine_args(p)
+    p.add_argument("--rate", type=_positive_float, default=500.0, help="control rate [Hz], up to 1000 (default 500)")
+    p.add_argument("--publish-rate", type=_positive_float, default=50.0, help="state messages per second (default 50)")
+    p.add_argument("--token", default=None, help="shared secret every client must present")
+    p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
+    p.set_defaults(func=cmd_server)
+
+    p = sub.add_parser("joystick", help="stream a local joystick to an engine (the input client)")
+    p.add_argument("--connect", required=True, help="the engine's request URL, e.g. tcp://127.0.0.1:5555")
+    p.add_argument("--token", default=None, help="shared secret of the engine")
+    p.add_argument("--device", default=None, help="use the first joystick whose name contains this")
+    p.add_argument("--rate", type=_positive_float, default=100.0, help="input messages per second (default 100)")
+    p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
+    p.add_argument("--virtual", action="store_true", help="attach an SDL virtual joystick (no hardware needed)")
+    p.set_defaults(func=cmd_joystick)
     return parser
 
 

@@ -50,6 +50,7 @@ class CommandError(BosunError):
 
 @dataclass
 class LogEntry:
+    seq: int
     t: float
     level: str
     text: str
@@ -71,6 +72,7 @@ class Session:
         if self.mode not in MODES:
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {self.mode!r}")
         self.estop_latched = False
+        self.log_seq = 0
         self.profile: DeviceProfile = default_profile()
         self.profile_locked = False
         self.sample: InputSample | None = None
@@ -89,7 +91,8 @@ class Session:
 
     # ------------------------------------------------------------------ logging
     def note(self, level: str, text: str) -> None:
-        self.log.append(LogEntry(time.time(), level, text))
+        self.log_seq += 1
+        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
 
     # ------------------------------------------------------------------ commands
     def _load(self, robot_ref: str, solver_name: str) -> None:

@@ -1,0 +1,315 @@
+"""The engine process: a fixed-rate loop around a :class:`Session`, served over ZeroMQ.
+
+Each tick: drain the request socket (commands, input; each message validated, bad ones
+rejected and logged), run one control tick, publish the state every ``publish_every``
+ticks, then sleep to the next deadline (sleep, then a short spin for sub-millisecond
+accuracy).  Roles: the first client asking for ``operator`` gets it; others are viewers
+until it is released or its holder is silent for ``operator_timeout``.  E-STOP is
+accepted from every client.  A non-local bind needs a shared token from every client.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import secrets
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import zmq
+
+from app.engine.session import CommandError, Session
+from app.errors import BosunError
+from app.net.codec import ProtocolError, decode, encode
+from app.net.messages import OPERATOR_ONLY
+from app.net.transport import TransportError, check_url, is_local, state_url_for
+from app.teleop.devices import InputSample
+
+log = logging.getLogger("bosun.engine")
+
+
+@dataclass
+class ClientInfo:
+    name: str
+    role: str
+    last_seen: float
+
+
+@dataclass
+class LoopStats:
+    """Tick timing of the fixed-rate loop, over a ring buffer of recent ticks."""
+
+    period: float
+    periods: deque = field(default_factory=lambda: deque(maxlen=200_000))
+    work: deque = field(default_factory=lambda: deque(maxlen=200_000))
+    latencies: deque = field(default_factory=lambda: deque(maxlen=200_000))
+    missed: int = 0
+    ticks: int = 0
+
+    def summary(self) -> dict[str, Any]:
+        p = np.array(self.periods) if self.periods else np.array([math.nan])
+        w = np.array(self.work) if self.work else np.array([math.nan])
+        lat = np.array(self.latencies) if self.latencies else np.array([math.nan])
+
+        def pct(a, q):
+            return float(np.percentile(a, q)) if np.all(np.isfinite(a)) else None
+
+        return {
+            "ticks": self.ticks,
+            "period_target_ms": self.period * 1e3,
+            "period_p50_ms": pct(p, 50) and pct(p, 50) * 1e3,
+            "period_p99_ms": pct(p, 99) and pct(p, 99) * 1e3,
+            "period_max_ms": float(np.max(p)) * 1e3 if np.all(np.isfinite(p)) else None,
+            "jitter_p99_ms": pct(np.abs(p - self.period), 99) and pct(np.abs(p - self.period), 99) * 1e3,
+            "work_p99_ms": pct(w, 99) and pct(w, 99) * 1e3,
+            "missed_deadlines": self.missed,
+            "latency_p50_ms": pct(lat, 50) and pct(lat, 50) * 1e3,
+            "latency_p99_ms": pct(lat, 99) and pct(lat, 99) * 1e3,
+            "latency_samples": len(self.latencies),
+        }
+
+
+class EngineServer:
+    """Serve a session over ZeroMQ at a fixed rate.
+
+    Parameters
+    ----------
+    session : Session
+    bind : str
+        Request URL (tcp://HOST:PORT with PORT 0 for any free port, or ipc://PATH).
+    rate : float
+        Control rate [Hz], 1..1000 (default 500).
+    publish_rate : float
+        State messages per second (default 50).
+    token : str, optional
+        Shared secret; required when ``bind`` is not a loopback or ipc address.
+    """
+
+    def __init__(
+        self,
+        session: Session,
+        bind: str = "tcp://127.0.0.1:5555",
+        rate: float = 500.0,
+        publish_rate: float = 50.0,
+        token: str | None = None,
+        operator_timeout: float = 2.0,
+        context: zmq.Context | None = None,
+    ) -> None:
+        check_url(bind)
+        if not 1.0 <= rate <= 1000.0:
+            raise TransportError(f"rate must be between 1 and 1000 Hz, got {rate:g}")
+        if not 0.1 <= publish_rate <= rate:
+            raise TransportError(f"publish rate must be between 0.1 Hz and the loop rate, got {publish_rate:g}")
+        if not is_local(bind) and not token:
+            raise TransportError(f"binding to the non-local address {bind} needs a shared token (--token)")
+        self.session = session
+        self.rate = rate
+        self.dt = 1.0 / rate
+        self.publish_every = max(1, round(rate / publish_rate))
+        self.token = token
+        self.operator_timeout = operator_timeout
+        self.ctx = context or zmq.Context.instance()
+        self.router = self.ctx.socket(zmq.ROUTER)
+        self.router.setsockopt(zmq.LINGER, 0)
+        self.router.setsockopt(zmq.ROUTER_MANDATORY, 0)
+        self.router.setsockopt(zmq.MAXMSGSIZE, 1 << 20)
+        self.pub = self.ctx.socket(zmq.PUB)
+        self.pub.setsockopt(zmq.LINGER, 0)
+        self.pub.setsockopt(zmq.SNDHWM, 1000)
+        try:
+            self.router.bind(bind)
+            self.pub.bind(state_url_for(bind))
+        except zmq.ZMQError as err:
+            self.close()
+            raise TransportError(f"cannot bind {bind}: {err}") from None
+        self.url = self.router.getsockopt(zmq.LAST_ENDPOINT).decode()
+        self.state_url = self.pub.getsockopt(zmq.LAST_ENDPOINT).decode()
+        self.clients: dict[bytes, ClientInfo] = {}
+        self.operator: bytes | None = None
+        self.rejected = 0
+        self.stats = LoopStats(self.dt)
+        self._stop = threading.Event()
+        self._pending_latency: tuple[float, int] | None = None
+        self._log_sent = 0
+
+    # ------------------------------------------------------------------ protocol
+    def _reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
+        fields: dict[str, Any] = {"re": re, "ok": ok}
+        if error:
+            fields["error"] = error[:1000]
+        self.router.send_multipart([ident, encode("reply", **fields)], zmq.NOBLOCK)
+
+    def _reject(self, ident: bytes, reason: str, re: str | None = None) -> None:
+        self.rejected += 1
+        log.warning("rejected message from %r: %s", ident[:32], reason)
+        if re is not None:
+            self._reply(ident, re, False, reason)
+
+    def _operator_alive(self, now: float) -> bool:
+        if self.operator is None or self.operator not in self.clients:
+            return False
+        return now - self.clients[self.operator].last_seen <= self.operator_timeout
+
+    def handle(self, ident: bytes, data: bytes, now: float) -> None:
+        """Validate and dispatch one message from a client."""
+        try:
+            msg = decode(data)
+        except ProtocolError as err:
+            self._reject(ident, str(err), re="invalid")
+            return
+        mtype = msg["type"]
+        if mtype == "hello":
+            self._hello(ident, msg, now)
+            return
+        client = self.clients.get(ident)
+        if client is None:
+            self._reject(ident, f"{mtype} before hello", re=mtype)
+            return
+        client.last_seen = now
+        if mtype == "bye":
+            self.clients.pop(ident, None)
+            if self.operator == ident:
+                self.operator = None
+                self.session.note("info", f"operator {client.name} left")
+            return
+        if mtype == "ping":
+            self._reply(ident, "ping", True)
+            return
+        if mtype == "estop":
+            self.session.estop(source=client.name)
+            self._reply(ident, "estop", True)
+            return
+        if mtype == "release_operator":
+            if self.operator == ident:
+                self.operator = None
+                client.role = "viewer"
+                self.session.note("info", f"operator {client.name} released the role")
+            self._reply(ident, mtype, True)
+            return
+        if mtype in OPERATOR_ONLY and ident != self.operator:
+            if mtype == "input":
+                self._reject(ident, f"input from viewer {client.name}")
+            else:
+                self._reject(ident, f"{mtype}: only the operator may do this", re=mtype)
+            return
+        if mtype == "input":
+            sample = InputSample(tuple(msg["axes"]), tuple(msg["buttons"]), msg["device"], now)
+            self.session.feed(sample, now)
+            if "t_send" in msg:
+                self._pending_latency = (msg["t_send"], msg["seq"])
+            return
+        if mtype == "device_lost":
+            self.session.feed(None, now)
+            return
+        try:
+            if mtype == "set_robot":
+                self.session.set_robot(msg["robot"])
+            elif mtype == "set_solver":
+                self.session.set_solver(msg["solver"])
+            elif mtype == "set_mode":
+                self.session.set_mode(msg["mode"])
+            elif mtype == "set_scaling":
+                self.session.set_scaling(msg.get("k_p"), msg.get("x_w"), msg.get("k_v"))
+            elif mtype == "reset":
+                self.session.reset()
+        except (CommandError, BosunError) as err:
+            self.session.note("warning", f"{mtype} refused: {err}")
+            self._reply(ident, mtype, False, str(err))
+            return
+        self._reply(ident, mtype, True)
+
+    def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
+        if self.token is not None and not secrets.compare_digest(msg.get("token", ""), self.token):
+            self._reject(ident, "hello with a wrong or missing token", re="hello")
+            return
+        role, note = "viewer", ""
+        if msg["role"] == "operator":
+            if self.operator in (None, ident) or not self._operator_alive(now):
+                self.operator = ident
+                role = "operator"
+            else:
+                note = f"operator role is held by {self.clients[self.operator].name}; joined as viewer"
+        self.clients[ident] = ClientInfo(msg["name"], role, now)
+        self.session.note("info", f"{msg['name']} connected as {role}")
+        welcome: dict[str, Any] = {
+            "client_id": ident.decode(errors="replace")[:64],
+            "role": role,
+            "state_url": self.state_url,
+        }
+        if note:
+            welcome["note"] = note
+        self.router.send_multipart([ident, encode("welcome", **welcome)], zmq.NOBLOCK)
+
+    def poll_requests(self, now: float, limit: int = 200) -> None:
+        for _ in range(limit):
+            try:
+                frames = self.router.recv_multipart(zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            if len(frames) != 2:
+                self._reject(frames[0] if frames else b"?", f"{len(frames)} frames; expected a single message")
+                continue
+            self.handle(frames[0], frames[1], now)
+
+    def publish(self) -> None:
+        snap = self.session.snapshot()
+        op = self.clients.get(self.operator) if self.operator else None
+        snap["operator"] = op.name if op else ""
+        snap["clients"] = len(self.clients)
+        snap["rejected"] = self.rejected
+        snap["rate"] = self.rate
+        self.pub.send(encode("state", state=snap), zmq.NOBLOCK)
+        for e in self.session.log:
+            if e.seq > self._log_sent:
+                self.pub.send(encode("log", level=e.level, text=e.text[:1000], t=e.t), zmq.NOBLOCK)
+                self._log_sent = e.seq
+
+    # ------------------------------------------------------------------ loop
+    def step(self, now: float) -> None:
+        """One tick: requests, control, latency bookkeeping, publication."""
+        self.poll_requests(now)
+        budget = 0.4 * self.dt
+        self.session.tick(now, self.dt, solve_budget=budget)
+        if self._pending_latency is not None:
+            t_send, _ = self._pending_latency
+            self.stats.latencies.append(time.monotonic() - t_send)
+            self._pending_latency = None
+        if self.stats.ticks % self.publish_every == 0:
+            self.publish()
+
+    def run(self, duration: float | None = None) -> LoopStats:
+        """Run until :meth:`stop` (or for ``duration`` seconds)."""
+        next_t = time.perf_counter()
+        end = math.inf if duration is None else next_t + duration
+        last_start = None
+        while not self._stop.is_set() and next_t < end:
+            start = time.perf_counter()
+            if last_start is not None:
+                self.stats.periods.append(start - last_start)
+            last_start = start
+            self.step(time.monotonic())
+            self.stats.ticks += 1
+            done = time.perf_counter()
+            self.stats.work.append(done - start)
+            next_t += self.dt
+            if done > next_t:
+                self.stats.missed += 1
+                next_t = done  # do not try to catch up with a burst of ticks
+            remaining = next_t - time.perf_counter()
+            if remaining > 0.0005:
+                time.sleep(remaining - 0.0004)
+            while time.perf_counter() < next_t:
+                pass
+        return self.stats
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def close(self) -> None:
+        for s in (getattr(self, "router", None), getattr(self, "pub", None)):
+            if s is not None:
+                s.close(0)

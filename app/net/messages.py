@@ -1,0 +1,65 @@
+"""The Bosun protocol, version 1: message types and their fields (see docs/protocol.md).
+
+Every message is a msgpack map with ``v`` (protocol version), ``type`` and the fields
+below.  A field spec is (kind, required, limit):
+
+* ``str``: UTF-8 text of at most ``limit`` characters;
+* ``int``: integer in [0, limit];
+* ``float``: finite number with |x| ≤ limit;
+* ``bool``;
+* ``floats``: list of at most ``limit`` finite numbers; ``unit_floats``: same, each in [−1, 1];
+* ``bools``: list of at most ``limit`` booleans;
+* ``vec3``: three finite numbers with |x| ≤ limit;
+* ``enum``: one of the strings in ``limit``;
+* ``map``: a map (state snapshots from the engine; not accepted from clients).
+"""
+
+from __future__ import annotations
+
+PROTOCOL_VERSION = 1
+MAX_MESSAGE_BYTES = 65_536
+
+ROLES = ("operator", "viewer")
+MODES = ("position", "velocity")
+
+# ------------------------------------------------------------------ client -> engine
+CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
+    "hello": {"role": ("enum", True, ROLES), "name": ("str", True, 64), "token": ("str", False, 256)},
+    "bye": {},
+    "ping": {"seq": ("int", False, 2**62)},
+    "input": {
+        "seq": ("int", True, 2**62),
+        "t_send": ("float", False, 1e12),
+        "axes": ("unit_floats", True, 16),
+        "buttons": ("bools", True, 64),
+        "device": ("str", True, 128),
+    },
+    "device_lost": {"device": ("str", False, 128)},
+    "set_robot": {"robot": ("str", True, 1024)},
+    "set_solver": {"solver": ("str", True, 64)},
+    "set_mode": {"mode": ("enum", True, MODES)},
+    "set_scaling": {"k_p": ("vec3", False, 1e4), "x_w": ("vec3", False, 1e5), "k_v": ("vec3", False, 1e3)},
+    "estop": {"reason": ("str", False, 256)},
+    "reset": {},
+    "release_operator": {},
+}
+
+# ------------------------------------------------------------------ engine -> client
+ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
+    "welcome": {
+        "client_id": ("str", True, 64),
+        "role": ("enum", True, ROLES),
+        "state_url": ("str", True, 1024),
+        "note": ("str", False, 256),
+    },
+    "reply": {"re": ("str", True, 32), "ok": ("bool", True, None), "error": ("str", False, 1024)},
+    "state": {"state": ("map", True, None)},
+    "log": {
+        "level": ("enum", True, ("info", "warning", "error")),
+        "text": ("str", True, 1024),
+        "t": ("float", True, 1e12),
+    },
+}
+
+#: messages only the operator may send (a viewer gets an error reply); E-STOP is anyone's
+OPERATOR_ONLY = frozenset({"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset"})

@@ -1,0 +1,198 @@
+"""ZeroMQ transport: endpoints and the client side of the protocol.
+
+The engine binds two sockets: a ROUTER for requests and input (``--bind URL``) and a PUB
+for the state stream, whose address it tells each client in ``welcome``.  A client
+connects a DEALER to the request URL and a SUB to the state URL, so one machine or
+several is only a matter of URL: ``ipc:///tmp/bosun``, ``tcp://127.0.0.1:5555``,
+``tcp://host:5555``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ipaddress
+import time
+import uuid
+from typing import Any
+from urllib.parse import urlsplit
+
+import zmq
+
+from app.errors import BosunError
+from app.net.codec import ProtocolError, decode_engine, encode
+
+DEFAULT_URL = "tcp://127.0.0.1:5555"
+
+
+class TransportError(BosunError):
+    """A URL that cannot be used, or an engine that does not answer."""
+
+
+def check_url(url: str) -> str:
+    """Accept tcp://HOST:PORT (PORT may be 0 for any free port) and ipc://PATH."""
+    parts = urlsplit(url)
+    if parts.scheme == "ipc":
+        if not (parts.netloc or parts.path):
+            raise TransportError(f"ipc URL needs a path: {url}")
+        return url
+    if parts.scheme != "tcp":
+        raise TransportError(f"URL must start with tcp:// or ipc://, got {url!r}")
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if not parts.hostname or port is None:
+        raise TransportError(f"tcp URL needs a host and a port, e.g. tcp://127.0.0.1:5555; got {url!r}")
+    return url
+
+
+def is_local(url: str) -> bool:
+    """True for ipc:// and loopback tcp addresses (127.0.0.0/8, ::1, localhost)."""
+    parts = urlsplit(url)
+    if parts.scheme == "ipc":
+        return True
+    host = parts.hostname or ""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def state_url_for(bind_url: str) -> str:
+    """Where the PUB socket binds: ipc://PATH.state, or the same tcp host on any free port."""
+    parts = urlsplit(bind_url)
+    if parts.scheme == "ipc":
+        return bind_url + ".state"
+    return f"tcp://{parts.hostname if ':' not in (parts.hostname or '') else '[' + parts.hostname + ']'}:0"
+
+
+def client_view_of(state_endpoint: str, request_url: str) -> str:
+    """The state URL as a client should dial it: the engine's port, the host the client used."""
+    st, req = urlsplit(state_endpoint), urlsplit(request_url)
+    if st.scheme != "tcp" or req.scheme != "tcp":
+        return state_endpoint
+    return f"tcp://{req.netloc.rsplit(':', 1)[0]}:{st.port}"
+
+
+class Client:
+    """A protocol client: request/reply and input on a DEALER, state on a SUB.
+
+    Parameters
+    ----------
+    url : str
+        The engine's request URL.
+    role : {"operator", "viewer"}
+    name : str
+        Shown in the engine's log.
+    token : str, optional
+        Shared secret for an engine bound to a non-local address.
+    timeout : float
+        Seconds to wait for ``welcome`` and for replies.
+    """
+
+    def __init__(
+        self,
+        url: str,
+        role: str = "viewer",
+        name: str = "client",
+        token: str | None = None,
+        timeout: float = 3.0,
+        context: zmq.Context | None = None,
+    ) -> None:
+        self.url = check_url(url)
+        self.ctx = context or zmq.Context.instance()
+        self.timeout = timeout
+        self.dealer = self.ctx.socket(zmq.DEALER)
+        self.dealer.setsockopt(zmq.LINGER, 0)
+        self.dealer.setsockopt(zmq.IDENTITY, f"{name}-{uuid.uuid4().hex[:8]}".encode())
+        self.dealer.connect(self.url)
+        self.sub: zmq.Socket | None = None
+        self.role = None
+        self.seq = 0
+        hello: dict[str, Any] = {"role": role, "name": name}
+        if token is not None:
+            hello["token"] = token
+        self.send("hello", **hello)
+        welcome = self._wait_for(("welcome", "reply"))
+        if welcome["type"] == "reply":
+            self.close()
+            raise TransportError(f"engine refused the connection: {welcome.get('error', 'no reason given')}")
+        self.role = welcome["role"]
+        self.client_id = welcome["client_id"]
+        self.note = welcome.get("note", "")
+        self.state_url = client_view_of(welcome["state_url"], self.url)
+        self.sub = self.ctx.socket(zmq.SUB)
+        self.sub.setsockopt(zmq.LINGER, 0)
+        self.sub.setsockopt(zmq.CONFLATE, 0)
+        self.sub.setsockopt(zmq.SUBSCRIBE, b"")
+        self.sub.connect(self.state_url)
+
+    # ------------------------------------------------------------------ sending
+    def send(self, mtype: str, **fields: Any) -> None:
+        self.dealer.send(encode(mtype, **fields), zmq.NOBLOCK)
+
+    def send_input(self, axes, buttons, device: str) -> None:
+        self.seq += 1
+        self.send(
+            "input",
+            seq=self.seq,
+            t_send=time.monotonic(),
+            axes=[float(a) for a in axes],
+            buttons=[bool(b) for b in buttons],
+            device=device,
+        )
+
+    def request(self, mtype: str, **fields: Any) -> dict[str, Any]:
+        """Send a command and wait for its reply; raises TransportError when refused or silent."""
+        self.send(mtype, **fields)
+        reply = self._wait_for(("reply",), re=mtype)
+        if not reply["ok"]:
+            raise TransportError(reply.get("error", f"{mtype} refused"))
+        return reply
+
+    # ------------------------------------------------------------------ receiving
+    def _wait_for(self, types: tuple[str, ...], re: str | None = None) -> dict[str, Any]:
+        deadline = time.monotonic() + self.timeout
+        while (left := deadline - time.monotonic()) > 0:
+            if not self.dealer.poll(int(left * 1000) + 1):
+                continue
+            try:
+                msg = decode_engine(self.dealer.recv())
+            except ProtocolError:
+                continue
+            if msg["type"] in types and (re is None or msg.get("re") == re):
+                return msg
+        raise TransportError(f"no answer from the engine at {self.url} within {self.timeout:g} s")
+
+    def recv_state(self, timeout: float = 1.0) -> dict[str, Any] | None:
+        """The next state message's snapshot (None on timeout); log messages are skipped."""
+        deadline = time.monotonic() + timeout
+        while (left := deadline - time.monotonic()) > 0:
+            if not self.sub.poll(int(left * 1000) + 1):
+                continue
+            try:
+                msg = decode_engine(self.sub.recv())
+            except ProtocolError:
+                continue
+            if msg["type"] == "state":
+                return msg["state"]
+        return None
+
+    def latest_state(self, timeout: float = 1.0) -> dict[str, Any] | None:
+        """Drain the stream and return the newest snapshot (waits up to timeout for one)."""
+        newest = self.recv_state(timeout)
+        while newest is not None and self.sub.poll(0):
+            nxt = self.recv_state(0.001)
+            if nxt is None:
+                break
+            newest = nxt
+        return newest
+
+    def close(self) -> None:
+        with contextlib.suppress(zmq.ZMQError):
+            self.send("bye")
+        for s in (self.dealer, self.sub):
+            if s is not None:
+                s.close(0)

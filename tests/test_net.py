@@ -1,0 +1,252 @@
+"""Protocol codec (incl. fuzzing) and the engine end to end over real sockets on 127.0.0.1."""
+
+import contextlib
+import threading
+import time
+
+import msgpack
+import numpy as np
+import pytest
+import zmq
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from app.engine.server import EngineServer
+from app.engine.session import Session
+from app.net.codec import ProtocolError, decode, encode
+from app.net.messages import CLIENT_MESSAGES, MAX_MESSAGE_BYTES
+from app.net.transport import Client, TransportError, check_url, is_local
+from app.teleop.client import run_joystick_client
+from app.teleop.devices import PygameJoysticks
+from app.teleop.virtual import VirtualJoystick
+
+
+# ------------------------------------------------------------------ codec
+def test_round_trip_every_client_message():
+    samples = {
+        "hello": {"role": "operator", "name": "me", "token": "s3cret"},
+        "bye": {},
+        "ping": {"seq": 3},
+        "input": {"seq": 1, "t_send": 12.5, "axes": [0.1, -1.0, 1.0], "buttons": [True, False], "device": "stick"},
+        "device_lost": {"device": "stick"},
+        "set_robot": {"robot": "scara"},
+        "set_solver": {"solver": "ga"},
+        "set_mode": {"mode": "position"},
+        "set_scaling": {"k_p": [1.0, 1.0, 1.0], "x_w": [0.0, 1.0, 2.0], "k_v": [0.1, 0.1, 0.1]},
+        "estop": {"reason": "test"},
+        "reset": {},
+        "release_operator": {},
+    }
+    assert set(samples) == set(CLIENT_MESSAGES)
+    for mtype, fields in samples.items():
+        assert decode(encode(mtype, **fields)) == {"type": mtype, **fields}
+
+
+@pytest.mark.parametrize(
+    "data, reason",
+    [
+        (b"\xc1garbage", "not a msgpack message"),
+        (msgpack.packb([1, 2, 3]), "message is not a map"),
+        (msgpack.packb({"v": 2, "type": "ping"}), "protocol version 2 is not supported"),
+        (msgpack.packb({"v": 1, "type": "launch_missiles"}), "unknown message type"),
+        (msgpack.packb({"v": 1, "type": "ping", "extra": 1}), "unknown field"),
+        (encode("input", seq=1, axes=[2.0], buttons=[], device="x"), r"values must lie in \[-1, 1\]"),
+        (encode("input", seq=1, axes=[float("nan")], buttons=[], device="x"), "finite numbers only"),
+        (encode("input", seq=1, axes=[0.0] * 17, buttons=[], device="x"), "at most 16"),
+        (encode("input", seq=-1, axes=[], buttons=[], device="x"), "must be an integer"),
+        (encode("input", axes=[], buttons=[], device="x"), "missing field 'seq'"),
+        (encode("set_mode", mode="turbo"), "must be one of position, velocity"),
+        (encode("set_scaling", k_p=[1.0, 2.0]), "exactly 3"),
+        (encode("hello", role="operator", name="x" * 65), "longer than 64"),
+        (encode("estop", reason=5), "must be text"),
+        (b"\x00" * (MAX_MESSAGE_BYTES + 1), "exceeds the limit"),
+    ],
+)
+def test_bad_messages_rejected_with_reason(data, reason):
+    with pytest.raises(ProtocolError, match=reason):
+        decode(data)
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(st.binary(max_size=512))
+def test_fuzz_random_bytes_never_crash(data):
+    with contextlib.suppress(ProtocolError):
+        decode(data)
+
+
+_json_like = st.recursive(
+    st.none()
+    | st.booleans()
+    | st.integers(min_value=-(2**63), max_value=2**64 - 1)
+    | st.floats()
+    | st.text(max_size=20),
+    lambda children: st.lists(children, max_size=5) | st.dictionaries(st.text(max_size=8), children, max_size=5),
+    max_leaves=20,
+)
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(
+    mtype=st.sampled_from(sorted(CLIENT_MESSAGES) + ["nope"]),
+    fields=st.dictionaries(
+        st.sampled_from(["seq", "axes", "buttons", "device", "role", "name", "mode", "k_p", "robot", "token", "x"]),
+        _json_like,
+        max_size=6,
+    ),
+)
+def test_fuzz_structured_messages_valid_or_rejected(mtype, fields):
+    data = msgpack.packb({"v": 1, "type": mtype, **fields}, use_bin_type=True)
+    try:
+        msg = decode(data)
+    except ProtocolError:
+        return
+    # accepted messages are clean: known type, known fields, finite numbers
+    assert msg["type"] in CLIENT_MESSAGES and set(msg) - {"type"} <= set(CLIENT_MESSAGES[msg["type"]])
+    for v in msg.values():
+        if isinstance(v, float):
+            assert np.isfinite(v)
+
+
+def test_urls():
+    assert is_local("tcp://127.0.0.1:5555") and is_local("tcp://localhost:1") and is_local("ipc:///tmp/x")
+    assert not is_local("tcp://0.0.0.0:5555") and not is_local("tcp://192.0.2.7:5555")
+    for bad in ("http://x:1", "tcp://127.0.0.1", "tcp://:5555", "ipc://"):
+        with pytest.raises(TransportError):
+            check_url(bad)
+
+
+def test_non_local_bind_needs_token():
+    with pytest.raises(TransportError, match="needs a shared token"):
+        EngineServer(Session(), bind="tcp://0.0.0.0:0")
+
+
+# ------------------------------------------------------------------ engine over sockets
+@pytest.fixture
+def engine():
+    """An engine on 127.0.0.1 (free port) running in a thread; always stopped."""
+    servers = []
+
+    def start(token=None, **session_kwargs):
+        srv = EngineServer(Session(**session_kwargs), bind="tcp://127.0.0.1:0", rate=500, publish_rate=50, token=token)
+        th = threading.Thread(target=srv.run, kwargs={"duration": 30.0}, daemon=True)
+        th.start()
+        servers.append((srv, th))
+        return srv
+
+    yield start
+    for srv, th in servers:
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()
+
+
+def wait_for(client, predicate, timeout=5.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        st_ = client.recv_state(0.5)
+        if st_ is not None and predicate(st_):
+            return st_
+    raise AssertionError("state never satisfied the condition")
+
+
+def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
+    srv = engine()
+    viewer = Client(srv.url, role="viewer", name="viewer")
+    try:
+        p0 = np.array(viewer.recv_state(2.0)["tool"])
+        PygameJoysticks()  # SDL joystick subsystem up before attaching
+        vj = VirtualJoystick(n_axes=4, n_buttons=8)
+        stop = threading.Event()
+        th = threading.Thread(
+            target=run_joystick_client, args=(srv.url,), kwargs={"rate": 200, "stop": stop}, daemon=True
+        )
+        try:
+            vj.set_button(0, True)  # deadman (default profile: button 0)
+            vj.set_axis(0, 0.8)  # +x
+            th.start()
+            st_ = wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.05)
+            assert st_["flags"]["device"] and st_["operator"] == "joystick"
+            # a second client cannot take the operator role while the first holds it
+            second = Client(srv.url, role="operator", name="intruder")
+            assert second.role == "viewer" and "held by joystick" in second.note
+            with pytest.raises(TransportError, match="only the operator"):
+                second.request("set_mode", mode="position")
+            second.close()
+            # unplug: the engine holds the robot
+            vj.detach()
+            st_ = wait_for(viewer, lambda s: not s["flags"]["device"])
+            p_hold = np.array(st_["tool"])
+            time.sleep(0.3)
+            np.testing.assert_allclose(viewer.latest_state()["tool"], p_hold, atol=2e-3)
+        finally:
+            stop.set()
+            th.join(timeout=5)
+            if vj.handle:
+                vj.detach()
+    finally:
+        viewer.close()
+
+
+def test_estop_from_a_viewer_latches_and_reset_clears(engine):
+    srv = engine(robot_name="offshore_crane")
+    op = Client(srv.url, role="operator", name="op")
+    viewer = Client(srv.url, role="viewer", name="v")
+    try:
+        for _ in range(100):
+            op.send_input([1.0, 0.0, 0.0], [True], "stick")
+            time.sleep(0.005)
+        viewer.request("estop", reason="test")
+        st_ = wait_for(viewer, lambda s: s["flags"]["estop"])
+        p = np.array(st_["tool"])
+        for _ in range(60):  # input keeps coming: nothing moves
+            op.send_input([1.0, 0.0, 0.0], [True], "stick")
+            time.sleep(0.005)
+        np.testing.assert_allclose(viewer.latest_state()["tool"], p, atol=1e-9)
+        with pytest.raises(TransportError, match="only the operator"):
+            viewer.request("reset")
+        op.request("reset")
+        assert not wait_for(viewer, lambda s: not s["flags"]["estop"])["flags"]["estop"]
+    finally:
+        op.close()
+        viewer.close()
+
+
+def test_stale_network_input_stops(engine):
+    srv = engine(robot_name="comau_smart5_3dof")
+    op = Client(srv.url, role="operator", name="op")
+    viewer = Client(srv.url, role="viewer", name="v")
+    try:
+        for _ in range(80):
+            op.send_input([1.0, 0.0, 0.0], [True], "stick")
+            time.sleep(0.005)
+        time.sleep(0.3)  # silence longer than the 200 ms stale timeout
+        st_ = viewer.latest_state()
+        assert st_["flags"]["stale_input"]
+        time.sleep(0.2)
+        np.testing.assert_allclose(viewer.latest_state()["tool"], st_["tool"], atol=1e-5)
+    finally:
+        op.close()
+        viewer.close()
+
+
+def test_token_and_malformed_messages(engine):
+    srv = engine(token="s3cret")
+    with pytest.raises(TransportError, match="wrong or missing token"):
+        Client(srv.url, role="viewer", name="anon", timeout=2.0)
+    ok = Client(srv.url, role="operator", name="ok", token="s3cret")
+    raw = zmq.Context.instance().socket(zmq.DEALER)
+    raw.setsockopt(zmq.LINGER, 0)
+    raw.connect(srv.url)
+    try:
+        for junk in (b"\xff\xfe", msgpack.packb({"v": 1, "type": "input"}), b"", msgpack.packb({"v": 1})):
+            raw.send(junk)
+        raw.send_multipart([b"two", b"frames"])
+        ok.request("set_robot", robot="scara")  # the engine kept running and still answers
+        st_ = wait_for(ok, lambda s: s["robot"] == "scara")
+        assert st_["rejected"] >= 5
+        with pytest.raises(TransportError, match="unknown robot 'nope'"):
+            ok.request("set_robot", robot="nope")
+        assert ok.latest_state()["robot"] == "scara"
+    finally:
+        raw.close(0)
+        ok.close()
