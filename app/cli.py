@@ -412,7 +412,11 @@ def cmd_server(args: argparse.Namespace) -> int:
     import signal
 
     from app.engine.server import EngineServer
+    from app.net.transport import check_url, is_local
 
+    check_url(args.bind)
+    if not is_local(args.bind) and not args.token:
+        raise BosunError(f"binding to the non-local address {args.bind} needs a shared token (--token)")
     session = _make_session(args)
     server = EngineServer(session, bind=args.bind, rate=args.rate, publish_rate=args.publish_rate, token=args.token)
     signal.signal(signal.SIGTERM, lambda *_: server.stop())

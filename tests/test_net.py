@@ -250,3 +250,59 @@ def test_token_and_malformed_messages(engine):
     finally:
         raw.close(0)
         ok.close()
+
+
+def test_separate_processes_server_joystick_viewer():
+    """bosun server and bosun joystick --virtual as their own processes; this test is the viewer."""
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    exe = str(Path(sys.executable).with_name("bosun"))
+    srv = subprocess.Popen(
+        [exe, "server", "--bind", "tcp://127.0.0.1:0", "--duration", "30"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    js = None
+    try:
+        url = None
+        for _ in range(5):
+            line = srv.stdout.readline()
+            m = re.search(r"requests on (tcp://\S+),", line)
+            if m:
+                url = m.group(1)
+                break
+        assert url, "server did not report its address"
+        viewer = Client(url, role="viewer", name="test-viewer", timeout=10)
+        try:
+            p0 = np.array(viewer.recv_state(5.0)["tool"])
+            js = subprocess.Popen(
+                [exe, "joystick", "--connect", url, "--virtual", "--duration", "4"],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+            st_ = wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.05, timeout=15)
+            assert st_["operator"] == "joystick" and st_["flags"]["device_name"]
+            out, err = js.communicate(timeout=30)
+            assert js.returncode == 0, err
+            assert "sent" in out
+            wait_for(viewer, lambda s: s["flags"]["stale_input"] or not s["flags"]["device"], timeout=5)
+        finally:
+            viewer.close()
+    finally:
+        if js is not None and js.poll() is None:
+            js.kill()
+        srv.terminate()
+        srv.wait(timeout=10)
+
+
+def test_cli_server_refuses_public_bind_without_token(capsys):
+    from app.cli import main
+
+    assert main(["server", "--bind", "tcp://0.0.0.0:0", "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert "needs a shared token" in err and err.count("\n") == 1
