@@ -499,6 +499,28 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---------------------------------------------------------------------------- plug-in commands
+PLUGIN_GROUP = "bosun.commands"
+HELPERS = {"positive_float": None, "finite_float": None}  # filled below, handed to plug-ins
+
+
+def _load_plugin_commands(sub) -> None:
+    """Commands other packages register under the ``bosun.commands`` entry-point group.
+
+    The GUI (package ``ui``) adds ``bosun gui`` this way, so the Qt-free core never imports
+    the GUI; each plug-in gets ``register(subparsers, helpers)``.
+    """
+    from importlib.metadata import entry_points
+
+    HELPERS.update(positive_float=_positive_float, finite_float=_finite_float)
+    for ep in entry_points(group=PLUGIN_GROUP):
+        try:
+            register = ep.load()
+        except ImportError:
+            continue  # the plug-in's package is not installed here
+        register(sub, HELPERS)
+
+
 # ---------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
@@ -612,6 +634,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_loop)
+    _load_plugin_commands(sub)
 
     def add_engine_args(p: argparse.ArgumentParser) -> None:
         p.add_argument("--robot", default="comau_smart5_3dof", help="robot to load (default comau_smart5_3dof)")
@@ -643,13 +666,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _commands(parser: argparse.ArgumentParser) -> set[str]:
+    for action in parser._actions:  # argparse keeps subcommands on its private action list
+        if isinstance(action, argparse._SubParsersAction):
+            return set(action.choices)
+    return set()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``bosun`` and ``python -m app``; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
-        # Until the GUI exists, running the app lists the robot library.
-        args = parser.parse_args(["robots"])
+        # the GUI when it is installed, else the robot library
+        args = parser.parse_args(["gui"] if "gui" in _commands(parser) else ["robots"])
     try:
         return args.func(args)
     except BosunError as err:

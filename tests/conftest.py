@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+# QSettings (the GUI's remembered choices) goes to a throw-away folder, never the user's config
+os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="bosun-test-config-")
 
 import numpy as np
 import pytest

@@ -32,9 +32,30 @@ def test_robots_json(capsys):
     assert by_name["kuka_youbot"]["dof"] == 5 and by_name["tac_delta_head"]["type"] == "delta"
 
 
-def test_no_command_lists_robots(capsys):
-    code, out, _ = run(capsys)
-    assert code == 0 and "offshore_crane" in out
+def test_no_command_opens_the_gui_or_says_why(capsys, monkeypatch):
+    # the default command is the GUI; without any display it explains itself in one line
+    for var in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM"):
+        monkeypatch.delenv(var, raising=False)
+    assert main([]) == 2
+    err = capsys.readouterr().err
+    assert "no display to open the GUI on" in err and err.count("\n") == 1
+
+
+def test_gui_attaches_to_a_running_engine_and_quits(capsys):
+    import threading
+
+    from app.engine.server import EngineServer
+    from app.engine.session import Session
+
+    srv = EngineServer(Session(), bind="tcp://127.0.0.1:0")
+    th = threading.Thread(target=srv.run, kwargs={"duration": 30.0}, daemon=True)
+    th.start()
+    try:
+        assert main(["gui", "--connect", srv.url, "--quit-after", "1.5"]) == 0  # offscreen platform (conftest)
+    finally:
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()
 
 
 def test_fk_comau_json_done_when(capsys):

@@ -257,6 +257,7 @@ class Session:
             "lower": self.robot.lower.tolist(),
             "upper": self.robot.upper.tolist(),
             "tool": self.robot.position(q).tolist(),
+            "frames": self.robot.frames(q)[:, :3, 3].tolist(),
             "target": np.asarray(self.target, dtype=float).tolist(),
             "signal": self.signal.tolist(),
             "solver_error": None if not math.isfinite(self.solver_cost) else float(self.solver_cost),

@@ -1,0 +1,263 @@
+"""Operator HMI with pytest-qt (offscreen), talking to a real engine over 127.0.0.1."""
+
+import csv
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("PyQt5")
+from PyQt5.QtCore import QSettings
+
+from app.engine.server import EngineServer
+from app.engine.session import Session
+from ui.csv_logger import StateCsvLogger
+from ui.glprobe import gl_available
+from ui.link import EngineLink
+from ui.main_window import MainWindow
+from ui.widgets.view3d import RobotView2D, make_robot_view
+
+
+@pytest.fixture
+def engine():
+    srv = EngineServer(Session(robot_name="comau_smart5_3dof"), bind="tcp://127.0.0.1:0", rate=500, publish_rate=50)
+    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
+    th.start()
+    yield srv
+    srv.stop()
+    th.join(timeout=5)
+    srv.close()
+
+
+@pytest.fixture
+def window(qtbot, engine, tmp_path):
+    link = EngineLink(engine.url)
+    win = MainWindow(link, settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat), dialogs=False)
+    qtbot.addWidget(win)
+    win.show()
+    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=5000)
+    yield win
+    win.close()
+
+
+def test_fallback_2d_view_when_gl_is_unavailable(qtbot):
+    assert os.environ["QT_QPA_PLATFORM"] == "offscreen"
+    assert not gl_available()
+    view = make_robot_view()
+    qtbot.addWidget(view)
+    assert isinstance(view, RobotView2D)
+
+
+def test_choosing_a_robot_loads_it_in_engine_and_view(qtbot, window):
+    combo = window.teleop.robot
+    combo.setCurrentText("scara")
+    combo.activated.emit(combo.currentIndex())
+    qtbot.waitUntil(lambda: window.teleop.state["robot"] == "scara", timeout=5000)
+    qtbot.wait(100)
+    _, _, _, links, _, _ = window.teleop.view.plots["top"]
+    x, _ = links.getData()
+    assert len(x) == 4 + 2  # scara: base, 4 DH frames, tool
+    assert len(window.teleop.bars.bars) == 4
+
+
+def test_mode_and_solver_reach_the_engine(qtbot, window):
+    window.teleop.mode_pos.click()
+    qtbot.waitUntil(lambda: window.teleop.state["mode"] == "position", timeout=5000)
+    solver = window.teleop.solver
+    solver.setCurrentText("ga")
+    solver.activated.emit(solver.currentIndex())
+    qtbot.waitUntil(lambda: window.teleop.state["solver"] == "ga", timeout=5000)
+
+
+def test_virtual_stick_moves_the_plotted_tool_point(qtbot, window):
+    plots = window.teleop.plots
+    qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=5000)
+    x0 = plots.ring.view()[-1, 4]
+    window.teleop.stick.pad.set_position(1.0, 0.0, True)
+    qtbot.waitUntil(lambda: plots.ring.view()[-1, 4] - x0 > 0.05, timeout=5000)
+    window.teleop.stick.pad.set_position(0.0, 0.0, False)
+    assert plots.frames_drawn > 0
+
+
+def test_keyboard_drives_the_stick(qtbot, window):
+    from PyQt5.QtCore import Qt
+
+    got = []
+    window.teleop.stick.changed.connect(lambda *a: got.append(a))
+    assert window.teleop.stick.key(Qt.Key_Up, True)
+    assert got[-1] == (0.0, 1.0, 0.0, True)
+    window.teleop.stick.key(Qt.Key_Up, False)
+    assert got[-1] == (0.0, 0.0, 0.0, False)
+
+
+def test_stop_latches_and_reset_clears(qtbot, window):
+    window.status.stop.click()
+    qtbot.waitUntil(lambda: window.teleop.state["flags"]["estop"], timeout=5000)
+    assert window.status.latched.text() == "E-STOP LATCHED" and window.status.reset.isEnabled()
+    assert window.status.lights["plant"].state == "error"
+    window.status.reset.click()
+    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["estop"], timeout=5000)
+    assert window.status.latched.text() == ""
+
+
+def test_invalid_xml_gives_error_and_keeps_robot(qtbot, window, tmp_path):
+    bad = tmp_path / "broken_arm.xml"
+    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>')
+    window.teleop.load_robot_file(str(bad))
+    qtbot.waitUntil(lambda: len(window.messages) > 0, timeout=5000)
+    title, message = window.messages[-1]
+    assert title == "Robot not loaded" and "broken_arm.xml:1: schema" in message
+    qtbot.wait(200)
+    assert window.teleop.state["robot"] == "comau_smart5_3dof"
+
+
+def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
+    path = tmp_path / "log.csv"
+    window.teleop.log_path.setText(str(path))
+    window.teleop.log_duration.setValue(0.0)  # until stopped
+    window.teleop.start_logger()
+    qtbot.waitUntil(lambda: window.teleop.logger is not None and window.teleop.logger.rows >= 10, timeout=5000)
+    window.teleop.stop_logger()
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    assert rows[0][:4] == ["t", "q_q1", "q_q2", "q_q3"] and len(rows) >= 11
+
+
+def test_csv_logger_rows_and_closed_mid_run(tmp_path):
+    state = {
+        "t": 0.0,
+        "joint_names": ["a", "b"],
+        "q": [0.1, 0.2],
+        "qdot": [0, 0],
+        "tool": [1, 2, 3],
+        "target": [1, 2, 3],
+        "signal": [0, 0, 0],
+        "solver_error": None,
+        "solver_time": 0.001,
+        "flags": {"estop": False, "stale_input": False, "enabled": True},
+    }
+    log = StateCsvLogger(tmp_path / "a.csv", ["q", "tool", "solver"], duration=0.1)
+    written = 0
+    for k in range(20):
+        if log.add({**state, "t": k * 0.02}):
+            written += 1
+    assert written == 6 and log.done  # t = 0 .. 0.10 s, then the duration ended the file
+    with open(tmp_path / "a.csv") as f:
+        rows = list(csv.reader(f))
+    assert len(rows) == 7 and rows[0] == [
+        "t",
+        "q_a",
+        "q_b",
+        "tool_x",
+        "tool_y",
+        "tool_z",
+        "solver_error",
+        "solver_time",
+    ]
+    # a logger abandoned mid-run (no close) has flushed every row written so far
+    log2 = StateCsvLogger(tmp_path / "b.csv", ["q"])
+    for k in range(5):
+        log2.add({**state, "t": k * 0.02})
+    with open(tmp_path / "b.csv") as f:
+        assert len(list(csv.reader(f))) == 6
+    with pytest.raises(ValueError, match="unknown or no signals"):
+        StateCsvLogger(tmp_path / "c.csv", ["nope"])
+
+
+def test_lost_engine_connection_is_reported(qtbot, engine, tmp_path):
+    link = EngineLink(engine.url, lost_after=0.5)
+    win = MainWindow(link, settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat), dialogs=False)
+    qtbot.addWidget(win)
+    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=5000)
+    engine.stop()
+    qtbot.waitUntil(lambda: any(t == "Engine connection lost" for t, _ in win.messages), timeout=5000)
+    assert win.status.lights["engine"].state == "error"
+    win.close()
+
+
+def test_unplugged_joystick_is_reported(qtbot, window):
+    from app.teleop.virtual import VirtualJoystick
+
+    vj = VirtualJoystick(n_axes=4, n_buttons=8)
+    try:
+        qtbot.waitUntil(lambda: window.teleop.device.count() == 2, timeout=5000)
+        window.teleop.device.setCurrentIndex(1)
+        window.teleop.device.activated.emit(1)
+        vj.set_button(0, True)
+        qtbot.waitUntil(
+            lambda: window.teleop.state["flags"]["device_name"] != "on-screen stick / keyboard", timeout=5000
+        )
+    finally:
+        vj.detach()
+    qtbot.waitUntil(lambda: "unplugged" in window.status.log_view.toPlainText(), timeout=5000)
+    # the GUI falls back to the on-screen stick, which nobody holds: the deadman is off and the robot holds
+    qtbot.waitUntil(lambda: window.teleop.inputs.choice == "on-screen stick / keyboard", timeout=5000)
+    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=5000)
+    qtbot.wait(300)
+    p = np.array(window.teleop.state["tool"])
+    qtbot.wait(300)
+    np.testing.assert_allclose(window.teleop.state["tool"], p, atol=1e-6)
+
+
+# ------------------------------------------------------------------ OpenGL under Xvfb
+GL_SCRIPT = r"""
+import sys, numpy as np
+from PyQt5.QtWidgets import QApplication
+app = QApplication(sys.argv[:1])
+from ui.glprobe import gl_available
+if not gl_available():
+    sys.exit(77)
+from ui.widgets.view3d import RobotView3D, make_robot_view
+from app.engine.session import Session
+view = make_robot_view()
+assert isinstance(view, RobotView3D), type(view)
+view.resize(400, 300); view.show(); app.processEvents()
+view.update_state(Session(robot_name="offshore_crane").snapshot()); app.processEvents()
+img = view.view.renderToArray((400, 300))
+lit = (img[..., :3].max(axis=2) > 100).mean()
+print("lit fraction", lit)
+sys.exit(0 if 0.001 < lit < 0.9 else 1)
+"""
+
+
+def test_gl_view_renders_under_xvfb(tmp_path):
+    if shutil.which("Xvfb") is None:
+        pytest.skip("Xvfb is not installed")
+    display = ":93"
+    xvfb = subprocess.Popen(
+        ["Xvfb", display, "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        time.sleep(1.0)
+        env = {**os.environ, "DISPLAY": display, "QT_QPA_PLATFORM": "xcb"}
+        res = subprocess.run(
+            [sys.executable, "-c", GL_SCRIPT], env=env, capture_output=True, text=True, timeout=120, cwd=str(tmp_path)
+        )
+    finally:
+        xvfb.terminate()
+        xvfb.wait(timeout=10)
+    if res.returncode == 77:
+        pytest.skip("no OpenGL context under Xvfb here")
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "lit fraction" in res.stdout
+
+
+def test_arrow_keys_drive_the_tool(qtbot, window):
+    from PyQt5.QtCore import Qt
+
+    window.activateWindow()
+    window.tabs.setFocus()
+    plots = window.teleop.plots
+    qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=5000)
+    y0 = window.teleop.state["tool"][1]
+    qtbot.keyPress(window.tabs, Qt.Key_Up)
+    qtbot.waitUntil(lambda: window.teleop.state["tool"][1] - y0 > 0.05, timeout=5000)
+    qtbot.keyRelease(window.tabs, Qt.Key_Up)
+    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=5000)

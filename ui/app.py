@@ -1,0 +1,85 @@
+"""``bosun`` / ``bosun gui``: the operator HMI, with its own engine or attached to one."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from app.errors import BosunError
+
+
+def has_display() -> bool:
+    return bool(
+        os.environ.get("DISPLAY")
+        or os.environ.get("WAYLAND_DISPLAY")
+        or os.environ.get("QT_QPA_PLATFORM") in ("offscreen", "minimal", "vnc")
+    )
+
+
+def run_gui(
+    connect: str | None = None,
+    token: str | None = None,
+    robot: str | None = None,
+    solver: str | None = None,
+    mode: str | None = None,
+    quit_after: float | None = None,
+) -> int:
+    """Open the main window; start a child engine unless ``connect`` names a running one."""
+    if not has_display():
+        raise BosunError(
+            "no display to open the GUI on (DISPLAY is not set); run 'bosun server' headless, "
+            "or start the GUI on a desktop or under xvfb-run"
+        )
+    from PyQt5.QtCore import QSettings, QTimer
+    from PyQt5.QtWidgets import QApplication
+
+    from app.net.transport import TransportError
+    from ui.engine_process import EngineProcess
+    from ui.link import EngineLink
+    from ui.main_window import MainWindow
+
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setApplicationName("Bosun")
+    settings = QSettings("Bosun", "Bosun HMI")
+    engine = None
+    try:
+        if connect is None:
+            engine = EngineProcess(
+                robot=robot or str(settings.value("robot", "comau_smart5_3dof")),
+                solver=solver or str(settings.value("solver", "jacobian")),
+                mode=mode or str(settings.value("mode", "velocity")),
+            )
+            connect = engine.url
+        link = EngineLink(connect, role="operator", token=token)
+    except TransportError as err:
+        if engine is not None:
+            engine.stop()
+        raise BosunError(str(err)) from None
+    win = MainWindow(link, engine=engine, settings=settings)
+    win.resize(1500, 950)
+    win.show()
+    if quit_after is not None:
+        QTimer.singleShot(int(quit_after * 1000), win.close)
+    return app.exec_()
+
+
+def register(sub, helpers) -> None:
+    """Add ``bosun gui`` to the CLI (entry point ``bosun.commands``)."""
+    import argparse
+
+    p = sub.add_parser("gui", help="the operator HMI (the default command)")
+    p.add_argument(
+        "--connect",
+        default=None,
+        help="attach to a running 'bosun server' at this URL (default: start an engine process)",
+    )
+    p.add_argument("--token", default=None, help="shared secret of that engine")
+    p.add_argument("--robot", default=None, help="robot for a new engine (default: the last one used)")
+    p.add_argument("--solver", default=None, help="solver for a new engine")
+    p.add_argument("--mode", choices=["position", "velocity"], default=None, help="mode for a new engine")
+    p.add_argument("--quit-after", type=helpers["positive_float"], default=None, help=argparse.SUPPRESS)
+    p.set_defaults(
+        func=lambda a: run_gui(
+            connect=a.connect, token=a.token, robot=a.robot, solver=a.solver, mode=a.mode, quit_after=a.quit_after
+        )
+    )

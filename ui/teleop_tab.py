@@ -1,0 +1,341 @@
+"""Teleop tab: robot, solver, mode and scaling; input devices; 3D view; live plots; CSV logger."""
+
+from __future__ import annotations
+
+import os
+
+from PyQt5.QtCore import QObject, QTimer, pyqtSignal
+from PyQt5.QtWidgets import (
+    QButtonGroup,
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QProgressBar,
+    QPushButton,
+    QRadioButton,
+    QSplitter,
+    QVBoxLayout,
+    QWidget,
+)
+
+from app.ik import solver_names
+from app.models.registry import list_robots
+from ui.csv_logger import SIGNALS, StateCsvLogger
+from ui.widgets.plots import LivePlots, UtilisationBars
+from ui.widgets.stick import VirtualStick
+from ui.widgets.view3d import make_robot_view
+
+MANUAL = "on-screen stick / keyboard"
+
+
+class InputManager(QObject):
+    """Polls the chosen input at 100 Hz and streams it to the engine.
+
+    Sources: any joystick pygame sees (hot-plug) or the on-screen stick and keyboard.
+    """
+
+    sample = pyqtSignal(tuple, tuple, str)  # axes, buttons, device (for the live display)
+    devices_changed = pyqtSignal(list)
+    notice = pyqtSignal(str, str)  # level, text (not "event": that would shadow QObject.event)
+
+    def __init__(self, link, parent=None) -> None:
+        super().__init__(parent)
+        self.link = link
+        self.choice = MANUAL
+        self.manual = (0.0, 0.0, 0.0, False)
+        try:
+            from app.teleop.devices import PygameJoysticks
+
+            self.sticks = PygameJoysticks()
+        except Exception as err:
+            self.sticks = None
+            self.notice.emit("warning", f"joysticks unavailable: {err}")
+        self.known: list[str] = []
+        self.timer = QTimer(self)
+        self.timer.setInterval(10)
+        self.timer.timeout.connect(self.poll)
+        self.timer.start()
+
+    def set_manual(self, x: float, y: float, z: float, held: bool) -> None:
+        self.manual = (x, y, z, held)
+
+    def poll(self) -> None:
+        joy = None
+        if self.sticks is not None:
+            self.sticks.select = None if self.choice == MANUAL else self.choice
+            joy = self.sticks.poll()
+            for ev in self.sticks.take_events():
+                level = "warning" if ev.kind == "removed" else "info"
+                text = f"joystick {ev.device} {'unplugged: the robot holds' if ev.kind == 'removed' else 'plugged in'}"
+                self.notice.emit(level, text)
+                if ev.kind == "removed" and ev.device == self.choice:
+                    self.link.send("device_lost", device=ev.device[:128])
+            names = self.sticks.devices()
+            if names != self.known:
+                self.known = names
+                self.devices_changed.emit(names)
+        if self.choice != MANUAL:
+            if joy is not None:
+                self.link.send_input(joy.axes[:16], joy.buttons[:64], joy.device[:128])
+                self.sample.emit(joy.axes, joy.buttons, joy.device)
+            return
+        x, y, z, held = self.manual
+        # the default profile reads axes (0, 1 inverted, 2) and button 0 as the deadman
+        axes, buttons = (x, -y, z), (held,)
+        self.link.send_input(axes, buttons, MANUAL)
+        self.sample.emit(axes, buttons, MANUAL)
+
+
+class TeleopTab(QWidget):
+    error = pyqtSignal(str, str)  # title, message for a dialog
+
+    def __init__(self, link, parent=None) -> None:
+        super().__init__(parent)
+        self.link = link
+        self.logger: StateCsvLogger | None = None
+        self.state: dict | None = None
+        self._syncing = False
+        outer = QHBoxLayout(self)
+        split = QSplitter()
+        outer.addWidget(split)
+
+        # ---------------------------------------------------------- controls
+        controls = QWidget()
+        cl = QVBoxLayout(controls)
+        split.addWidget(controls)
+
+        g = QGroupBox("Manipulator")
+        f = QFormLayout(g)
+        self.robot = QComboBox()
+        self.robot.addItems(list_robots())
+        self.robot.setToolTip("robot from the library (robots/*.xml); loading it moves nothing")
+        self.robot.activated.connect(lambda _i: self.link.send("set_robot", robot=self.robot.currentText()))
+        row = QHBoxLayout()
+        row.addWidget(self.robot, 1)
+        self.open_xml = QPushButton("Open XML…")
+        self.open_xml.setToolTip("load any robot file (DH table and limits); an invalid file keeps the current robot")
+        self.open_xml.clicked.connect(self.choose_xml)
+        row.addWidget(self.open_xml)
+        f.addRow("robot", row)
+        self.solver = QComboBox()
+        self.solver.addItems(solver_names())
+        self.solver.setToolTip(
+            "IK solver: ga (the paper's genetic algorithm), jacobian (damped least squares), "
+            "analytic (closed form, Comau and crane)"
+        )
+        self.solver.activated.connect(lambda _i: self.link.send("set_solver", solver=self.solver.currentText()))
+        f.addRow("solver", self.solver)
+        mode_row = QHBoxLayout()
+        self.mode_group = QButtonGroup(self)
+        self.mode_pos = QRadioButton("position")
+        self.mode_pos.setToolTip("position mode (Ctrl+1): x = k_p·s + x_w; releasing the stick returns to x_w")
+        self.mode_vel = QRadioButton("velocity")
+        self.mode_vel.setToolTip("velocity mode (Ctrl+2): ẋ = k_v·s; releasing the stick stops and holds")
+        for b in (self.mode_pos, self.mode_vel):
+            self.mode_group.addButton(b)
+            mode_row.addWidget(b)
+        self.mode_pos.clicked.connect(lambda: self.set_mode("position"))
+        self.mode_vel.clicked.connect(lambda: self.set_mode("velocity"))
+        f.addRow("mode", mode_row)
+        cl.addWidget(g)
+
+        g = QGroupBox("Workspace scaling (eqs. 1–2)")
+        grid = QGridLayout(g)
+        self.k_p = self._spin(0.0, 1e4, 3, "k_p: tool displacement per full stick deflection [m]")
+        self.k_v = self._spin(0.0, 1e3, 3, "k_v: tool speed per full stick deflection [m/s]")
+        self.x_w = [self._spin(-1e5, 1e5, 3, f"x_w {a}: origin of the virtual workspace [m]") for a in "xyz"]
+        grid.addWidget(QLabel("k_p [m]"), 0, 0)
+        grid.addWidget(self.k_p, 0, 1)
+        grid.addWidget(QLabel("k_v [m/s]"), 0, 2)
+        grid.addWidget(self.k_v, 0, 3)
+        grid.addWidget(QLabel("x_w [m]"), 1, 0)
+        for k, s in enumerate(self.x_w):
+            grid.addWidget(s, 1, 1 + k)
+        self.apply_scaling = QPushButton("Apply")
+        self.apply_scaling.setToolTip("send k_p, x_w and k_v to the engine")
+        self.apply_scaling.clicked.connect(self.send_scaling)
+        grid.addWidget(self.apply_scaling, 2, 3)
+        cl.addWidget(g)
+
+        g = QGroupBox("Input")
+        il = QVBoxLayout(g)
+        self.device = QComboBox()
+        self.device.addItem(MANUAL)
+        self.device.setToolTip(
+            "input device: a joystick (hot-plug) or the on-screen stick and keyboard (arrows: x/y, Page Up/Down: z)"
+        )
+        il.addWidget(self.device)
+        self.axes_bars = []
+        axes_row = QHBoxLayout()
+        for k in range(6):
+            b = QProgressBar()
+            b.setRange(-1000, 1000)
+            b.setTextVisible(False)
+            b.setMaximumHeight(10)
+            b.setToolTip(f"raw axis {k} of the input device, in [−1, 1]")
+            self.axes_bars.append(b)
+            axes_row.addWidget(b)
+        il.addLayout(axes_row)
+        self.buttons_label = QLabel("buttons: –")
+        self.buttons_label.setToolTip("buttons held on the input device")
+        il.addWidget(self.buttons_label)
+        self.stick = VirtualStick()
+        il.addWidget(self.stick)
+        cl.addWidget(g)
+
+        g = QGroupBox("CSV logger")
+        lg = QFormLayout(g)
+        path_row = QHBoxLayout()
+        self.log_path = QLineEdit(os.path.join(os.getcwd(), "bosun_log.csv"))
+        self.log_path.setToolTip("file the logger writes (overwritten)")
+        browse = QPushButton("…")
+        browse.setToolTip("choose the log file")
+        browse.clicked.connect(self._browse_log)
+        path_row.addWidget(self.log_path, 1)
+        path_row.addWidget(browse)
+        lg.addRow("file", path_row)
+        self.log_duration = self._spin(0.0, 86400.0, 1, "logging duration [s] of engine time; 0 = until stopped")
+        self.log_duration.setValue(60.0)
+        lg.addRow("duration [s]", self.log_duration)
+        sig_row = QHBoxLayout()
+        self.log_signals = {}
+        for name in SIGNALS:
+            cb = QCheckBox(name)
+            cb.setChecked(name in ("q", "tool", "target"))
+            cb.setToolTip(f"log '{name}' columns")
+            self.log_signals[name] = cb
+            sig_row.addWidget(cb)
+        lg.addRow("signals", sig_row)
+        self.log_button = QPushButton("Start logging")
+        self.log_button.setToolTip("start or stop writing engine states to the CSV file")
+        self.log_button.clicked.connect(self.toggle_logger)
+        self.log_rows = QLabel("")
+        lg.addRow(self.log_button, self.log_rows)
+        cl.addWidget(g)
+        cl.addStretch(1)
+
+        # ---------------------------------------------------------- view and plots
+        middle = QWidget()
+        ml = QVBoxLayout(middle)
+        self.view = make_robot_view()
+        ml.addWidget(self.view, 3)
+        self.bars = UtilisationBars()
+        ml.addWidget(self.bars, 1)
+        split.addWidget(middle)
+        self.plots = LivePlots()
+        split.addWidget(self.plots)
+        split.setSizes([330, 520, 520])
+
+        self.inputs = InputManager(link, self)
+        self.stick.changed.connect(self.inputs.set_manual)
+        self.inputs.sample.connect(self.show_sample)
+        self.inputs.devices_changed.connect(self._devices)
+        self.device.activated.connect(lambda _i: setattr(self.inputs, "choice", self.device.currentText()))
+        link.state.connect(self.on_state)
+        link.reply.connect(self.on_reply)
+
+    @staticmethod
+    def _spin(lo: float, hi: float, decimals: int, tip: str) -> QDoubleSpinBox:
+        s = QDoubleSpinBox()
+        s.setRange(lo, hi)
+        s.setDecimals(decimals)
+        s.setToolTip(tip)
+        return s
+
+    # ------------------------------------------------------------------ commands
+    def choose_xml(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open robot XML", os.getcwd(), "Robot files (*.xml)")
+        if path:
+            self.load_robot_file(path)
+
+    def load_robot_file(self, path: str) -> None:
+        self.link.send("set_robot", robot=path)
+
+    def set_mode(self, mode: str) -> None:
+        self.link.send("set_mode", mode=mode)
+
+    def send_scaling(self) -> None:
+        k_p, k_v = self.k_p.value(), self.k_v.value()
+        self.link.send("set_scaling", k_p=[k_p] * 3, k_v=[k_v] * 3, x_w=[s.value() for s in self.x_w])
+
+    def on_reply(self, re: str, ok: bool, error: str) -> None:
+        if not ok and re in ("set_robot", "set_solver", "set_mode", "set_scaling", "invalid"):
+            what = {"set_robot": "Robot not loaded", "set_solver": "Solver not changed"}.get(re, "Command refused")
+            self.error.emit(what, error)
+
+    # ------------------------------------------------------------------ display
+    def _devices(self, names: list) -> None:
+        current = self.device.currentText()
+        self.device.clear()
+        self.device.addItems([MANUAL, *names])
+        if current in names:
+            self.device.setCurrentText(current)
+        elif current != MANUAL:
+            self.inputs.choice = MANUAL
+
+    def show_sample(self, axes: tuple, buttons: tuple, device: str) -> None:
+        for k, b in enumerate(self.axes_bars):
+            b.setValue(int(1000 * axes[k]) if k < len(axes) else 0)
+        held = [str(i) for i, v in enumerate(buttons) if v]
+        self.buttons_label.setText(f"buttons: {' '.join(held) if held else '–'}   ({device})")
+
+    def on_state(self, state: dict) -> None:
+        self.state = state
+        self.view.update_state(state)
+        self.bars.update_state(state)
+        self.plots.add_state(state)
+        if self.logger is not None:
+            if self.logger.add(state):
+                self.log_rows.setText(f"{self.logger.rows} rows")
+            else:
+                self.stop_logger()
+        self._sync_controls(state)
+
+    def _sync_controls(self, state: dict) -> None:
+        if self.robot.currentText() != state["robot"]:
+            if self.robot.findText(state["robot"]) < 0:
+                self.robot.addItem(state["robot"])
+            self.robot.setCurrentText(state["robot"])
+        self.solver.setCurrentText(state["solver"])
+        (self.mode_pos if state["mode"] == "position" else self.mode_vel).setChecked(True)
+        sc = state["scaling"]
+        for w, v in ((self.k_p, sc["k_p"][0]), (self.k_v, sc["k_v"][0]), *zip(self.x_w, sc["x_w"], strict=True)):
+            if not w.hasFocus():
+                w.setValue(v)
+
+    # ------------------------------------------------------------------ logger
+    def _browse_log(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Log file", self.log_path.text(), "CSV (*.csv)")
+        if path:
+            self.log_path.setText(path)
+
+    def toggle_logger(self) -> None:
+        if self.logger is None:
+            self.start_logger()
+        else:
+            self.stop_logger()
+
+    def start_logger(self) -> None:
+        signals = [n for n, cb in self.log_signals.items() if cb.isChecked()]
+        duration = self.log_duration.value() or None
+        try:
+            self.logger = StateCsvLogger(self.log_path.text(), signals, duration)
+        except (OSError, ValueError) as err:
+            self.error.emit("Logger not started", str(err))
+            return
+        self.log_button.setText("Stop logging")
+        self.log_rows.setText("0 rows")
+
+    def stop_logger(self) -> None:
+        if self.logger is not None:
+            self.logger.close()
+            self.log_rows.setText(f"{self.logger.rows} rows written to {os.path.basename(self.log_path.text())}")
+            self.logger = None
+        self.log_button.setText("Start logging")

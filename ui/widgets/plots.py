@@ -1,0 +1,157 @@
+"""Live plots fed by engine states: ring buffers, redrawn by a timer (not per sample)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt5.QtCore import QTimer
+from PyQt5.QtWidgets import QGridLayout, QLabel, QProgressBar, QVBoxLayout, QWidget
+
+COLORS = [(230, 90, 70), (80, 180, 90), (80, 140, 230), (220, 180, 60), (170, 100, 210), (70, 200, 200)]
+
+
+class Ring:
+    """Fixed-size ring buffer of rows; ``view()`` returns them oldest first."""
+
+    def __init__(self, size: int, width: int) -> None:
+        self.data = np.full((size, width), np.nan)
+        self.n = 0
+        self.i = 0
+
+    def push(self, row) -> None:
+        self.data[self.i] = row
+        self.i = (self.i + 1) % len(self.data)
+        self.n = min(self.n + 1, len(self.data))
+
+    def view(self) -> np.ndarray:
+        if self.n < len(self.data):
+            return self.data[: self.n]
+        return np.roll(self.data, -self.i, axis=0)
+
+
+class LivePlots(QWidget):
+    """X/Y/Z target vs reached, joint values with limit bands, solver error and time."""
+
+    def __init__(self, seconds: float = 20.0, rate: float = 50.0, fps: float = 30.0, parent=None) -> None:
+        super().__init__(parent)
+        self.size = int(seconds * rate)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        self.glw = pg.GraphicsLayoutWidget()
+        lay.addWidget(self.glw)
+        self.p_xyz = self.glw.addPlot(row=0, col=0, title="tool x, y, z: target (dashed) vs reached [m]")
+        self.p_q = self.glw.addPlot(row=1, col=0, title="joints (limit bands shaded) [rad, m]")
+        self.p_s = self.glw.addPlot(row=2, col=0, title="solver: error [m] (red), time [ms] (blue)")
+        for p in (self.p_xyz, self.p_q, self.p_s):
+            p.showGrid(x=True, y=True, alpha=0.25)
+            p.setClipToView(True)
+            p.setDownsampling(auto=True, mode="peak")
+            p.setLabel("bottom", "t", "s")
+        self.p_xyz.setToolTip("tool position in the robot's world frame [m]")
+        self.p_q.setToolTip("joint values [rad or m] with their limits as bands")
+        self.p_s.setToolTip("last solve: position error [m] and solve time [ms]")
+        self.p_xyz.addLegend(offset=(5, 5))
+        self.cur_xyz = []
+        for k, name in enumerate("xyz"):
+            c = COLORS[k]
+            self.cur_xyz.append(
+                (
+                    self.p_xyz.plot(pen=pg.mkPen(c, width=1, style=pg.QtCore.Qt.DashLine)),
+                    self.p_xyz.plot(pen=pg.mkPen(c, width=2), name=name),
+                )
+            )
+        self.cur_q: list = []
+        self.bands: list = []
+        self.cur_err = self.p_s.plot(pen=pg.mkPen((230, 80, 80), width=1.5))
+        self.cur_time = self.p_s.plot(pen=pg.mkPen((80, 140, 230), width=1.5))
+        self.ring = None
+        self.robot = None
+        self.timer = QTimer(self)
+        self.timer.setInterval(int(1000 / fps))
+        self.timer.timeout.connect(self.redraw)
+        self.timer.start()
+        self.frames_drawn = 0
+
+    def _reset(self, state: dict) -> None:
+        n = len(state["q"])
+        self.ring = Ring(self.size, 1 + 6 + n + 2)
+        self.robot = state["robot"]
+        for c in self.cur_q:
+            self.p_q.removeItem(c)
+        for b in self.bands:
+            self.p_q.removeItem(b)
+        self.cur_q, self.bands = [], []
+        for j in range(n):
+            c = COLORS[j % len(COLORS)]
+            lo, hi = state["lower"][j], state["upper"][j]
+            band = pg.LinearRegionItem(
+                (lo, hi), orientation="horizontal", movable=False, brush=pg.mkBrush(*c, 18), pen=pg.mkPen(*c, 60)
+            )
+            self.p_q.addItem(band)
+            self.bands.append(band)
+            self.cur_q.append(self.p_q.plot(pen=pg.mkPen(c, width=2), name=state["joint_names"][j]))
+
+    def add_state(self, state: dict) -> None:
+        if self.ring is None or state["robot"] != self.robot or len(state["q"]) != self.ring.data.shape[1] - 9:
+            self._reset(state)
+        err = state.get("solver_error")
+        self.ring.push(
+            [
+                state["t"],
+                *state["target"],
+                *state["tool"],
+                *state["q"],
+                np.nan if err is None else err,
+                1e3 * state.get("solver_time", 0.0),
+            ]
+        )
+
+    def redraw(self) -> None:
+        if self.ring is None or self.ring.n == 0 or not self.isVisible():
+            return
+        d = self.ring.view()
+        t = d[:, 0]
+        for k, (c_target, c_tool) in enumerate(self.cur_xyz):
+            c_target.setData(t, d[:, 1 + k])
+            c_tool.setData(t, d[:, 4 + k])
+        for j, c in enumerate(self.cur_q):
+            c.setData(t, d[:, 7 + j])
+        self.cur_err.setData(t, d[:, -2])
+        self.cur_time.setData(t, d[:, -1])
+        self.frames_drawn += 1
+
+
+class UtilisationBars(QWidget):
+    """(q − q_min)/(q_max − q_min) per joint as bars."""
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self.grid = QGridLayout(self)
+        self.grid.setContentsMargins(4, 4, 4, 4)
+        self.bars: list[QProgressBar] = []
+        self.names: tuple = ()
+
+    def update_state(self, state: dict) -> None:
+        names = tuple(state["joint_names"])
+        if names != self.names:
+            while self.grid.count():
+                w = self.grid.takeAt(0).widget()
+                if w is not None:
+                    w.deleteLater()
+            self.bars = []
+            for j, n in enumerate(names):
+                self.grid.addWidget(QLabel(n), j, 0)
+                bar = QProgressBar()
+                bar.setRange(0, 1000)
+                bar.setTextVisible(True)
+                bar.setToolTip(f"{n}: utilisation of the joint range, (q − q_min)/(q_max − q_min) [%]")
+                self.grid.addWidget(bar, j, 1)
+                self.bars.append(bar)
+            self.names = names
+        for j, bar in enumerate(self.bars):
+            lo, hi, q = state["lower"][j], state["upper"][j], state["q"][j]
+            u = (q - lo) / (hi - lo) if hi > lo else 0.0
+            bar.setValue(round(1000 * min(max(u, 0.0), 1.0)))
+            bar.setFormat(f"{100 * u:.0f} %")
+            near = u < 0.05 or u > 0.95
+            bar.setStyleSheet("QProgressBar::chunk { background: %s; }" % ("#d9534f" if near else "#5cb85c"))

@@ -1,0 +1,83 @@
+"""Status area as in the lab's HMI: timestamped log, a light per subsystem, a big STOP."""
+
+from __future__ import annotations
+
+import time
+
+from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtGui import QFont
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QPlainTextEdit, QPushButton, QVBoxLayout, QWidget
+
+LIGHT = {"ok": "#3c9d3c", "warn": "#e0a020", "error": "#d9534f", "off": "#666666"}
+
+
+class StatusLight(QLabel):
+    def __init__(self, name: str, tooltip: str, parent=None) -> None:
+        super().__init__(parent)
+        self.name = name
+        self.setToolTip(tooltip)
+        self.state = "off"
+        self.set("off")
+
+    def set(self, state: str, detail: str = "") -> None:
+        self.state = state
+        self.setText(f"● {self.name}{': ' + detail if detail else ''}")
+        self.setStyleSheet(f"color: {LIGHT[state]}; font-weight: bold; padding: 2px 6px;")
+
+
+class StatusPanel(QWidget):
+    stop_clicked = pyqtSignal()
+    reset_clicked = pyqtSignal()
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        lay = QHBoxLayout(self)
+        left = QVBoxLayout()
+        lights = QHBoxLayout()
+        self.lights = {
+            "engine": StatusLight("engine", "engine connection and loop"),
+            "input": StatusLight("input", "input device: joystick, on-screen stick or keyboard"),
+            "plant": StatusLight("plant", "simulated manipulator: moving, holding, E-STOP"),
+        }
+        for w in self.lights.values():
+            lights.addWidget(w)
+        lights.addStretch(1)
+        left.addLayout(lights)
+        self.log_view = QPlainTextEdit()
+        self.log_view.setReadOnly(True)
+        self.log_view.setMaximumBlockCount(2000)
+        self.log_view.setToolTip("event log (UTC time stamps)")
+        left.addWidget(self.log_view)
+        lay.addLayout(left, 1)
+        right = QVBoxLayout()
+        self.stop = QPushButton("STOP")
+        self.stop.setMinimumSize(150, 90)
+        f = QFont()
+        f.setPointSize(22)
+        f.setBold(True)
+        self.stop.setFont(f)
+        self.stop.setStyleSheet(
+            "QPushButton { background: #c9302c; color: white; border-radius: 8px; }"
+            "QPushButton:pressed { background: #8b1e1b; }"
+        )
+        self.stop.setToolTip("E-STOP: stops all motion within one engine tick and latches (Space or Esc)")
+        self.stop.clicked.connect(self.stop_clicked)
+        right.addWidget(self.stop)
+        self.latched = QLabel("")
+        self.latched.setStyleSheet("color: #d9534f; font-weight: bold;")
+        right.addWidget(self.latched)
+        self.reset = QPushButton("Reset E-STOP")
+        self.reset.setToolTip("clear a latched E-STOP (operator only)")
+        self.reset.setEnabled(False)
+        self.reset.clicked.connect(self.reset_clicked)
+        right.addWidget(self.reset)
+        right.addStretch(1)
+        lay.addLayout(right)
+
+    def add_log(self, level: str, text: str) -> None:
+        stamp = time.strftime("%H:%M:%S", time.gmtime())
+        self.log_view.appendPlainText(f"{stamp}  {level.upper():7s} {text}")
+
+    def show_estop(self, latched: bool) -> None:
+        self.latched.setText("E-STOP LATCHED" if latched else "")
+        self.reset.setEnabled(latched)
