@@ -148,13 +148,16 @@ class AnalysisTab(QWidget):
             lo, hi = float(err.min()), float(max(err.max(), err.min() + 1e-9))
             cmap = pg.colormap.get("viridis")
             self._show_3d_scatter(result.targets, cmap.map((err - lo) / (hi - lo), mode="float"))
-            brushes = [pg.mkBrush(cmap.map((e - lo) / (hi - lo), mode="qcolor")) for e in err]
+            order = np.argsort(-err)  # large errors first, so the small ones are drawn on top
+            brushes = [pg.mkBrush(cmap.map((e - lo) / (hi - lo), mode="qcolor")) for e in err[order]]
             for col, (a, b, name) in enumerate(
                 ((0, 1, "top x–y [m]"), (0, 2, "side x–z [m]"), (1, 2, "front y–z [m]"))
             ):
                 p = self.glw.addPlot(row=0, col=col, title=f"{name}, colour log10 error")
                 p.addItem(
-                    pg.ScatterPlotItem(result.targets[:, a], result.targets[:, b], brush=brushes, size=7, pen=None)
+                    pg.ScatterPlotItem(
+                        result.targets[order, a], result.targets[order, b], brush=brushes, size=7, pen=None
+                    )
                 )
                 p.setAspectLocked(True)
         else:
@@ -181,11 +184,16 @@ class AnalysisTab(QWidget):
             self.scatter3d.setToolTip("targets coloured by log10 error (viridis: dark small, yellow large) [m]")
             self.scatter3d.setMinimumHeight(280)
             self.layout().insertWidget(2, self.scatter3d, 1)
+        from ui.widgets.view3d import _box_edges
+
         self.scatter3d.clear()
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        self.scatter3d.addItem(gl.GLLinePlotItem(pos=_box_edges(lo, hi), color=(0.5, 0.6, 0.9, 0.6), mode="lines"))
         self.scatter3d.addItem(gl.GLScatterPlotItem(pos=points, color=colors, size=8))
-        c = points.mean(axis=0)
-        size = float(np.ptp(points, axis=0).max())
-        self.scatter3d.setCameraPosition(pos=pg.Vector(*c), distance=2.0 * size, elevation=25, azimuth=-60)
+        size = float(np.max(hi - lo))
+        self.scatter3d.setCameraPosition(
+            pos=pg.Vector(*(0.5 * (lo + hi))), distance=5.0 * size, elevation=22, azimuth=-60
+        )
 
     def save_csv(self, path: str | None = None) -> None:
         if self.result is None:
