@@ -108,10 +108,12 @@ class MainWindow(QMainWindow):
             self.status.lights["input"].set("ok", f["device_name"][:24])
         else:
             self.status.lights["input"].set("warn", "no input")
-        self.analysis.set_robot(state["robot"])
-        self.settings.setValue("robot", state["robot"])
-        self.settings.setValue("solver", state["solver"])
-        self.settings.setValue("mode", state["mode"])
+        choice = (state["robot"], state["solver"], state["mode"])
+        if choice != getattr(self, "_choice", None):
+            self._choice = choice
+            self.analysis.set_robot(state["robot"])
+            for key, value in zip(("robot", "solver", "mode"), choice, strict=True):
+                self.settings.setValue(key, value)
 
     def on_connection(self, ok: bool, message: str) -> None:
         self.status.lights["engine"].set("ok" if ok else "error", "connected" if ok else "LOST")

@@ -238,8 +238,10 @@ class TeleopTab(QWidget):
         self.inputs.sample.connect(self.show_sample)
         self.inputs.devices_changed.connect(self._devices)
         self.device.activated.connect(lambda _i: setattr(self.inputs, "choice", self.device.currentText()))
+        self._dirty = False
         link.state.connect(self.on_state)
         link.reply.connect(self.on_reply)
+        self.plots.frame.connect(self.refresh)
 
     @staticmethod
     def _spin(lo: float, hi: float, decimals: int, tip: str) -> QDoubleSpinBox:
@@ -287,27 +289,39 @@ class TeleopTab(QWidget):
         self.buttons_label.setText(f"buttons: {' '.join(held) if held else '–'}   ({device})")
 
     def on_state(self, state: dict) -> None:
+        """Every state is logged and buffered; widgets are refreshed once per plot frame."""
         self.state = state
+        self.plots.add_state(state)
+        self._dirty = True
+        if self.logger is not None and not self.logger.add(state):
+            self.stop_logger()
+
+    def refresh(self) -> None:
+        """Once per frame (30/s): view, bars and controls from the newest state."""
+        if not self._dirty or self.state is None:
+            return
+        self._dirty = False
+        state = self.state
         self.view.update_state(state)
         self.bars.update_state(state)
-        self.plots.add_state(state)
         if self.logger is not None:
-            if self.logger.add(state):
-                self.log_rows.setText(f"{self.logger.rows} rows")
-            else:
-                self.stop_logger()
+            self.log_rows.setText(f"{self.logger.rows} rows")
         self._sync_controls(state)
 
     def _sync_controls(self, state: dict) -> None:
+        """Controls follow the engine, touched only where they differ (each change relayouts)."""
         if self.robot.currentText() != state["robot"]:
             if self.robot.findText(state["robot"]) < 0:
                 self.robot.addItem(state["robot"])
             self.robot.setCurrentText(state["robot"])
-        self.solver.setCurrentText(state["solver"])
-        (self.mode_pos if state["mode"] == "position" else self.mode_vel).setChecked(True)
+        if self.solver.currentText() != state["solver"]:
+            self.solver.setCurrentText(state["solver"])
+        button = self.mode_pos if state["mode"] == "position" else self.mode_vel
+        if not button.isChecked():
+            button.setChecked(True)
         sc = state["scaling"]
         for w, v in ((self.k_p, sc["k_p"][0]), (self.k_v, sc["k_v"][0]), *zip(self.x_w, sc["x_w"], strict=True)):
-            if not w.hasFocus():
+            if not w.hasFocus() and w.value() != round(v, w.decimals()):
                 w.setValue(v)
 
     # ------------------------------------------------------------------ logger

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt5.QtCore import QTimer
+from PyQt5.QtCore import QTimer, pyqtSignal
 from PyQt5.QtWidgets import QGridLayout, QLabel, QProgressBar, QVBoxLayout, QWidget
 
 COLORS = [(230, 90, 70), (80, 180, 90), (80, 140, 230), (220, 180, 60), (170, 100, 210), (70, 200, 200)]
@@ -32,6 +32,8 @@ class Ring:
 class LivePlots(QWidget):
     """X/Y/Z target vs reached, joint values with limit bands, solver error and time."""
 
+    frame = pyqtSignal()  # emitted after each redraw: other views refresh at the same frame rate
+
     def __init__(self, seconds: float = 20.0, rate: float = 50.0, fps: float = 30.0, parent=None) -> None:
         super().__init__(parent)
         self.size = int(seconds * rate)
@@ -46,7 +48,11 @@ class LivePlots(QWidget):
             p.showGrid(x=True, y=True, alpha=0.25)
             p.setClipToView(True)
             p.setDownsampling(auto=True, mode="peak")
-            p.setLabel("bottom", "t", "s")
+            p.setLabel("bottom", "time before now", "s")
+            # a fixed time axis (−window … 0): its ticks are painted once and cached, where a
+            # scrolling axis would re-render its text every frame (the main paint cost)
+            p.setXRange(-seconds, 0.0, padding=0.0)
+            p.disableAutoRange()  # y is re-fitted about once a second in redraw(), for the same reason
         self.p_xyz.setToolTip("tool position in the robot's world frame [m]")
         self.p_q.setToolTip("joint values [rad or m] with their limits as bands")
         self.p_s.setToolTip("last solve: position error [m] and solve time [ms]")
@@ -71,6 +77,14 @@ class LivePlots(QWidget):
         self.timer.timeout.connect(self.redraw)
         self.timer.start()
         self.frames_drawn = 0
+
+    @staticmethod
+    def _fit_y(plot, values: np.ndarray) -> None:
+        v = values[np.isfinite(values)]
+        if v.size:
+            lo, hi = float(v.min()), float(v.max())
+            pad = 0.08 * max(hi - lo, 1e-6)
+            plot.setYRange(lo - pad, hi + pad, padding=0.0)
 
     def _reset(self, state: dict) -> None:
         n = len(state["q"])
@@ -110,7 +124,7 @@ class LivePlots(QWidget):
         if self.ring is None or self.ring.n == 0 or not self.isVisible():
             return
         d = self.ring.view()
-        t = d[:, 0]
+        t = d[:, 0] - d[-1, 0]
         for k, (c_target, c_tool) in enumerate(self.cur_xyz):
             c_target.setData(t, d[:, 1 + k])
             c_tool.setData(t, d[:, 4 + k])
@@ -118,7 +132,12 @@ class LivePlots(QWidget):
             c.setData(t, d[:, 7 + j])
         self.cur_err.setData(t, d[:, -2])
         self.cur_time.setData(t, d[:, -1])
+        if self.frames_drawn % 30 == 0:
+            self._fit_y(self.p_xyz, d[:, 1:7])
+            self._fit_y(self.p_q, d[:, 7:-2])
+            self._fit_y(self.p_s, d[:, -2:])
         self.frames_drawn += 1
+        self.frame.emit()
 
 
 class UtilisationBars(QWidget):
@@ -148,10 +167,15 @@ class UtilisationBars(QWidget):
                 self.grid.addWidget(bar, j, 1)
                 self.bars.append(bar)
             self.names = names
+            self.near = [None] * len(names)
         for j, bar in enumerate(self.bars):
             lo, hi, q = state["lower"][j], state["upper"][j], state["q"][j]
             u = (q - lo) / (hi - lo) if hi > lo else 0.0
-            bar.setValue(round(1000 * min(max(u, 0.0), 1.0)))
-            bar.setFormat(f"{100 * u:.0f} %")
+            value = round(1000 * min(max(u, 0.0), 1.0))
+            if value != bar.value():
+                bar.setValue(value)
+                bar.setFormat(f"{100 * u:.0f} %")
             near = u < 0.05 or u > 0.95
-            bar.setStyleSheet("QProgressBar::chunk { background: %s; }" % ("#d9534f" if near else "#5cb85c"))
+            if near != self.near[j]:  # a style change relayouts: only when crossing the 5 % margin
+                self.near[j] = near
+                bar.setStyleSheet("QProgressBar::chunk { background: %s; }" % ("#d9534f" if near else "#5cb85c"))

@@ -20,6 +20,9 @@ class StatusLight(QLabel):
         self.set("off")
 
     def set(self, state: str, detail: str = "") -> None:
+        if (state, detail) == getattr(self, "_shown", None):
+            return  # restyling a label relayouts the window: only on change
+        self._shown = (state, detail)
         self.state = state
         self.setText(f"● {self.name}{': ' + detail if detail else ''}")
         self.setStyleSheet(f"color: {LIGHT[state]}; font-weight: bold; padding: 2px 6px;")
@@ -79,5 +82,8 @@ class StatusPanel(QWidget):
         self.log_view.appendPlainText(f"{stamp}  {level.upper():7s} {text}")
 
     def show_estop(self, latched: bool) -> None:
+        if latched == getattr(self, "_latched_shown", None):
+            return
+        self._latched_shown = latched
         self.latched.setText("E-STOP LATCHED" if latched else "")
         self.reset.setEnabled(latched)

@@ -101,17 +101,23 @@ class RobotView2D(QWidget):
             )
             target = pw.plot(pen=None, symbol="o", symbolSize=12, symbolBrush=(50, 200, 50))
             tool = pw.plot(pen=None, symbol="x", symbolSize=12, symbolPen=pg.mkPen((230, 50, 50), width=2))
+            pw.disableAutoRange()  # fitted to the workspace box once per robot: axes stay cached
             self.plots[key] = (pw, (a, b), box, links, target, tool)
             row.addWidget(pw)
+        self._box_key = None
 
     def update_state(self, state: dict) -> None:
         frames = np.asarray(state["frames"], dtype=float)
         lo, hi = np.asarray(state["box"][0]), np.asarray(state["box"][1])
-        for _pw, (a, b), box, links, target, tool in self.plots.values():
+        new_box = (state["robot"], tuple(lo), tuple(hi))
+        for pw, (a, b), box, links, target, tool in self.plots.values():
             links.setData(frames[:, a], frames[:, b])
             target.setData([state["target"][a]], [state["target"][b]])
             tool.setData([state["tool"][a]], [state["tool"][b]])
-            box.setData([lo[a], hi[a], hi[a], lo[a], lo[a]], [lo[b], lo[b], hi[b], hi[b], lo[b]])
+            if new_box != self._box_key:
+                box.setData([lo[a], hi[a], hi[a], lo[a], lo[a]], [lo[b], lo[b], hi[b], hi[b], lo[b]])
+                pw.setRange(xRange=(lo[a], hi[a]), yRange=(lo[b], hi[b]), padding=0.05)
+        self._box_key = new_box
 
     def grab_image(self):
         return self.grab().toImage()
