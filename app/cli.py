@@ -138,7 +138,41 @@ def _show_value(v: float, unit: str) -> str:
     return f"{math.degrees(v):9.3f}°" if unit == "rad" else f"{v:9.4f} m"
 
 
+def _delta_fk(args: argparse.Namespace, head) -> int:
+    q = head.check_q(args.q)
+    if args.deg:
+        q = np.deg2rad(q)
+    try:
+        p = head.fk(q)
+    except ValueError as err:
+        raise BosunError(f"{head.name}: {err}") from None
+    ok = head.within_limits(q)
+    if args.json:
+        _print_json(
+            {
+                "robot": head.name,
+                "q": [float(v) for v in q],
+                "position": [float(v) for v in p],
+                "rotation": np.eye(3).tolist(),
+                "within_limits": bool(ok.all()),
+            }
+        )
+    else:
+        x, y, z = (_num(v, 4) for v in p)
+        print(f"{head.name}: tool centre point in {{t}} (plates stay parallel)")
+        print(f"  position [m]    x = {x}   y = {y}   z = {z}")
+    if not ok.all():
+        print("bosun: warning: arm angles outside the limits", file=sys.stderr)
+    return 0
+
+
 def cmd_fk(args: argparse.Namespace) -> int:
+    from app.models.delta import DeltaHead
+    from app.models.registry import load_robot
+
+    model = load_robot(args.robot)
+    if isinstance(model, DeltaHead):
+        return _delta_fk(args, model)
     robot, q = _serial_robot_and_q(args)
     frames = robot.frames(q)
     T = frames[-1]

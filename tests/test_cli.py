@@ -108,7 +108,7 @@ def test_jacobian_text(capsys):
         (["fk", "scara", "--q", "nan", "0", "0", "0"], "argument --q: 'nan' is not a finite number"),
         (["jacobian", "scara", "--q", "inf", "0", "0", "0"], "'inf' is not a finite number"),
         (["fk", "scara"], "the following arguments are required: --q"),
-        (["fk", "tac_delta_head", "--q", "0", "0", "0"], "no delta kinematics are available yet"),
+        (["fk", "em8000", "--q", "0", "0", "0", "0", "0", "0"], "no stewart kinematics are available yet"),
         (["fk", "missing/robot.xml", "--q", "0"], "robot file not found: missing/robot.xml"),
         (["frobnicate"], "invalid choice: 'frobnicate'"),
     ],

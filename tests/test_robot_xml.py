@@ -181,6 +181,6 @@ def test_load_by_path_and_env_dir(tmp_path, monkeypatch):
     assert list_robots() == ["two_link"]
 
 
-def test_parallel_types_have_no_serial_model_yet():
-    with pytest.raises(RobotTypeError, match="tac_delta_head' is a delta mechanism"):
-        load_robot("tac_delta_head")
+def test_stewart_type_has_no_model_yet():
+    with pytest.raises(RobotTypeError, match="em8000' is a stewart mechanism"):
+        load_robot("em8000")

@@ -27,6 +27,7 @@ import numpy as np
 from app.errors import BosunError
 from app.ik import DEFAULT, make_solver
 from app.models.registry import load_robot
+from app.models.serial import SerialRobot
 from app.models.workspace import workspace_box
 from app.sim.actuators import JointActuators
 from app.teleop.devices import InputSample
@@ -97,6 +98,8 @@ class Session:
     # ------------------------------------------------------------------ commands
     def _load(self, robot_ref: str, solver_name: str) -> None:
         robot = load_robot(robot_ref)
+        if not isinstance(robot, SerialRobot):
+            raise CommandError(f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms")
         solver = make_solver(solver_name, robot, seed=self.seed)
         q0 = 0.5 * (robot.lower + robot.upper)
         act = JointActuators(robot.lower, robot.upper, robot.speed, robot.accel, self.actuator_tau, q0)
@@ -115,6 +118,10 @@ class Session:
         solver = self.solver_name
         try:
             robot = load_robot(robot_ref)
+            if not isinstance(robot, SerialRobot):
+                raise CommandError(
+                    f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms"
+                )
             make_solver(solver, robot)
         except BosunError as err:
             if "no closed-form solution" in str(err):
