@@ -1,0 +1,1 @@
+"""Marine environment: waves, vessel motion."""
