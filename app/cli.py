@@ -316,17 +316,22 @@ def cmd_ik(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
-def cmd_analyze(args: argparse.Namespace) -> int:
-    from app.analysis.ik_studies import error_distribution, plot_error_distribution, write_json
+def _study_setup(args: argparse.Namespace, kind: str):
+    """Robot, solver options (checked against the robot before any work) and output folder of a study."""
+    from app.ik import make_solver
     from app.models.registry import load_robot
 
     robot = load_robot(args.robot)
     args.robot_name = robot.name
     opts = _solver_options(args)
-    from app.ik import make_solver
-
     make_solver(args.solver, robot, **opts)  # fail fast on a solver that does not apply
-    out = _out_dir(args, "analyze")
+    return robot, opts, _out_dir(args, kind)
+
+
+def cmd_analyze(args: argparse.Namespace) -> int:
+    from app.analysis.ik_studies import error_distribution, plot_error_distribution, write_json
+
+    robot, opts, out = _study_setup(args, "analyze")
     result = error_distribution(
         robot,
         args.solver,
@@ -357,14 +362,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 
 def cmd_track(args: argparse.Namespace) -> int:
     from app.analysis.ik_studies import plot_tracking, track, write_json
-    from app.ik import make_solver
-    from app.models.registry import load_robot
 
-    robot = load_robot(args.robot)
-    args.robot_name = robot.name
-    opts = _solver_options(args)
-    make_solver(args.solver, robot, **opts)
-    out = _out_dir(args, "track")
+    robot, opts, out = _study_setup(args, "track")
     result = track(
         robot,
         args.solver,
