@@ -328,8 +328,19 @@ def _study_setup(args: argparse.Namespace, kind: str):
     return robot, opts, _out_dir(args, kind)
 
 
+def _save_study(result, out: Path, stem: str, plot) -> dict[str, Any]:
+    """Write a study's STEM.csv, STEM.png and summary.json into ``out``; returns the summary."""
+    from app.analysis.ik_studies import write_json
+
+    result.write_csv(out / f"{stem}.csv")
+    plot(result, out / f"{stem}.png")
+    summary = result.summary()
+    write_json(summary, out / "summary.json")
+    return summary
+
+
 def cmd_analyze(args: argparse.Namespace) -> int:
-    from app.analysis.ik_studies import error_distribution, plot_error_distribution, write_json
+    from app.analysis.ik_studies import error_distribution, plot_error_distribution
 
     robot, opts, out = _study_setup(args, "analyze")
     result = error_distribution(
@@ -340,10 +351,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         solver_options=opts,
         progress=_progress_bar(f"{robot.name}/{args.solver}"),
     )
-    result.write_csv(out / "error_distribution.csv")
-    plot_error_distribution(result, out / "error_distribution.png")
-    summary = result.summary()
-    write_json(summary, out / "summary.json")
+    summary = _save_study(result, out, "error_distribution", plot_error_distribution)
     if args.json:
         _print_json({**summary, "out": str(out)})
     else:
@@ -361,7 +369,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def cmd_track(args: argparse.Namespace) -> int:
-    from app.analysis.ik_studies import plot_tracking, track, write_json
+    from app.analysis.ik_studies import plot_tracking, track
 
     robot, opts, out = _study_setup(args, "track")
     result = track(
@@ -373,10 +381,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         solver_options=opts,
         progress=_progress_bar(f"{robot.name}/{args.solver}"),
     )
-    result.write_csv(out / "tracking.csv")
-    plot_tracking(result, out / "tracking.png")
-    summary = result.summary()
-    write_json(summary, out / "summary.json")
+    summary = _save_study(result, out, "tracking", plot_tracking)
     if args.json:
         _print_json({**summary, "out": str(out)})
     else:

@@ -42,6 +42,21 @@ def _tick(progress: Progress, cancelled: Cancelled, done: int, total: int) -> No
         raise _CancelledError
 
 
+TARGET_REACHED = ["target_x", "target_y", "target_z", "reached_x", "reached_y", "reached_z"]
+
+
+def _f6(values) -> list[str]:
+    return [f"{v:.6f}" for v in values]
+
+
+def _write_rows(path: Path, header: list[str], rows) -> None:
+    """The CSV files of the studies: a header, then one row per target."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+
+
 class ReachabilityReference:
     """Is a target reachable at all?  Damped least squares from 1 + 10 starts gets within 1e-3 of the diagonal.
 
@@ -96,33 +111,21 @@ class ErrorDistribution:
         }
 
     def write_csv(self, path: Path) -> None:
-        with open(path, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(
+        _write_rows(
+            path,
+            [*TARGET_REACHED, "error_m", "time_s", "success", "reachable"],
+            (
                 [
-                    "target_x",
-                    "target_y",
-                    "target_z",
-                    "reached_x",
-                    "reached_y",
-                    "reached_z",
-                    "error_m",
-                    "time_s",
-                    "success",
-                    "reachable",
+                    *_f6(self.targets[i]),
+                    *_f6(self.reached[i]),
+                    f"{self.error[i]:.6g}",
+                    f"{self.time_s[i]:.6g}",
+                    int(self.success[i]),
+                    int(self.reachable[i]),
                 ]
-            )
-            for i in range(len(self.error)):
-                w.writerow(
-                    [
-                        *(f"{v:.6f}" for v in self.targets[i]),
-                        *(f"{v:.6f}" for v in self.reached[i]),
-                        f"{self.error[i]:.6g}",
-                        f"{self.time_s[i]:.6g}",
-                        int(self.success[i]),
-                        int(self.reachable[i]),
-                    ]
-                )
+                for i in range(len(self.error))
+            ),
+        )
 
 
 def _stats(x: NDArray[np.float64]) -> dict[str, float]:
@@ -245,35 +248,23 @@ class Tracking:
         }
 
     def write_csv(self, path: Path) -> None:
-        with open(path, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(
+        _write_rows(
+            path,
+            ["t", *TARGET_REACHED, "error_m", "solve_time_s", "success"]
+            + [f"q{i + 1}" for i in range(self.q.shape[1])],
+            (
                 [
-                    "t",
-                    "target_x",
-                    "target_y",
-                    "target_z",
-                    "reached_x",
-                    "reached_y",
-                    "reached_z",
-                    "error_m",
-                    "solve_time_s",
-                    "success",
+                    f"{self.t[i]:.3f}",
+                    *_f6(self.target[i]),
+                    *_f6(self.reached[i]),
+                    f"{self.error[i]:.6g}",
+                    f"{self.time_s[i]:.6g}",
+                    int(self.success[i]),
+                    *_f6(self.q[i]),
                 ]
-                + [f"q{i + 1}" for i in range(self.q.shape[1])]
-            )
-            for i in range(len(self.t)):
-                w.writerow(
-                    [
-                        f"{self.t[i]:.3f}",
-                        *(f"{v:.6f}" for v in self.target[i]),
-                        *(f"{v:.6f}" for v in self.reached[i]),
-                        f"{self.error[i]:.6g}",
-                        f"{self.time_s[i]:.6g}",
-                        int(self.success[i]),
-                        *(f"{v:.6f}" for v in self.q[i]),
-                    ]
-                )
+                for i in range(len(self.t))
+            ),
+        )
 
 
 def tracking_path(robot, duration: float, dt: float, amplitude: float = 0.25) -> tuple[NDArray, NDArray]:
