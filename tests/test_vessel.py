@@ -1,0 +1,248 @@
+"""Vessel motion: RAO tables, loaders, the closed-form model against the MSS reference data, time series, MRU."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.marine.vessel import (
+    MRU,
+    RAOTable,
+    VesselError,
+    VesselMotion,
+    VesselParticulars,
+    load_rao,
+    load_rao_csv,
+    parametric_complex_rao,
+    parametric_rao,
+    rao_to_csv,
+    significant_response,
+)
+from app.marine.waves import G, jonswap, wave_components
+
+W = np.linspace(0.1, 3.2, 2000)
+HEAVE, ROLL, PITCH = 2, 3, 4
+
+
+# ----------------------------------------------------------------------------- reference data
+@pytest.fixture(scope="module")
+def mss_table():
+    from tests.conftest import SHARED_DATA
+
+    path = SHARED_DATA / "supply_mss.mat"
+    if not path.is_file():
+        pytest.skip("../shared/data/supply_mss.mat is not present")
+    return path, load_rao(path)
+
+
+def test_mss_loader_reproduces_the_table_at_its_grid_points(mss_table):
+    import scipy.io
+
+    path, table = mss_table
+    raw = scipy.io.loadmat(str(path), squeeze_me=True, struct_as_record=False)["vessel"]
+    w, hd = raw.motionRAO.w, raw.headings
+    assert table.w.shape == (36,) and table.headings.shape == (36,)
+    Wg, Hg = np.meshgrid(w, hd, indexing="ij")
+    got = table(Wg, Hg)
+    for dof in range(6):
+        want = raw.motionRAO.amp[dof][:, :, 0] * np.exp(1j * raw.motionRAO.phase[dof][:, :, 0])
+        np.testing.assert_allclose(got[dof], want, rtol=1e-12, atol=1e-12)
+
+
+# Closed-form model vs the ShipX/VERES table (TAC paper's supply vessel), Hs 3 m, JONSWAP.
+# Cases the closed form cannot represent are strict xfails with the measured ratio, so the
+# numbers stay visible and an improved model has to update them.
+_ROLL_XFAIL = (
+    "1-DOF roll (ζ44 = 0.15, not tuned) gives 1.87-1.95x the table: the table's roll RAO is flat "
+    "(≈0.05 rad/m over 0.4-0.75 rad/s) and 3x the wave slope at 0.3 rad/s, not a single-DOF resonance"
+)
+_PITCH_XFAIL = "closed form has no pitch in beam seas (k_e = 0); the table has 0.020-0.026 rad from hull asymmetry"
+
+
+def _case(dof, heading, tp):
+    marks = []
+    if dof == ROLL and heading in (90, 135):
+        marks = [pytest.mark.xfail(strict=True, reason=_ROLL_XFAIL)]
+    if dof == PITCH and heading == 90:
+        marks = [pytest.mark.xfail(strict=True, reason=_PITCH_XFAIL)]
+    return pytest.param(dof, heading, tp, marks=marks, id=f"{['', '', 'heave', 'roll', 'pitch'][dof]}-{heading}-Tp{tp}")
+
+
+@pytest.mark.parametrize(
+    ("dof", "heading", "tp"),
+    [_case(d, h, tp) for d in (HEAVE, ROLL, PITCH) for h in (90, 135, 180) for tp in (8, 10)],
+)
+def test_parametric_model_within_30_percent_of_the_mss_table(mss_table, dof, heading, tp):
+    _, table = mss_table
+    model = parametric_rao()
+    S = jonswap(W, 3.0, tp)
+    beta = np.deg2rad(heading)
+    mine = significant_response(model, S, W, beta)[dof]
+    ref = significant_response(table, S, W, beta)[dof]
+    if ref < 1e-3:  # roll in head seas: zero in both
+        assert mine < 1e-3
+    else:
+        assert 0.7 <= mine / ref <= 1.3, f"model {mine:.4f} vs table {ref:.4f} (ratio {mine / ref:.3f})"
+
+
+# ----------------------------------------------------------------------------- closed form
+def test_closed_form_long_wave_limits():
+    """Very long waves: the hull follows the surface (heave 1, pitch and roll = wave slope)."""
+    p = VesselParticulars()
+    w = np.array([0.05])
+    k = w**2 / G
+    head = parametric_complex_rao(p, w, np.pi)
+    assert abs(head[HEAVE, 0] - (-1.0)) < 0.01  # z down = −ζ
+    assert abs(abs(head[PITCH, 0]) - k[0]) / k[0] < 0.02
+    assert abs(head[ROLL, 0]) < 1e-12
+    beam = parametric_complex_rao(p, w, np.pi / 2)
+    assert abs(abs(beam[ROLL, 0]) - k[0]) / k[0] < 0.02
+    assert abs(beam[PITCH, 0]) < 1e-12
+
+
+def test_roll_peaks_at_the_natural_frequency():
+    p = VesselParticulars()
+    w = np.linspace(0.2, 1.5, 2001)
+    roll = np.abs(parametric_complex_rao(p, w, np.full_like(w, np.pi / 2))[ROLL])
+    wn = np.sqrt(G * p.gm_t) / (p.r44 * np.sqrt(1 + p.roll_added_inertia))
+    assert p.roll_natural_frequency == pytest.approx(wn)
+    assert abs(w[np.argmax(roll)] - wn) < 0.05
+
+
+def test_more_roll_damping_means_less_roll():
+    S = jonswap(W, 3.0, 9.0)
+    lo = significant_response(parametric_rao(VesselParticulars(roll_damping=0.1)), S, W, np.pi / 2)[ROLL]
+    hi = significant_response(parametric_rao(VesselParticulars(roll_damping=0.3)), S, W, np.pi / 2)[ROLL]
+    assert hi < 0.8 * lo
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [("beam", -1.0, "beam must be a positive"), ("cb", 1.5, "cb must be in"), ("roll_damping", 0.0, "roll_damping")],
+)
+def test_bad_particulars(field, value, match):
+    with pytest.raises(VesselError, match=match):
+        VesselParticulars(**{field: value})
+
+
+# ----------------------------------------------------------------------------- CSV format
+def test_csv_round_trip_reproduces_the_table():
+    t = parametric_rao(w=np.linspace(0.2, 2.0, 12), headings_deg=np.arange(0, 360, 30))
+    back = load_rao_csv(rao_to_csv(t), "rt.csv")
+    np.testing.assert_allclose(back.w, t.w, rtol=1e-6)
+    np.testing.assert_allclose(back.headings, t.headings, atol=1e-9)
+    Wg, Hg = np.meshgrid(t.w, t.headings, indexing="ij")
+    np.testing.assert_allclose(back(Wg, Hg), t(Wg, Hg), rtol=1e-6, atol=1e-9)
+
+
+def test_interpolation_is_periodic_in_heading():
+    t = parametric_rao(w=np.linspace(0.2, 2.0, 12), headings_deg=np.arange(0, 360, 30))
+    w = np.full(3, 0.7)
+    a = t(w, np.deg2rad([345.0, -15.0, 705.0]))
+    np.testing.assert_allclose(a[:, 0], a[:, 1])
+    np.testing.assert_allclose(a[:, 0], a[:, 2])
+
+
+def _csv(rows):
+    head = "w,heading_deg," + ",".join(f"{d}_amp,{d}_phase" for d in ("surge", "sway", "heave", "roll", "pitch", "yaw"))
+    return head + "\n" + "\n".join(rows) + "\n"
+
+
+GOOD = "0.5,0," + ",".join(["0.1,0"] * 6)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("", "empty RAO file"),
+        ("w,heading_deg\n1,2\n", r"<t>:1: missing column\(s\) surge_amp"),
+        (
+            _csv([GOOD, "0.6,0," + ",".join(["abc,0"] + ["0.1,0"] * 5)]),
+            r"<t>:3: field surge_amp: 'abc' is not a number",
+        ),
+        (_csv([GOOD, "0.6,0," + ",".join(["-1,0"] + ["0.1,0"] * 5)]), r"<t>:3: field surge_amp: amplitude must not"),
+        (_csv([GOOD, "0.6,0," + ",".join(["nan,0"] + ["0.1,0"] * 5)]), r"<t>:3: field surge_amp: value is not finite"),
+        (_csv([GOOD, "0.6,0,1"]), r"<t>:3: expected 14 fields, got 3"),
+        (_csv([GOOD, "0.6,0," + ",".join(["0.1,0"] * 6), "0.6,90," + ",".join(["0.1,0"] * 6)]), "full grid"),
+        (_csv([GOOD, GOOD]), "full grid|duplicate"),
+    ],
+)
+def test_csv_errors_name_line_and_field(text, match):
+    with pytest.raises(VesselError, match=match):
+        load_rao_csv(text, "<t>")
+
+
+def test_load_rao_file_errors(tmp_path):
+    with pytest.raises(VesselError, match="no such RAO file"):
+        load_rao(tmp_path / "none.csv")
+    bad = tmp_path / "x.txt"
+    bad.write_text("1")
+    with pytest.raises(VesselError, match="unknown RAO file type"):
+        load_rao(bad)
+    junk = tmp_path / "junk.mat"
+    junk.write_bytes(b"not a mat file at all")
+    with pytest.raises(VesselError, match="junk.mat"):
+        load_rao(junk)
+
+
+def test_table_validation():
+    w, h = np.array([0.5, 1.0]), np.array([0.0])
+    with pytest.raises(VesselError, match="strictly increasing"):
+        RAOTable(w[::-1], h, np.zeros((6, 2, 1)), np.zeros((6, 2, 1)))
+    with pytest.raises(VesselError, match="shape"):
+        RAOTable(w, h, np.zeros((6, 3, 1)), np.zeros((6, 2, 1)))
+
+
+# ----------------------------------------------------------------------------- time series
+@pytest.fixture(scope="module")
+def motion():
+    sea = wave_components("jonswap", 3.0, 9.0, np.random.default_rng(7), heading=np.deg2rad(120))
+    return VesselMotion(parametric_rao(), sea)
+
+
+def test_time_series_variance_matches_the_spectral_integral(motion):
+    t = np.arange(0, 3600.0, 0.1)
+    eta, _, _ = motion.eta_derivatives(t)
+    H = parametric_rao()(motion.w, motion.sea.direction)
+    want = 0.5 * np.sum((motion.sea.amplitude * np.abs(H)) ** 2, axis=1)
+    for dof in (HEAVE, ROLL, PITCH):
+        assert np.var(eta[:, dof]) == pytest.approx(want[dof], rel=0.05)
+
+
+def test_derivatives_and_body_velocities_are_consistent(motion):
+    dt = 1e-3
+    t = np.arange(100.0, 130.0, dt)
+    s = motion.state(t)
+    _, deta, _ = motion.eta_derivatives(t)
+    np.testing.assert_allclose(np.gradient(s.eta, dt, axis=0)[1:-1], deta[1:-1], atol=2e-5)
+    np.testing.assert_allclose(np.gradient(s.nu, dt, axis=0)[1:-1], s.nu_dot[1:-1], atol=2e-5)
+    # ν maps back to η̇ by Fossen's kinematics: ṗ = R_b^n ν₁, Θ̇ = T(Θ) ν₂
+    from app.geometry import euler_zyx_to_matrix
+
+    R = euler_zyx_to_matrix(s.eta[:, 3:6])
+    np.testing.assert_allclose(np.einsum("nij,nj->ni", R, s.nu[:, :3]), deta[:, :3], atol=1e-12)
+    phi, th = s.eta[:, 3], s.eta[:, 4]
+    p, q, r = s.nu[:, 3], s.nu[:, 4], s.nu[:, 5]
+    dpsi = (np.sin(phi) * q + np.cos(phi) * r) / np.cos(th)
+    dth = np.cos(phi) * q - np.sin(phi) * r
+    dphi = p + np.sin(phi) * np.tan(th) * q + np.cos(phi) * np.tan(th) * r
+    np.testing.assert_allclose(np.stack([dphi, dth, dpsi], axis=1), deta[:, 3:], atol=1e-12)
+    assert s.eta.shape == (t.size, 6) and np.all(np.isfinite(s.nu_dot))
+
+
+def test_mru_adds_seeded_bias_and_noise(motion):
+    t = np.arange(0, 200.0, 0.01)
+    true = motion.state(t)
+    bias = np.array([0, 0, 0.1, 0.01, 0, 0])
+    sd = np.array([0, 0, 0.05, 0.002, 0.002, 0])
+    m1 = MRU(np.random.default_rng(3), noise_eta=sd, bias_eta=bias).measure(true)
+    m2 = MRU(np.random.default_rng(3), noise_eta=sd, bias_eta=bias).measure(true)
+    np.testing.assert_array_equal(m1.eta, m2.eta)
+    err = m1.eta - true.eta
+    np.testing.assert_allclose(err.mean(axis=0), bias, atol=3e-3)
+    np.testing.assert_allclose(err.std(axis=0), sd, rtol=0.05, atol=1e-12)
+    np.testing.assert_array_equal(m1.nu, true.nu)
+    with pytest.raises(VesselError, match="noise_eta must not be negative"):
+        MRU(np.random.default_rng(0), noise_eta=[-1, 0, 0, 0, 0, 0])
+    with pytest.raises(VesselError, match="6 finite numbers"):
+        MRU(np.random.default_rng(0), bias_nu=[0, 0])
