@@ -181,7 +181,7 @@ def test_load_rao_file_errors(tmp_path):
         load_rao(bad)
     junk = tmp_path / "junk.mat"
     junk.write_bytes(b"not a mat file at all")
-    with pytest.raises(VesselError, match="junk.mat"):
+    with pytest.raises(VesselError, match=r"junk\.mat"):
         load_rao(junk)
 
 

@@ -18,10 +18,11 @@ Two RAO sources:
   from Jensen, Mansour & Olsen (2004), "Estimation of ship motions using closed-form
   expressions", Ocean Eng. 31, 61–85 (zero speed: α = 1, B → C_B·B), with one addition: for
   oblique waves the heave and pitch forces are averaged over the waterline breadth,
-  sinc(k |sin β| B / 2) (JMO treat the wave as uniform across the section).  Roll is a damped one-degree-of-freedom oscillator driven by the
-  wave slope, ω_n = √(g GM_T) / (r44 √(1 + a44)), excitation reduced by exp(−kT/2) and the
-  breadth average, with an equivalent linear damping ratio ζ44.  Surge, sway and yaw are not
-  modelled by the closed form and are zero.  The defaults are the MSS supply vessel of the
+  sinc(k |sin β| B / 2) (JMO treat the wave as uniform across the section).  Roll is a damped
+  one-degree-of-freedom oscillator driven by the wave slope, ω_n = √(g GM_T) / (r44 √(1 + a44)),
+  excitation reduced by exp(−kT/2) and the breadth average, with an
+  equivalent linear damping ratio ζ44.  Surge, sway and yaw are not modelled by the closed
+  form and are zero.  The defaults are the MSS supply vessel of the
   TAC paper (§9): Lpp 82.8 m, B 19.2 m, T 6.0 m, C_B 0.651, GM_T 2.144 m, GM_L 103.6 m,
   r44/r55/r66 6.84/20.7/20.7 m, m 6.36e6 kg.
 * :func:`load_rao` — the MSS vessel ``.mat`` format (``vessel.motionRAO.amp/phase`` cells of
