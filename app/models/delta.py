@@ -158,13 +158,13 @@ class DeltaHead:
 
     # ------------------------------------------------------------------ velocity kinematics
     def jacobian(self, alpha: ArrayLike, p_t: ArrayLike | None = None) -> NDArray[np.float64]:
-        """J(p, α) of eq. (32): ṗ_c^t = J α̇; shape (3, 3)."""
+        """J(p, α) of eq. (32): ṗ_c^t = J α̇; alpha (..., 3) → shape (..., 3, 3)."""
         alpha = np.asarray(alpha, dtype=float)
         p = self.fk(alpha) if p_t is None else np.asarray(p_t, dtype=float)
         c = self.knees(alpha)
         d = self.knee_rates(alpha)
-        s = p[None, :] - c  # s_i = p − c_i, eq. (5)
-        B = np.diag(np.sum(s * d, axis=-1))
+        s = p[..., None, :] - c  # s_i = p − c_i, eq. (5)
+        B = np.sum(s * d, axis=-1)[..., None] * np.eye(3)
         return np.linalg.solve(s, B)
 
     # ------------------------------------------------------------------ workspace
@@ -241,6 +241,24 @@ class DeltaWorkspace:
             t = np.where(den > 1e-15, num / den, np.inf)
         t_exit = float(np.clip(np.min(t), 0.0, 1.0))
         return c + t_exit * direction, True
+
+    def saturate_many(self, p: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """:meth:`saturate` for points of shape (n, 3) towards ``self.center``; returns (points, saturated)."""
+        p = np.atleast_2d(np.asarray(p, dtype=float))
+        c = self.center
+        eq = self.equations
+        n, b = eq[:, :3], eq[:, 3]
+        outside = ~self.inside(p)
+        out = p.copy()
+        if np.any(outside):
+            direction = p[outside] - c
+            num = -(n @ c + b)
+            den = direction @ n.T
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = np.where(den > 1e-15, num / den, np.inf)
+            t_exit = np.clip(np.min(t, axis=1), 0.0, 1.0)
+            out[outside] = c + t_exit[:, None] * direction
+        return out, outside
 
     def limits_box(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return self.points.min(axis=0), self.points.max(axis=0)

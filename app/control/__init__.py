@@ -1,0 +1,1 @@
+"""Controllers: crane-head (TAC) motion compensation."""
