@@ -36,7 +36,11 @@ def test_desired_point_and_crane_ik_with_l2_plus_xd(system):
         )
 
 
-def _motion(t, amp=np.array([0.3, -0.2, 0.8, 0.04, 0.03, 0.02]), w=np.array([0.6, 0.7, 0.8, 0.5, 0.9, 0.4])):
+AMP = np.array([0.3, -0.2, 0.8, 0.04, 0.03, 0.02])
+OMEGA = np.array([0.6, 0.7, 0.8, 0.5, 0.9, 0.4])
+
+
+def _motion(t, amp=AMP, w=OMEGA):
     eta = amp * np.sin(np.outer(t, w))
     deta = amp * w * np.cos(np.outer(t, w))
     from app.marine.vessel import body_velocities

@@ -187,7 +187,7 @@ class TacSimulator:
         self.beta_d = BETA_EQ60.copy()
         head = system.head
         self.p_d_n = system.tcp_n(np.zeros(6), self.beta_d, system.p_d_t)  # p_d^n: TCP in calm water
-        self.n_steps = int(round(sc.duration / sc.dt))
+        self.n_steps = round(sc.duration / sc.dt)
         self.k = 0
         self.head_servo = HeadServo(PidGains(), head.lower, head.upper, system.alpha_d)
         crane = system.crane
