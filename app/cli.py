@@ -245,7 +245,7 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     return 0
 
 
-def _progress_bar(desc: str):
+def _progress_bar(desc: str, unit: str = "target"):
     """A tqdm bar on stderr (hidden when stderr is not a terminal) as a progress(done, total) callback."""
     from tqdm import tqdm
 
@@ -254,7 +254,7 @@ def _progress_bar(desc: str):
     def update(done: int, total: int) -> None:
         nonlocal bar
         if bar is None:
-            bar = tqdm(total=total, desc=desc, unit="target", file=sys.stderr, disable=None, leave=False)
+            bar = tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, disable=None, leave=False)
         bar.n = done
         bar.refresh()
         if done >= total:
@@ -391,6 +391,94 @@ def cmd_track(args: argparse.Namespace) -> int:
             f"solved {summary['success_rate']:.0%}"
         )
         print(f"  wrote {out}/tracking.csv, tracking.png, summary.json")
+    return 0
+
+
+def _scenario(args: argparse.Namespace, **over):
+    from app.sim.tac import ScenarioError, TacScenario
+
+    try:
+        return TacScenario(
+            hs=over.get("hs", getattr(args, "hs", 3.0)),
+            tp=args.tp,
+            heading=args.heading,
+            spectrum=args.spectrum,
+            spreading=args.spreading,
+            duration=args.duration,
+            dt=args.dt,
+            seed=args.seed,
+            mode=over.get("mode", getattr(args, "mode", "tac")),
+            rao=args.rao,
+            roll_damping=args.roll_damping,
+            crane_share=args.crane_share,
+            crane_kp=args.crane_kp,
+            mru_noise=args.mru_noise,
+        )
+    except ScenarioError as err:
+        raise BosunError(str(err)) from None
+
+
+def _sim_out(args: argparse.Namespace, default: str) -> Path:
+    out = Path(args.out) if args.out else Path("out") / default
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise BosunError(f"cannot create output folder {out}: {err.strerror or err}") from None
+    return out
+
+
+def cmd_sim_tac(args: argparse.Namespace) -> int:
+    from app.analysis.tac_report import save_run
+    from app.sim.tac import simulate
+
+    sc = _scenario(args)
+    out = _sim_out(args, f"tac_{sc.mode}_hs{sc.hs:g}")
+    bar = _progress_bar(f"sim tac {sc.mode}", unit="step")
+    result = simulate(sc, progress=bar)
+    doc = save_run(result, out)
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+    else:
+        print(
+            f"TAC {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, {sc.duration:g} s "
+            f"({'MSS table ' + sc.rao if sc.rao else 'parametric vessel'})"
+        )
+        print(
+            f"  e_c rms {doc['rms_e_c_m']:.3f} m (max {doc['max_e_c_m']:.3f})   e_s rms {doc['rms_e_s_m']:.3f} m "
+            f"(max {doc['max_e_s_m']:.3f})   ratio {doc['ratio_rms']:.2%}   saturated {doc['saturated_pct']:.1f} %"
+        )
+        print(f"  x_d = {doc['x_d_m']:.3f} m   {doc['speed_x_realtime']:.0f}× real time")
+        print(f"  wrote {out}/timeseries.csv, fig08–fig12 PNG, summary.json")
+    return 0
+
+
+def cmd_sim_sweep(args: argparse.Namespace) -> int:
+    from app.analysis.tac_report import parse_range, save_sweep, sweep
+
+    try:
+        hs_values = parse_range(args.hs)
+    except ValueError as err:
+        raise BosunError(f"--hs: {err}") from None
+    if not hs_values:
+        raise BosunError("--hs: no values")
+    modes = tuple(args.modes)
+    base = _scenario(args, hs=hs_values[0], mode=modes[0])
+    for hs in hs_values:  # check every sea state before any work
+        _scenario(args, hs=hs)
+    out = _sim_out(args, "tac_sweep")
+    rows = sweep(base, hs_values, modes, jobs=args.jobs, progress=_progress_bar("tac sweep", unit="run"))
+    doc = save_sweep(rows, base, out)
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+    else:
+        table = [
+            [f"{r['hs']:g}", r["mode"], f"{r['ratio_rms']:.2%}", f"{r['rms_e_c_m']:.3f}", f"{r['saturated_pct']:.1f}"]
+            for r in rows
+        ]
+        print(_table(["Hs [m]", "mode", "rms e_c/e_s", "rms e_c [m]", "saturated %"], table))
+        for m, v in doc["max_hs_ratio_le_5pct"].items():
+            print(f"  {m}: ratio ≤ 5 % up to Hs = {'—' if v is None else f'{v:g} m'}")
+        print(f"  wrote {out}/sweep.csv, sweep.png, sweep.json")
     return 0
 
 
@@ -672,6 +760,63 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_loop)
+
+    p = sub.add_parser("sim", help="simulations: sim tac (crane-head compensation), sim tac-sweep")
+    sims = p.add_subparsers(dest="sim", metavar="WHAT", parser_class=_Parser, required=True)
+
+    def add_sea_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--tp", type=_positive_float, default=9.0, help="peak period [s] (default 9)")
+        p.add_argument(
+            "--heading",
+            type=_finite_float,
+            default=90.0,
+            help="wave heading [deg], 0 following, 90 beam, 180 head (default 90)",
+        )
+        p.add_argument(
+            "--spectrum", choices=["jonswap", "pm", "torsethaugen"], default="jonswap", help="default jonswap"
+        )
+        p.add_argument(
+            "--spreading", type=int, default=None, metavar="S", help="short-crested cos^2s sea (default long-crested)"
+        )
+        p.add_argument("--duration", type=_positive_float, default=600.0, help="simulated time [s] (default 600)")
+        p.add_argument("--dt", type=_positive_float, default=0.01, help="time step [s] (default 0.01)")
+        p.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
+        p.add_argument(
+            "--rao",
+            default=None,
+            metavar="FILE",
+            help="RAO table (.mat MSS vessel or .csv); default: the built-in parametric supply vessel",
+        )
+        p.add_argument(
+            "--roll-damping", type=_positive_float, default=0.15, help="ζ44 of the parametric vessel (default 0.15)"
+        )
+        p.add_argument(
+            "--crane-share",
+            type=_finite_float,
+            default=0.3,
+            help="cooperative: share of the motion the crane takes (default 0.3)",
+        )
+        p.add_argument(
+            "--crane-kp", type=_finite_float, default=1.0, help="cooperative: crane position gain [1/s] (default 1)"
+        )
+        p.add_argument(
+            "--mru-noise", type=_finite_float, default=0.0, help="MRU noise scale, 1 = 2 cm / 0.05° (default 0: none)"
+        )
+        p.add_argument("--json", action="store_true", help="machine-readable output")
+
+    b = sims.add_parser("tac", help="one run: vessel in waves, crane and Delta head (CSV, Figs. 8–12, JSON)")
+    b.add_argument("--hs", type=_positive_float, default=3.0, help="significant wave height [m] (default 3)")
+    b.add_argument("--mode", choices=["off", "tac", "cooperative"], default="tac", help="default tac")
+    add_sea_args(b)
+    b.add_argument("--out", default=None, help="output folder (default out/tac_MODE_hsHS)")
+    b.set_defaults(func=cmd_sim_tac)
+    b = sims.add_parser("tac-sweep", help="rms(e_c)/rms(e_s) against Hs for each mode (table and plot)")
+    b.add_argument("--hs", default="0.5:5:0.5", help="START:STOP:STEP or a,b,c [m] (default 0.5:5:0.5)")
+    b.add_argument("--modes", nargs="+", choices=["off", "tac", "cooperative"], default=["tac", "cooperative"])
+    b.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1)")
+    add_sea_args(b)
+    b.add_argument("--out", default=None, help="output folder (default out/tac_sweep)")
+    b.set_defaults(func=cmd_sim_sweep)
     _load_plugin_commands(sub)
 
     def add_engine_args(p: argparse.ArgumentParser) -> None:

@@ -45,12 +45,20 @@ def test_pm_peak_is_at_tp():
 
 
 def test_dnv_gamma_rule():
-    assert dnv_gamma(4.0, 6.0) == 5.0  # Tp/sqrt(Hs) = 3 <= 3.6
+    assert dnv_gamma(4.0, 6.4) == 5.0  # Tp/sqrt(Hs) = 3.2 <= 3.6 (6.0 s would break: steeper than 1/15)
     assert dnv_gamma(1.0, 6.0) == 1.0  # 6 >= 5
     assert dnv_gamma(4.0, 8.6) == pytest.approx(np.exp(5.75 - 1.15 * 4.3))
     # the peak enhancement raises the peak against PM, with the same energy
-    wp = 2 * np.pi / 6.0
-    assert jonswap(wp, 4.0, 6.0) / pierson_moskowitz(wp, 4.0, 6.0) == pytest.approx((1 - 0.287 * np.log(5)) * 5)
+    wp = 2 * np.pi / 6.4
+    assert jonswap(wp, 4.0, 6.4) / pierson_moskowitz(wp, 4.0, 6.4) == pytest.approx((1 - 0.287 * np.log(5)) * 5)
+
+
+def test_breaking_seas_are_refused():
+    with pytest.raises(SeaStateError, match="steeper than a sea can be"):
+        jonswap(1.0, 4.0, 6.0)  # 2πHs/(gTp²) = 0.071 > 1/15
+    with pytest.raises(SeaStateError, match="steeper"):
+        dnv_gamma(15.0, 15.0)  # 0.043 > 1/25
+    assert dnv_gamma(8.0, 15.0) == 1.0  # 0.0228: fine
 
 
 def test_torsethaugen_partitions():

@@ -161,6 +161,9 @@ class CraneHead:
         p_cmd, saturated = self.workspace.saturate_many(p_ref_t)
         sol = self.head.ik(p_cmd)
         bad = ~np.all(sol.reachable, axis=1)
+        # the hull is convex, the reachable set is not quite: a point inside the hull can still
+        # need an arm past its limit; that reference is clipped and counted as saturated
+        clipped = ~np.all(sol.within_limits, axis=1) & ~bad
         alpha_ref = np.clip(sol.alpha, self.head.lower, self.head.upper)
         if np.any(bad):  # numerically outside the assembly: hold the last good reference
             hold = self.alpha_d if alpha_hold is None else alpha_hold
@@ -169,8 +172,9 @@ class CraneHead:
         # eq. (56) (no feed-forward while saturated: the reference is not moving with v_ref there)
         J = self.head.jacobian(alpha_ref, p_cmd)
         alpha_dot_ref = np.linalg.solve(J, v_ref_t[..., None])[..., 0]
-        alpha_dot_ref[saturated | bad] = 0.0
-        return HeadReference(o_t_n, R_t_n, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, saturated | bad)
+        limited = saturated | bad | clipped
+        alpha_dot_ref[limited] = 0.0
+        return HeadReference(o_t_n, R_t_n, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited)
 
 
 # ----------------------------------------------------------------------------- joint servo

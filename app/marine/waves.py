@@ -52,6 +52,15 @@ def check_sea(hs: float, tp: float) -> None:
         raise SeaStateError(f"Hs must be a positive number of metres, got {hs}")
     if not (math.isfinite(tp) and tp > 0):
         raise SeaStateError(f"Tp must be a positive number of seconds, got {tp}")
+    # DNV-RP-C205 §3.5.5.4: average steepness S_p = 2π Hs/(g Tp²) at most 1/15 for Tp ≤ 8 s,
+    # 1/25 for Tp ≥ 15 s, linear between; steeper seas break
+    sp = 2 * math.pi * hs / (G * tp**2)
+    limit = 1 / 15 - (1 / 15 - 1 / 25) * min(1.0, max(0.0, (tp - 8.0) / 7.0))
+    if sp > limit:
+        raise SeaStateError(
+            f"Hs {hs:g} m with Tp {tp:g} s is steeper than a sea can be "
+            f"(2πHs/(gTp²) = {sp:.3f} > {limit:.3f}, DNV-RP-C205 §3.5.5.4)"
+        )
 
 
 def wmo_sea_state(hs: float) -> tuple[int, str]:

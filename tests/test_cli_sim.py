@@ -1,0 +1,78 @@
+"""`bosun sim tac` and `bosun sim tac-sweep`: outputs, summaries, bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from app.analysis.tac_report import FIGURES, max_hs_within, parse_range
+from app.cli import main
+
+
+def run(capsys, *argv):
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse usage errors
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_sim_tac_writes_csv_figures_and_summary(capsys, tmp_path):
+    code, out, _ = run(
+        capsys, "sim", "tac", "--hs", "2", "--tp", "8", "--duration", "20", "--out", str(tmp_path), "--json"
+    )
+    assert code == 0
+    doc = json.loads(out)
+    for key in ("rms_e_c_m", "rms_e_s_m", "max_e_c_m", "max_e_s_m", "ratio_rms", "saturated_pct", "speed_x_realtime"):
+        assert key in doc
+    assert doc["scenario"]["mode"] == "tac" and doc["steps"] == 2000
+    assert 0 < doc["ratio_rms"] < 0.05
+    assert doc["x_d_m"] == pytest.approx(6.51, abs=0.01)
+    for f in (*FIGURES, "timeseries.csv", "summary.json"):
+        assert (tmp_path / f).stat().st_size > 0
+    with open(tmp_path / "timeseries.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0][:4] == ["t", "x", "y", "z"] and "e_c" in rows[0] and len(rows) == 2001
+
+
+def test_sim_tac_off_mode_has_ratio_one(capsys, tmp_path):
+    code, out, _ = run(capsys, "sim", "tac", "--mode", "off", "--duration", "10", "--out", str(tmp_path))
+    assert code == 0 and "ratio 100.00%" in out
+
+
+def test_sweep_table_and_plot(capsys, tmp_path):
+    code, out, _ = run(
+        capsys, "sim", "tac-sweep", "--hs", "1,2", "--duration", "10", "--modes", "off", "tac", "--out", str(tmp_path)
+    )
+    assert code == 0
+    assert "tac: ratio ≤ 5 % up to Hs = 2 m" in out and "off: ratio ≤ 5 % up to Hs = —" in out
+    doc = json.loads((tmp_path / "sweep.json").read_text())
+    assert len(doc["rows"]) == 4 and (tmp_path / "sweep.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [
+        (["sim", "tac", "--hs", "0"], "must be positive"),
+        (["sim", "tac", "--mode", "x"], "invalid choice"),
+        (["sim", "tac", "--rao", "/no/such.mat"], "no such RAO file"),
+        (["sim", "tac", "--dt", "1"], "dt must be in"),
+        (["sim", "tac", "--crane-share", "3"], "crane share"),
+        (["sim", "tac-sweep", "--hs", "3:1:1"], "--hs: '3:1:1' is not a range"),
+        (["sim", "tac-sweep", "--hs", "1,30"], "steeper than a sea can be"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, argv, match):
+    code, _, err = run(capsys, *argv)
+    assert code == 2
+    assert match in err and len(err.strip().splitlines()) == 1
+
+
+def test_parse_range_and_max_hs():
+    assert parse_range("0.5:2:0.5") == [0.5, 1.0, 1.5, 2.0]
+    assert parse_range("1,2.5") == [1.0, 2.5]
+    rows = [{"mode": "tac", "hs": h, "ratio_rms": r} for h, r in ((1, 0.01), (2, 0.04), (3, 0.06), (4, 0.03))]
+    assert max_hs_within(rows, "tac") == 2
