@@ -529,6 +529,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _make_session(args: argparse.Namespace):
+    if getattr(args, "plant", "teleop") == "tac":
+        from app.engine.tac_session import TacSession
+
+        return TacSession()
     from app.engine.session import Session
 
     return Session(robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0)
@@ -544,11 +548,11 @@ def cmd_server(args: argparse.Namespace) -> int:
     if not is_local(args.bind) and not args.token:
         raise BosunError(f"binding to the non-local address {args.bind} needs a shared token (--token)")
     session = _make_session(args)
-    server = EngineServer(session, bind=args.bind, rate=args.rate, publish_rate=args.publish_rate, token=args.token)
+    rate = args.rate if args.rate is not None else (50.0 if args.plant == "tac" else 500.0)
+    pub = min(args.publish_rate, rate) if args.publish_rate is not None else (25.0 if args.plant == "tac" else 50.0)
+    server = EngineServer(session, bind=args.bind, rate=rate, publish_rate=pub, token=args.token)
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
-    print(
-        f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {args.rate:g} Hz", flush=True
-    )
+    print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
     print(f"  requests on {server.url}, state on {server.state_url}", flush=True)
     try:
         server.run(duration=args.duration)
@@ -832,8 +836,18 @@ def build_parser() -> argparse.ArgumentParser:
         "a non-local address needs --token",
     )
     add_engine_args(p)
-    p.add_argument("--rate", type=_positive_float, default=500.0, help="control rate [Hz], up to 1000 (default 500)")
-    p.add_argument("--publish-rate", type=_positive_float, default=50.0, help="state messages per second (default 50)")
+    p.add_argument(
+        "--plant",
+        choices=["teleop", "tac"],
+        default="teleop",
+        help="teleop (a manipulator from the library) or tac (vessel, crane and Delta head); default teleop",
+    )
+    p.add_argument(
+        "--rate", type=_positive_float, default=None, help="control rate [Hz], up to 1000 (default 500; tac 50)"
+    )
+    p.add_argument(
+        "--publish-rate", type=_positive_float, default=None, help="state messages per second (default 50; tac 25)"
+    )
     p.add_argument("--token", default=None, help="shared secret every client must present")
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.set_defaults(func=cmd_server)

@@ -23,6 +23,7 @@ def run_gui(
     solver: str | None = None,
     mode: str | None = None,
     quit_after: float | None = None,
+    connect_tac: str | None = None,
 ) -> int:
     """Open the main window; start a child engine unless ``connect`` names a running one."""
     if not has_display():
@@ -55,7 +56,22 @@ def run_gui(
         if engine is not None:
             engine.stop()
         raise BosunError(str(err)) from None
-    win = MainWindow(link, engine=engine, settings=settings)
+    marine_engines: list = []
+
+    def marine_link():
+        """The crane-head scene runs in its own engine process (started on first use)."""
+        if connect_tac is not None:
+            return EngineLink(connect_tac, role="operator", token=token, name="bosun-gui-tac")
+        proc = EngineProcess(plant="tac")
+        marine_engines.append(proc)
+        try:
+            return EngineLink(proc.url, role="operator", name="bosun-gui-tac")
+        except TransportError:
+            proc.stop()
+            raise
+
+    win = MainWindow(link, engine=engine, settings=settings, marine_link_factory=marine_link)
+    app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
     win.resize(1500, 950)
     win.show()
     if quit_after is not None:
@@ -74,12 +90,23 @@ def register(sub, helpers) -> None:
         help="attach to a running 'bosun server' at this URL (default: start an engine process)",
     )
     p.add_argument("--token", default=None, help="shared secret of that engine")
+    p.add_argument(
+        "--connect-tac",
+        default=None,
+        help="attach the Crane head tab to a running 'bosun server --plant tac' (default: start one on first use)",
+    )
     p.add_argument("--robot", default=None, help="robot for a new engine (default: the last one used)")
     p.add_argument("--solver", default=None, help="solver for a new engine")
     p.add_argument("--mode", choices=["position", "velocity"], default=None, help="mode for a new engine")
     p.add_argument("--quit-after", type=helpers["positive_float"], default=None, help=argparse.SUPPRESS)
     p.set_defaults(
         func=lambda a: run_gui(
-            connect=a.connect, token=a.token, robot=a.robot, solver=a.solver, mode=a.mode, quit_after=a.quit_after
+            connect=a.connect,
+            token=a.token,
+            robot=a.robot,
+            solver=a.solver,
+            mode=a.mode,
+            quit_after=a.quit_after,
+            connect_tac=a.connect_tac,
         )
     )

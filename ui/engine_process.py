@@ -14,22 +14,16 @@ class EngineProcess:
     """``python -m app server`` on a free loopback port; stopped with the GUI."""
 
     def __init__(
-        self, robot: str = "comau_smart5_3dof", solver: str = "jacobian", mode: str = "velocity", timeout: float = 30.0
+        self,
+        robot: str = "comau_smart5_3dof",
+        solver: str = "jacobian",
+        mode: str = "velocity",
+        timeout: float = 30.0,
+        plant: str = "teleop",
     ) -> None:
-        cmd = [
-            sys.executable,
-            "-m",
-            "app",
-            "server",
-            "--bind",
-            "tcp://127.0.0.1:0",
-            "--robot",
-            robot,
-            "--solver",
-            solver,
-            "--mode",
-            mode,
-        ]
+        cmd = [sys.executable, "-m", "app", "server", "--bind", "tcp://127.0.0.1:0", "--plant", plant]
+        if plant == "teleop":
+            cmd += ["--robot", robot, "--solver", solver, "--mode", mode]
         self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         self.url = None
         deadline = time.monotonic() + timeout

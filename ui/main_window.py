@@ -19,12 +19,21 @@ from PyQt5.QtWidgets import (
 )
 
 from ui.analysis_tab import AnalysisTab
+from ui.marine_tab import CraneHeadTab
 from ui.teleop_tab import TeleopTab
 from ui.widgets.status import StatusPanel
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, link, engine=None, settings: QSettings | None = None, dialogs: bool = True) -> None:
+    def __init__(
+        self,
+        link,
+        engine=None,
+        settings: QSettings | None = None,
+        dialogs: bool = True,
+        marine_link_factory=None,
+        use_gl: bool | None = None,
+    ) -> None:
         super().__init__()
         self.link = link
         self.engine = engine
@@ -37,6 +46,12 @@ class MainWindow(QMainWindow):
         self.analysis = AnalysisTab()
         self.tabs.addTab(self.teleop, "Teleop")
         self.tabs.addTab(self.analysis, "Analysis")
+        self.crane_head = CraneHeadTab(marine_link_factory, use_gl=use_gl)
+        self.tabs.addTab(self.crane_head, "Crane head")
+        # the crane-head engine starts the first time its tab is shown
+        self.tabs.currentChanged.connect(
+            lambda i: self.crane_head.connect_engine() if self.tabs.widget(i) is self.crane_head else None
+        )
         self.setCentralWidget(self.tabs)
         self.status = StatusPanel()
         dock = QDockWidget("Status")
@@ -46,7 +61,7 @@ class MainWindow(QMainWindow):
         self.addDockWidget(Qt.BottomDockWidgetArea, dock)
 
         self.status.stop_clicked.connect(self.estop)
-        self.status.reset_clicked.connect(lambda: link.send("reset"))
+        self.status.reset_clicked.connect(self.reset)
         for key in (Qt.Key_Space, Qt.Key_Escape):
             sc = QShortcut(QKeySequence(key), self)
             sc.setContext(Qt.ApplicationShortcut)
@@ -66,6 +81,7 @@ class MainWindow(QMainWindow):
         self.teleop.error.connect(self.show_error)
         self.analysis.error.connect(self.show_error)
         self.teleop.inputs.notice.connect(self.on_input_event)
+        self.crane_head.notice.connect(self.on_marine_notice)
         self.status.lights["engine"].set("ok", "connected")
         self.status.add_log("info", f"connected to the engine at {link.client.url} as {link.role}")
         if link.note:
@@ -86,7 +102,17 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ actions
     def estop(self) -> None:
         self.link.send("estop", reason="STOP button")
+        self.crane_head.estop()
         self.status.add_log("error", "STOP pressed: E-STOP sent")
+
+    def reset(self) -> None:
+        self.link.send("reset")
+        self.crane_head.reset()
+
+    def on_marine_notice(self, level: str, text: str) -> None:
+        self.status.add_log(level, text)
+        if level == "error" and ("refused" in text or "not started" in text or "engine:" in text):
+            self.show_error("Crane head", text)
 
     def show_error(self, title: str, message: str) -> None:
         self.messages.append((title, message))
@@ -144,6 +170,7 @@ class MainWindow(QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("windowState", self.saveState())
         self.teleop.stop_logger()
+        self.crane_head.close_link()
         self.link.close()
         if self.engine is not None:
             self.engine.stop()

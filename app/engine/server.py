@@ -216,6 +216,14 @@ class EngineServer:
                 self.session.set_scaling(msg.get("k_p"), msg.get("x_w"), msg.get("k_v"))
             elif mtype == "reset":
                 self.session.reset()
+            elif mtype in ("set_sea", "set_tac_mode"):
+                handler = getattr(self.session, mtype, None)
+                if handler is None:
+                    raise CommandError(f"{mtype}: this engine runs the teleop session, not the crane-head scene")
+                if mtype == "set_sea":
+                    handler(msg["spectrum"], msg["hs"], msg["tp"], msg["heading"])
+                else:
+                    handler(msg["mode"])
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")
             self._reply(ident, mtype, False, str(err))

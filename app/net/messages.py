@@ -42,6 +42,14 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "estop": {"reason": ("str", False, 256)},
     "reset": {},
     "release_operator": {},
+    # crane-head scene (``bosun server --plant tac``)
+    "set_sea": {
+        "spectrum": ("enum", True, ("jonswap", "pm", "torsethaugen")),
+        "hs": ("float", True, 30.0),
+        "tp": ("float", True, 40.0),
+        "heading": ("float", True, 720.0),
+    },
+    "set_tac_mode": {"mode": ("enum", True, ("off", "tac", "cooperative"))},
 }
 
 # ------------------------------------------------------------------ engine -> client
@@ -62,4 +70,6 @@ ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
 }
 
 #: messages only the operator may send (a viewer gets an error reply); E-STOP is anyone's
-OPERATOR_ONLY = frozenset({"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset"})
+OPERATOR_ONLY = frozenset(
+    {"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset", "set_sea", "set_tac_mode"}
+)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -196,6 +196,16 @@ class TacSimulator:
         )
         self._beta0_hint = float(self.beta_d[0])
         self._started = False
+        self._beta_c_prev: NDArray[np.float64] | None = None
+        self.continue_from_current = False  # set when the machine's state is carried over (live changes)
+
+    def set_mode(self, mode: str) -> None:
+        """Switch the compensation mode live; the joints continue from where they are."""
+        if mode not in MODES:
+            raise ScenarioError(f"mode must be one of {', '.join(MODES)}, got '{mode}'")
+        self.scenario = replace(self.scenario, mode=mode)
+        self.head_servo.reset(self.head_servo.alpha)
+        self._beta_c_prev = None
 
     @property
     def done(self) -> bool:
@@ -204,6 +214,9 @@ class TacSimulator:
     def _start(self, first_state) -> None:
         """Start the controllers on their references (no artificial transient at t = 0)."""
         sc, sys_ = self.scenario, self.system
+        self._started = True
+        if self.continue_from_current:
+            return
         if sc.mode == "cooperative":
             beta_c = sys_.crane_ik_tcp(self._target_b(first_state.eta), self._beta0_hint)[0]
             self.crane_servo.beta = self.beta_d + sc.crane_share * (beta_c - self.beta_d)
@@ -212,15 +225,17 @@ class TacSimulator:
                 first_state.eta, first_state.nu, self.crane_servo.beta[None], np.zeros((1, 3)), self.p_d_n
             )
             self.head_servo.reset(ref.alpha_ref[0])
-        self._started = True
 
     def _target_b(self, eta: NDArray[np.float64]) -> NDArray[np.float64]:
         """p_d^n in {b}: where the TCP must be, seen from the vessel."""
         R = euler_zyx_to_matrix(eta[:, 3:6])
         return np.einsum("nji,nj->ni", R, self.p_d_n - eta[:, :3])
 
-    def advance(self, n: int) -> TacChunk:
-        """Simulate the next ``n`` steps (fewer at the end)."""
+    def advance(self, n: int, frozen: bool = False) -> TacChunk:
+        """Simulate the next ``n`` steps (fewer at the end).
+
+        ``frozen``: the head and crane joints stay where they are (E-STOP) while the vessel moves.
+        """
         sc, sys_ = self.scenario, self.system
         n = max(0, min(n, self.n_steps - self.k))
         t = (self.k + 1 + np.arange(n)) * sc.dt
@@ -230,20 +245,31 @@ class TacSimulator:
             first = self.vessel.state(np.array([self.k * sc.dt]))
             self._start(first)
         # crane
-        if sc.mode == "cooperative":
+        crane = self.crane_servo
+        if frozen:
+            crane.beta_dot = np.zeros(3)
+            beta = np.broadcast_to(crane.beta, (n, 3)).copy()
+            beta_dot = np.zeros((n, 3))
+        elif sc.mode == "cooperative":
             beta_c = sys_.crane_ik_tcp(self._target_b(meas.eta), self._beta0_hint)
             self._beta0_hint = float(beta_c[-1, 0])
-            prev = getattr(self, "_beta_c_prev", beta_c[0])
+            prev = beta_c[0] if self._beta_c_prev is None else self._beta_c_prev
             beta_c_dot = np.diff(np.vstack([prev[None], beta_c]), axis=0) / sc.dt
             self._beta_c_prev = beta_c[-1]
             beta, beta_dot = self.crane_servo.run(self.beta_d, beta_c, beta_c_dot, sc.dt)
+        elif np.any(crane.beta != self.beta_d) or np.any(crane.beta_dot != 0):
+            # after cooperative mode: the crane drives back to the configuration of eq. (60)
+            beta, beta_dot = crane.run(self.beta_d, np.broadcast_to(self.beta_d, (n, 3)), np.zeros((n, 3)), sc.dt)
+            if np.allclose(crane.beta, self.beta_d, atol=1e-6) and np.allclose(crane.beta_dot, 0, atol=1e-6):
+                crane.beta, crane.beta_dot = self.beta_d.copy(), np.zeros(3)
         else:
             beta = np.broadcast_to(self.beta_d, (n, 3)).copy()
             beta_dot = np.zeros((n, 3))
         # head
         ref = sys_.head_reference(meas.eta, meas.nu, beta, beta_dot, self.p_d_n)
-        if sc.mode == "off":  # head locked at p_d^t: the uncompensated TCP
-            alpha = np.broadcast_to(sys_.alpha_d, (n, 3)).copy()
+        if frozen or sc.mode == "off":  # head locked (E-STOP: where it is; off: at p_d^t)
+            hold = self.head_servo.alpha if frozen else sys_.alpha_d
+            alpha = np.broadcast_to(hold, (n, 3)).copy()
             u = alpha.copy()
             saturated = np.zeros(n, dtype=bool)
         else:

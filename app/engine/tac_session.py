@@ -1,0 +1,163 @@
+"""Engine session for the crane-head compensation scene (vessel, crane, Delta head).
+
+Served by the same :class:`~app.engine.server.EngineServer` as the teleop session
+(``bosun server --plant tac``), usually at 50 Hz: each tick advances the simulation by the tick's
+time in steps of ``dt`` (0.01 s).  Commands: ``set_sea`` (spectrum, Hs, Tp, heading; restarts the
+sea), ``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane
+freeze where they are; latched until ``reset``).  Teleop commands are refused with a clear message.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from app.engine.session import CommandError, LogEntry
+from app.errors import BosunError
+from app.geometry import euler_zyx_to_matrix
+from app.sim.tac import MODES, TacScenario, TacSimulator
+
+# drawing only: the supply vessel's box (Lpp, B; deck at the crane base 3 m above CO, keel at T = 6 m)
+SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
+
+
+@dataclass
+class TacSession:
+    scenario: TacScenario = field(default_factory=lambda: TacScenario(duration=1e5))
+    log: deque = field(default_factory=lambda: deque(maxlen=200))
+
+    def __post_init__(self) -> None:
+        self.log_seq = 0
+        self.estop_latched = False
+        self.robot_name, self.solver_name, self.mode = "tac", "-", self.scenario.mode
+        self.sim = TacSimulator(self.scenario)
+        self.system = self.sim.system
+        self._carry = 0.0
+        self.last: dict[str, Any] = {}
+        self.sea_seq = 0
+        self._publish_count = 0
+        hull = self.system.workspace.hull
+        self._hull = {
+            "points": np.round(hull.points[hull.vertices], 4).tolist(),
+            "index": {int(v): i for i, v in enumerate(hull.vertices)},
+        }
+        self._hull["faces"] = [[self._hull["index"][int(v)] for v in s] for s in hull.simplices]
+        del self._hull["index"]
+        self.note("info", f"crane-head scene: Hs {self.scenario.hs:g} m, Tp {self.scenario.tp:g} s, mode {self.mode}")
+
+    # ------------------------------------------------------------------ log
+    def note(self, level: str, text: str) -> None:
+        self.log_seq += 1
+        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
+
+    # ------------------------------------------------------------------ commands
+    def set_sea(self, spectrum: str, hs: float, tp: float, heading: float) -> None:
+        try:
+            sc = replace(self.scenario, spectrum=spectrum, hs=hs, tp=tp, heading=heading, seed=self.scenario.seed + 1)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+        self.scenario = sc
+        beta, alpha = self.sim.crane_servo.beta.copy(), self.sim.head_servo.alpha.copy()
+        self.sim = TacSimulator(sc, self.system)
+        self.sim.crane_servo.beta, self.sim.head_servo.alpha = beta, alpha  # the machine stays where it is
+        self.sim.continue_from_current = True
+        self.sea_seq += 1
+        self.note("info", f"sea: {spectrum} Hs {hs:g} m, Tp {tp:g} s, heading {heading:g}°")
+
+    def set_tac_mode(self, mode: str) -> None:
+        if mode not in MODES:
+            raise CommandError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+        self.sim.set_mode(mode)
+        self.scenario = self.sim.scenario
+        self.mode = mode
+        self.note("info", f"compensation mode: {mode}")
+
+    def estop(self, source: str = "operator") -> None:
+        if not self.estop_latched:
+            self.note("error", f"E-STOP from {source}: head and crane stopped")
+        self.estop_latched = True
+
+    def reset(self) -> None:
+        if self.estop_latched:
+            self.estop_latched = False
+            self.sim.set_mode(self.sim.scenario.mode)  # controllers restart from where the machine is
+            self.note("info", "E-STOP reset")
+
+    def _teleop_only(self, *_: Any) -> None:
+        raise CommandError("this engine runs the crane-head scene; robot, solver and stick commands do not apply")
+
+    set_robot = set_solver = set_mode = set_scaling = _teleop_only
+
+    def feed(self, sample, now: float) -> None:  # joystick input is not used by this scene
+        return None
+
+    # ------------------------------------------------------------------ loop
+    def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
+        self._carry += dt
+        n = int(self._carry / self.scenario.dt + 1e-9)
+        if n <= 0:
+            return
+        self._carry -= n * self.scenario.dt
+        if self.sim.done:  # a long session: start a fresh sea record, the machine stays put
+            self.set_sea(self.scenario.spectrum, self.scenario.hs, self.scenario.tp, self.scenario.heading)
+        c = self.sim.advance(n, frozen=self.estop_latched)
+        if c.t.size:
+            self.last = {
+                "t": float(c.t[-1]),
+                "eta": c.eta[-1].tolist(),
+                "beta": c.beta[-1].tolist(),
+                "p_ref_t": c.p_ref_t[-1].tolist(),
+                "p_c_t": c.p_c_t[-1].tolist(),
+                "alpha_ref": c.alpha_ref[-1].tolist(),
+                "alpha": c.alpha[-1].tolist(),
+                "u": c.u[-1].tolist(),
+                "e_c": float(c.e_c[-1]),
+                "e_s": float(c.e_s[-1]),
+                "saturated": bool(c.saturated.any()),
+                "p_c_n": c.p_c_n[-1].tolist(),
+                "p_s_n": c.p_s_n[-1].tolist(),
+            }
+
+    def _scene(self) -> dict[str, Any]:
+        """Points in {n} for drawing: ship box corners, crane polyline, head knees, TCP, desired point."""
+        eta = np.asarray(self.last["eta"])
+        R = euler_zyx_to_matrix(eta[3:6])
+        o = eta[:3]
+        beta = np.asarray(self.last["beta"])
+        F = self.system.crane.frames(beta)
+        crane_b = F[:, :3, 3]
+        o_t_b, R_t_b = F[-1, :3, 3], F[-1, :3, :3]
+        alpha = np.asarray(self.last["alpha"])
+        knees_t = self.system.head.knees(alpha)
+        p_c_t = np.asarray(self.last["p_c_t"])
+        head_b = o_t_b + (np.vstack([knees_t, p_c_t]) @ R_t_b.T)
+        hl, hb = SHIP_LENGTH / 2, SHIP_BEAM / 2
+        ship_b = np.array([[x, y, z] for x in (-hl, hl) for y in (-hb, hb) for z in (SHIP_DECK_Z, SHIP_KEEL_Z)])
+
+        def to_n(p):
+            return np.round(p @ R.T + o, 4).tolist()
+
+        return {"ship": to_n(ship_b), "crane": to_n(crane_b), "head": to_n(head_b)}
+
+    def snapshot(self) -> dict[str, Any]:
+        self._publish_count += 1
+        sc = self.scenario
+        snap: dict[str, Any] = {
+            "kind": "tac",
+            "estop": self.estop_latched,
+            "sea": {"spectrum": sc.spectrum, "hs": sc.hs, "tp": sc.tp, "heading": sc.heading, "seq": self.sea_seq},
+            "tac_mode": sc.mode,
+            "x_d": self.system.x_d,
+            "p_d_n": self.sim.p_d_n.tolist(),
+            "alpha_limits": [float(self.system.head.lower[0]), float(self.system.head.upper[0])],
+            "sample": self.last,
+        }
+        if self.last:
+            snap["scene"] = self._scene()
+        if self._publish_count % 25 == 1:  # the hull now and then: late joiners get it within a second or so
+            snap["hull"] = self._hull
+        return snap

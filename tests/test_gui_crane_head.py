@@ -1,0 +1,153 @@
+"""Crane-head tab (pytest-qt offscreen) against a real crane-head engine over 127.0.0.1."""
+
+import threading
+
+import numpy as np
+import pytest
+
+pytest.importorskip("PyQt5")
+from PyQt5.QtCore import QSettings
+
+from app.engine.server import EngineServer
+from app.engine.session import Session
+from app.engine.tac_session import TacSession
+from app.net.transport import Client, TransportError
+from ui.link import EngineLink
+from ui.main_window import MainWindow
+from ui.marine_tab import SceneView2D
+
+
+def _serve(session, rate):
+    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
+    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
+    th.start()
+    return srv, th
+
+
+@pytest.fixture
+def engines():
+    teleop = _serve(Session(robot_name="comau_smart5_3dof"), 200)
+    tac = _serve(TacSession(), 50)
+    yield teleop[0], tac[0]
+    for srv, th in (teleop, tac):
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()
+
+
+@pytest.fixture
+def window(qtbot, engines, tmp_path):
+    teleop, tac = engines
+    made = []
+
+    def factory():
+        made.append(EngineLink(tac.url, name="gui-tac"))
+        return made[-1]
+
+    win = MainWindow(
+        EngineLink(teleop.url),
+        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
+        dialogs=False,
+        marine_link_factory=factory,
+        use_gl=False,
+    )
+    qtbot.addWidget(win)
+    win.show()
+    yield win, made
+    win.close()
+
+
+def test_tab_starts_its_engine_and_plots_live(qtbot, window):
+    win, made = window
+    tab = win.crane_head
+    assert tab.link is None and not tab.mode.isEnabled()
+    win.tabs.setCurrentWidget(tab)  # first show connects
+    assert len(made) == 1 and tab.mode.isEnabled()
+    qtbot.waitUntil(lambda: tab.hull is not None and tab.ring.i > 20, timeout=10000)
+    assert isinstance(tab.scene, SceneView2D)
+    assert tab.hull is not None and len(tab.hull["points"]) > 50
+    x, y = tab.c_ec.getData()
+    assert len(x) > 20 and np.all(np.isfinite(y))
+    _, ys = tab.c_es.getData()
+    assert np.max(ys) > 0.05  # the uncompensated TCP moves in the default Hs 3 m sea
+    assert "mode <b>tac</b>" in tab.readout.text()
+    win.tabs.setCurrentIndex(0)
+    win.tabs.setCurrentWidget(tab)
+    assert len(made) == 1  # one engine link, not one per visit
+
+
+def test_sea_and_mode_reach_the_engine(qtbot, window):
+    win, _ = window
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    tab.spectrum.setCurrentText("torsethaugen")
+    tab.hs.setValue(2.0)
+    tab.tp.setValue(8.0)
+    tab.heading.setValue(135)
+    tab.apply_sea.click()
+    qtbot.waitUntil(lambda: tab.state["sea"]["spectrum"] == "torsethaugen", timeout=5000)
+    assert tab.state["sea"]["hs"] == 2.0 and tab.state["sea"]["heading"] == 135.0
+    tab.mode.setCurrentText("cooperative")
+    qtbot.waitUntil(lambda: tab.state["tac_mode"] == "cooperative", timeout=5000)
+
+
+def test_breaking_sea_is_refused_with_a_message(qtbot, window):
+    win, _ = window
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    tab.hs.setValue(12.0)
+    tab.tp.setValue(5.0)
+    tab.apply_sea.click()
+    qtbot.waitUntil(lambda: any("steeper than a sea" in m for _, m in win.messages), timeout=5000)
+    assert tab.state["sea"]["hs"] == 3.0  # the engine kept its sea
+
+
+def test_stop_freezes_the_head_and_reset_resumes(qtbot, window):
+    win, _ = window
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and bool(tab.state.get("sample")), timeout=10000)
+    win.status.stop.click()
+    qtbot.waitUntil(lambda: tab.state["estop"], timeout=5000)
+    a1 = tab.state["sample"]["alpha"]
+    qtbot.wait(300)
+    assert tab.state["sample"]["alpha"] == a1 and "E-STOP latched" in tab.readout.text()
+    win.status.reset.click()
+    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["sample"]["alpha"] != a1, timeout=5000)
+
+
+def test_engine_that_does_not_start_is_reported(qtbot, engines, tmp_path):
+    teleop, _ = engines
+
+    def broken():
+        raise RuntimeError("the engine did not start: no such plant")
+
+    win = MainWindow(
+        EngineLink(teleop.url),
+        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
+        dialogs=False,
+        marine_link_factory=broken,
+        use_gl=False,
+    )
+    qtbot.addWidget(win)
+    win.tabs.setCurrentWidget(win.crane_head)
+    assert any("no such plant" in m for _, m in win.messages)
+    assert win.crane_head.start.isVisible() or not win.isVisible()
+    win.close()
+
+
+def test_teleop_engine_refuses_crane_head_commands(engines):
+    teleop, tac = engines
+    for url, mtype, fields, match in (
+        (teleop.url, "set_tac_mode", {"mode": "tac"}, "teleop session"),
+        (tac.url, "set_robot", {"robot": "scara"}, "crane-head scene"),
+    ):
+        c = Client(url, role="operator", name="t")
+        try:
+            with pytest.raises(TransportError, match=match):
+                c.request(mtype, **fields)
+        finally:
+            c.close()

@@ -1,0 +1,352 @@
+"""Crane-head tab: supply vessel, offshore crane and Delta head in waves (TAC paper Figs. 7–12).
+
+Talks to its own engine (``bosun server --plant tac``) through an :class:`~ui.link.EngineLink`;
+the engine is started when the tab is first opened (or a link is given, e.g. by tests).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QGridLayout,
+    QGroupBox,
+    QLabel,
+    QPushButton,
+    QSplitter,
+    QVBoxLayout,
+    QWidget,
+)
+
+from ui.glprobe import gl_available
+
+HISTORY_S = 60.0
+SAMPLE_HZ = 25
+
+SHIP_EDGES = [(0, 1), (0, 2), (0, 4), (1, 3), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 6), (5, 7), (6, 7)]
+
+
+def _up(p) -> np.ndarray:
+    """{n} (NED, z down) → display coordinates (x north, y west, z up): a right-handed z-up frame."""
+    p = np.asarray(p, dtype=float)
+    return np.stack([p[..., 0], -p[..., 1], -p[..., 2]], axis=-1)
+
+
+class Ring:
+    """Fixed-size ring buffer of rows for the live plots."""
+
+    def __init__(self, n: int, width: int) -> None:
+        self.data = np.full((n, width), np.nan)
+        self.i = 0
+        self.full = False
+
+    def push(self, row) -> None:
+        self.data[self.i] = row
+        self.i = (self.i + 1) % len(self.data)
+        self.full = self.full or self.i == 0
+
+    def view(self) -> np.ndarray:
+        return np.roll(self.data, -self.i, axis=0) if self.full else self.data[: self.i]
+
+
+class SceneView3D(QWidget):
+    kind = "3d"
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        import pyqtgraph.opengl as gl
+
+        self.view = gl.GLViewWidget()
+        self.view.setBackgroundColor((18, 26, 38))
+        self.view.setCameraPosition(distance=140, elevation=18, azimuth=-60)
+        self.view.setToolTip("Vessel (grey), crane (orange), Delta head (cyan), TCP (red), desired point (green)")
+        sea = gl.GLGridItem()
+        sea.setSize(200, 200)
+        sea.setSpacing(10, 10)
+        sea.setColor((60, 110, 160, 120))
+        self.view.addItem(sea)
+        self.ship = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.75, 0.75, 0.75, 1), width=2, mode="lines")
+        self.crane = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.9, 0.55, 0.15, 1), width=5)
+        self.head = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.3, 0.85, 0.9, 1), width=2, mode="lines")
+        self.tcp = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.95, 0.25, 0.2, 1), size=12)
+        self.goal = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.2, 0.85, 0.3, 1), size=12)
+        for it in (self.ship, self.crane, self.head, self.tcp, self.goal):
+            self.view.addItem(it)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.view)
+
+    def update_scene(self, scene: dict, p_d_n) -> None:
+        ship = _up(scene["ship"])
+        self.ship.setData(pos=np.array([ship[i] for e in SHIP_EDGES for i in e]))
+        self.crane.setData(pos=_up(scene["crane"]))
+        head = _up(scene["head"])
+        tip = _up(scene["crane"][-1])
+        knees, tcp = head[:3], head[3]
+        self.head.setData(pos=np.array([p for k in knees for p in (tip, k, k, tcp)]))
+        self.tcp.setData(pos=tcp[None])
+        self.goal.setData(pos=_up(p_d_n)[None])
+
+
+class SceneView2D(QWidget):
+    """Without OpenGL: the scene seen from astern (east–up), the athwartship plane of a beam sea."""
+
+    kind = "2d"
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self.plot = pg.PlotWidget(title="seen from astern: east [m] – up [m] (no OpenGL here)")
+        self.plot.setAspectLocked(True)
+        self.plot.showGrid(x=True, y=True, alpha=0.3)
+        self.ship = self.plot.plot(pen=pg.mkPen((190, 190, 190), width=2))
+        self.crane = self.plot.plot(pen=pg.mkPen((230, 140, 40), width=4), symbol="o", symbolSize=5)
+        self.head = self.plot.plot(pen=pg.mkPen((80, 210, 230), width=1.5))
+        self.tcp = self.plot.plot(pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=10)
+        self.goal = self.plot.plot(
+            pen=None, symbol="+", symbolBrush=(50, 220, 80), symbolPen=(50, 220, 80), symbolSize=14
+        )
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.plot)
+
+    def update_scene(self, scene: dict, p_d_n) -> None:
+        ship = _up(scene["ship"])
+        # the midship section: the four corners at x = +L/2 are indices 4..7 (y ±, z deck/keel)
+        sec = ship[[4, 5, 7, 6, 4]]
+        self.ship.setData(-sec[:, 1], sec[:, 2])
+        crane = _up(scene["crane"])
+        self.crane.setData(-crane[:, 1], crane[:, 2])
+        head = _up(scene["head"])
+        tip = crane[-1]
+        pts = np.array([p for k in head[:3] for p in (tip, k, head[3], [np.nan] * 3)])
+        self.head.setData(-pts[:, 1], pts[:, 2], connect="finite")
+        self.tcp.setData([-head[3, 1]], [head[3, 2]])
+        g = _up(p_d_n)
+        self.goal.setData([-g[1]], [g[2]])
+
+
+def make_scene_view(use_gl: bool | None = None) -> QWidget:
+    if use_gl is None:
+        use_gl = gl_available()
+    if use_gl:
+        try:
+            return SceneView3D()
+        except Exception:
+            pass
+    return SceneView2D()
+
+
+class CraneHeadTab(QWidget):
+    """Sea-state controls, mode switch, 3D/2D scene, workspace hull and the live plots of Figs. 8–12.
+
+    ``link_factory`` makes the :class:`~ui.link.EngineLink` to the crane-head engine on first use.
+    """
+
+    notice = pyqtSignal(str, str)  # level, text for the status log
+
+    def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
+        super().__init__()
+        self.link_factory = link_factory
+        self.link = None
+        self.use_gl = use_gl
+        self.hull = None
+        self.state: dict | None = None
+        self._sea_seq = -1
+        self._t_last = -math.inf
+        n = int(HISTORY_S * SAMPLE_HZ)
+        self.ring = Ring(n, 1 + 6 + 3 + 3 + 3 + 3 + 2)  # t, η, p_ref, p_c, α, u, e_c, e_s
+        self._build()
+
+    # ------------------------------------------------------------------ layout
+    def _build(self) -> None:
+        controls = QGroupBox("Sea state and compensation")
+        form = QFormLayout(controls)
+        self.spectrum = QComboBox()
+        self.spectrum.addItems(["jonswap", "pm", "torsethaugen"])
+        self.hs = QDoubleSpinBox(decimals=1, minimum=0.1, maximum=14.0, singleStep=0.5, value=3.0, suffix=" m")
+        self.tp = QDoubleSpinBox(decimals=1, minimum=3.0, maximum=25.0, singleStep=0.5, value=9.0, suffix=" s")
+        self.heading = QDoubleSpinBox(decimals=0, minimum=0, maximum=359, singleStep=15, value=90, suffix=" °")
+        self.heading.setWrapping(True)
+        self.heading.setToolTip("wave heading: 0 following sea, 90 beam sea (to starboard), 180 head sea")
+        self.apply_sea = QPushButton("Apply sea")
+        self.apply_sea.clicked.connect(self.send_sea)
+        self.mode = QComboBox()
+        self.mode.addItems(["off", "tac", "cooperative"])
+        self.mode.setCurrentText("tac")
+        self.mode.setToolTip("off: head locked; tac: the head compensates (paper); cooperative: crane joins in")
+        self.mode.currentTextChanged.connect(lambda m: self._send("set_tac_mode", mode=m))
+        self.start = QPushButton("Start crane-head engine")
+        self.start.clicked.connect(self.connect_engine)
+        form.addRow(self.start)
+        form.addRow("spectrum", self.spectrum)
+        form.addRow("Hs", self.hs)
+        form.addRow("Tp", self.tp)
+        form.addRow("heading", self.heading)
+        form.addRow(self.apply_sea)
+        form.addRow("mode", self.mode)
+        self.readout = QLabel("not connected")
+        self.readout.setTextFormat(Qt.RichText)
+        self.readout.setMinimumWidth(260)
+        form.addRow(self.readout)
+
+        self.scene = make_scene_view(self.use_gl)
+        self.hull_plot = pg.PlotWidget(title="head workspace (x–z, head frame) with p_ref and p_c")
+        self.hull_plot.setAspectLocked(True)
+        self.hull_plot.showGrid(x=True, y=True, alpha=0.3)
+        self.hull_curve = self.hull_plot.plot(pen=pg.mkPen((120, 140, 220), width=1.5))
+        self.ref_dot = self.hull_plot.plot(pen=None, symbol="o", symbolBrush=(160, 160, 160), symbolSize=10)
+        self.pc_dot = self.hull_plot.plot(pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=7)
+
+        plots = pg.GraphicsLayoutWidget()
+        self.p_eta = plots.addPlot(row=0, col=0, title="Fig. 8 vessel: heave [m], roll/pitch [deg]")
+        self.p_tcp = plots.addPlot(row=0, col=1, title="Fig. 9 p_c^t (line) vs p_ref^t (grey) [m]")
+        self.p_err = plots.addPlot(row=1, col=0, title="Fig. 11 e_s (red) vs e_c (blue) [m]")
+        self.p_ang = plots.addPlot(row=1, col=1, title="Fig. 12 α (line) and u_α (grey) [deg]")
+        colors = [(230, 90, 70), (90, 170, 230), (120, 210, 120)]
+        for p in (self.p_eta, self.p_tcp, self.p_err, self.p_ang):
+            p.showGrid(x=True, y=True, alpha=0.3)
+            p.setDownsampling(auto=True, mode="peak")
+            p.setClipToView(True)
+            p.setLabel("bottom", "t [s]")
+        self.c_eta = [self.p_eta.plot(pen=pg.mkPen(c, width=1.2)) for c in colors]
+        self.c_ref = [self.p_tcp.plot(pen=pg.mkPen((150, 150, 150), width=3)) for _ in range(2)]
+        self.c_pc = [self.p_tcp.plot(pen=pg.mkPen(c, width=1.2)) for c in colors[:2]]
+        self.c_es = self.p_err.plot(pen=pg.mkPen((230, 80, 70), width=1.2))
+        self.c_ec = self.p_err.plot(pen=pg.mkPen((90, 170, 230), width=1.5))
+        self.c_u = [self.p_ang.plot(pen=pg.mkPen((150, 150, 150), width=1)) for _ in range(3)]
+        self.c_al = [self.p_ang.plot(pen=pg.mkPen(c, width=1.2)) for c in colors]
+
+        left = QWidget()
+        lv = QVBoxLayout(left)
+        lv.addWidget(controls)
+        lv.addWidget(self.hull_plot, 1)
+        top = QSplitter(Qt.Horizontal)
+        top.addWidget(left)
+        top.addWidget(self.scene)
+        top.setStretchFactor(1, 1)
+        main = QSplitter(Qt.Vertical)
+        main.addWidget(top)
+        main.addWidget(plots)
+        main.setSizes([520, 420])
+        lay = QGridLayout(self)
+        lay.addWidget(main, 0, 0)
+        self._set_enabled(False)
+
+    def _set_enabled(self, on: bool) -> None:
+        for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode):
+            w.setEnabled(on)
+        self.start.setVisible(not on)
+
+    # ------------------------------------------------------------------ engine
+    def connect_engine(self) -> bool:
+        if self.link is not None:
+            return True
+        if self.link_factory is None:
+            return False
+        try:
+            self.link = self.link_factory()
+        except Exception as err:  # the engine did not start: say why, keep the tab usable
+            self.notice.emit("error", f"crane-head engine: {err}")
+            self.readout.setText(f"<b>engine not started</b>: {err}")
+            return False
+        self.link.state.connect(self.on_state)
+        self.link.reply.connect(self.on_reply)
+        self.link.log.connect(lambda lvl, text: self.notice.emit(lvl, f"crane head: {text}"))
+        self._set_enabled(True)
+        self.notice.emit("info", "crane-head engine connected")
+        return True
+
+    def _send(self, mtype: str, **fields) -> None:
+        if self.link is not None:
+            self.link.send(mtype, **fields)
+
+    def send_sea(self) -> None:
+        self._send(
+            "set_sea",
+            spectrum=self.spectrum.currentText(),
+            hs=float(self.hs.value()),
+            tp=float(self.tp.value()),
+            heading=float(self.heading.value()),
+        )
+
+    def estop(self) -> None:
+        self._send("estop", reason="STOP in the GUI")
+
+    def reset(self) -> None:
+        self._send("reset")
+
+    def on_reply(self, re: str, ok: bool, error: str) -> None:
+        if not ok and re in ("set_sea", "set_tac_mode", "reset"):
+            self.notice.emit("error", f"crane head: {re} refused: {error}")
+
+    def close_link(self) -> None:
+        if self.link is not None:
+            self.link.close()
+            self.link = None
+
+    # ------------------------------------------------------------------ state
+    def on_state(self, state: dict) -> None:
+        if state.get("kind") != "tac":
+            return
+        self.state = state
+        if "hull" in state and self.hull is None:
+            self.hull = state["hull"]
+            self._draw_hull()
+        sea = state["sea"]
+        if sea["seq"] != self._sea_seq:
+            self._sea_seq = sea["seq"]
+        s = state.get("sample") or {}
+        if not s:
+            return
+        if s["t"] < self._t_last:  # a new sea record: keep plotting on one time axis
+            self.ring = Ring(len(self.ring.data), self.ring.data.shape[1])
+        self._t_last = s["t"]
+        self.ring.push([s["t"], *s["eta"], *s["p_ref_t"], *s["p_c_t"], *s["alpha"], *s["u"], s["e_c"], s["e_s"]])
+        if "scene" in state:
+            self.scene.update_scene(state["scene"], state["p_d_n"])
+        self.ref_dot.setData([s["p_ref_t"][0]], [s["p_ref_t"][2]])
+        self.pc_dot.setData([s["p_c_t"][0]], [s["p_c_t"][2]])
+        self._draw_plots()
+        d = self.ring.view()
+        rms_c = float(np.sqrt(np.nanmean(d[:, 19] ** 2)))
+        rms_s = float(np.sqrt(np.nanmean(d[:, 20] ** 2)))
+        ratio = f"{rms_c / rms_s:.1%}" if rms_s > 1e-9 else "—"
+        flag = "<span style='color:#e08020'><b>SATURATED</b></span>" if s["saturated"] else "inside workspace"
+        stop = "<span style='color:#e03030'><b>E-STOP latched</b></span><br>" if state.get("estop") else ""
+        self.readout.setText(
+            f"{stop}t = {s['t']:.1f} s — mode <b>{state['tac_mode']}</b>, {flag}<br>"
+            f"sea: {sea['spectrum']} Hs {sea['hs']:g} m, Tp {sea['tp']:g} s, {sea['heading']:g}°<br>"
+            f"e_c {s['e_c']:.3f} m, e_s {s['e_s']:.3f} m; last {HISTORY_S:g} s rms ratio {ratio}<br>"
+            f"x_d = {state['x_d']:.2f} m"
+        )
+
+    def _draw_hull(self) -> None:
+        """Outline of the hull's x–z projection (convex hull of the projected vertices)."""
+        from scipy.spatial import ConvexHull
+
+        pts = np.asarray(self.hull["points"])[:, [0, 2]]
+        h = ConvexHull(pts)
+        loop = pts[np.append(h.vertices, h.vertices[0])]
+        self.hull_curve.setData(loop[:, 0], loop[:, 1])
+
+    def _draw_plots(self) -> None:
+        d = self.ring.view()
+        t = d[:, 0]
+        self.c_eta[0].setData(t, d[:, 3])
+        self.c_eta[1].setData(t, np.degrees(d[:, 4]))
+        self.c_eta[2].setData(t, np.degrees(d[:, 5]))
+        for k, col in enumerate((0, 2)):
+            self.c_ref[k].setData(t, d[:, 7 + col])
+            self.c_pc[k].setData(t, d[:, 10 + col])
+        self.c_es.setData(t, d[:, 20])
+        self.c_ec.setData(t, d[:, 19])
+        for i in range(3):
+            self.c_u[i].setData(t, np.degrees(d[:, 16 + i]))
+            self.c_al[i].setData(t, np.degrees(d[:, 13 + i]))
