@@ -36,7 +36,13 @@ def main() -> int:
     settings = QSettings(str(OUT / "screenshots.ini"), QSettings.IniFormat)
     engine = EngineProcess(robot="knuckle_boom_crane", solver="jacobian", mode="velocity")
     link = EngineLink(engine.url)
-    win = MainWindow(link, engine=engine, settings=settings, dialogs=False)
+    tac_engines = []
+
+    def marine_link():
+        tac_engines.append(EngineProcess(plant="tac"))
+        return EngineLink(tac_engines[-1].url, name="screenshots-tac")
+
+    win = MainWindow(link, engine=engine, settings=settings, dialogs=False, marine_link_factory=marine_link)
     win.resize(1600, 1000)
     win.show()
     pump(app, 1.5)
@@ -62,8 +68,14 @@ def main() -> int:
         pump(app, 0.2)
     pump(app, 0.5)
     win.grab().save(str(OUT / "analysis.png"))
+    win.tabs.setCurrentWidget(win.crane_head)
+    pump(app, 25.0)  # the crane-head scene: Hs 3 m beam sea, head compensating
+    win.grab().save(str(OUT / "crane_head.png"))
     print(f"view: {win.teleop.view.kind}; plots redrawn {win.teleop.plots.frames_drawn} times")
+    print(f"crane-head scene view: {win.crane_head.scene.kind}")
     win.close()
+    for e in tac_engines:
+        e.stop()
     (OUT / "screenshots.ini").unlink(missing_ok=True)
     return 0
 

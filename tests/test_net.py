@@ -36,6 +36,8 @@ def test_round_trip_every_client_message():
         "estop": {"reason": "test"},
         "reset": {},
         "release_operator": {},
+        "set_sea": {"spectrum": "torsethaugen", "hs": 3.0, "tp": 9.0, "heading": 135.0},
+        "set_tac_mode": {"mode": "cooperative"},
     }
     assert set(samples) == set(CLIENT_MESSAGES)
     for mtype, fields in samples.items():

@@ -197,8 +197,11 @@ class CraneHeadTab(QWidget):
         form.addRow(self.readout)
 
         self.scene = make_scene_view(self.use_gl)
-        self.hull_plot = pg.PlotWidget(title="head workspace (x–z, head frame) with p_ref and p_c")
+        self.hull_plot = pg.PlotWidget(title="head workspace (x–z): p_ref grey, p_c red")
         self.hull_plot.setAspectLocked(True)
+        self.hull_plot.setMinimumWidth(300)
+        self.hull_plot.setLabel("bottom", "x^t [m]")
+        self.hull_plot.setLabel("left", "z^t [m]")
         self.hull_plot.showGrid(x=True, y=True, alpha=0.3)
         self.hull_curve = self.hull_plot.plot(pen=pg.mkPen((120, 140, 220), width=1.5))
         self.ref_dot = self.hull_plot.plot(pen=None, symbol="o", symbolBrush=(160, 160, 160), symbolSize=10)
@@ -223,18 +226,17 @@ class CraneHeadTab(QWidget):
         self.c_u = [self.p_ang.plot(pen=pg.mkPen((150, 150, 150), width=1)) for _ in range(3)]
         self.c_al = [self.p_ang.plot(pen=pg.mkPen(c, width=1.2)) for c in colors]
 
-        left = QWidget()
-        lv = QVBoxLayout(left)
-        lv.addWidget(controls)
-        lv.addWidget(self.hull_plot, 1)
+        controls.setMaximumWidth(360)
         top = QSplitter(Qt.Horizontal)
-        top.addWidget(left)
+        top.addWidget(controls)
+        top.addWidget(self.hull_plot)
         top.addWidget(self.scene)
-        top.setStretchFactor(1, 1)
+        top.setStretchFactor(2, 1)
+        top.setSizes([340, 340, 900])
         main = QSplitter(Qt.Vertical)
         main.addWidget(top)
         main.addWidget(plots)
-        main.setSizes([520, 420])
+        main.setSizes([430, 470])
         lay = QGridLayout(self)
         lay.addWidget(main, 0, 0)
         self._set_enabled(False)
@@ -335,6 +337,8 @@ class CraneHeadTab(QWidget):
         h = ConvexHull(pts)
         loop = pts[np.append(h.vertices, h.vertices[0])]
         self.hull_curve.setData(loop[:, 0], loop[:, 1])
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        self.hull_plot.setRange(xRange=(lo[0], hi[0]), yRange=(lo[1], hi[1]), padding=0.08)
 
     def _draw_plots(self) -> None:
         d = self.ring.view()

@@ -111,16 +111,23 @@ class CraneHead:
         return xi[..., :3], xi[..., 3:]
 
     def crane_ik_tcp(self, p_b: ArrayLike, beta0_hint: float = -math.pi / 2) -> NDArray[np.float64]:
-        """β placing the TCP (x_d beyond the jib tip) at p_b in {b}: eqs. (42)–(44), elbow up, L2 + x_d."""
+        """β placing the TCP (x_d beyond the jib tip) at p_b in {b}: eqs. (42)–(44), elbow up, L2 + x_d.
+
+        Vectorised over rows of ``p_b``; the slew angle is unwrapped to stay continuous from
+        ``beta0_hint``.  Targets out of reach give the stretched-towards configuration (|δ| ≤ 1).
+        """
+        e = self.elbow_tcp
         p_b = np.atleast_2d(np.asarray(p_b, dtype=float))
-        out = np.empty_like(p_b)
-        for k, p in enumerate(p_b):
-            cands = self.elbow_tcp.candidates(p, beta0_hint, "up")
-            q = min(cands, key=lambda c: abs(math.remainder(c[0][0] - beta0_hint, 2 * math.pi)))[0]
-            q[0] = beta0_hint + math.remainder(q[0] - beta0_hint, 2 * math.pi)
-            out[k] = q
-            beta0_hint = q[0]
-        return out
+        T1 = np.linalg.inv(e.T_world_1)
+        p1 = p_b @ T1[:3, :3].T + T1[:3, 3]  # eq. (42)
+        x, y, z = p1[:, 0], p1[:, 1], p1[:, 2]
+        r = np.hypot(x, y)
+        beta0 = np.unwrap(np.concatenate([[beta0_hint], np.arctan2(y, x)]))[1:]  # eq. (43)
+        delta = (x**2 + y**2 + (z - e.L0) ** 2 - e.L1**2 - e.L2**2) / (2 * e.L1 * e.L2)  # eq. (44)
+        delta = np.clip(delta, -1.0, 1.0)
+        beta2 = np.arctan2(-np.sqrt(1.0 - delta**2), delta)  # elbow up: the negative root
+        beta1 = np.arctan2(z - e.L0, r) - np.arctan2(e.L2 * np.sin(beta2), e.L1 + e.L2 * np.cos(beta2))
+        return np.column_stack([beta0, beta1, beta2])
 
     def tcp_n(self, eta: ArrayLike, beta: ArrayLike, p_t: ArrayLike) -> NDArray[np.float64]:
         """A head point p^t expressed in {n}: o_t^n + R_b^n R_t^b p^t."""
@@ -220,16 +227,29 @@ class HeadServo:
         out_u = np.empty((n, 3))
         alpha, integral, u = self.alpha, self.integral, self.u
         implicit = 1.0 + g.kd * g.k_dc / g.t_dc
+        kp, ki, kd, inv_t = g.kp, g.ki, g.kd, 1.0 / g.t_dc
+        # plain floats per joint: three joints, so Python scalars beat small numpy arrays here
+        ref, ref_dot = alpha_ref.tolist(), alpha_dot_ref.tolist()
+        alpha, integral, u = self.alpha.tolist(), self.integral.tolist(), self.u.tolist()
+        ulo, uhi, lo_, hi_ = u_lo.tolist(), u_hi.tolist(), lo.tolist(), hi.tolist()
         for k in range(n):
-            err = alpha_ref[k] - alpha
-            trial = integral + err * dt
-            u_new = (g.kp * err + g.ki * trial + g.kd * (alpha_dot_ref[k] + alpha / g.t_dc)) / implicit  # eq. (57)
-            limited = (u_new < u_lo) | (u_new > u_hi)
-            integral = np.where(limited, integral, trial)
-            u = np.minimum(np.maximum(u_new, u_lo), u_hi)
-            alpha = np.minimum(np.maximum(a * alpha + b * u, lo), hi)  # eq. (58), zero-order hold
+            rk, rdk = ref[k], ref_dot[k]
+            for j in range(3):
+                err = rk[j] - alpha[j]
+                trial = integral[j] + err * dt
+                u_new = (kp * err + ki * trial + kd * (rdk[j] + alpha[j] * inv_t)) / implicit  # eq. (57)
+                if u_new < ulo[j]:
+                    u_new = ulo[j]
+                elif u_new > uhi[j]:
+                    u_new = uhi[j]
+                else:
+                    integral[j] = trial  # anti-windup: integrate only while the input is free
+                u[j] = u_new
+                a_new = a * alpha[j] + b * u_new  # eq. (58), zero-order hold
+                alpha[j] = lo_[j] if a_new < lo_[j] else hi_[j] if a_new > hi_[j] else a_new
             out_a[k] = alpha
             out_u[k] = u
+        alpha, integral, u = np.array(alpha), np.array(integral), np.array(u)
         self.alpha, self.integral, self.u = alpha, integral, u
         return out_a, out_u
 
