@@ -275,7 +275,12 @@ def _solver_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _out_dir(args: argparse.Namespace, kind: str) -> Path:
-    out = Path(args.out) if args.out else Path("out") / f"{kind}_{args.robot_name}_{args.solver}"
+    return _make_out(args, f"{kind}_{args.robot_name}_{args.solver}")
+
+
+def _make_out(args: argparse.Namespace, default: str) -> Path:
+    """``--out`` (or out/DEFAULT), created; a folder that cannot be made is a one-line error."""
+    out = Path(args.out) if args.out else Path("out") / default
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
@@ -418,21 +423,12 @@ def _scenario(args: argparse.Namespace, **over):
         raise BosunError(str(err)) from None
 
 
-def _sim_out(args: argparse.Namespace, default: str) -> Path:
-    out = Path(args.out) if args.out else Path("out") / default
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise BosunError(f"cannot create output folder {out}: {err.strerror or err}") from None
-    return out
-
-
 def cmd_sim_tac(args: argparse.Namespace) -> int:
     from app.analysis.tac_report import save_run
     from app.sim.tac import simulate
 
     sc = _scenario(args)
-    out = _sim_out(args, f"tac_{sc.mode}_hs{sc.hs:g}")
+    out = _make_out(args, f"tac_{sc.mode}_hs{sc.hs:g}")
     bar = _progress_bar(f"sim tac {sc.mode}", unit="step")
     result = simulate(sc, progress=bar)
     doc = save_run(result, out)
@@ -465,7 +461,7 @@ def cmd_sim_sweep(args: argparse.Namespace) -> int:
     base = _scenario(args, hs=hs_values[0], mode=modes[0])
     for hs in hs_values:  # check every sea state before any work
         _scenario(args, hs=hs)
-    out = _sim_out(args, "tac_sweep")
+    out = _make_out(args, "tac_sweep")
     rows = sweep(base, hs_values, modes, jobs=args.jobs, progress=_progress_bar("tac sweep", unit="run"))
     doc = save_sweep(rows, base, out)
     if args.json:

@@ -35,6 +35,18 @@ def engines():
         srv.close()
 
 
+def _window(qtbot, teleop_url, tmp_path, factory):
+    win = MainWindow(
+        EngineLink(teleop_url),
+        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
+        dialogs=False,
+        marine_link_factory=factory,
+        use_gl=False,
+    )
+    qtbot.addWidget(win)
+    return win
+
+
 @pytest.fixture
 def window(qtbot, engines, tmp_path):
     teleop, tac = engines
@@ -44,14 +56,7 @@ def window(qtbot, engines, tmp_path):
         made.append(EngineLink(tac.url, name="gui-tac"))
         return made[-1]
 
-    win = MainWindow(
-        EngineLink(teleop.url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
-        marine_link_factory=factory,
-        use_gl=False,
-    )
-    qtbot.addWidget(win)
+    win = _window(qtbot, teleop.url, tmp_path, factory)
     win.show()
     yield win, made
     win.close()
@@ -125,14 +130,7 @@ def test_engine_that_does_not_start_is_reported(qtbot, engines, tmp_path):
     def broken():
         raise RuntimeError("the engine did not start: no such plant")
 
-    win = MainWindow(
-        EngineLink(teleop.url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
-        marine_link_factory=broken,
-        use_gl=False,
-    )
-    qtbot.addWidget(win)
+    win = _window(qtbot, teleop.url, tmp_path, broken)
     win.tabs.setCurrentWidget(win.crane_head)
     assert any("no such plant" in m for _, m in win.messages)
     assert win.crane_head.start.isVisible() or not win.isVisible()
