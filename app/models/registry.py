@@ -16,10 +16,15 @@ from app.errors import RobotNotFoundError, RobotTypeError
 from app.models.delta import DeltaHead
 from app.models.serial import SerialRobot
 from app.models.spec import RobotSpec
+from app.models.stewart import StewartPlatform
 from app.models.xml import parse_robot_file
 
 #: mechanism type -> factory building its kinematic model from a spec
-MODEL_FACTORIES: dict[str, Callable[[RobotSpec], Any]] = {"serial": SerialRobot, "delta": DeltaHead}
+MODEL_FACTORIES: dict[str, Callable[[RobotSpec], Any]] = {
+    "serial": SerialRobot,
+    "delta": DeltaHead,
+    "stewart": StewartPlatform,
+}
 
 ENV_ROBOTS_DIR = "BOSUN_ROBOTS_DIR"
 

@@ -1,0 +1,205 @@
+"""Vessel-to-vessel motion compensation (VVMC) in the simulated Motion-Lab.
+
+Both platforms play a vessel in the same irregular sea (EM8000 the supply vessel at
+``heading1``, EM1500 the receiving vessel at ``heading2``, each DOF auto-scaled into its
+platform's limits).  With compensation the Comau keeps its tool point on the work point fixed
+in EM1500's body frame by inverse kinematic control (analytic IK, eqs. 7–20, plus the
+feed-forward joint velocity J⁻¹ ṗ of eq. 21 computed from both platforms' velocities, eqs. 54–56),
+and the winch keeps the payload's height relative to EM1500.  Without compensation the robot and
+winch hold still.  The same seas drive both runs, so the two are directly comparable.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.errors import BosunError
+from app.marine.vessel import VesselParticulars, load_rao, parametric_rao
+from app.marine.waves import SPECTRA, check_sea
+from app.models.lab import load_lab
+from app.sim.motionlab import MotionLab
+from app.sim.stewart import WaveSimulation
+
+
+class VvmcError(BosunError):
+    """A VVMC scenario that cannot run (one line)."""
+
+
+@dataclass(frozen=True)
+class VvmcScenario:
+    """Sea, vessels and run length.  Angles in degrees (they come from the CLI)."""
+
+    hs: float = 2.0
+    tp: float = 8.0
+    spectrum: str = "jonswap"
+    heading1: float = 150.0  # EM8000 vessel: bow quartering sea
+    heading2: float = 90.0  # EM1500 vessel: beam sea
+    duration: float = 300.0
+    dt: float = 0.01
+    seed: int = 1
+    ramp: float = 5.0  # platform ENGAGE fade [s]
+    settle: float = 10.0  # not counted in the statistics [s] (after the ramp)
+    rao: str | None = None
+    lab: str = "motionlab"
+
+    def __post_init__(self) -> None:
+        if self.spectrum not in SPECTRA:
+            raise VvmcError(f"spectrum must be one of {', '.join(SPECTRA)}, got {self.spectrum!r}")
+        for name in ("hs", "tp", "duration", "dt"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise VvmcError(f"--{name} must be a positive number, got {v}")
+        if self.dt > 0.05:
+            raise VvmcError(f"--dt {self.dt:g} s is too coarse for the pendulum and servo loops (at most 0.05 s)")
+        if self.duration <= self.ramp + self.settle:
+            raise VvmcError(
+                f"--duration {self.duration:g} s leaves nothing to measure after the {self.ramp + self.settle:g} s start-up"
+            )
+        check_sea(self.hs, self.tp)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(eq=False)
+class VvmcRun:
+    """Time series of one run (n samples); arrays, SI units, angles in rad."""
+
+    compensated: bool
+    t: NDArray[np.float64]
+    eta1: NDArray[np.float64]
+    eta2: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qd: NDArray[np.float64]
+    e_t_b2: NDArray[np.float64]
+    L_w: NDArray[np.float64]
+    L_w_dot: NDArray[np.float64]
+    swing: NDArray[np.float64]
+    height_error: NDArray[np.float64]
+    at_limit: NDArray[np.bool_]
+    leg_clamped: NDArray[np.bool_]
+    cancelled: bool = False
+
+
+def _sources(sc: VvmcScenario, lab: MotionLab) -> None:
+    rao = load_rao(sc.rao) if sc.rao else parametric_rao(VesselParticulars())
+    for k, (p, heading) in enumerate(zip(lab.platforms, (sc.heading1, sc.heading2), strict=True)):
+        src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, np.ones(6))
+        scale = WaveSimulation.auto_scale(src.significant, p.model)
+        src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, scale)
+        p.mode = "neutral"
+        p.filter.reset(np.zeros(6))
+        p.ramp_time = sc.ramp
+        p.set_source("simulation", src)
+        p.command("engage")
+        del k
+
+
+def simulate(
+    sc: VvmcScenario,
+    compensate: bool,
+    progress: Callable[[int], None] | None = None,
+    cancel: Callable[[], bool] | None = None,
+) -> VvmcRun:
+    """One run; ``progress(n_steps_done)`` is called every 100 steps."""
+    layout = load_lab(sc.lab)
+    lab0 = MotionLab(layout)
+    lab = MotionLab(layout, q0=lab0.q_work)
+    _sources(sc, lab)
+    lab.set_vvmc(compensate)
+    n = int(round(sc.duration / sc.dt))
+    out = {
+        k: np.empty(s)
+        for k, s in {
+            "t": n,
+            "eta1": (n, 6),
+            "eta2": (n, 6),
+            "q": (n, 3),
+            "qd": (n, 3),
+            "e": (n, 3),
+            "L": n,
+            "Ld": n,
+            "swing": (n, 2),
+            "h": n,
+        }.items()
+    }
+    at_limit = np.zeros((n, 4), dtype=bool)
+    clamped = np.zeros((n, 2), dtype=bool)
+    done = n
+    for i in range(n):
+        s = lab.step(sc.dt)
+        out["t"][i], out["eta1"][i], out["eta2"][i] = s.t, s.eta1, s.eta2
+        out["q"][i], out["qd"][i], out["e"][i] = s.q, s.qd, s.e_t_b2
+        out["L"][i], out["Ld"][i], out["swing"][i], out["h"][i] = s.L_w, s.L_w_dot, s.swing, s.payload_height_error
+        at_limit[i] = lab.at_limit
+        clamped[i] = [p.leg_clamped for p in lab.platforms]
+        if progress is not None and (i + 1) % 100 == 0:
+            progress(i + 1)
+        if cancel is not None and cancel():
+            done = i + 1
+            break
+    sl = slice(0, done)
+    return VvmcRun(
+        compensate,
+        out["t"][sl],
+        out["eta1"][sl],
+        out["eta2"][sl],
+        out["q"][sl],
+        out["qd"][sl],
+        out["e"][sl],
+        out["L"][sl],
+        out["Ld"][sl],
+        out["swing"][sl],
+        out["h"][sl],
+        at_limit[sl],
+        clamped[sl],
+        cancelled=done < n,
+    )
+
+
+def _rms(x: NDArray[np.float64]) -> float:
+    return float(np.sqrt(np.mean(np.square(x)))) if x.size else 0.0
+
+
+def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
+    """The JSON summary: rms relative tool-point error with and without VVMC, swing, utilisation."""
+    layout = load_lab(sc.lab)
+    lab = MotionLab(layout)
+    t0 = sc.ramp + sc.settle
+
+    def stats(run: VvmcRun) -> dict:
+        m = run.t >= t0
+        e = run.e_t_b2[m]
+        e0 = e  # from the work point, the same measure for both runs
+        swing = np.degrees(np.arccos(np.clip(np.cos(run.swing[m, 0]) * np.cos(run.swing[m, 1]), -1, 1)))
+        q_range = lab.robot.upper - lab.robot.lower
+        return {
+            "rms_tool_error_m": _rms(np.linalg.norm(e0, axis=1)),
+            "rms_tool_error_xyz_m": [_rms(e0[:, k]) for k in range(3)],
+            "max_tool_error_m": float(np.max(np.linalg.norm(e0, axis=1))) if e0.size else 0.0,
+            "mean_tool_offset_m": [float(v) for v in e.mean(axis=0)],
+            "rms_payload_height_error_m": _rms(run.height_error[m]) if run.compensated else None,
+            "payload_swing_rms_deg": _rms(swing),
+            "payload_swing_max_deg": float(swing.max()) if swing.size else 0.0,
+            "joint_speed_utilisation": [float(v) for v in np.max(np.abs(run.qd[m]), axis=0) / lab.robot.speed],
+            "joint_range_utilisation": [float(v) for v in np.ptp(run.q[m], axis=0) / q_range],
+            "winch_speed_utilisation": float(np.max(np.abs(run.L_w_dot[m])) / layout.winch["speed"]),
+            "winch_length_range_m": [float(run.L_w[m].min()), float(run.L_w[m].max())],
+            "time_at_limit_s": float(np.sum(run.at_limit[m].any(axis=1)) * sc.dt),
+            "time_at_limit_per_axis_s": [float(v) for v in run.at_limit[m].sum(axis=0) * sc.dt],
+            "time_leg_clamped_s": float(np.sum(run.leg_clamped[m].any(axis=1)) * sc.dt),
+        }
+
+    s_on, s_off = stats(on), stats(off)
+    off_rms = s_off["rms_tool_error_m"]
+    return {
+        "measured_from_s": t0,
+        "compensated": s_on,
+        "uncompensated": s_off,
+        "reduction_percent": 100.0 * (1.0 - s_on["rms_tool_error_m"] / off_rms) if off_rms > 0 else None,
+    }

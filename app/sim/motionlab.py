@@ -1,0 +1,495 @@
+"""The Motion-Lab: two Stewart platforms, the Comau robot on EM8000, its winch and the hanging load.
+
+Frames (Motion-Lab paper Table 4): world {g} (z-up), platform neutral frames {n1}, {n2} and body
+frames {b1}, {b2} (z-down), robot base {r} (z-up), tool point {t}.  The pendulum is integrated in
+{d}, the world turned half a turn about x (z-down, gravity along +z_d), where eq. (23) puts the
+load below the tool at rest.
+
+Equations and corrections (each checked by a test in ``tests/test_motionlab.py``):
+
+* Comau tool point eq. (3) with L = d4 + d6 + d_tp, Jacobian eq. (5), acceleration eq. (6) — closed
+  form, checked against the DH chain and finite differences.
+* Tool point on the moving platform eqs. (54)–(57).  The paper says ṗ^g = ṗ^n1 because H^g_n1 is
+  constant; constant, but not the identity (the calibration swaps x, y and flips z), so here
+  ṗ^g = R^g_n1 ṗ^n1 and p̈^g = R^g_n1 p̈^n1.
+* Pendulum eqs. (29)–(30) / (60)–(61) from the Lagrangian (25)–(28) in a z-down frame: the printed
+  z̈_t terms have the wrong sign for that frame (a tool accelerating downwards must *lower* the
+  effective gravity, g − z̈_t); derived again here, with a viscous damping term −c φ̇:
+
+      L α̈ = ẍ cα + ÿ sα sβ + z̈ sα cβ − g sα cβ − 2 L̇ α̇ − L β̇² sα cα − c L α̇
+      L cα β̈ = −ÿ cβ + z̈ sβ − g sβ − 2 L̇ β̇ cα + 2 L α̇ β̇ sα − c L cα β̇
+
+  integrated with fixed-step RK4 (tool acceleration and wire speed held over the step).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.errors import BosunError
+from app.ik.analytic import ComauArm
+from app.models.lab import LabLayout
+from app.models.registry import load_robot
+from app.models.stewart import StewartPlatform
+from app.sim.stewart import MotionFilter, Platform
+
+G = 9.81
+R_G_D = np.diag([1.0, -1.0, -1.0])  # {d} (z-down) in {g} (z-up): half a turn about x
+COMAU_MODES = ("settled", "remote", "motion_comp")
+WINCH_MODES = ("local", "remote", "motion_comp")
+REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
+
+
+class LabError(BosunError):
+    """A Motion-Lab command that cannot be carried out (one line)."""
+
+
+# ----------------------------------------------------------------------------- Comau
+@dataclass(frozen=True)
+class ComauKinematics:
+    """Closed-form kinematics of the 3-DOF Comau with extension arm (Motion-Lab eqs. 3–6).
+
+    Joint variables q are the controller's (θ1..θ3 of eq. 3); the tool point is in the robot
+    base frame {r}.  Vectorised over leading axes of q.
+    """
+
+    a1: float
+    d1: float
+    a2: float
+    a3: float
+    L: float
+
+    @staticmethod
+    def from_arm(arm: ComauArm) -> ComauKinematics:
+        return ComauKinematics(arm.a1, arm.d1, arm.a2, arm.a3, arm.L)
+
+    def _terms(self, q):
+        q = np.asarray(q, dtype=float)
+        s1, c1 = np.sin(q[..., 0]), np.cos(q[..., 0])
+        s2, c2 = np.sin(q[..., 1]), np.cos(q[..., 1])
+        s3, c3 = np.sin(q[..., 2]), np.cos(q[..., 2])
+        u = self.a1 - self.L * s3 - self.a3 * c3 + self.a2 * s2  # radial reach
+        z = self.d1 + self.L * c3 + self.a2 * c2 - self.a3 * s3
+        return s1, c1, s2, c2, s3, c3, u, z
+
+    def position(self, q: ArrayLike) -> NDArray[np.float64]:
+        """p_t^r of eq. (3); shape (..., 3)."""
+        s1, c1, _, _, _, _, u, z = self._terms(q)
+        return np.stack([c1 * u, -s1 * u, z], axis=-1)
+
+    def jacobian(self, q: ArrayLike) -> NDArray[np.float64]:
+        """J = ∂p_t^r/∂q of eq. (5); shape (..., 3, 3)."""
+        s1, c1, s2, c2, s3, c3, u, _ = self._terms(q)
+        u2, u3 = self.a2 * c2, -self.L * c3 + self.a3 * s3
+        z2, z3 = -self.a2 * s2, -self.L * s3 - self.a3 * c3
+        J = np.zeros(np.shape(u) + (3, 3))
+        J[..., 0, 0], J[..., 0, 1], J[..., 0, 2] = -s1 * u, c1 * u2, c1 * u3
+        J[..., 1, 0], J[..., 1, 1], J[..., 1, 2] = -c1 * u, -s1 * u2, -s1 * u3
+        J[..., 2, 1], J[..., 2, 2] = z2, z3
+        return J
+
+    def jdot_qdot(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        """J̇ q̇ of eq. (6) (the velocity-product part of p̈_t^r); shape (..., 3)."""
+        s1, c1, s2, c2, s3, c3, u, _ = self._terms(q)
+        qd = np.asarray(qd, dtype=float)
+        d1, d2, d3 = qd[..., 0], qd[..., 1], qd[..., 2]
+        u2, u3 = self.a2 * c2, -self.L * c3 + self.a3 * s3
+        ud = u2 * d2 + u3 * d3
+        udd = -self.a2 * s2 * d2**2 + (self.L * s3 + self.a3 * c3) * d3**2
+        zdd = -self.a2 * c2 * d2**2 + (-self.L * c3 + self.a3 * s3) * d3**2
+        x = -c1 * d1**2 * u - 2 * s1 * d1 * ud + c1 * udd
+        y = s1 * d1**2 * u - 2 * c1 * d1 * ud - s1 * udd
+        return np.stack([x, y, zdd], axis=-1)
+
+    def velocity(self, q: ArrayLike, qd: ArrayLike) -> NDArray[np.float64]:
+        """ṗ_t^r = J q̇ (eq. 4)."""
+        return np.einsum("...ij,...j->...i", self.jacobian(q), np.asarray(qd, dtype=float))
+
+    def acceleration(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray[np.float64]:
+        """p̈_t^r = J̇ q̇ + J q̈ (eq. 6)."""
+        return self.jdot_qdot(q, qd) + np.einsum("...ij,...j->...i", self.jacobian(q), np.asarray(qdd, dtype=float))
+
+
+def tool_on_platform(
+    comau: ComauKinematics,
+    T_b1_r: NDArray[np.float64],
+    eta: NDArray[np.float64],
+    eta_dot: NDArray[np.float64],
+    eta_ddot: NDArray[np.float64],
+    q: NDArray[np.float64],
+    qd: NDArray[np.float64],
+    qdd: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Tool-point position, velocity, acceleration in the platform's neutral frame {n1}.
+
+    Eqs. (54), (56), (57): p = p_b + R (p_r + R_r p_t^r), ṗ = ṗ_b + Ṙ(p_r + R_r p_t^r) + R R_r ṗ_t^r,
+    p̈ = p̈_b + R̈(p_r + R_r p_t^r) + 2Ṙ R_r ṗ_t^r + R R_r p̈_t^r, with Ṙ, R̈ of eqs. (47), (51).
+    """
+    R, Rd, Rdd = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+    R_r, p_r = T_b1_r[:3, :3], T_b1_r[:3, 3]
+    p_tr, v_tr, a_tr = comau.position(q), comau.velocity(q, qd), comau.acceleration(q, qd, qdd)
+    arm = p_r + R_r @ p_tr
+    p = eta[:3] + R @ arm
+    v = eta_dot[:3] + Rd @ arm + R @ (R_r @ v_tr)
+    a = eta_ddot[:3] + Rdd @ arm + 2 * Rd @ (R_r @ v_tr) + R @ (R_r @ a_tr)
+    return p, v, a
+
+
+# ----------------------------------------------------------------------------- pendulum
+@dataclass
+class Pendulum:
+    """The 2-DOF spherical pendulum of eqs. (29)–(30) (corrected z̈ sign, see module doc), RK4.
+
+    State x = (α, β, α̇, β̇) [rad, rad/s]; α about ^φβ y, β about x (Fig. 16).
+    """
+
+    damping: float = 0.0  # c [1/s]
+    g: float = G
+    alpha: float = 0.0
+    beta: float = 0.0
+    alpha_dot: float = 0.0
+    beta_dot: float = 0.0
+
+    def derivative(self, x: NDArray[np.float64], a_t: NDArray[np.float64], L: float, Ld: float) -> NDArray[np.float64]:
+        a, b, ad, bd = x
+        sa, ca, sb, cb = math.sin(a), math.cos(a), math.sin(b), math.cos(b)
+        ax, ay, az = a_t
+        c = self.damping
+        add = (
+            ax * ca + ay * sa * sb + az * sa * cb - self.g * sa * cb - 2 * Ld * ad - L * bd * bd * sa * ca
+        ) / L - c * ad
+        ca_safe = ca if abs(ca) > 1e-6 else math.copysign(1e-6, ca)
+        bdd = (-ay * cb + az * sb - self.g * sb - 2 * Ld * bd * ca + 2 * L * ad * bd * sa) / (L * ca_safe) - c * bd
+        return np.array([ad, bd, add, bdd])
+
+    def step(self, dt: float, a_t_d: NDArray[np.float64], L: float, Ld: float) -> None:
+        """Advance by dt: tool acceleration a_t_d in {d} held, wire length L + Ld·s over the step."""
+        x = np.array([self.alpha, self.beta, self.alpha_dot, self.beta_dot])
+        k1 = self.derivative(x, a_t_d, L, Ld)
+        k2 = self.derivative(x + 0.5 * dt * k1, a_t_d, L + 0.5 * dt * Ld, Ld)
+        k3 = self.derivative(x + 0.5 * dt * k2, a_t_d, L + 0.5 * dt * Ld, Ld)
+        k4 = self.derivative(x + dt * k3, a_t_d, L + dt * Ld, Ld)
+        x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.alpha, self.beta, self.alpha_dot, self.beta_dot = (float(v) for v in x)
+
+    def direction(self) -> NDArray[np.float64]:
+        """Unit wire vector in {d}: (−sα, cα sβ, cα cβ) of eq. (23)."""
+        sa, ca, sb, cb = math.sin(self.alpha), math.cos(self.alpha), math.sin(self.beta), math.cos(self.beta)
+        return np.array([-sa, ca * sb, ca * cb])
+
+    def direction_rate(self) -> NDArray[np.float64]:
+        """d/dt of :meth:`direction` (the bracket of eq. 24 / 59)."""
+        a, b, ad, bd = self.alpha, self.beta, self.alpha_dot, self.beta_dot
+        sa, ca, sb, cb = math.sin(a), math.cos(a), math.sin(b), math.cos(b)
+        return np.array([-ad * ca, -ad * sa * sb + bd * ca * cb, -ad * sa * cb - bd * ca * sb])
+
+    def energy(self, L: float, v_t: NDArray[np.float64] = np.zeros(3), m: float = 1.0) -> float:
+        """Kinetic + potential energy, eqs. (26)–(27), with the tool moving at v_t (in {d})."""
+        v_p = v_t + L * self.direction_rate()
+        return 0.5 * m * float(v_p @ v_p) + m * self.g * L * (1 - math.cos(self.alpha) * math.cos(self.beta))
+
+    @property
+    def swing(self) -> float:
+        """Angle of the wire from the vertical [rad]."""
+        return math.acos(max(-1.0, min(1.0, math.cos(self.alpha) * math.cos(self.beta))))
+
+
+# ----------------------------------------------------------------------------- winch
+class Winch:
+    """Wire length L_w within [min, max], speed and acceleration limits (a 1-DOF motion filter).
+
+    Modes: ``local`` (speed from the operator's spring-return slider), ``remote`` (speed from a
+    client or the joystick), ``motion_comp`` (length that keeps the payload height fixed
+    relative to EM1500, with feed-forward).
+    """
+
+    def __init__(self, spec: dict) -> None:
+        self.spec = spec
+        self.filter = MotionFilter([spec["min_length"]], [spec["max_length"]], [spec["speed"]], [spec["accel"]], 0.05)
+        self.filter.reset([spec["start_length"]])
+        self.mode = "local"
+        self.speed_command = 0.0
+
+    @property
+    def length(self) -> float:
+        return float(self.filter.x[0])
+
+    @property
+    def speed(self) -> float:
+        return float(self.filter.v[0])
+
+    def step(self, dt: float, L_ref: float | None = None, Ld_ref: float = 0.0) -> None:
+        if L_ref is None:  # speed control: integrate the commanded speed as the reference
+            v = float(np.clip(self.speed_command, -self.spec["speed"], self.spec["speed"]))
+            self.filter.step(self.filter.x + v * dt, [v], dt)
+        else:
+            self.filter.step([L_ref], [Ld_ref], dt)
+
+
+# ----------------------------------------------------------------------------- the lab
+@dataclass
+class LabSample:
+    """One instant of the lab (all vectors as lists in the JSON snapshot; arrays here)."""
+
+    t: float
+    eta1: NDArray[np.float64]
+    eta2: NDArray[np.float64]
+    legs1: NDArray[np.float64]
+    legs2: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qd: NDArray[np.float64]
+    p_t_g: NDArray[np.float64]
+    v_t_g: NDArray[np.float64]
+    p_p_g: NDArray[np.float64]
+    p_w_g: NDArray[np.float64]
+    e_t_b2: NDArray[np.float64]  # tool point minus work point, in {b2}
+    L_w: float
+    L_w_dot: float
+    swing: tuple[float, float]
+    payload_height_error: float
+
+
+class MotionLab:
+    """The whole lab, stepped at a fixed dt: platforms → robot control → winch → pendulum.
+
+    Parameters
+    ----------
+    layout : LabLayout
+    q0 : array_like (3,), optional   start configuration (default: the park configuration)
+    """
+
+    def __init__(self, layout: LabLayout, q0: ArrayLike | None = None) -> None:
+        self.layout = layout
+        self.models = tuple(load_robot(robot) for _, robot in layout.platforms)
+        self.platforms = tuple(Platform(m) for m in self.models)
+        self.robot = load_robot(layout.crane_robot)
+        arm = ComauArm.match(self.robot)
+        if arm is None:
+            raise LabError(f"crane robot '{layout.crane_robot}' is not a Comau-type 3-DOF arm (Motion-Lab Table 3)")
+        self.arm = arm
+        self.comau = ComauKinematics.from_arm(arm)
+        lo, hi = self.robot.lower, self.robot.upper
+        speed = self.robot.speed
+        self.joints = MotionFilter(lo, hi, speed, np.full(3, layout.crane_accel), tau=0.05)
+        self.joints.reset(layout.park_q if q0 is None else q0)
+        self.comau_mode = "remote"
+        self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]
+        self.winch = Winch(layout.winch)
+        self.pendulum = Pendulum(damping=layout.payload_damping)
+        self.T_n1_g = np.linalg.inv(layout.T_world_n1)
+        self.payload_target_b2: NDArray[np.float64] | None = None
+        self.t = 0.0
+        self.frozen = False
+        self.at_limit = np.zeros(4, dtype=bool)  # joints 1–3, winch: at a position or speed limit
+        self.q_work = self.work_configuration()
+        self.last: LabSample | None = None
+        self._update_tool()
+        self.last = self._sample()
+
+    # ------------------------------------------------------------------ geometry
+    def platform_pose(self, k: int) -> NDArray[np.float64]:
+        """H^g_bk: body frame of platform k (0 or 1) in the world, eq. (39)."""
+        p = self.platforms[k]
+        T_n = self.layout.T_world_n1 if k == 0 else self.layout.T_world_n2
+        return T_n @ StewartPlatform.pose_matrix(p.eta)
+
+    def work_point(self) -> tuple[NDArray, NDArray, NDArray]:
+        """The work point fixed in {b2}: position, velocity, acceleration in {n1}."""
+        p2 = self.platforms[1]
+        R, Rd, Rdd = StewartPlatform.rotation_rates(p2.eta, p2.eta_dot, p2.eta_ddot)
+        w = self.layout.work_point_b2
+        T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
+        R12 = T_n1_n2[:3, :3]
+        p = T_n1_n2[:3, 3] + R12 @ (p2.eta[:3] + R @ w)
+        v = R12 @ (p2.eta_dot[:3] + Rd @ w)
+        a = R12 @ (p2.eta_ddot[:3] + Rdd @ w)
+        return p, v, a
+
+    def to_robot_base(self, p_n1, v_n1) -> tuple[NDArray, NDArray]:
+        """Invert eqs. (54) and (56) for the tool point in {r} (position and velocity)."""
+        p1 = self.platforms[0]
+        R, Rd, _ = StewartPlatform.rotation_rates(p1.eta, p1.eta_dot, p1.eta_ddot)
+        R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
+        p_tr = R_r.T @ (R.T @ (p_n1 - p1.eta[:3]) - p_r)
+        arm = p_r + R_r @ p_tr
+        v_tr = R_r.T @ (R.T @ (v_n1 - p1.eta_dot[:3] - Rd @ arm))
+        return p_tr, v_tr
+
+    def work_configuration(self) -> NDArray[np.float64]:
+        """Joint angles that put the tool on the work point with both platforms at neutral."""
+        p_n1, _, _ = self._work_point_neutral()
+        R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
+        p_tr = R_r.T @ (p_n1 - p_r)
+        q = self._ik(p_tr, self.layout.park_q)
+        if q is None:
+            raise LabError("the work point of the lab layout is out of the robot's reach within its joint limits")
+        return q
+
+    def _work_point_neutral(self):
+        T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
+        return T_n1_n2[:3, :3] @ self.layout.work_point_b2 + T_n1_n2[:3, 3], None, None
+
+    def _ik(self, p_tr: NDArray[np.float64], q_near: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """Analytic IK (eqs. 7–20): the exact candidate inside the limits nearest ``q_near``."""
+        best, best_d = None, np.inf
+        for q, exact in self.arm.candidates(p_tr, float(q_near[0]), "auto"):
+            q = q.copy()
+            q[0] = q_near[0] + math.remainder(q[0] - q_near[0], 2 * math.pi)
+            if not exact or not np.all((q >= self.robot.lower - 1e-9) & (q <= self.robot.upper + 1e-9)):
+                continue
+            d = float(np.sum((q - q_near) ** 2))
+            if d < best_d:
+                best, best_d = q, d
+        return best
+
+    # ------------------------------------------------------------------ commands
+    def set_comau_mode(self, mode: str) -> None:
+        if mode not in COMAU_MODES:
+            raise LabError(f"Comau mode must be one of {', '.join(COMAU_MODES)}, got {mode!r}")
+        self.comau_mode = mode
+        self.tool_velocity_cmd = np.zeros(3)
+
+    def set_winch_mode(self, mode: str) -> None:
+        if mode not in WINCH_MODES:
+            raise LabError(f"winch mode must be one of {', '.join(WINCH_MODES)}, got {mode!r}")
+        self.winch.mode = mode
+        self.winch.speed_command = 0.0
+        self.payload_target_b2 = None  # captured on the next step
+
+    def set_vvmc(self, on: bool) -> None:
+        """VVMC on: Comau and winch in MOTION_COMP; off: both hold (Comau REMOTE, winch LOCAL, zero speed)."""
+        self.set_comau_mode("motion_comp" if on else "remote")
+        self.set_winch_mode("motion_comp" if on else "local")
+
+    def estop(self) -> None:
+        self.frozen = True
+        for p in self.platforms:
+            p.estop()
+        self.tool_velocity_cmd = np.zeros(3)
+        self.winch.speed_command = 0.0
+
+    def reset(self) -> None:
+        self.frozen = False
+        for p in self.platforms:
+            p.reset()
+        self.set_comau_mode("remote")
+        self.set_winch_mode("local")
+
+    # ------------------------------------------------------------------ step
+    def step(self, dt: float) -> LabSample:
+        self.t += dt
+        for p in self.platforms:
+            p.step(dt)
+        self._step_robot(dt)
+        self._update_tool()
+        self._step_winch(dt)
+        a_t_d = R_G_D.T @ self.a_t_g
+        self.pendulum.step(dt, a_t_d, self.winch.length, self.winch.speed)
+        self.last = self._sample()
+        return self.last
+
+    def _step_robot(self, dt: float) -> None:
+        f = self.joints
+        if self.frozen:
+            v = f.v + np.clip(-f.v, -f.accel * dt, f.accel * dt)
+            f.a, f.v = (v - f.v) / dt, v
+            f.x = np.clip(f.x + v * dt, f.lower, f.upper)
+            return
+        if self.comau_mode == "settled":
+            f.step(self.layout.park_q, None, dt, 0.25)
+        elif self.comau_mode == "remote":
+            J = self.comau.jacobian(f.x)
+            qd = np.linalg.lstsq(J, self.tool_velocity_cmd, rcond=1e-6)[0]  # eq. (21)
+            f.step(f.x + qd * dt, qd, dt)
+        else:  # motion_comp: inverse kinematic control with feed-forward of both platforms
+            p_n1, v_n1, _ = self.work_point()
+            p_tr, v_tr = self.to_robot_base(p_n1, v_n1)
+            q_d = self._ik(p_tr, f.x)
+            if q_d is None:  # out of reach: hold the nearest reachable direction, limits intact
+                q_d = f.x.copy()
+            qd_d = np.linalg.lstsq(self.comau.jacobian(q_d), v_tr, rcond=1e-6)[0]  # eq. (21)
+            f.step(q_d, qd_d, dt)
+        tol = 1e-6
+        self.at_limit[:3] = (f.x <= f.lower + tol) | (f.x >= f.upper - tol) | (np.abs(f.v) >= f.speed * (1 - 1e-3))
+
+    def _update_tool(self) -> None:
+        p1 = self.platforms[0]
+        f = self.joints
+        p, v, a = tool_on_platform(self.comau, self.layout.T_b1_r, p1.eta, p1.eta_dot, p1.eta_ddot, f.x, f.v, f.a)
+        T = self.layout.T_world_n1
+        self.p_t_n1 = p
+        self.p_t_g = T[:3, :3] @ p + T[:3, 3]  # eq. (55)
+        self.v_t_g = T[:3, :3] @ v  # eq. (56), rotated into {g}
+        self.a_t_g = T[:3, :3] @ a  # eq. (57), rotated into {g}
+
+    def _b2_to_g(self) -> tuple[NDArray, NDArray]:
+        H = self.platform_pose(1)
+        return H[:3, :3], H[:3, 3]
+
+    def _step_winch(self, dt: float) -> None:
+        w = self.winch
+        if self.frozen:
+            w.speed_command = 0.0
+            w.step(dt)
+        elif w.mode == "motion_comp":
+            R2, o2 = self._b2_to_g()
+            if self.payload_target_b2 is None:  # keep the payload where it is now, relative to EM1500
+                self.payload_target_b2 = R2.T @ (self.p_p_g() - o2)
+            target_g = R2 @ self.payload_target_b2 + o2
+            p2 = self.platforms[1]
+            _, Rd, _ = StewartPlatform.rotation_rates(p2.eta, p2.eta_dot, p2.eta_ddot)
+            R_g_n2 = self.layout.T_world_n2[:3, :3]
+            v_target_g = R_g_n2 @ (p2.eta_dot[:3] + Rd @ self.payload_target_b2)
+            # heights along gravity: z_d = −z_g; the load hangs L_w below the tool (small swing)
+            L_ref = float(self.p_t_g[2] - target_g[2])
+            Ld_ref = float(self.v_t_g[2] - v_target_g[2])
+            w.step(dt, L_ref, Ld_ref)
+        else:
+            w.step(dt)
+        sp = w.spec
+        self.at_limit[3] = (
+            w.length <= sp["min_length"] + 1e-6
+            or w.length >= sp["max_length"] - 1e-6
+            or abs(w.speed) >= sp["speed"] * (1 - 1e-3)
+        )
+
+    def p_p_g(self) -> NDArray[np.float64]:
+        """Payload position in {g}, eq. (58)."""
+        return self.p_t_g + R_G_D @ (self.winch.length * self.pendulum.direction())
+
+    def v_p_g(self) -> NDArray[np.float64]:
+        """Payload velocity in {g}, eq. (59)."""
+        pd = self.pendulum
+        return self.v_t_g + R_G_D @ (self.winch.length * pd.direction_rate() + self.winch.speed * pd.direction())
+
+    def _sample(self) -> LabSample:
+        R2, o2 = self._b2_to_g()
+        e_b2 = R2.T @ (self.p_t_g - o2) - self.layout.work_point_b2
+        if self.payload_target_b2 is not None:
+            target_g = R2 @ self.payload_target_b2 + o2
+            h_err = float(self.p_p_g()[2] - target_g[2])
+        else:
+            h_err = 0.0
+        p_w_g = R2 @ self.layout.work_point_b2 + o2
+        return LabSample(
+            t=self.t,
+            eta1=self.platforms[0].eta,
+            eta2=self.platforms[1].eta,
+            legs1=self.models[0].leg_lengths(self.platforms[0].eta),
+            legs2=self.models[1].leg_lengths(self.platforms[1].eta),
+            q=self.joints.x.copy(),
+            qd=self.joints.v.copy(),
+            p_t_g=self.p_t_g.copy(),
+            v_t_g=self.v_t_g.copy(),
+            p_p_g=self.p_p_g(),
+            p_w_g=p_w_g,
+            e_t_b2=e_b2,
+            L_w=self.winch.length,
+            L_w_dot=self.winch.speed,
+            swing=(self.pendulum.alpha, self.pendulum.beta),
+            payload_height_error=h_err,
+        )

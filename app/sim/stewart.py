@@ -1,0 +1,457 @@
+"""Stewart platform plant as the Motion-Lab HMI runs it: modes, motion sources, motion filter.
+
+Modes (the lab HMI's): ``settled`` (resting low on its end stops), ``neutral`` (raised to η = 0)
+and ``engaged`` (following a motion source).  Transitions are commanded with :meth:`Platform.command`
+(``neutral``, ``settle``, ``engage``, ``disengage``) and are ramped: raising and settling move at a
+fifth of the Table 8 speeds, ENGAGE fades the source in over ``ramp_time`` with a smooth-step gain
+and DISENGAGE fades it out back to neutral.  Whatever the source and the mode, every pose goes
+through :class:`MotionFilter`, so pose, velocity and acceleration never pass the Table 8 limits.
+
+Sources:
+
+* ``simulation``: a vessel in irregular waves (:class:`app.marine.vessel.VesselMotion`), each DOF
+  scaled (``scale``; ``auto`` fits the most probable largest response of a 3-hour sea to 80 % of
+  the platform's limit);
+* ``generator``: a sine per DOF, amplitude, frequency 0.01–1 Hz and phase;
+* ``remote``: the pose last sent by a client;
+* ``timeseries``: 6-DOF playback of a CSV with columns ``t,x,y,z,phi,theta,psi`` (s, m, deg).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.errors import BosunError
+from app.marine.vessel import VesselMotion, significant_response
+from app.marine.waves import spectrum as sea_spectrum
+from app.marine.waves import wave_components
+from app.models.stewart import StewartPlatform
+
+MODES = ("settled", "neutral", "engaged")
+SOURCES = ("simulation", "generator", "remote", "timeseries")
+ACTIONS = ("neutral", "settle", "engage", "disengage")
+TIMESERIES_COLUMNS = ("t", "x", "y", "z", "phi", "theta", "psi")
+GENERATOR_FREQ_RANGE = (0.01, 1.0)  # Hz, the lab HMI's sine generator
+TRANSFER_SPEED_FRACTION = 0.2  # raising / settling speed as a fraction of the Table 8 speeds
+
+
+class PlatformError(BosunError):
+    """A platform command or a motion source is not valid (one-line message)."""
+
+
+# ----------------------------------------------------------------------------- filter
+class MotionFilter:
+    """Per-DOF limiter: position, velocity and acceleration never pass their limits.
+
+    Each step the new velocity v⁺ is the desired one (feed-forward v_ref + (x_ref − x)/τ) clipped
+    to the intersection of
+    [v − a·dt, v + a·dt] (acceleration), [−v_max, v_max] (speed) and the braking speed towards
+    each position limit (:meth:`_braking`, exact for the discrete steps, last partial step
+    included); then x⁺ = x + v⁺ dt.  Because the braking speed is exact, by induction the
+    intersection is never empty: a state the filter produced can always be brought to rest
+    inside the limits, and no step crosses a limit.
+
+    Parameters
+    ----------
+    lower, upper, speed, accel : array_like (n,)
+    tau : float   time constant of the tracking loop [s]
+    """
+
+    def __init__(self, lower: ArrayLike, upper: ArrayLike, speed: ArrayLike, accel: ArrayLike, tau: float = 0.1):
+        self.lower, self.upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        self.speed, self.accel = np.asarray(speed, dtype=float), np.asarray(accel, dtype=float)
+        self.tau = float(tau)
+        self.x = np.zeros_like(self.lower)
+        self.v = np.zeros_like(self.lower)
+        self.a = np.zeros_like(self.lower)
+
+    def reset(self, x: ArrayLike) -> None:
+        self.x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
+        self.v = np.zeros_like(self.x)
+        self.a = np.zeros_like(self.x)
+
+    def _braking(self, d: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
+        """Largest speed from which braking at the limit, step by step, stops within distance d.
+
+        Braking from v moves dt·Σ_{i=0..m} (v − i·a·dt), m = ⌊v/(a dt)⌋ (the last, partial step
+        included), a continuous increasing function of v; for each m it is linear in v, so
+        v = (d/dt + a dt m(m+1)/2)/(m+1) on the piece where m·a·dt ≤ v ≤ (m+1)·a·dt.
+        """
+        a = self.accel
+        h = a * dt
+        d = np.maximum(d, 0.0)
+        n_c = np.maximum(-0.5 + np.sqrt(0.25 + 2.0 * d / (a * dt * dt)), 0.0)  # continuous estimate
+        best = np.full_like(d, np.inf)
+        for off in (-1, 0, 1):
+            m = np.maximum(np.floor(n_c) + off, 0.0)
+            v = (d / dt + h * m * (m + 1) / 2.0) / (m + 1)
+            ok = (v >= m * h * (1 - 1e-12)) & (v <= (m + 1) * h * (1 + 1e-12))
+            best = np.where(ok, np.minimum(best, v), best)
+        return np.where(np.isfinite(best), best, -h / 2 + np.sqrt(h * h / 4 + 2 * a * d))
+
+    def step(
+        self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
+    ) -> NDArray[np.float64]:
+        """Advance by ``dt`` toward ``x_ref`` (with feed-forward ``v_ref``); returns the new x."""
+        x_ref = np.asarray(x_ref, dtype=float)
+        v_des = (x_ref - self.x) / max(self.tau, dt)
+        if v_ref is not None:
+            v_des = v_des + np.asarray(v_ref, dtype=float)
+        vmax = self.speed * speed_scale
+        hi = np.minimum.reduce([self.v + self.accel * dt, vmax, self._braking(self.upper - self.x, dt)])
+        lo = np.maximum.reduce([self.v - self.accel * dt, -vmax, -self._braking(self.x - self.lower, dt)])
+        hi = np.maximum(hi, lo)  # rounding only
+        v_new = np.clip(np.where(np.isfinite(v_des), v_des, 0.0), lo, hi)
+        self.a = (v_new - self.v) / dt
+        self.v = v_new
+        self.x = np.clip(self.x + v_new * dt, self.lower, self.upper)
+        return self.x
+
+
+# ----------------------------------------------------------------------------- sources
+@dataclass(frozen=True)
+class Generator:
+    """A sine per DOF: η_k(t) = A_k sin(2π f_k t + φ_k); amplitudes in m / rad, f in Hz, phase rad."""
+
+    amplitude: NDArray[np.float64]
+    frequency: NDArray[np.float64]
+    phase: NDArray[np.float64]
+
+    @staticmethod
+    def make(amplitude: ArrayLike, frequency: ArrayLike, phase: ArrayLike, platform: StewartPlatform) -> Generator:
+        A, f, ph = (np.asarray(v, dtype=float).reshape(-1) for v in (amplitude, frequency, phase))
+        for name, v in (("amplitude", A), ("frequency", f), ("phase", ph)):
+            if v.shape != (6,) or not np.all(np.isfinite(v)):
+                raise PlatformError(f"generator {name} needs six finite numbers, got {v.tolist()}")
+        lo, hi = GENERATOR_FREQ_RANGE
+        for k, dof in enumerate(("surge", "sway", "heave", "roll", "pitch", "yaw")):
+            if A[k] < 0:
+                raise PlatformError(f"generator {dof} amplitude must not be negative")
+            if A[k] > 0 and not lo <= f[k] <= hi:
+                raise PlatformError(f"generator {dof} frequency {f[k]:g} Hz is outside {lo:g}–{hi:g} Hz")
+            reach = min(-platform.pose_min[k], platform.pose_max[k])
+            if A[k] > reach + 1e-12:
+                unit, s = ("°", 180 / math.pi) if k >= 3 else ("m", 1.0)
+                raise PlatformError(
+                    f"generator {dof} amplitude {A[k] * s:.3g} {unit} exceeds "
+                    f"the {platform.name} limit {reach * s:.3g} {unit}"
+                )
+        return Generator(A, f, ph)
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        w = 2 * np.pi * self.frequency
+        arg = w * t + self.phase
+        return self.amplitude * np.sin(arg), self.amplitude * w * np.cos(arg)
+
+
+@dataclass(frozen=True, eq=False)
+class TimeSeries:
+    """6-DOF playback: samples t [s] (strictly increasing, from 0) and η (n, 6) [m, rad]."""
+
+    t: NDArray[np.float64]
+    eta: NDArray[np.float64]
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        if t >= self.t[-1]:
+            return self.eta[-1].copy(), np.zeros(6)
+        i = int(np.searchsorted(self.t, t, side="right")) - 1
+        i = max(i, 0)
+        h = self.t[i + 1] - self.t[i]
+        s = (t - self.t[i]) / h
+        eta = self.eta[i] + s * (self.eta[i + 1] - self.eta[i])
+        return eta, (self.eta[i + 1] - self.eta[i]) / h
+
+
+def parse_timeseries_csv(text: str, where: str = "<csv>") -> TimeSeries:
+    """Read a 6-DOF motion CSV: header ``t,x,y,z,phi,theta,psi`` (s, m, deg), one sample a row.
+
+    Raises
+    ------
+    PlatformError
+        ``where:line: what is wrong`` for a missing column, a non-number, NaN/inf, time that does
+        not increase, fewer than two rows.
+    """
+    rows = list(csv.reader(io.StringIO(text)))
+    rows = [(i + 1, r) for i, r in enumerate(rows) if r and any(c.strip() for c in r) and not r[0].startswith("#")]
+    if not rows:
+        raise PlatformError(f"{where}: empty file; expected a header t,x,y,z,phi,theta,psi")
+    line, header = rows[0]
+    names = [c.strip().lower() for c in header]
+    aliases = {"φ": "phi", "θ": "theta", "ψ": "psi", "time": "t"}
+    names = [aliases.get(n, n) for n in names]
+    missing = [c for c in TIMESERIES_COLUMNS if c not in names]
+    if missing:
+        raise PlatformError(
+            f"{where}:{line}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
+            f"(header must name t,x,y,z,phi,theta,psi; got {','.join(names)})"
+        )
+    idx = [names.index(c) for c in TIMESERIES_COLUMNS]
+    data = []
+    for line, r in rows[1:]:
+        vals = []
+        for col, k in zip(TIMESERIES_COLUMNS, idx, strict=True):
+            if k >= len(r) or not r[k].strip():
+                raise PlatformError(f"{where}:{line}: column {col} is empty")
+            try:
+                v = float(r[k])
+            except ValueError:
+                raise PlatformError(f"{where}:{line}: column {col}: {r[k].strip()!r} is not a number") from None
+            if not math.isfinite(v):
+                raise PlatformError(f"{where}:{line}: column {col} is {r[k].strip()} (must be a finite number)")
+            vals.append(v)
+        if data and vals[0] <= data[-1][0]:
+            raise PlatformError(
+                f"{where}:{line}: time {vals[0]:g} s does not increase (previous row {data[-1][0]:g} s)"
+            )
+        data.append(vals)
+    if len(data) < 2:
+        raise PlatformError(f"{where}: needs at least two samples, got {len(data)}")
+    a = np.array(data)
+    eta = a[:, 1:].copy()
+    eta[:, 3:] = np.radians(eta[:, 3:])
+    return TimeSeries(a[:, 0] - a[0, 0], eta)
+
+
+def timeseries_to_csv(t: ArrayLike, eta: ArrayLike) -> str:
+    """The CSV :func:`parse_timeseries_csv` reads (angles written in degrees)."""
+    t, eta = np.asarray(t, dtype=float), np.asarray(eta, dtype=float)
+    out = io.StringIO()
+    out.write(",".join(TIMESERIES_COLUMNS) + "\n")
+    for ti, e in zip(t, eta, strict=True):
+        out.write(",".join(f"{v:.6g}" for v in (ti, *e[:3], *np.degrees(e[3:]))) + "\n")
+    return out.getvalue()
+
+
+@dataclass
+class WaveSimulation:
+    """Vessel-in-waves source: η(t) of a vessel (RAO) in a random sea, scaled per DOF.
+
+    The vessel's η (NED, z-down, zyx Euler angles) is played as the platform's η (z-down,
+    eq. 33 angles): at these amplitudes the two angle conventions differ by second-order terms
+    only, and the motion filter makes any pose admissible anyway.
+    """
+
+    rao: object
+    spectrum: str
+    hs: float
+    tp: float
+    heading_deg: float
+    seed: int
+    scale: NDArray[np.float64]
+    motion: VesselMotion = field(init=False)
+    significant: NDArray[np.float64] = field(init=False)
+
+    def __post_init__(self) -> None:
+        rng = np.random.default_rng(self.seed)
+        heading = math.radians(self.heading_deg)
+        sea = wave_components(self.spectrum, self.hs, self.tp, rng, heading=heading)
+        self.motion = VesselMotion(self.rao, sea)
+        w = np.linspace(0.2, 3.0, 400)
+        self.significant = significant_response(self.rao, sea_spectrum(self.spectrum, w, self.hs, self.tp), w, heading)
+
+    @staticmethod
+    def auto_scale(significant: ArrayLike, platform: StewartPlatform, fill: float = 0.8) -> NDArray[np.float64]:
+        """Per-DOF scale ≤ 1 fitting the most probable largest response of ~1000 cycles
+        (≈ 0.93 H_s, Rayleigh) to ``fill`` of the smaller side of each pose limit."""
+        reach = np.minimum(-platform.pose_min, platform.pose_max)
+        peak = 0.93 * np.asarray(significant, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = np.where(peak > 1e-9, fill * reach / peak, 1.0)
+        return np.minimum(s, 1.0)
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        eta, deta, _ = self.motion.eta_derivatives(np.array([t]))
+        return eta[0] * self.scale, deta[0] * self.scale
+
+
+class Remote:
+    """The pose last commanded by a client (``remote`` source); clipped to the pose box."""
+
+    def __init__(self, platform: StewartPlatform) -> None:
+        self.platform = platform
+        self.eta = np.zeros(6)
+
+    def set(self, eta: ArrayLike) -> None:
+        e = np.asarray(eta, dtype=float).reshape(-1)
+        if e.shape != (6,) or not np.all(np.isfinite(e)):
+            raise PlatformError(f"remote pose needs six finite numbers, got {np.asarray(eta).tolist()}")
+        self.eta = np.clip(e, self.platform.pose_min, self.platform.pose_max)
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        return self.eta.copy(), np.zeros(6)
+
+
+# ----------------------------------------------------------------------------- platform
+def smoothstep(x: float) -> float:
+    """0 → 1 with zero slope at both ends (3x² − 2x³)."""
+    x = min(1.0, max(0.0, x))
+    return x * x * (3.0 - 2.0 * x)
+
+
+class Platform:
+    """One Stewart platform with the lab HMI's modes, a motion source and the motion filter.
+
+    Parameters
+    ----------
+    model : StewartPlatform
+    ramp_time : float   ENGAGE / DISENGAGE fade time [s]; default 5
+    start : str         initial mode, ``settled`` (default) or ``neutral``
+    """
+
+    def __init__(self, model: StewartPlatform, ramp_time: float = 5.0, start: str = "settled") -> None:
+        self.model = model
+        self.ramp_time = float(ramp_time)
+        self.filter = MotionFilter(model.pose_min, model.pose_max, model.speed_max, model.accel_max)
+        self.settled_pose = np.zeros(6)
+        self.settled_pose[2] = model.pose_max[2]  # heave down (z-down) to the end of its stroke
+        self.mode = start
+        self.transition = ""  # "raising", "settling", "engaging", "disengaging" or ""
+        self.filter.reset(self.settled_pose if start == "settled" else np.zeros(6))
+        self.source_name = "generator"
+        self.source = Generator(np.zeros(6), np.full(6, 0.1), np.zeros(6))
+        self.remote = Remote(model)
+        self.t_source = 0.0
+        self.gain = 0.0
+        self.frozen = False
+        self.leg_clamped = False
+
+    # ------------------------------------------------------------------ commands
+    @property
+    def status(self) -> str:
+        return self.transition or self.mode
+
+    def command(self, action: str) -> None:
+        """``neutral`` (raise from settled), ``settle``, ``engage``, ``disengage``."""
+        if action not in ACTIONS:
+            raise PlatformError(f"platform action must be one of {', '.join(ACTIONS)}, got {action!r}")
+        if self.frozen:
+            raise PlatformError(f"{self.model.name} is stopped (E-STOP); reset first")
+        busy = self.transition
+        if action == "neutral":
+            if self.mode != "settled" or busy:
+                raise PlatformError(f"{self.model.name}: NEUTRAL is reached from SETTLED (now {self.status.upper()})")
+            self.transition = "raising"
+        elif action == "settle":
+            if self.mode != "neutral" or busy:
+                raise PlatformError(f"{self.model.name}: SETTLE is done from NEUTRAL (now {self.status.upper()})")
+            self.transition = "settling"
+        elif action == "engage":
+            if self.mode != "neutral" or busy:
+                raise PlatformError(f"{self.model.name}: ENGAGE needs NEUTRAL (now {self.status.upper()})")
+            self.t_source, self.gain = 0.0, 0.0
+            self.mode, self.transition = "engaged", "engaging"
+        else:
+            if self.mode != "engaged" or busy == "disengaging":
+                raise PlatformError(f"{self.model.name}: DISENGAGE needs ENGAGED (now {self.status.upper()})")
+            self.transition = "disengaging"
+
+    def set_source(self, name: str, source=None) -> None:
+        """Select a motion source (not while engaged: disengage first, as on the lab HMI)."""
+        if name not in SOURCES:
+            raise PlatformError(f"motion source must be one of {', '.join(SOURCES)}, got {name!r}")
+        if self.mode == "engaged":
+            raise PlatformError(f"{self.model.name} is ENGAGED; disengage before changing the motion source")
+        if name == "remote":
+            source = self.remote
+        elif source is None:
+            raise PlatformError(f"source {name} needs its parameters")
+        self.source_name, self.source = name, source
+
+    def estop(self) -> None:
+        """Stop at the acceleration limit and hold (pose, speed and acceleration stay in their limits)."""
+        self.frozen = True
+
+    def reset(self) -> None:
+        """After an E-STOP: back to NEUTRAL where the platform stands (it is then raised/lowered by command)."""
+        if self.frozen:
+            self.frozen = False
+            self.mode, self.transition, self.gain = "neutral", "", 0.0
+
+    # ------------------------------------------------------------------ step
+    def _clamp_to_legs(self, eta: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Scale a target toward neutral until every leg is inside its stroke (2 % margin)."""
+        m = self.model
+        margin = 0.02 * (m.leg_max - m.leg_min)
+        lo, hi = m.leg_min + margin, m.leg_max - margin
+
+        def inside(e):
+            L = m.leg_lengths(e)
+            return bool(np.all((lo <= L) & (hi >= L)))
+
+        if inside(eta):
+            self.leg_clamped = False
+            return eta
+        a, b = 0.0, 1.0
+        for _ in range(20):
+            c = 0.5 * (a + b)
+            a, b = (c, b) if inside(c * eta) else (a, c)
+        self.leg_clamped = True
+        return a * eta
+
+    def step(self, dt: float) -> NDArray[np.float64]:
+        """Advance by ``dt``; returns η (6,)."""
+        f = self.filter
+        speed_scale = 1.0
+        target, v_ref = f.x.copy(), None
+        if self.frozen:
+            return self._stop_step(dt)
+        if self.mode == "engaged":
+            self.t_source += dt
+            if self.transition == "engaging":
+                self.gain = smoothstep(self.t_source / self.ramp_time) if self.ramp_time > 0 else 1.0
+                if self.gain >= 1.0:
+                    self.transition = ""
+            elif self.transition == "disengaging":
+                self.gain = max(0.0, self.gain - dt / self.ramp_time) if self.ramp_time > 0 else 0.0
+            eta_s, v_s = self.source(self.t_source)
+            g = smoothstep(self.gain) if self.transition == "disengaging" else self.gain
+            target, v_ref = self._clamp_to_legs(g * eta_s), g * v_s
+            if self.transition == "disengaging" and self.gain <= 0.0:
+                target, v_ref = np.zeros(6), None
+                if np.all(np.abs(f.x) < 1e-6) and np.all(np.abs(f.v) < 1e-6):
+                    self.mode, self.transition = "neutral", ""
+        elif self.transition == "raising" or self.mode == "neutral":
+            target, v_ref = np.zeros(6), None
+            speed_scale = TRANSFER_SPEED_FRACTION
+            if self.transition == "raising" and np.allclose(f.x, 0, atol=1e-6) and np.allclose(f.v, 0, atol=1e-6):
+                self.mode, self.transition = "neutral", ""
+        if self.transition == "settling" or (self.mode == "settled" and not self.transition):
+            target, v_ref = self.settled_pose, None
+            speed_scale = TRANSFER_SPEED_FRACTION
+            at_rest = np.allclose(f.x, self.settled_pose, atol=1e-6) and np.allclose(f.v, 0, atol=1e-6)
+            if self.transition == "settling" and at_rest:
+                self.mode, self.transition = "settled", ""
+        return f.step(target, v_ref, dt, speed_scale).copy()
+
+    def _stop_step(self, dt: float) -> NDArray[np.float64]:
+        """Brake every DOF at its acceleration limit until at rest (still through the limits)."""
+        f = self.filter
+        dv = np.clip(-f.v, -f.accel * dt, f.accel * dt)
+        v_new = f.v + dv
+        # braking toward a pose limit stays admissible: v_new is between v and 0
+        f.a = (v_new - f.v) / dt
+        f.v = v_new
+        f.x = np.clip(f.x + v_new * dt, f.lower, f.upper)
+        return f.x.copy()
+
+    @property
+    def eta(self) -> NDArray[np.float64]:
+        return self.filter.x.copy()
+
+    @property
+    def eta_dot(self) -> NDArray[np.float64]:
+        return self.filter.v.copy()
+
+    @property
+    def eta_ddot(self) -> NDArray[np.float64]:
+        return self.filter.a.copy()
