@@ -48,14 +48,19 @@ def test_eq44_fixes_the_rotation_order(rng):
         d, dd = rng.uniform(-0.5, 0.5, 3), rng.normal(size=3)
         h = 1e-6
 
-        def body_rate(R):
+        def body_rate(R, h=h):
             Rd = (R(h) - R(-h)) / (2 * h)
             return unskew(R(0).T @ Rd)
 
-        w = body_rate(lambda t: rotation_xyz(d + dd * t))
+        w = body_rate(lambda t, d=d, dd=dd: rotation_xyz(d + dd * t))
         np.testing.assert_allclose(T_delta(d) @ w, dd, atol=1e-7)
+
         # the printed order R_x(ψ) R_y(θ) R_z(φ) does not satisfy eq. (44)
-        w_printed = body_rate(lambda t: rot_x(d[2] + dd[2] * t) @ rot_y(d[1] + dd[1] * t) @ rot_z(d[0] + dd[0] * t))
+        def printed(t, d=d, dd=dd):
+            e = d + dd * t
+            return rot_x(e[2]) @ rot_y(e[1]) @ rot_z(e[0])
+
+        w_printed = body_rate(printed)
         assert np.abs(T_delta(d) @ w_printed - dd).max() > 1e-3
 
 
@@ -101,13 +106,13 @@ def test_leg_rates_and_body_acceleration_against_finite_differences(platform, rn
         ed, edd = rng.normal(size=6) * 0.3, rng.normal(size=6) * 0.5
         h = 1e-5
 
-        def traj(t):
+        def traj(t, eta=eta, ed=ed, edd=edd):
             return eta + ed * t + 0.5 * edd * t * t
 
         ld = (platform.leg_lengths(traj(h)) - platform.leg_lengths(traj(-h))) / (2 * h)
         np.testing.assert_allclose(platform.leg_rates(eta, ed), ld, atol=1e-8)
         # eq. (47) and (51): Ṙ = R S(ω), R̈ = R S(ω)² + R S(ω̇)
-        R, Rd, Rdd = StewartPlatform.rotation_rates(eta, ed, edd)
+        _, Rd, Rdd = StewartPlatform.rotation_rates(eta, ed, edd)
         h = 1e-4
         Rp, R0, Rm = (rotation_xyz(traj(s)[3:]) for s in (h, 0.0, -h))
         np.testing.assert_allclose(Rd, (Rp - Rm) / (2 * h), atol=1e-7)
@@ -192,9 +197,9 @@ def test_estop_stops_within_limits(platform):
 
 
 def test_generator_refuses_bad_parameters(platform):
-    with pytest.raises(PlatformError, match="frequency 2 Hz is outside 0.01–1 Hz"):
+    with pytest.raises(PlatformError, match=r"frequency 2 Hz is outside 0\.01–1 Hz"):
         Generator.make([0.1, 0, 0, 0, 0, 0], [2, 0.1, 0.1, 0.1, 0.1, 0.1], np.zeros(6), platform)
-    with pytest.raises(PlatformError, match="heave amplitude .* exceeds"):
+    with pytest.raises(PlatformError, match=r"heave amplitude .* exceeds"):
         Generator.make([0, 0, 5.0, 0, 0, 0], np.full(6, 0.1), np.zeros(6), platform)
 
 

@@ -58,7 +58,8 @@ class VvmcScenario:
             raise VvmcError(f"--dt {self.dt:g} s is too coarse for the pendulum and servo loops (at most 0.05 s)")
         if self.duration <= self.ramp + self.settle:
             raise VvmcError(
-                f"--duration {self.duration:g} s leaves nothing to measure after the {self.ramp + self.settle:g} s start-up"
+                f"--duration {self.duration:g} s leaves nothing to measure after the "
+                f"{self.ramp + self.settle:g} s start-up"
             )
         check_sea(self.hs, self.tp)
 
@@ -112,7 +113,7 @@ def simulate(
     lab = MotionLab(layout, q0=lab0.q_work)
     _sources(sc, lab)
     lab.set_vvmc(compensate)
-    n = int(round(sc.duration / sc.dt))
+    n = round(sc.duration / sc.dt)
     out = {
         k: np.empty(s)
         for k, s in {

@@ -187,9 +187,9 @@ class Pendulum:
         sa, ca, sb, cb = math.sin(a), math.cos(a), math.sin(b), math.cos(b)
         return np.array([-ad * ca, -ad * sa * sb + bd * ca * cb, -ad * sa * cb - bd * ca * sb])
 
-    def energy(self, L: float, v_t: NDArray[np.float64] = np.zeros(3), m: float = 1.0) -> float:
+    def energy(self, L: float, v_t: NDArray[np.float64] | None = None, m: float = 1.0) -> float:
         """Kinetic + potential energy, eqs. (26)–(27), with the tool moving at v_t (in {d})."""
-        v_p = v_t + L * self.direction_rate()
+        v_p = (np.zeros(3) if v_t is None else v_t) + L * self.direction_rate()
         return 0.5 * m * float(v_p @ v_p) + m * self.g * L * (1 - math.cos(self.alpha) * math.cos(self.beta))
 
     @property
