@@ -423,6 +423,62 @@ def _scenario(args: argparse.Namespace, **over):
         raise BosunError(str(err)) from None
 
 
+def cmd_sim_vvmc(args: argparse.Namespace) -> int:
+    import time
+
+    from app.analysis.vvmc_report import save_runs
+    from app.control.vvmc import VvmcError, VvmcScenario, simulate
+
+    try:
+        sc = VvmcScenario(
+            hs=args.hs,
+            tp=args.tp,
+            spectrum=args.spectrum,
+            heading1=args.heading1,
+            heading2=args.heading2,
+            duration=args.duration,
+            dt=args.dt,
+            seed=args.seed,
+            rao=args.rao,
+        )
+    except VvmcError as err:
+        raise BosunError(str(err)) from None
+    out = _make_out(args, f"vvmc_hs{sc.hs:g}_seed{sc.seed}")
+    n = round(sc.duration / sc.dt)
+    bar = _progress_bar("sim vvmc", unit="step")
+    t0 = time.perf_counter()
+    on = simulate(sc, True, progress=lambda k: bar(k, 2 * n))
+    off = simulate(sc, False, progress=lambda k: bar(n + k, 2 * n))
+    speed = 2 * sc.duration / (time.perf_counter() - t0)
+    doc = save_runs(sc, on, off, out, speed)
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+    else:
+        c, u = doc["compensated"], doc["uncompensated"]
+        print(
+            f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, EM8000 heading {sc.heading1:g}°, EM1500 {sc.heading2:g}°, "
+            f"{sc.duration:g} s, seed {sc.seed} ({'RAO ' + sc.rao if sc.rao else 'parametric vessel'})"
+        )
+        print(
+            f"  tool point rel. EM1500, rms: {1000 * u['rms_tool_error_m']:.1f} mm without, "
+            f"{1000 * c['rms_tool_error_m']:.2f} mm with VVMC  (reduction {doc['reduction_percent']:.1f} %)"
+        )
+        print(
+            f"  payload swing rms {c['payload_swing_rms_deg']:.2f}° (max {c['payload_swing_max_deg']:.2f}°), "
+            f"height error rms {1000 * c['rms_payload_height_error_m']:.1f} mm"
+        )
+        util = ", ".join(f"{100 * v:.0f}" for v in c["joint_speed_utilisation"])
+        print(
+            f"  joint speed use [%]: {util}; winch speed use {100 * c['winch_speed_utilisation']:.0f} %; "
+            f"time at a limit {c['time_at_limit_s']:.1f} s"
+        )
+        print(
+            f"  {speed:.1f}× real time; wrote {out}/timeseries.csv, platforms.png, tool_error.png, "
+            "robot_winch_load.png, summary.json"
+        )
+    return 0
+
+
 def cmd_sim_tac(args: argparse.Namespace) -> int:
     from app.analysis.tac_report import save_run
     from app.sim.tac import simulate
@@ -761,7 +817,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_loop)
 
-    p = sub.add_parser("sim", help="simulations: sim tac (crane-head compensation), sim tac-sweep")
+    p = sub.add_parser("sim", help="simulations: sim tac, sim tac-sweep (crane head), sim vvmc (Motion-Lab)")
     sims = p.add_subparsers(dest="sim", metavar="WHAT", parser_class=_Parser, required=True)
 
     def add_sea_args(p: argparse.ArgumentParser) -> None:
@@ -817,6 +873,19 @@ def build_parser() -> argparse.ArgumentParser:
     add_sea_args(b)
     b.add_argument("--out", default=None, help="output folder (default out/tac_sweep)")
     b.set_defaults(func=cmd_sim_sweep)
+    b = sims.add_parser("vvmc", help="vessel-to-vessel motion compensation in the Motion-Lab (CSV, plots, JSON)")
+    b.add_argument("--hs", type=_positive_float, default=2.0, help="significant wave height [m] (default 2)")
+    b.add_argument("--tp", type=_positive_float, default=8.0, help="peak period [s] (default 8)")
+    b.add_argument("--spectrum", choices=["jonswap", "pm", "torsethaugen"], default="jonswap", help="default jonswap")
+    b.add_argument("--heading1", type=_finite_float, default=150.0, help="EM8000 vessel wave heading [deg] (150)")
+    b.add_argument("--heading2", type=_finite_float, default=90.0, help="EM1500 vessel wave heading [deg] (90)")
+    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time [s] (default 300)")
+    b.add_argument("--dt", type=_positive_float, default=0.01, help="time step [s] (default 0.01)")
+    b.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
+    b.add_argument("--rao", default=None, metavar="FILE", help="RAO table (.mat or .csv); default parametric vessel")
+    b.add_argument("--out", default=None, help="output folder (default out/vvmc_hsHS_seedSEED)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_sim_vvmc)
     _load_plugin_commands(sub)
 
     def add_engine_args(p: argparse.ArgumentParser) -> None:

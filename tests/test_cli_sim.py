@@ -76,3 +76,56 @@ def test_parse_range_and_max_hs():
     assert parse_range("1,2.5") == [1.0, 2.5]
     rows = [{"mode": "tac", "hs": h, "ratio_rms": r} for h, r in ((1, 0.01), (2, 0.04), (3, 0.06), (4, 0.03))]
     assert max_hs_within(rows, "tac") == 2
+
+
+# ----------------------------------------------------------------------------- bosun sim vvmc
+def test_sim_vvmc_writes_csv_plots_and_summary(capsys, tmp_path):
+    code, out, _ = run(
+        capsys,
+        "sim",
+        "vvmc",
+        "--hs",
+        "2",
+        "--tp",
+        "8",
+        "--duration",
+        "25",
+        "--seed",
+        "1",
+        "--out",
+        str(tmp_path),
+        "--json",
+    )
+    assert code == 0
+    doc = json.loads(out)
+    c, u = doc["compensated"], doc["uncompensated"]
+    for key in (
+        "rms_tool_error_m",
+        "payload_swing_rms_deg",
+        "joint_speed_utilisation",
+        "winch_speed_utilisation",
+        "time_at_limit_s",
+    ):
+        assert key in c and key in u
+    assert doc["reduction_percent"] > 90
+    assert c["rms_tool_error_m"] < u["rms_tool_error_m"]
+    for f in ("timeseries.csv", "platforms.png", "tool_error.png", "robot_winch_load.png", "summary.json"):
+        assert (tmp_path / f).stat().st_size > 0
+    with open(tmp_path / "timeseries.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0][0] == "t" and "em1500_heave" in rows[0] and "L_w" in rows[0] and len(rows) == 2501
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--hs", "-2"], "argument --hs: '-2' must be positive"),
+        (["--hs", "9", "--tp", "5"], "steep"),
+        (["--duration", "5"], "leaves nothing to measure"),
+        (["--dt", "0.2"], "too coarse"),
+    ],
+)
+def test_sim_vvmc_bad_input_is_one_line(capsys, tmp_path, argv, message):
+    code, _, err = run(capsys, "sim", "vvmc", *argv, "--out", str(tmp_path))
+    assert code == 2
+    assert message in err and "Traceback" not in err
