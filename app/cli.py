@@ -585,6 +585,10 @@ def _make_session(args: argparse.Namespace):
         from app.engine.tac_session import TacSession
 
         return TacSession()
+    if getattr(args, "plant", "teleop") == "lab":
+        from app.engine.lab_session import LabSession
+
+        return LabSession()
     from app.engine.session import Session
 
     return Session(robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0)
@@ -600,8 +604,12 @@ def cmd_server(args: argparse.Namespace) -> int:
     if not is_local(args.bind) and not args.token:
         raise BosunError(f"binding to the non-local address {args.bind} needs a shared token (--token)")
     session = _make_session(args)
-    rate = args.rate if args.rate is not None else (50.0 if args.plant == "tac" else 500.0)
-    pub = min(args.publish_rate, rate) if args.publish_rate is not None else (25.0 if args.plant == "tac" else 50.0)
+    rate = args.rate if args.rate is not None else (50.0 if args.plant in ("tac", "lab") else 500.0)
+    pub = (
+        min(args.publish_rate, rate)
+        if args.publish_rate is not None
+        else (25.0 if args.plant in ("tac", "lab") else 50.0)
+    )
     server = EngineServer(session, bind=args.bind, rate=rate, publish_rate=pub, token=args.token)
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
     print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
@@ -903,9 +911,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_engine_args(p)
     p.add_argument(
         "--plant",
-        choices=["teleop", "tac"],
+        choices=["teleop", "tac", "lab"],
         default="teleop",
-        help="teleop (a manipulator from the library) or tac (vessel, crane and Delta head); default teleop",
+        help="teleop (a library manipulator), tac (vessel, crane, Delta head), lab (Motion-Lab); default teleop",
     )
     p.add_argument(
         "--rate", type=_positive_float, default=None, help="control rate [Hz], up to 1000 (default 500; tac 50)"

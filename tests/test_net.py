@@ -38,6 +38,18 @@ def test_round_trip_every_client_message():
         "release_operator": {},
         "set_sea": {"spectrum": "torsethaugen", "hs": 3.0, "tp": 9.0, "heading": 135.0},
         "set_tac_mode": {"mode": "cooperative"},
+        "lab_platform": {"platform": "em8000", "action": "engage"},
+        "lab_source": {
+            "platform": "em1500",
+            "source": "generator",
+            "amplitude": [0.0, 0.0, 0.1, 0.0, 0.0, 0.0],
+            "frequency": [0.1] * 6,
+            "phase": [0.0] * 6,
+        },
+        "lab_remote_pose": {"platform": "em1500", "eta": [0.0, 0.0, 0.1, 0.0, 0.0, 0.05]},
+        "lab_comau_mode": {"mode": "motion_comp"},
+        "lab_winch": {"mode": "local", "speed": -0.2},
+        "lab_vvmc": {"on": True},
     }
     assert set(samples) == set(CLIENT_MESSAGES)
     for mtype, fields in samples.items():

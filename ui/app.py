@@ -24,6 +24,7 @@ def run_gui(
     mode: str | None = None,
     quit_after: float | None = None,
     connect_tac: str | None = None,
+    connect_lab: str | None = None,
 ) -> int:
     """Open the main window; start a child engine unless ``connect`` names a running one."""
     if not has_display():
@@ -70,7 +71,19 @@ def run_gui(
             proc.stop()
             raise
 
-    win = MainWindow(link, engine=engine, settings=settings, marine_link_factory=marine_link)
+    def lab_link():
+        """The Motion-Lab runs in its own engine process (started on first use)."""
+        if connect_lab is not None:
+            return EngineLink(connect_lab, role="operator", token=token, name="bosun-gui-lab")
+        proc = EngineProcess(plant="lab")
+        marine_engines.append(proc)
+        try:
+            return EngineLink(proc.url, role="operator", name="bosun-gui-lab")
+        except TransportError:
+            proc.stop()
+            raise
+
+    win = MainWindow(link, engine=engine, settings=settings, marine_link_factory=marine_link, lab_link_factory=lab_link)
     app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
     win.resize(1500, 950)
     win.show()
@@ -95,6 +108,11 @@ def register(sub, helpers) -> None:
         default=None,
         help="attach the Crane head tab to a running 'bosun server --plant tac' (default: start one on first use)",
     )
+    p.add_argument(
+        "--connect-lab",
+        default=None,
+        help="attach the Motion-Lab tab to a running 'bosun server --plant lab' (default: start one on first use)",
+    )
     p.add_argument("--robot", default=None, help="robot for a new engine (default: the last one used)")
     p.add_argument("--solver", default=None, help="solver for a new engine")
     p.add_argument("--mode", choices=["position", "velocity"], default=None, help="mode for a new engine")
@@ -108,5 +126,6 @@ def register(sub, helpers) -> None:
             mode=a.mode,
             quit_after=a.quit_after,
             connect_tac=a.connect_tac,
+            connect_lab=a.connect_lab,
         )
     )

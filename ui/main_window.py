@@ -19,6 +19,7 @@ from PyQt5.QtWidgets import (
 )
 
 from ui.analysis_tab import AnalysisTab
+from ui.lab_tab import MotionLabTab
 from ui.marine_tab import CraneHeadTab
 from ui.teleop_tab import TeleopTab
 from ui.widgets.status import StatusPanel
@@ -33,6 +34,7 @@ class MainWindow(QMainWindow):
         dialogs: bool = True,
         marine_link_factory=None,
         use_gl: bool | None = None,
+        lab_link_factory=None,
     ) -> None:
         super().__init__()
         self.link = link
@@ -48,10 +50,10 @@ class MainWindow(QMainWindow):
         self.tabs.addTab(self.analysis, "Analysis")
         self.crane_head = CraneHeadTab(marine_link_factory, use_gl=use_gl)
         self.tabs.addTab(self.crane_head, "Crane head")
-        # the crane-head engine starts the first time its tab is shown
-        self.tabs.currentChanged.connect(
-            lambda i: self.crane_head.connect_engine() if self.tabs.widget(i) is self.crane_head else None
-        )
+        self.motion_lab = MotionLabTab(lab_link_factory, use_gl=use_gl)
+        self.tabs.addTab(self.motion_lab, "Motion-Lab")
+        # the scene engines start the first time their tab is shown
+        self.tabs.currentChanged.connect(self._scene_tab_shown)
         self.setCentralWidget(self.tabs)
         self.status = StatusPanel()
         dock = QDockWidget("Status")
@@ -82,6 +84,7 @@ class MainWindow(QMainWindow):
         self.analysis.error.connect(self.show_error)
         self.teleop.inputs.notice.connect(self.on_input_event)
         self.crane_head.notice.connect(self.on_marine_notice)
+        self.motion_lab.notice.connect(self.on_marine_notice)
         self.status.lights["engine"].set("ok", "connected")
         self.status.add_log("info", f"connected to the engine at {link.client.url} as {link.role}")
         if link.note:
@@ -99,20 +102,29 @@ class MainWindow(QMainWindow):
                 return self.teleop.stick.key(ev.key(), ev.type() == QEvent.KeyPress)
         return False
 
+    def _scene_tab_shown(self, i: int) -> None:
+        w = self.tabs.widget(i)
+        if w is self.crane_head:
+            self.crane_head.connect_engine()
+        elif w is self.motion_lab:
+            self.motion_lab.connect_engine()
+
     # ------------------------------------------------------------------ actions
     def estop(self) -> None:
         self.link.send("estop", reason="STOP button")
         self.crane_head.estop()
+        self.motion_lab.estop()
         self.status.add_log("error", "STOP pressed: E-STOP sent")
 
     def reset(self) -> None:
         self.link.send("reset")
         self.crane_head.reset()
+        self.motion_lab.reset()
 
     def on_marine_notice(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
         if level == "error" and ("refused" in text or "not started" in text or "engine:" in text):
-            self.show_error("Crane head", text)
+            self.show_error("Motion-Lab" if text.startswith("Motion-Lab") else "Crane head", text)
 
     def show_error(self, title: str, message: str) -> None:
         self.messages.append((title, message))
@@ -171,6 +183,7 @@ class MainWindow(QMainWindow):
         self.settings.setValue("windowState", self.saveState())
         self.teleop.stop_logger()
         self.crane_head.close_link()
+        self.motion_lab.close_link()
         self.link.close()
         if self.engine is not None:
             self.engine.stop()

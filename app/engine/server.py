@@ -25,7 +25,7 @@ import zmq
 from app.engine.session import CommandError, Session
 from app.errors import BosunError
 from app.net.codec import ProtocolError, decode, encode
-from app.net.messages import OPERATOR_ONLY
+from app.net.messages import OPERATOR_ONLY, SCENE_MESSAGES
 from app.net.transport import TransportError, check_url, is_local, state_url_for
 from app.teleop.devices import InputSample
 
@@ -216,14 +216,11 @@ class EngineServer:
                 self.session.set_scaling(msg.get("k_p"), msg.get("x_w"), msg.get("k_v"))
             elif mtype == "reset":
                 self.session.reset()
-            elif mtype in ("set_sea", "set_tac_mode"):
+            elif mtype in SCENE_MESSAGES:
                 handler = getattr(self.session, mtype, None)
                 if handler is None:
-                    raise CommandError(f"{mtype}: this engine runs the teleop session, not the crane-head scene")
-                if mtype == "set_sea":
-                    handler(msg["spectrum"], msg["hs"], msg["tp"], msg["heading"])
-                else:
-                    handler(msg["mode"])
+                    raise CommandError(f"{mtype}: this engine does not run that scene (it runs {self.session.mode!r})")
+                handler(**{k: v for k, v in msg.items() if k not in ("v", "type")})
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")
             self._reply(ident, mtype, False, str(err))

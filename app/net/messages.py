@@ -50,7 +50,45 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
         "heading": ("float", True, 720.0),
     },
     "set_tac_mode": {"mode": ("enum", True, ("off", "tac", "cooperative"))},
+    # Motion-Lab (``bosun server --plant lab``)
+    "lab_platform": {
+        "platform": ("str", True, 32),
+        "action": ("enum", True, ("neutral", "settle", "engage", "disengage")),
+    },
+    "lab_source": {
+        "platform": ("str", True, 32),
+        "source": ("enum", True, ("simulation", "generator", "remote", "timeseries")),
+        "amplitude": ("floats", False, 6),
+        "frequency": ("floats", False, 6),
+        "phase": ("floats", False, 6),
+        "spectrum": ("enum", False, ("jonswap", "pm", "torsethaugen")),
+        "hs": ("float", False, 30.0),
+        "tp": ("float", False, 40.0),
+        "heading": ("float", False, 720.0),
+        "seed": ("int", False, 2**31),
+        "scale": ("floats", False, 6),
+        "csv": ("str", False, 60_000),
+        "name": ("str", False, 256),
+    },
+    "lab_remote_pose": {"platform": ("str", True, 32), "eta": ("floats", True, 6)},
+    "lab_comau_mode": {"mode": ("enum", True, ("settled", "remote", "motion_comp"))},
+    "lab_winch": {"mode": ("enum", False, ("local", "remote", "motion_comp")), "speed": ("float", False, 10.0)},
+    "lab_vvmc": {"on": ("bool", True, None)},
 }
+
+#: scene commands the server hands to the session's method of the same name (fields as keywords)
+SCENE_MESSAGES = frozenset(
+    {
+        "set_sea",
+        "set_tac_mode",
+        "lab_platform",
+        "lab_source",
+        "lab_remote_pose",
+        "lab_comau_mode",
+        "lab_winch",
+        "lab_vvmc",
+    }
+)
 
 # ------------------------------------------------------------------ engine -> client
 ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
@@ -71,5 +109,5 @@ ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
 
 #: messages only the operator may send (a viewer gets an error reply); E-STOP is anyone's
 OPERATOR_ONLY = frozenset(
-    {"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset", "set_sea", "set_tac_mode"}
+    {"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset"} | SCENE_MESSAGES
 )

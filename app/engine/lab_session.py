@@ -1,0 +1,274 @@
+"""Engine session for the Motion-Lab (``bosun server --plant lab``): the lab HMI's commands.
+
+Each tick advances :class:`~app.sim.motionlab.MotionLab` in steps of 0.01 s.  Commands (protocol
+messages, see docs/protocol.md): ``lab_platform`` (neutral / settle / engage / disengage),
+``lab_source`` (simulation, generator, remote, timeseries with their parameters), ``lab_remote_pose``,
+``lab_comau_mode``, ``lab_winch`` (mode and / or spring-return speed), ``lab_vvmc`` (on/off), plus
+``estop`` / ``reset``.  A joystick (``input``) drives the Comau tool point in REMOTE (axes 0–2, 0.25
+m/s at full stick, in the robot base frame) and the winch in REMOTE (axis 3, up to its speed limit).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from app.engine.session import CommandError, LogEntry
+from app.errors import BosunError
+from app.marine.vessel import VesselParticulars, parametric_rao
+from app.models.lab import load_lab
+from app.models.stewart import StewartPlatform
+from app.sim.motionlab import REMOTE_TOOL_SPEED, MotionLab
+from app.sim.stewart import Generator, WaveSimulation, parse_timeseries_csv
+
+STEP = 0.01
+INPUT_TIMEOUT = 0.5  # s without a joystick sample: the remote commands go to zero
+
+
+@dataclass
+class LabSession:
+    lab_name: str = "motionlab"
+    log: deque = field(default_factory=lambda: deque(maxlen=200))
+
+    def __post_init__(self) -> None:
+        self.log_seq = 0
+        self.estop_latched = False
+        self.robot_name, self.solver_name, self.mode = "motionlab", "analytic", "lab"
+        self.layout = load_lab(self.lab_name)
+        lab0 = MotionLab(self.layout)
+        self.lab = MotionLab(self.layout, q0=lab0.q_work)
+        self.names = [n for n, _ in self.layout.platforms]
+        self._carry = 0.0
+        self.sample = None
+        self.sample_time = -math.inf
+        self._rao = None
+        self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
+        self.vvmc = False
+        self.note("info", f"Motion-Lab: {', '.join(self.names)} SETTLED, Comau REMOTE, winch LOCAL")
+
+    # ------------------------------------------------------------------ log
+    def note(self, level: str, text: str) -> None:
+        self.log_seq += 1
+        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
+
+    def _platform(self, name: str) -> int:
+        if name not in self.names:
+            raise CommandError(f"unknown platform {name!r} (this lab has {', '.join(self.names)})")
+        return self.names.index(name)
+
+    def _guard(self) -> None:
+        if self.estop_latched:
+            raise CommandError("E-STOP is latched; reset first")
+
+    # ------------------------------------------------------------------ commands
+    def lab_platform(self, platform: str, action: str) -> None:
+        self._guard()
+        k = self._platform(platform)
+        try:
+            self.lab.platforms[k].command(action)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+        self.note("info", f"{platform}: {action.upper()}")
+
+    def lab_source(self, platform: str, source: str, **p: Any) -> None:
+        k = self._platform(platform)
+        plat = self.lab.platforms[k]
+        try:
+            if plat.mode == "engaged":
+                raise CommandError(f"{platform} is ENGAGED; disengage before changing the motion source")
+            if source == "generator":
+                obj = Generator.make(
+                    p.get("amplitude", [0.0] * 6), p.get("frequency", [0.1] * 6), p.get("phase", [0.0] * 6), plat.model
+                )
+                info = {"amplitude": obj.amplitude.tolist(), "frequency": obj.frequency.tolist()}
+            elif source == "simulation":
+                if self._rao is None:
+                    self._rao = parametric_rao(VesselParticulars())
+                args = (
+                    self._rao,
+                    p.get("spectrum", "jonswap"),
+                    p.get("hs", 2.0),
+                    p.get("tp", 8.0),
+                    p.get("heading", 150.0 if k == 0 else 90.0),
+                    int(p.get("seed", 1)),
+                )
+                src = WaveSimulation(*args, np.ones(6))
+                auto = WaveSimulation.auto_scale(src.significant, plat.model)
+                scale = np.asarray(p["scale"], dtype=float) if p.get("scale") else auto
+                if scale.shape != (6,) or np.any(scale < 0) or np.any(scale > 10):
+                    raise CommandError("scale needs six factors between 0 and 10")
+                obj = WaveSimulation(*args, scale)
+                info = {"hs": args[2], "tp": args[3], "heading": args[4], "scale": scale.tolist()}
+                info["significant"] = src.significant.tolist()
+            elif source == "timeseries":
+                if not p.get("csv"):
+                    raise CommandError("timeseries needs the CSV text (columns t,x,y,z,phi,theta,psi)")
+                obj = parse_timeseries_csv(p["csv"], p.get("name", "time series"))
+                info = {"duration": obj.duration, "samples": int(obj.t.size)}
+            else:
+                obj, info = None, {}
+            plat.set_source(source, obj)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+        self.sources[k] = {"source": source, **info}
+        self.note("info", f"{platform}: motion source {source.upper()}")
+
+    def lab_remote_pose(self, platform: str, eta: list[float]) -> None:
+        k = self._platform(platform)
+        try:
+            self.lab.platforms[k].remote.set(eta)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+
+    def lab_comau_mode(self, mode: str) -> None:
+        self._guard()
+        try:
+            self.lab.set_comau_mode(mode)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+        self.note("info", f"Comau: {mode.upper()}")
+
+    def lab_winch(self, mode: str | None = None, speed: float | None = None) -> None:
+        self._guard()
+        try:
+            if mode is not None:
+                self.lab.set_winch_mode(mode)
+                self.note("info", f"winch: {mode.upper()}")
+            if speed is not None:
+                if self.lab.winch.mode != "local":
+                    raise CommandError("the speed slider drives the winch in LOCAL mode only")
+                lim = self.layout.winch["speed"]
+                self.lab.winch.speed_command = float(np.clip(speed, -lim, lim))
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+
+    def lab_vvmc(self, on: bool) -> None:
+        self._guard()
+        self.lab.set_vvmc(on)
+        self.vvmc = on
+        self.note("info", f"VVMC {'ON: Comau and winch MOTION_COMP' if on else 'OFF: Comau REMOTE, winch LOCAL'}")
+
+    def estop(self, source: str = "operator") -> None:
+        if not self.estop_latched:
+            self.note("error", f"E-STOP from {source}: platforms, robot and winch braking to rest")
+        self.estop_latched = True
+        self.vvmc = False
+        self.lab.estop()
+
+    def reset(self) -> None:
+        if self.estop_latched:
+            self.estop_latched = False
+            self.lab.reset()
+            self.note("info", "E-STOP reset: platforms NEUTRAL where they stand, Comau REMOTE, winch LOCAL")
+
+    def _not_here(self, *_: Any) -> None:
+        raise CommandError("this engine runs the Motion-Lab; robot, solver and scaling commands do not apply")
+
+    set_robot = set_solver = set_mode = set_scaling = _not_here
+
+    def feed(self, sample, now: float) -> None:
+        self.sample, self.sample_time = sample, now
+
+    # ------------------------------------------------------------------ loop
+    def _apply_input(self, now: float) -> None:
+        s = self.sample
+        lab = self.lab
+        fresh = s is not None and now - self.sample_time <= INPUT_TIMEOUT and not self.estop_latched
+        axes = np.zeros(4)
+        if fresh:
+            a = np.asarray(s.axes[:4], dtype=float)
+            axes[: a.size] = np.where(np.abs(a) > 0.08, a, 0.0)  # dead zone
+        if lab.comau_mode == "remote":
+            lab.tool_velocity_cmd = REMOTE_TOOL_SPEED * axes[:3]
+        if lab.winch.mode == "remote":
+            lab.winch.speed_command = self.layout.winch["speed"] * axes[3]
+
+    def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
+        self._carry += dt
+        n = int(self._carry / STEP + 1e-9)
+        if n <= 0:
+            return
+        self._carry -= n * STEP
+        self._apply_input(now)
+        for _ in range(min(n, 50)):  # never more than 0.5 s of catch-up in one tick
+            self.lab.step(STEP)
+
+    # ------------------------------------------------------------------ state
+    def _scene(self) -> dict[str, Any]:
+        """Points in the world {g} for drawing: leg ends of both platforms, robot polyline, wire, load."""
+        lab = self.lab
+        out: dict[str, Any] = {}
+        for k, name in enumerate(self.names):
+            model = lab.models[k]
+            T_n = self.layout.T_world_n1 if k == 0 else self.layout.T_world_n2
+            H = T_n @ StewartPlatform.pose_matrix(lab.platforms[k].eta)
+            base = model.a_n @ T_n[:3, :3].T + T_n[:3, 3]
+            top = model.b_b @ H[:3, :3].T + H[:3, 3]
+            out[name] = {"base": np.round(base, 4).tolist(), "top": np.round(top, 4).tolist()}
+        H1 = lab.platform_pose(0) @ self.layout.T_b1_r
+        F = lab.robot.frames(lab.joints.x)
+        pts = np.vstack([np.zeros(3), F[:, :3, 3]])
+        out["robot"] = np.round(pts @ H1[:3, :3].T + H1[:3, 3], 4).tolist()
+        out["tool"] = np.round(lab.p_t_g, 4).tolist()
+        out["payload"] = np.round(lab.p_p_g(), 4).tolist()
+        out["work_point"] = np.round(lab.last.p_w_g, 4).tolist()
+        return out
+
+    def snapshot(self) -> dict[str, Any]:
+        lab = self.lab
+        s = lab.last
+        plats = []
+        for k, name in enumerate(self.names):
+            p, m = lab.platforms[k], lab.models[k]
+            plats.append(
+                {
+                    "name": name,
+                    "status": p.status,
+                    "mode": p.mode,
+                    "source": p.source_name,
+                    "source_info": self.sources[k],
+                    "eta": np.round(p.eta, 6).tolist(),
+                    "eta_dot": np.round(p.eta_dot, 6).tolist(),
+                    "legs": np.round(m.leg_lengths(p.eta), 5).tolist(),
+                    "leg_range": [m.leg_min, m.leg_max],
+                    "pose_min": m.pose_min.tolist(),
+                    "pose_max": m.pose_max.tolist(),
+                    "leg_clamped": p.leg_clamped,
+                    "ramp": p.gain,
+                }
+            )
+        r = lab.robot
+        return {
+            "kind": "lab",
+            "estop": self.estop_latched,
+            "t": lab.t,
+            "platforms": plats,
+            "comau": {
+                "mode": lab.comau_mode,
+                "q": s.q.tolist(),
+                "qd": s.qd.tolist(),
+                "lower": r.lower.tolist(),
+                "upper": r.upper.tolist(),
+                "speed": r.speed.tolist(),
+                "at_limit": lab.at_limit[:3].tolist(),
+            },
+            "winch": {
+                "mode": lab.winch.mode,
+                "length": s.L_w,
+                "speed": s.L_w_dot,
+                "min": self.layout.winch["min_length"],
+                "max": self.layout.winch["max_length"],
+                "speed_max": self.layout.winch["speed"],
+                "speed_command": lab.winch.speed_command,
+            },
+            "pendulum": {"alpha": s.swing[0], "beta": s.swing[1], "swing": lab.pendulum.swing},
+            "vvmc": self.vvmc,
+            "tool_error_b2": s.e_t_b2.tolist(),
+            "payload_height_error": s.payload_height_error,
+            "scene": self._scene(),
+        }

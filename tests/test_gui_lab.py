@@ -1,0 +1,106 @@
+"""Motion-Lab tab (pytest-qt offscreen) against a real lab engine over 127.0.0.1."""
+
+import threading
+
+import numpy as np
+import pytest
+
+pytest.importorskip("PyQt5")
+from PyQt5.QtCore import QSettings
+
+from app.engine.lab_session import LabSession
+from app.engine.server import EngineServer
+from app.engine.session import Session
+from ui.lab_tab import LabScene2D
+from ui.link import EngineLink
+from ui.main_window import MainWindow
+
+
+def _serve(session, rate):
+    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
+    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
+    th.start()
+    return srv, th
+
+
+@pytest.fixture
+def window(qtbot, tmp_path):
+    teleop, lab = _serve(Session(robot_name="comau_smart5_3dof"), 200), _serve(LabSession(), 50)
+    made = []
+
+    def factory():
+        made.append(EngineLink(lab[0].url, name="gui-lab"))
+        return made[-1]
+
+    win = MainWindow(
+        EngineLink(teleop[0].url),
+        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
+        dialogs=False,
+        lab_link_factory=factory,
+        use_gl=False,
+    )
+    qtbot.addWidget(win)
+    win.show()
+    yield win, made
+    win.close()
+    for srv, th in (teleop, lab):
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()
+
+
+def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
+    win, made = window
+    tab = win.motion_lab
+    assert tab.link is None and not tab.tabs.isEnabled()
+    win.tabs.setCurrentWidget(tab)
+    assert len(made) == 1 and tab.tabs.isEnabled()
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    assert isinstance(tab.scene, LabScene2D)
+    em1500 = tab.platforms["em1500"]
+    assert "SETTLED" in em1500.status.text() and not em1500.buttons["engage"].isEnabled()
+    em1500.buttons["neutral"].click()
+    qtbot.waitUntil(lambda: "NEUTRAL" in em1500.status.text() and em1500.buttons["engage"].isEnabled(), timeout=30000)
+    # sine generator: 0.1 m heave at 0.5 Hz
+    em1500.source.setCurrentIndex(0)
+    em1500.gen[2][0].setValue(0.1)
+    em1500.gen[2][1].setValue(0.5)
+    em1500.apply.click()
+    qtbot.waitUntil(lambda: tab.state["platforms"][1]["source"] == "generator", timeout=5000)
+    em1500.buttons["engage"].click()
+    qtbot.waitUntil(lambda: "ENGAGED" in em1500.status.text() and not em1500.apply.isEnabled(), timeout=10000)
+    qtbot.waitUntil(lambda: em1500.ring.i > 30, timeout=15000)
+    qtbot.wait(2500)
+    z = em1500.ring.view()[:, 3]
+    assert np.nanmax(np.abs(z)) > 0.02  # it heaves
+    assert all(0 <= b.value() <= 1000 for b in em1500.leg_bars)
+    # VVMC on: Comau and winch in MOTION_COMP, reported back by the engine
+    tab.vvmc.click()
+    qtbot.waitUntil(lambda: tab.state["vvmc"] and tab.state["comau"]["mode"] == "motion_comp", timeout=5000)
+    assert tab.comau_mode.currentText() == "MOTION_COMP" and tab.winch_mode.currentText() == "MOTION_COMP"
+    # the robot first travels to the work point (EM8000 is still SETTLED, 0.9 m low), then holds it
+    qtbot.waitUntil(lambda: np.linalg.norm(tab.state["tool_error_b2"]) < 0.01, timeout=20000)
+    # STOP: everything brakes to rest and commands are refused until reset
+    win.estop()
+    qtbot.waitUntil(lambda: tab.state["estop"], timeout=5000)
+    qtbot.wait(1500)
+    assert np.abs(tab.state["platforms"][1]["eta_dot"]).max() < 1e-9
+    win.reset()
+    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=5000)
+
+
+def test_bad_time_series_is_refused_with_a_dialog(qtbot, window, tmp_path):
+    win, _ = window
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    bad = tmp_path / "waves.csv"
+    bad.write_text("t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,0,0,0,0,0\n0.5,0,0,0,0,0,0\n")
+    p = tab.platforms["em8000"]
+    p.source.setCurrentIndex(3)
+    p.load_csv(str(bad))
+    p.apply.click()
+    qtbot.waitUntil(lambda: any("does not increase" in m for _, m in win.messages), timeout=5000)
+    title, msg = next((t, m) for t, m in win.messages if "does not increase" in m)
+    assert title == "Motion-Lab" and "waves.csv:4" in msg
+    assert tab.state["platforms"][0]["source"] == "generator"  # nothing changed

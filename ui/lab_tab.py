@@ -1,0 +1,653 @@
+"""Motion-Lab tab, modelled on the lab's own PyQt5 HMI (Motion-Lab paper §2.9, Figs. 10–11).
+
+One sub-tab per Stewart platform (mode buttons, motion source with the sine generator and the
+wave simulator, status fields, position and attitude plots, six actuator-stroke bars), one for
+the Comau robot and the winch (modes, joint plots, utilisation bars, wire-length bar and the
+spring-return speed slider, VVMC on/off) and one with the 3D scene of the lab and the pendulum
+plots.  Everything goes through the lab engine (``bosun server --plant lab``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QSlider,
+    QStackedWidget,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+)
+
+from app.marine.waves import spectrum as sea_spectrum
+from ui.glprobe import gl_available
+from ui.marine_tab import Ring
+
+HISTORY_S = 60.0
+SAMPLE_HZ = 25
+DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+SOURCES = ("generator", "simulation", "remote", "timeseries")
+
+
+def _bar(fmt: str = "%p %") -> QProgressBar:
+    b = QProgressBar()
+    b.setRange(0, 1000)
+    b.setFormat(fmt)
+    b.setTextVisible(True)
+    return b
+
+
+def _set_bar(bar: QProgressBar, fraction: float, text: str) -> None:
+    bar.setValue(int(1000 * min(1.0, max(0.0, fraction))))
+    bar.setFormat(text)
+
+
+class PlatformPanel(QWidget):
+    """Controls and displays of one Stewart platform."""
+
+    command = pyqtSignal(str, dict)  # message type, fields
+
+    def __init__(self, name: str, title: str) -> None:
+        super().__init__()
+        self.name = name
+        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), 7)
+        self._t_last = -math.inf
+        self.limits: tuple[np.ndarray, np.ndarray] | None = None
+        self.csv_text: str | None = None
+        self.csv_name = ""
+
+        modes = QGroupBox(f"{title}: mode")
+        ml = QGridLayout(modes)
+        self.buttons = {}
+        for i, (action, label) in enumerate(
+            (("neutral", "NEUTRAL"), ("settle", "SETTLE"), ("engage", "ENGAGE"), ("disengage", "DISENGAGE"))
+        ):
+            b = QPushButton(label)
+            b.clicked.connect(
+                lambda _=False, a=action: self.command.emit("lab_platform", {"platform": name, "action": a})
+            )
+            self.buttons[action] = b
+            ml.addWidget(b, 0, i)
+        self.status = QLabel("–")
+        self.status.setTextFormat(Qt.RichText)
+        ml.addWidget(self.status, 1, 0, 1, 4)
+
+        src = QGroupBox("Motion source")
+        sl = QVBoxLayout(src)
+        row = QHBoxLayout()
+        self.source = QComboBox()
+        self.source.addItems([s.upper() for s in SOURCES])
+        self.apply = QPushButton("Apply source")
+        self.apply.clicked.connect(self.send_source)
+        row.addWidget(self.source)
+        row.addWidget(self.apply)
+        sl.addLayout(row)
+        self.stack = QStackedWidget()
+        self.stack.addWidget(self._generator())
+        self.stack.addWidget(self._simulator())
+        self.stack.addWidget(self._remote())
+        self.stack.addWidget(self._timeseries())
+        self.source.currentIndexChanged.connect(self.stack.setCurrentIndex)
+        sl.addWidget(self.stack)
+
+        legs = QGroupBox("Actuator strokes")
+        ll = QVBoxLayout(legs)
+        self.leg_bars = [_bar() for _ in range(6)]
+        for b in self.leg_bars:
+            ll.addWidget(b)
+
+        self.pos_plot = pg.PlotWidget(title="position [m] (platform frame, z down)")
+        self.att_plot = pg.PlotWidget(title="attitude [deg]")
+        colors = ((230, 90, 80), (90, 200, 90), (90, 140, 240))
+        for p in (self.pos_plot, self.att_plot):
+            p.addLegend(offset=(5, 5))
+            p.showGrid(x=True, y=True, alpha=0.3)
+            p.setDownsampling(auto=True)
+            p.setClipToView(True)
+        self.pos_curves = [
+            self.pos_plot.plot(pen=pg.mkPen(c, width=1.5), name=n) for c, n in zip(colors, DOFS[:3], strict=True)
+        ]
+        self.att_curves = [
+            self.att_plot.plot(pen=pg.mkPen(c, width=1.5), name=n) for c, n in zip(colors, DOFS[3:], strict=True)
+        ]
+
+        left = QVBoxLayout()
+        left.addWidget(modes)
+        left.addWidget(src)
+        left.addWidget(legs)
+        left.addStretch(1)
+        right = QVBoxLayout()
+        right.addWidget(self.pos_plot)
+        right.addWidget(self.att_plot)
+        lay = QHBoxLayout(self)
+        lw = QWidget()
+        lw.setLayout(left)
+        lw.setMaximumWidth(520)
+        lay.addWidget(lw)
+        lay.addLayout(right, 1)
+
+    # ------------------------------------------------------------------ source editors
+    def _generator(self) -> QWidget:
+        w = QWidget()
+        g = QGridLayout(w)
+        for j, h in enumerate(("DOF", "amplitude", "frequency [Hz]", "phase [deg]")):
+            g.addWidget(QLabel(f"<b>{h}</b>"), 0, j)
+        self.gen = []
+        for i, dof in enumerate(DOFS):
+            amp = QDoubleSpinBox()
+            amp.setRange(0.0, 40.0 if i >= 3 else 1.4)
+            amp.setDecimals(3)
+            amp.setSingleStep(0.01 if i < 3 else 0.5)
+            amp.setSuffix(" °" if i >= 3 else " m")
+            f = QDoubleSpinBox()
+            f.setRange(0.01, 1.0)
+            f.setDecimals(3)
+            f.setValue(0.1)
+            f.setSingleStep(0.01)
+            ph = QDoubleSpinBox()
+            ph.setRange(-360, 360)
+            g.addWidget(QLabel(dof), i + 1, 0)
+            for j, box in enumerate((amp, f, ph)):
+                g.addWidget(box, i + 1, j + 1)
+            self.gen.append((amp, f, ph))
+        return w
+
+    def _simulator(self) -> QWidget:
+        w = QWidget()
+        lay = QHBoxLayout(w)
+        form = QFormLayout()
+        self.sim_spectrum = QComboBox()
+        self.sim_spectrum.addItems(["jonswap", "pm", "torsethaugen"])
+        self.sim_hs = QDoubleSpinBox()
+        self.sim_hs.setRange(0.1, 15)
+        self.sim_hs.setValue(2.0)
+        self.sim_hs.setSuffix(" m")
+        self.sim_tp = QDoubleSpinBox()
+        self.sim_tp.setRange(2, 25)
+        self.sim_tp.setValue(8.0)
+        self.sim_tp.setSuffix(" s")
+        self.sim_heading = QDoubleSpinBox()
+        self.sim_heading.setRange(0, 359)
+        self.sim_heading.setValue(150.0 if self.name == "em8000" else 90.0)
+        self.sim_heading.setSuffix(" °")
+        form.addRow("spectrum", self.sim_spectrum)
+        form.addRow("Hs", self.sim_hs)
+        form.addRow("Tp", self.sim_tp)
+        form.addRow("wave heading", self.sim_heading)
+        self.auto_scale = QCheckBox("auto scale (fit to the limits)")
+        self.auto_scale.setChecked(True)
+        form.addRow(self.auto_scale)
+        self.scales = []
+        for dof in DOFS:
+            s = QDoubleSpinBox()
+            s.setRange(0.0, 10.0)
+            s.setDecimals(2)
+            s.setValue(1.0)
+            s.setEnabled(False)
+            form.addRow(f"scale {dof}", s)
+            self.scales.append(s)
+        self.auto_scale.toggled.connect(lambda on: [s.setEnabled(not on) for s in self.scales])
+        lay.addLayout(form)
+        self.spec_plot = pg.PlotWidget(title="S(ω) [m²s]")
+        self.spec_plot.setLabel("bottom", "ω [rad/s]")
+        self.spec_curve = self.spec_plot.plot(
+            pen=pg.mkPen((80, 160, 240), width=2), fillLevel=0, brush=(80, 160, 240, 60)
+        )
+        self.spec_plot.setMinimumWidth(200)
+        lay.addWidget(self.spec_plot)
+        for box in (self.sim_hs, self.sim_tp):
+            box.valueChanged.connect(self.draw_spectrum)
+        self.sim_spectrum.currentIndexChanged.connect(self.draw_spectrum)
+        self.draw_spectrum()
+        return w
+
+    def draw_spectrum(self) -> None:
+        w = np.linspace(0.1, 3.0, 300)
+        S = sea_spectrum(self.sim_spectrum.currentText(), w, float(self.sim_hs.value()), float(self.sim_tp.value()))
+        self.spec_curve.setData(w, S)
+
+    def _remote(self) -> QWidget:
+        w = QWidget()
+        form = QFormLayout(w)
+        self.remote = []
+        for i, dof in enumerate(DOFS):
+            s = QDoubleSpinBox()
+            s.setRange(-40 if i >= 3 else -1.4, 40 if i >= 3 else 1.4)
+            s.setDecimals(3)
+            s.setSingleStep(0.01 if i < 3 else 0.5)
+            s.setSuffix(" °" if i >= 3 else " m")
+            form.addRow(dof, s)
+            self.remote.append(s)
+        b = QPushButton("Send pose")
+        b.clicked.connect(self.send_remote_pose)
+        form.addRow(b)
+        form.addRow(QLabel("A client may also send lab_remote_pose messages (docs/protocol.md)."))
+        return w
+
+    def _timeseries(self) -> QWidget:
+        w = QWidget()
+        lay = QVBoxLayout(w)
+        b = QPushButton("Load CSV…")
+        b.clicked.connect(self.choose_csv)
+        self.csv_label = QLabel("columns t, x, y, z, phi, theta, psi (s, m, deg)")
+        self.csv_label.setWordWrap(True)
+        lay.addWidget(b)
+        lay.addWidget(self.csv_label)
+        lay.addStretch(1)
+        return w
+
+    def choose_csv(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "6-DOF time series", "", "CSV (*.csv);;all files (*)")
+        if path:
+            self.load_csv(path)
+
+    def load_csv(self, path: str) -> None:
+        try:
+            self.csv_text = Path(path).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as err:
+            self.command.emit("_error", {"text": f"cannot read {path}: {err}"})
+            return
+        self.csv_name = Path(path).name
+        self.csv_label.setText(f"{self.csv_name}: {len(self.csv_text.splitlines()) - 1} rows (checked by the engine)")
+
+    # ------------------------------------------------------------------ send
+    def send_source(self) -> None:
+        src = SOURCES[self.source.currentIndex()]
+        fields: dict = {"platform": self.name, "source": src}
+        if src == "generator":
+            amp = [a.value() if i < 3 else math.radians(a.value()) for i, (a, _, _) in enumerate(self.gen)]
+            fields.update(
+                amplitude=amp,
+                frequency=[f.value() for _, f, _ in self.gen],
+                phase=[math.radians(p.value()) for _, _, p in self.gen],
+            )
+        elif src == "simulation":
+            fields.update(
+                spectrum=self.sim_spectrum.currentText(),
+                hs=float(self.sim_hs.value()),
+                tp=float(self.sim_tp.value()),
+                heading=float(self.sim_heading.value()),
+            )
+            if not self.auto_scale.isChecked():
+                fields["scale"] = [float(s.value()) for s in self.scales]
+        elif src == "timeseries":
+            if self.csv_text is None:
+                self.command.emit("_error", {"text": "load a CSV file first"})
+                return
+            fields.update(csv=self.csv_text, name=self.csv_name)
+        self.command.emit("lab_source", fields)
+
+    def send_remote_pose(self) -> None:
+        eta = [s.value() if i < 3 else math.radians(s.value()) for i, s in enumerate(self.remote)]
+        self.command.emit("lab_remote_pose", {"platform": self.name, "eta": eta})
+
+    # ------------------------------------------------------------------ state
+    def update_state(self, p: dict, t: float) -> None:
+        status = p["status"].upper()
+        color = {"ENGAGED": "#3c9", "NEUTRAL": "#39f", "SETTLED": "#999"}.get(status, "#fa3")
+        info = p.get("source_info", {})
+        extra = ""
+        if p["source"] == "simulation" and "hs" in info:
+            extra = f" (Hs {info['hs']:g} m, Tp {info['tp']:g} s, scale {', '.join(f'{v:.2f}' for v in info['scale'])})"
+        self.status.setText(
+            f"<b style='color:{color}'>{status}</b> &nbsp; source <b>{p['source'].upper()}</b>{extra}"
+            f" &nbsp; ramp {100 * p['ramp']:.0f} %"
+            + (" &nbsp; <b style='color:#f80'>LEG LIMIT</b>" if p["leg_clamped"] else "")
+        )
+        engaged = p["mode"] == "engaged"
+        self.buttons["neutral"].setEnabled(p["status"] == "settled")
+        self.buttons["settle"].setEnabled(p["status"] == "neutral")
+        self.buttons["engage"].setEnabled(p["status"] == "neutral")
+        self.buttons["disengage"].setEnabled(engaged and p["status"] != "disengaging")
+        self.apply.setEnabled(not engaged)
+        lo, hi = p["leg_range"]
+        for k, (bar, L) in enumerate(zip(self.leg_bars, p["legs"], strict=True)):
+            _set_bar(bar, (L - lo) / (hi - lo), f"leg {k + 1}: {L:.3f} m")
+        if t - self._t_last >= 1.0 / SAMPLE_HZ - 1e-9:
+            self._t_last = t
+            eta = np.asarray(p["eta"])
+            self.ring.push([t, *eta[:3], *np.degrees(eta[3:])])
+
+    def draw(self) -> None:
+        d = self.ring.view()
+        if len(d) < 2:
+            return
+        for i, c in enumerate(self.pos_curves):
+            c.setData(d[:, 0], d[:, 1 + i])
+        for i, c in enumerate(self.att_curves):
+            c.setData(d[:, 0], d[:, 4 + i])
+
+
+class SpringSlider(QSlider):
+    """A slider that springs back to zero when released (the lab HMI's winch speed control)."""
+
+    def __init__(self) -> None:
+        super().__init__(Qt.Horizontal)
+        self.setRange(-100, 100)
+        self.setValue(0)
+        self.sliderReleased.connect(lambda: self.setValue(0))
+
+
+class LabScene2D(QWidget):
+    """Without OpenGL: the lab seen from the side (world x – z)."""
+
+    kind = "2d"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.plot = pg.PlotWidget(title="Motion-Lab, side view: world x [m] – z [m] (no OpenGL here)")
+        self.plot.setAspectLocked(True)
+        self.plot.showGrid(x=True, y=True, alpha=0.3)
+        self.legs = self.plot.plot(pen=pg.mkPen((170, 170, 190), width=1.5))
+        self.tops = self.plot.plot(pen=pg.mkPen((90, 150, 240), width=3))
+        self.robot = self.plot.plot(pen=pg.mkPen((230, 140, 40), width=4), symbol="o", symbolSize=5)
+        self.wire = self.plot.plot(pen=pg.mkPen((220, 220, 220), width=1))
+        self.load = self.plot.plot(pen=None, symbol="s", symbolBrush=(240, 60, 50), symbolSize=12)
+        self.goal = self.plot.plot(pen=None, symbol="+", symbolPen=(50, 220, 80), symbolSize=14)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.plot)
+
+    def update_scene(self, sc: dict) -> None:
+        legs, tops = [], []
+        for name in ("em8000", "em1500"):
+            b, t = np.asarray(sc[name]["base"]), np.asarray(sc[name]["top"])
+            for k in range(6):
+                legs += [b[k], t[k], [np.nan] * 3]
+            tops += [*t, t[0], [np.nan] * 3]
+        legs, tops = np.array(legs), np.array(tops)
+        self.legs.setData(legs[:, 0], legs[:, 2], connect="finite")
+        self.tops.setData(tops[:, 0], tops[:, 2], connect="finite")
+        r = np.asarray(sc["robot"])
+        self.robot.setData(r[:, 0], r[:, 2])
+        w = np.array([sc["tool"], sc["payload"]])
+        self.wire.setData(w[:, 0], w[:, 2])
+        self.load.setData([sc["payload"][0]], [sc["payload"][2]])
+        self.goal.setData([sc["work_point"][0]], [sc["work_point"][2]])
+
+
+class LabScene3D(QWidget):
+    kind = "3d"
+
+    def __init__(self) -> None:
+        super().__init__()
+        import pyqtgraph.opengl as gl
+
+        self.view = gl.GLViewWidget()
+        self.view.setBackgroundColor((18, 26, 38))
+        self.view.setCameraPosition(distance=12, elevation=22, azimuth=-70)
+        self.view.setToolTip(
+            "EM8000 and EM1500 (blue decks, grey legs), Comau (orange), wire and load (red), work point (green)"
+        )
+        floor = gl.GLGridItem()
+        floor.setSize(16, 16)
+        floor.setSpacing(1, 1)
+        self.view.addItem(floor)
+        self.legs = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.7, 0.7, 0.75, 1), width=2, mode="lines")
+        self.tops = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.35, 0.6, 0.95, 1), width=4, mode="lines")
+        self.robot = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.9, 0.55, 0.15, 1), width=6)
+        self.wire = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.9, 0.9, 0.9, 1), width=1)
+        self.load = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.95, 0.25, 0.2, 1), size=14)
+        self.goal = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.2, 0.85, 0.3, 1), size=10)
+        for it in (self.legs, self.tops, self.robot, self.wire, self.load, self.goal):
+            self.view.addItem(it)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.view)
+
+    def update_scene(self, sc: dict) -> None:
+        legs, tops = [], []
+        for name in ("em8000", "em1500"):
+            b, t = np.asarray(sc[name]["base"]), np.asarray(sc[name]["top"])
+            for k in range(6):
+                legs += [b[k], t[k]]
+                tops += [t[k], t[(k + 1) % 6]]
+        self.legs.setData(pos=np.array(legs))
+        self.tops.setData(pos=np.array(tops))
+        self.robot.setData(pos=np.asarray(sc["robot"]))
+        self.wire.setData(pos=np.array([sc["tool"], sc["payload"]]))
+        self.load.setData(pos=np.asarray(sc["payload"])[None])
+        self.goal.setData(pos=np.asarray(sc["work_point"])[None])
+
+
+def make_lab_scene(use_gl: bool | None) -> QWidget:
+    if use_gl is None:
+        use_gl = gl_available()
+    if use_gl:
+        try:
+            return LabScene3D()
+        except Exception:
+            pass
+    return LabScene2D()
+
+
+class MotionLabTab(QWidget):
+    """The Motion-Lab HMI; ``link_factory`` makes the link to the lab engine on first view."""
+
+    notice = pyqtSignal(str, str)
+
+    def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
+        super().__init__()
+        self.link_factory = link_factory
+        self.link = None
+        self.use_gl = use_gl
+        self.state: dict | None = None
+        self._t_last = -math.inf
+        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), 1 + 3 + 3 + 2 + 3 + 1)  # t, q, qd, α β, e_b2, L
+        self.tabs = QTabWidget()
+        self.platforms = {n: PlatformPanel(n, t) for n, t in (("em8000", "E-Motion 8000"), ("em1500", "E-Motion 1500"))}
+        for n, p in self.platforms.items():
+            p.command.connect(self._on_panel)
+            self.tabs.addTab(p, n.upper())
+        self.tabs.addTab(self._control(), "Comau && winch")
+        self.tabs.addTab(self._scene_tab(), "Scene && load")
+        self.start = QLabel("The Motion-Lab engine starts when this tab is first opened.")
+        lay = QVBoxLayout(self)
+        lay.addWidget(self.start)
+        lay.addWidget(self.tabs)
+        self._set_enabled(False)
+
+    # ------------------------------------------------------------------ layout
+    def _control(self) -> QWidget:
+        w = QWidget()
+        grid = QGridLayout(w)
+        cbox = QGroupBox("Comau SMART-5 NJ 110-3.0 (3-DOF, extension arm)")
+        cl = QFormLayout(cbox)
+        self.comau_mode = QComboBox()
+        self.comau_mode.addItems(["SETTLED", "REMOTE", "MOTION_COMP"])
+        self.comau_mode.activated.connect(
+            lambda i: self._send("lab_comau_mode", mode=("settled", "remote", "motion_comp")[i])
+        )
+        cl.addRow("mode", self.comau_mode)
+        self.joint_pos_bars = [_bar() for _ in range(3)]
+        self.joint_speed_bars = [_bar() for _ in range(3)]
+        for k in range(3):
+            cl.addRow(f"q{k + 1} position", self.joint_pos_bars[k])
+            cl.addRow(f"q{k + 1} speed use", self.joint_speed_bars[k])
+        wbox = QGroupBox("Winch")
+        wl = QFormLayout(wbox)
+        self.winch_mode = QComboBox()
+        self.winch_mode.addItems(["LOCAL", "REMOTE", "MOTION_COMP"])
+        self.winch_mode.activated.connect(lambda i: self._send("lab_winch", mode=("local", "remote", "motion_comp")[i]))
+        wl.addRow("mode", self.winch_mode)
+        self.wire_bar = _bar()
+        wl.addRow("wire length", self.wire_bar)
+        self.winch_slider = SpringSlider()
+        self.winch_slider.valueChanged.connect(self._slider)
+        wl.addRow("speed (springs back)", self.winch_slider)
+        self.vvmc = QPushButton("VVMC OFF")
+        self.vvmc.setCheckable(True)
+        self.vvmc.toggled.connect(lambda on: self._send("lab_vvmc", on=bool(on)))
+        self.vvmc.setMinimumHeight(36)
+        self.readout = QLabel("–")
+        self.readout.setTextFormat(Qt.RichText)
+        left = QVBoxLayout()
+        left.addWidget(cbox)
+        left.addWidget(wbox)
+        left.addWidget(self.vvmc)
+        left.addWidget(self.readout)
+        left.addStretch(1)
+        lw = QWidget()
+        lw.setLayout(left)
+        lw.setMaximumWidth(480)
+        self.joint_plot = pg.PlotWidget(title="Comau joints [deg]")
+        self.joint_plot.addLegend(offset=(5, 5))
+        self.joint_curves = [
+            self.joint_plot.plot(pen=pg.mkPen(c, width=1.5), name=f"q{k + 1}")
+            for k, c in enumerate(((230, 90, 80), (90, 200, 90), (90, 140, 240)))
+        ]
+        self.wire_plot = pg.PlotWidget(title="wire length L_w [m]")
+        self.wire_curve = self.wire_plot.plot(pen=pg.mkPen((200, 200, 90), width=1.5))
+        for p in (self.joint_plot, self.wire_plot):
+            p.showGrid(x=True, y=True, alpha=0.3)
+        right = QVBoxLayout()
+        right.addWidget(self.joint_plot, 2)
+        right.addWidget(self.wire_plot, 1)
+        grid.addWidget(lw, 0, 0)
+        grid.addLayout(right, 0, 1)
+        grid.setColumnStretch(1, 1)
+        return w
+
+    def _scene_tab(self) -> QWidget:
+        w = QWidget()
+        lay = QHBoxLayout(w)
+        self.scene = make_lab_scene(self.use_gl)
+        lay.addWidget(self.scene, 3)
+        plots = QVBoxLayout()
+        self.swing_plot = pg.PlotWidget(title="load swing φα, φβ [deg] (eqs. 29–30)")
+        self.swing_plot.addLegend(offset=(5, 5))
+        self.swing_curves = [
+            self.swing_plot.plot(pen=pg.mkPen(c, width=1.5), name=n)
+            for c, n in (((230, 90, 80), "φα"), ((90, 140, 240), "φβ"))
+        ]
+        self.err_plot = pg.PlotWidget(title="tool point − work point in EM1500's frame [mm]")
+        self.err_plot.addLegend(offset=(5, 5))
+        self.err_curves = [
+            self.err_plot.plot(pen=pg.mkPen(c, width=1.5), name=n)
+            for c, n in (((230, 90, 80), "x"), ((90, 200, 90), "y"), ((90, 140, 240), "z"))
+        ]
+        for p in (self.swing_plot, self.err_plot):
+            p.showGrid(x=True, y=True, alpha=0.3)
+            plots.addWidget(p)
+        lay.addLayout(plots, 2)
+        return w
+
+    def _set_enabled(self, on: bool) -> None:
+        self.tabs.setEnabled(on)
+        self.start.setVisible(not on)
+
+    # ------------------------------------------------------------------ engine
+    def connect_engine(self) -> bool:
+        if self.link is not None:
+            return True
+        if self.link_factory is None:
+            return False
+        try:
+            self.link = self.link_factory()
+        except Exception as err:
+            self.notice.emit("error", f"Motion-Lab engine: {err}")
+            self.start.setText(f"<b>engine not started</b>: {err}")
+            return False
+        self.link.state.connect(self.on_state)
+        self.link.reply.connect(self.on_reply)
+        self.link.log.connect(lambda lvl, text: self.notice.emit(lvl, f"Motion-Lab: {text}"))
+        self._set_enabled(True)
+        self.notice.emit("info", "Motion-Lab engine connected")
+        return True
+
+    def _send(self, mtype: str, **fields) -> None:
+        if self.link is not None:
+            self.link.send(mtype, **fields)
+
+    def _on_panel(self, mtype: str, fields: dict) -> None:
+        if mtype == "_error":
+            self.notice.emit("error", f"Motion-Lab: refused: {fields['text']}")
+            return
+        self._send(mtype, **fields)
+
+    def _slider(self, value: int) -> None:
+        if self.state is not None:
+            vmax = self.state["winch"]["speed_max"]
+            self._send("lab_winch", speed=vmax * value / 100.0)
+
+    def estop(self) -> None:
+        self._send("estop", reason="STOP in the GUI")
+
+    def reset(self) -> None:
+        self._send("reset")
+
+    def on_reply(self, re: str, ok: bool, error: str) -> None:
+        if not ok and (re.startswith("lab_") or re == "reset"):
+            self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
+
+    def close_link(self) -> None:
+        if self.link is not None:
+            self.link.close()
+            self.link = None
+
+    # ------------------------------------------------------------------ state
+    def on_state(self, state: dict) -> None:
+        if state.get("kind") != "lab":
+            return
+        self.state = state
+        t = state["t"]
+        for p in state["platforms"]:
+            self.platforms[p["name"]].update_state(p, t)
+        c, w = state["comau"], state["winch"]
+        for k in range(3):
+            lo, hi = c["lower"][k], c["upper"][k]
+            _set_bar(self.joint_pos_bars[k], (c["q"][k] - lo) / (hi - lo), f"{math.degrees(c['q'][k]):.1f}°")
+            use = abs(c["qd"][k]) / c["speed"][k]
+            _set_bar(self.joint_speed_bars[k], use, f"{100 * use:.0f} %")
+        _set_bar(self.wire_bar, (w["length"] - w["min"]) / (w["max"] - w["min"]), f"{w['length']:.3f} m")
+        self.comau_mode.setCurrentIndex(("settled", "remote", "motion_comp").index(c["mode"]))
+        self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w["mode"]))
+        self.winch_slider.setEnabled(w["mode"] == "local")
+        self.vvmc.blockSignals(True)
+        self.vvmc.setChecked(state["vvmc"])
+        self.vvmc.blockSignals(False)
+        self.vvmc.setText("VVMC ON" if state["vvmc"] else "VVMC OFF")
+        e = 1000 * np.linalg.norm(state["tool_error_b2"])
+        pend = state["pendulum"]
+        self.readout.setText(
+            f"{'<b style=color:#f44>E-STOP</b> &nbsp; ' if state['estop'] else ''}"
+            f"tool − work point {e:.1f} mm &nbsp; swing {math.degrees(pend['swing']):.2f}° &nbsp; t {t:.1f} s"
+        )
+        if t - self._t_last >= 1.0 / SAMPLE_HZ - 1e-9:
+            self._t_last = t
+            self.ring.push(
+                [t, *np.degrees(c["q"]), *c["qd"], pend["alpha"], pend["beta"], *state["tool_error_b2"], w["length"]]
+            )
+            self.scene.update_scene(state["scene"])
+            self._draw()
+
+    def _draw(self) -> None:
+        for p in self.platforms.values():
+            p.draw()
+        d = self.ring.view()
+        if len(d) < 2:
+            return
+        t = d[:, 0]
+        for k, c in enumerate(self.joint_curves):
+            c.setData(t, d[:, 1 + k])
+        for k, c in enumerate(self.swing_curves):
+            c.setData(t, np.degrees(d[:, 7 + k]))
+        for k, c in enumerate(self.err_curves):
+            c.setData(t, 1000 * d[:, 9 + k])
+        self.wire_curve.setData(t, d[:, 12])
