@@ -105,6 +105,8 @@ def _serial_robot_and_q(args: argparse.Namespace):
     from app.models.registry import load_robot
 
     robot = load_robot(args.robot)
+    if getattr(robot, "kind", "serial") != "serial":
+        raise BosunError(f"{robot.name} is a {robot.kind} mechanism; this command takes a serial arm")
     q = robot.check_q(args.q)
     if args.deg:
         q = np.where(np.array(robot.joint_kinds) == "revolute", np.deg2rad(q), q)

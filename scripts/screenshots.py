@@ -42,10 +42,69 @@ def main() -> int:
         tac_engines.append(EngineProcess(plant="tac"))
         return EngineLink(tac_engines[-1].url, name="screenshots-tac")
 
-    win = MainWindow(link, engine=engine, settings=settings, dialogs=False, marine_link_factory=marine_link)
+    def lab_link():
+        tac_engines.append(EngineProcess(plant="lab"))
+        return EngineLink(tac_engines[-1].url, name="screenshots-lab")
+
+    win = MainWindow(
+        link,
+        engine=engine,
+        settings=settings,
+        dialogs=False,
+        marine_link_factory=marine_link,
+        lab_link_factory=lab_link,
+    )
     win.resize(1600, 1000)
     win.show()
     pump(app, 1.5)
+    OUT.mkdir(parents=True, exist_ok=True)
+    only_lab = "--lab-only" in sys.argv
+    if not only_lab:
+        other_tabs(app, win)
+    motion_lab(app, win)
+    win.close()
+    for e in tac_engines:
+        e.stop()
+    (OUT / "screenshots.ini").unlink(missing_ok=True)
+    return 0
+
+
+def motion_lab(app: QApplication, win: MainWindow) -> None:
+    """Both platforms raised and engaged (EM8000 waves, EM1500 a sine), VVMC on."""
+    lab = win.motion_lab
+    win.tabs.setCurrentWidget(lab)
+    pump(app, 1.0)
+    for p in lab.platforms.values():
+        p.buttons["neutral"].click()
+    pump(app, 12.0)
+    em8000, em1500 = lab.platforms["em8000"], lab.platforms["em1500"]
+    em8000.source.setCurrentIndex(1)
+    em8000.sim_hs.setValue(2.5)
+    em8000.apply.click()
+    em1500.source.setCurrentIndex(0)
+    for i, (a, f) in enumerate(((0.0, 0.1), (0.05, 0.12), (0.12, 0.1), (3.0, 0.08), (2.0, 0.11), (0.0, 0.1))):
+        em1500.gen[i][0].setValue(a)
+        em1500.gen[i][1].setValue(f)
+    em1500.apply.click()
+    pump(app, 1.0)
+    em8000.buttons["engage"].click()
+    em1500.buttons["engage"].click()
+    pump(app, 3.0)
+    lab.vvmc.click()
+    pump(app, 30.0)
+    lab.tabs.setCurrentIndex(0)
+    pump(app, 0.5)
+    win.grab().save(str(OUT / "lab_platform.png"))
+    lab.tabs.setCurrentIndex(2)
+    pump(app, 0.5)
+    win.grab().save(str(OUT / "lab_control.png"))
+    lab.tabs.setCurrentIndex(3)
+    pump(app, 1.0)
+    win.grab().save(str(OUT / "lab_scene.png"))
+    print(f"Motion-Lab scene view: {lab.scene.kind}")
+
+
+def other_tabs(app: QApplication, win: MainWindow) -> None:
     stick = win.teleop.stick
     for x, y, z, secs in ((0.8, 0.0, 0.0, 2.0), (0.0, 0.8, 0.4, 2.0), (-0.6, -0.5, -0.5, 2.0)):
         stick.pad.set_position(x, y, True)
@@ -54,7 +113,6 @@ def main() -> int:
     stick.pad.set_position(0.0, 0.0, False)
     stick.z.setValue(0)
     pump(app, 0.8)
-    OUT.mkdir(parents=True, exist_ok=True)
     win.grab().save(str(OUT / "teleop.png"))
     win.status.stop.click()
     pump(app, 0.6)
@@ -73,11 +131,6 @@ def main() -> int:
     win.grab().save(str(OUT / "crane_head.png"))
     print(f"view: {win.teleop.view.kind}; plots redrawn {win.teleop.plots.frames_drawn} times")
     print(f"crane-head scene view: {win.crane_head.scene.kind}")
-    win.close()
-    for e in tac_engines:
-        e.stop()
-    (OUT / "screenshots.ini").unlink(missing_ok=True)
-    return 0
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.errors import RobotNotFoundError, RobotTypeError, RobotXmlError
+from app.errors import RobotNotFoundError, RobotXmlError
 from app.models import list_robots, load_robot, load_spec, robots_dir
 from app.models.xml import parse_robot_file, parse_robot_xml
 
@@ -181,6 +181,7 @@ def test_load_by_path_and_env_dir(tmp_path, monkeypatch):
     assert list_robots() == ["two_link"]
 
 
-def test_stewart_type_has_no_model_yet():
-    with pytest.raises(RobotTypeError, match="em8000' is a stewart mechanism"):
-        load_robot("em8000")
+def test_stewart_type_loads_its_platform_model():
+    from app.models.stewart import StewartPlatform
+
+    assert isinstance(load_robot("em8000"), StewartPlatform)

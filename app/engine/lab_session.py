@@ -34,6 +34,7 @@ INPUT_TIMEOUT = 0.5  # s without a joystick sample: the remote commands go to ze
 class LabSession:
     lab_name: str = "motionlab"
     log: deque = field(default_factory=lambda: deque(maxlen=200))
+    scene_name = "the Motion-Lab"
 
     def __post_init__(self) -> None:
         self.log_seq = 0

@@ -219,7 +219,8 @@ class EngineServer:
             elif mtype in SCENE_MESSAGES:
                 handler = getattr(self.session, mtype, None)
                 if handler is None:
-                    raise CommandError(f"{mtype}: this engine does not run that scene (it runs {self.session.mode!r})")
+                    scene = getattr(self.session, "scene_name", "the teleop session")
+                    raise CommandError(f"{mtype}: this engine runs {scene}, not the scene of that command")
                 handler(**{k: v for k, v in msg.items() if k not in ("v", "type")})
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")

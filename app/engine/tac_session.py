@@ -29,6 +29,7 @@ SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
 class TacSession:
     scenario: TacScenario = field(default_factory=lambda: TacScenario(duration=1e5))
     log: deque = field(default_factory=lambda: deque(maxlen=200))
+    scene_name = "the crane-head scene"
 
     def __post_init__(self) -> None:
         self.log_seq = 0

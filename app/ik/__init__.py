@@ -42,6 +42,12 @@ def make_solver(name: str, robot, *, seed: int | None = 0, **options: Any) -> So
     cls = SOLVERS.get(name)
     if cls is None:
         raise IKError(f"unknown solver '{name}' (available: {', '.join(SOLVERS)})")
+    kind = getattr(robot, "kind", "serial")
+    if kind != "serial":
+        raise IKError(
+            f"{robot.name} is a {kind} mechanism; the IK solvers take serial arms "
+            f"(its own kinematics are in the {'Crane head' if kind == 'delta' else 'Motion-Lab'} simulation)"
+        )
     return cls(robot, rng=np.random.default_rng(seed), **options)
 
 

@@ -121,6 +121,8 @@ class StewartPlatform:
     leg_min, leg_max : float   leg length range [m]
     """
 
+    kind = "stewart"
+
     def __init__(self, spec: RobotSpec) -> None:
         if spec.stewart is None:
             raise StewartError(f"robot '{spec.name}' is not a Stewart platform")
