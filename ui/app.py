@@ -59,31 +59,29 @@ def run_gui(
         raise BosunError(str(err)) from None
     marine_engines: list = []
 
-    def marine_link():
-        """The crane-head scene runs in its own engine process (started on first use)."""
-        if connect_tac is not None:
-            return EngineLink(connect_tac, role="operator", token=token, name="bosun-gui-tac")
-        proc = EngineProcess(plant="tac")
-        marine_engines.append(proc)
-        try:
-            return EngineLink(proc.url, role="operator", name="bosun-gui-tac")
-        except TransportError:
-            proc.stop()
-            raise
+    def scene_link(plant: str, url: str | None):
+        """A scene (crane head, Motion-Lab) runs in its own engine process, started on first use."""
 
-    def lab_link():
-        """The Motion-Lab runs in its own engine process (started on first use)."""
-        if connect_lab is not None:
-            return EngineLink(connect_lab, role="operator", token=token, name="bosun-gui-lab")
-        proc = EngineProcess(plant="lab")
-        marine_engines.append(proc)
-        try:
-            return EngineLink(proc.url, role="operator", name="bosun-gui-lab")
-        except TransportError:
-            proc.stop()
-            raise
+        def make():
+            if url is not None:
+                return EngineLink(url, role="operator", token=token, name=f"bosun-gui-{plant}")
+            proc = EngineProcess(plant=plant)
+            marine_engines.append(proc)
+            try:
+                return EngineLink(proc.url, role="operator", name=f"bosun-gui-{plant}")
+            except TransportError:
+                proc.stop()
+                raise
 
-    win = MainWindow(link, engine=engine, settings=settings, marine_link_factory=marine_link, lab_link_factory=lab_link)
+        return make
+
+    win = MainWindow(
+        link,
+        engine=engine,
+        settings=settings,
+        marine_link_factory=scene_link("tac", connect_tac),
+        lab_link_factory=scene_link("lab", connect_lab),
+    )
     app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
     win.resize(1500, 950)
     win.show()

@@ -38,6 +38,7 @@ from PyQt5.QtWidgets import (
 from app.marine.waves import spectrum as sea_spectrum
 from ui.glprobe import gl_available
 from ui.marine_tab import Ring
+from ui.scene_tab import SceneEngineMixin
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
@@ -437,10 +438,11 @@ def make_lab_scene(use_gl: bool | None) -> QWidget:
     return LabScene2D()
 
 
-class MotionLabTab(QWidget):
+class MotionLabTab(SceneEngineMixin, QWidget):
     """The Motion-Lab HMI; ``link_factory`` makes the link to the lab engine on first view."""
 
     notice = pyqtSignal(str, str)
+    engine_label = "Motion-Lab"
 
     def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
         super().__init__()
@@ -553,27 +555,8 @@ class MotionLabTab(QWidget):
         self.start.setVisible(not on)
 
     # ------------------------------------------------------------------ engine
-    def connect_engine(self) -> bool:
-        if self.link is not None:
-            return True
-        if self.link_factory is None:
-            return False
-        try:
-            self.link = self.link_factory()
-        except Exception as err:
-            self.notice.emit("error", f"Motion-Lab engine: {err}")
-            self.start.setText(f"<b>engine not started</b>: {err}")
-            return False
-        self.link.state.connect(self.on_state)
-        self.link.reply.connect(self.on_reply)
-        self.link.log.connect(lambda lvl, text: self.notice.emit(lvl, f"Motion-Lab: {text}"))
-        self._set_enabled(True)
-        self.notice.emit("info", "Motion-Lab engine connected")
-        return True
-
-    def _send(self, mtype: str, **fields) -> None:
-        if self.link is not None:
-            self.link.send(mtype, **fields)
+    def _engine_failed(self, err: Exception) -> None:
+        self.start.setText(f"<b>engine not started</b>: {err}")
 
     def _on_panel(self, mtype: str, fields: dict) -> None:
         if mtype == "_error":
@@ -586,20 +569,9 @@ class MotionLabTab(QWidget):
             vmax = self.state["winch"]["speed_max"]
             self._send("lab_winch", speed=vmax * value / 100.0)
 
-    def estop(self) -> None:
-        self._send("estop", reason="STOP in the GUI")
-
-    def reset(self) -> None:
-        self._send("reset")
-
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and (re.startswith("lab_") or re == "reset"):
             self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
-
-    def close_link(self) -> None:
-        if self.link is not None:
-            self.link.close()
-            self.link = None
 
     # ------------------------------------------------------------------ state
     def on_state(self, state: dict) -> None:

@@ -26,6 +26,7 @@ from PyQt5.QtWidgets import (
 )
 
 from ui.glprobe import gl_available
+from ui.scene_tab import SceneEngineMixin
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
@@ -143,13 +144,14 @@ def make_scene_view(use_gl: bool | None = None) -> QWidget:
     return SceneView2D()
 
 
-class CraneHeadTab(QWidget):
+class CraneHeadTab(SceneEngineMixin, QWidget):
     """Sea-state controls, mode switch, 3D/2D scene, workspace hull and the live plots of Figs. 8–12.
 
     ``link_factory`` makes the :class:`~ui.link.EngineLink` to the crane-head engine on first use.
     """
 
     notice = pyqtSignal(str, str)  # level, text for the status log
+    engine_label = "crane head"
 
     def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
         super().__init__()
@@ -247,27 +249,8 @@ class CraneHeadTab(QWidget):
         self.start.setVisible(not on)
 
     # ------------------------------------------------------------------ engine
-    def connect_engine(self) -> bool:
-        if self.link is not None:
-            return True
-        if self.link_factory is None:
-            return False
-        try:
-            self.link = self.link_factory()
-        except Exception as err:  # the engine did not start: say why, keep the tab usable
-            self.notice.emit("error", f"crane-head engine: {err}")
-            self.readout.setText(f"<b>engine not started</b>: {err}")
-            return False
-        self.link.state.connect(self.on_state)
-        self.link.reply.connect(self.on_reply)
-        self.link.log.connect(lambda lvl, text: self.notice.emit(lvl, f"crane head: {text}"))
-        self._set_enabled(True)
-        self.notice.emit("info", "crane-head engine connected")
-        return True
-
-    def _send(self, mtype: str, **fields) -> None:
-        if self.link is not None:
-            self.link.send(mtype, **fields)
+    def _engine_failed(self, err: Exception) -> None:
+        self.readout.setText(f"<b>engine not started</b>: {err}")
 
     def send_sea(self) -> None:
         self._send(
@@ -278,20 +261,9 @@ class CraneHeadTab(QWidget):
             heading=float(self.heading.value()),
         )
 
-    def estop(self) -> None:
-        self._send("estop", reason="STOP in the GUI")
-
-    def reset(self) -> None:
-        self._send("reset")
-
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and re in ("set_sea", "set_tac_mode", "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
-
-    def close_link(self) -> None:
-        if self.link is not None:
-            self.link.close()
-            self.link = None
 
     # ------------------------------------------------------------------ state
     def on_state(self, state: dict) -> None:
