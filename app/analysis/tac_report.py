@@ -36,21 +36,28 @@ def _plt():
     return plt
 
 
-def plot_run(result: TacResult, out: Path) -> list[Path]:
-    """Figures 8–12 of the TAC paper for one run; returns the files written."""
-    plt = _plt()
-    d, sc = result.data, result.scenario
-    t = d.t
-    title = f"Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, mode {sc.mode}"
-    paths = []
+def figure_saver(plt, out: Path, title: str, paths: list[Path]):
+    """``save(fig, name)``: title, tight layout, PNG at 110 dpi in ``out``, closed, path recorded."""
 
-    def save(fig, name):
+    def save(fig, name: str) -> None:
         fig.suptitle(title, fontsize=10)
         fig.tight_layout()
         p = out / name
         fig.savefig(p, dpi=110)
         plt.close(fig)
         paths.append(p)
+
+    return save
+
+
+def plot_run(result: TacResult, out: Path) -> list[Path]:
+    """Figures 8–12 of the TAC paper for one run; returns the files written."""
+    plt = _plt()
+    d, sc = result.data, result.scenario
+    t = d.t
+    title = f"Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, mode {sc.mode}"
+    paths: list[Path] = []
+    save = figure_saver(plt, out, title, paths)
 
     # Fig. 8: vessel η in {n}
     fig, ax = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)

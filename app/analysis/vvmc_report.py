@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from app.analysis.ik_studies import write_json
-from app.analysis.tac_report import _plt
+from app.analysis.tac_report import _plt, figure_saver
 from app.control.vvmc import VvmcRun, VvmcScenario, summarize
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
@@ -37,15 +37,8 @@ def write_timeseries(on: VvmcRun, off: VvmcRun, path: Path, every: int = 1) -> N
 def plot_runs(sc: VvmcScenario, on: VvmcRun, off: VvmcRun, out: Path) -> list[Path]:
     plt = _plt()
     title = f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, headings {sc.heading1:g}°/{sc.heading2:g}°, seed {sc.seed}"
-    paths = []
-
-    def save(fig, name):
-        fig.suptitle(title, fontsize=10)
-        fig.tight_layout()
-        p = out / name
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
+    paths: list[Path] = []
+    save = figure_saver(plt, out, title, paths)
 
     t = on.t
     fig, ax = plt.subplots(2, 2, figsize=(11, 5.5), sharex=True)

@@ -22,6 +22,7 @@ from app.errors import BosunError
 from app.marine.vessel import VesselParticulars, load_rao, parametric_rao
 from app.marine.waves import SPECTRA, check_sea
 from app.models.lab import load_lab
+from app.models.registry import load_robot
 from app.sim.motionlab import MotionLab
 from app.sim.stewart import WaveSimulation
 
@@ -89,7 +90,7 @@ class VvmcRun:
 
 def _sources(sc: VvmcScenario, lab: MotionLab) -> None:
     rao = load_rao(sc.rao) if sc.rao else parametric_rao(VesselParticulars())
-    for k, (p, heading) in enumerate(zip(lab.platforms, (sc.heading1, sc.heading2), strict=True)):
+    for p, heading in zip(lab.platforms, (sc.heading1, sc.heading2), strict=True):
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, np.ones(6))
         scale = WaveSimulation.auto_scale(src.significant, p.model)
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, scale)
@@ -98,7 +99,6 @@ def _sources(sc: VvmcScenario, lab: MotionLab) -> None:
         p.ramp_time = sc.ramp
         p.set_source("simulation", src)
         p.command("engage")
-        del k
 
 
 def simulate(
@@ -109,8 +109,7 @@ def simulate(
 ) -> VvmcRun:
     """One run; ``progress(n_steps_done)`` is called every 100 steps."""
     layout = load_lab(sc.lab)
-    lab0 = MotionLab(layout)
-    lab = MotionLab(layout, q0=lab0.q_work)
+    lab = MotionLab(layout, at_work=True)
     _sources(sc, lab)
     lab.set_vvmc(compensate)
     n = round(sc.duration / sc.dt)
@@ -170,7 +169,7 @@ def _rms(x: NDArray[np.float64]) -> float:
 def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
     """The JSON summary: rms relative tool-point error with and without VVMC, swing, utilisation."""
     layout = load_lab(sc.lab)
-    lab = MotionLab(layout)
+    robot = load_robot(layout.crane_robot)
     t0 = sc.ramp + sc.settle
 
     def stats(run: VvmcRun) -> dict:
@@ -178,7 +177,7 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
         e = run.e_t_b2[m]
         e0 = e  # from the work point, the same measure for both runs
         swing = np.degrees(np.arccos(np.clip(np.cos(run.swing[m, 0]) * np.cos(run.swing[m, 1]), -1, 1)))
-        q_range = lab.robot.upper - lab.robot.lower
+        q_range = robot.upper - robot.lower
         return {
             "rms_tool_error_m": _rms(np.linalg.norm(e0, axis=1)),
             "rms_tool_error_xyz_m": [_rms(e0[:, k]) for k in range(3)],
@@ -187,7 +186,7 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
             "rms_payload_height_error_m": _rms(run.height_error[m]) if run.compensated else None,
             "payload_swing_rms_deg": _rms(swing),
             "payload_swing_max_deg": float(swing.max()) if swing.size else 0.0,
-            "joint_speed_utilisation": [float(v) for v in np.max(np.abs(run.qd[m]), axis=0) / lab.robot.speed],
+            "joint_speed_utilisation": [float(v) for v in np.max(np.abs(run.qd[m]), axis=0) / robot.speed],
             "joint_range_utilisation": [float(v) for v in np.ptp(run.q[m], axis=0) / q_range],
             "winch_speed_utilisation": float(np.max(np.abs(run.L_w_dot[m])) / layout.winch["speed"]),
             "winch_length_range_m": [float(run.L_w[m].min()), float(run.L_w[m].max())],

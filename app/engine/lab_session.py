@@ -41,8 +41,7 @@ class LabSession:
         self.estop_latched = False
         self.robot_name, self.solver_name, self.mode = "motionlab", "analytic", "lab"
         self.layout = load_lab(self.lab_name)
-        lab0 = MotionLab(self.layout)
-        self.lab = MotionLab(self.layout, q0=lab0.q_work)
+        self.lab = MotionLab(self.layout, at_work=True)
         self.names = [n for n, _ in self.layout.platforms]
         self._carry = 0.0
         self.sample = None

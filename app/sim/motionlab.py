@@ -123,13 +123,15 @@ def tool_on_platform(
     q: NDArray[np.float64],
     qd: NDArray[np.float64],
     qdd: NDArray[np.float64],
+    rates: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Tool-point position, velocity, acceleration in the platform's neutral frame {n1}.
 
     Eqs. (54), (56), (57): p = p_b + R (p_r + R_r p_t^r), ṗ = ṗ_b + Ṙ(p_r + R_r p_t^r) + R R_r ṗ_t^r,
-    p̈ = p̈_b + R̈(p_r + R_r p_t^r) + 2Ṙ R_r ṗ_t^r + R R_r p̈_t^r, with Ṙ, R̈ of eqs. (47), (51).
+    p̈ = p̈_b + R̈(p_r + R_r p_t^r) + 2Ṙ R_r ṗ_t^r + R R_r p̈_t^r, with Ṙ, R̈ of eqs. (47), (51)
+    (``rates`` = (R, Ṙ, R̈) when the caller has them already).
     """
-    R, Rd, Rdd = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+    R, Rd, Rdd = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot) if rates is None else rates
     R_r, p_r = T_b1_r[:3, :3], T_b1_r[:3, 3]
     p_tr, v_tr, a_tr = comau.position(q), comau.velocity(q, qd), comau.acceleration(q, qd, qdd)
     arm = p_r + R_r @ p_tr
@@ -259,10 +261,10 @@ class MotionLab:
     Parameters
     ----------
     layout : LabLayout
-    q0 : array_like (3,), optional   start configuration (default: the park configuration)
+    at_work : bool   start with the tool on the work point (default: the park configuration)
     """
 
-    def __init__(self, layout: LabLayout, q0: ArrayLike | None = None) -> None:
+    def __init__(self, layout: LabLayout, at_work: bool = False) -> None:
         self.layout = layout
         self.models = tuple(load_robot(robot) for _, robot in layout.platforms)
         self.platforms = tuple(Platform(m) for m in self.models)
@@ -275,7 +277,7 @@ class MotionLab:
         lo, hi = self.robot.lower, self.robot.upper
         speed = self.robot.speed
         self.joints = MotionFilter(lo, hi, speed, np.full(3, layout.crane_accel), tau=0.05)
-        self.joints.reset(layout.park_q if q0 is None else q0)
+        self.joints.reset(layout.park_q)
         self.comau_mode = "remote"
         self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]
         self.winch = Winch(layout.winch)
@@ -286,11 +288,18 @@ class MotionLab:
         self.frozen = False
         self.at_limit = np.zeros(4, dtype=bool)  # joints 1–3, winch: at a position or speed limit
         self.q_work = self.work_configuration()
+        if at_work:
+            self.joints.reset(self.q_work)
+        self._rates = self._rotation_rates()
         self.last: LabSample | None = None
         self._update_tool()
         self.last = self._sample()
 
     # ------------------------------------------------------------------ geometry
+    def _rotation_rates(self) -> tuple[tuple[NDArray, NDArray, NDArray], ...]:
+        """(R, Ṙ, R̈) of each platform body (eqs. 33, 47, 51), computed once per step."""
+        return tuple(StewartPlatform.rotation_rates(p.eta, p.eta_dot, p.eta_ddot) for p in self.platforms)
+
     def platform_pose(self, k: int) -> NDArray[np.float64]:
         """H^g_bk: body frame of platform k (0 or 1) in the world, eq. (39)."""
         p = self.platforms[k]
@@ -300,7 +309,7 @@ class MotionLab:
     def work_point(self) -> tuple[NDArray, NDArray, NDArray]:
         """The work point fixed in {b2}: position, velocity, acceleration in {n1}."""
         p2 = self.platforms[1]
-        R, Rd, Rdd = StewartPlatform.rotation_rates(p2.eta, p2.eta_dot, p2.eta_ddot)
+        R, Rd, Rdd = self._rates[1]
         w = self.layout.work_point_b2
         T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
         R12 = T_n1_n2[:3, :3]
@@ -312,7 +321,7 @@ class MotionLab:
     def to_robot_base(self, p_n1, v_n1) -> tuple[NDArray, NDArray]:
         """Invert eqs. (54) and (56) for the tool point in {r} (position and velocity)."""
         p1 = self.platforms[0]
-        R, Rd, _ = StewartPlatform.rotation_rates(p1.eta, p1.eta_dot, p1.eta_ddot)
+        R, Rd, _ = self._rates[0]
         R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
         p_tr = R_r.T @ (R.T @ (p_n1 - p1.eta[:3]) - p_r)
         arm = p_r + R_r @ p_tr
@@ -384,6 +393,7 @@ class MotionLab:
         self.t += dt
         for p in self.platforms:
             p.step(dt)
+        self._rates = self._rotation_rates()
         self._step_robot(dt)
         self._update_tool()
         self._step_winch(dt)
@@ -419,7 +429,9 @@ class MotionLab:
     def _update_tool(self) -> None:
         p1 = self.platforms[0]
         f = self.joints
-        p, v, a = tool_on_platform(self.comau, self.layout.T_b1_r, p1.eta, p1.eta_dot, p1.eta_ddot, f.x, f.v, f.a)
+        p, v, a = tool_on_platform(
+            self.comau, self.layout.T_b1_r, p1.eta, p1.eta_dot, p1.eta_ddot, f.x, f.v, f.a, self._rates[0]
+        )
         T = self.layout.T_world_n1
         self.p_t_n1 = p
         self.p_t_g = T[:3, :3] @ p + T[:3, 3]  # eq. (55)
@@ -441,7 +453,7 @@ class MotionLab:
                 self.payload_target_b2 = R2.T @ (self.p_p_g() - o2)
             target_g = R2 @ self.payload_target_b2 + o2
             p2 = self.platforms[1]
-            _, Rd, _ = StewartPlatform.rotation_rates(p2.eta, p2.eta_dot, p2.eta_ddot)
+            _, Rd, _ = self._rates[1]
             R_g_n2 = self.layout.T_world_n2[:3, :3]
             v_target_g = R_g_n2 @ (p2.eta_dot[:3] + Rd @ self.payload_target_b2)
             # heights along gravity: z_d = −z_g; the load hangs L_w below the tool (small swing)
