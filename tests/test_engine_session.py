@@ -18,6 +18,17 @@ def sample(x=0.0, y=0.0, z=0.0, enable=True, device="test stick"):
     return InputSample((x, -y, z), (enable, False), device)
 
 
+def arm(session, t0=0.0):
+    """The operator's arming gesture: stick at neutral with enable released, then enable pressed."""
+    t = t0
+    for en in (False, True):
+        t += DT
+        session.feed(sample(enable=en), t)
+        session.tick(t, DT)
+    assert session.snapshot()["flags"]["enabled"]
+    return t
+
+
 def run(session, seconds, s=None, t0=0.0, feed=True):
     t = t0
     for _ in range(round(seconds / DT)):
@@ -31,7 +42,7 @@ def run(session, seconds, s=None, t0=0.0, feed=True):
 def test_velocity_mode_moves_tool_along_the_stick():
     ses = Session(robot_name="comau_smart5_3dof", solver_name="jacobian", mode="velocity")
     p0 = np.array(ses.snapshot()["tool"])
-    run(ses, 1.0, sample(x=1.0))
+    run(ses, 1.0, sample(x=1.0), t0=arm(ses))
     p1 = np.array(ses.snapshot()["tool"])
     d = p1 - p0
     assert d[0] > 0.2 and abs(d[1]) < 0.02 * d[0] and abs(d[2]) < 0.02 * d[0]  # straight along +x
@@ -39,7 +50,7 @@ def test_velocity_mode_moves_tool_along_the_stick():
 
 def test_velocity_release_stops_and_holds():
     ses = Session(mode="velocity")
-    t = run(ses, 0.5, sample(x=1.0))
+    t = run(ses, 0.5, sample(x=1.0), t0=arm(ses))
     q_ref = np.array(ses.snapshot()["q_ref"])
     t = run(ses, 0.5, sample(), t0=t)  # stick released: the reference no longer moves
     np.testing.assert_array_equal(ses.snapshot()["q_ref"], q_ref)
@@ -55,7 +66,7 @@ def test_position_mode_follows_and_returns_to_start():
     ses = Session(mode="velocity")
     ses.set_mode("position")
     start = np.array(ses.scaling.x_w)
-    t = run(ses, 2.0, sample(z=0.5))
+    t = run(ses, 2.0, sample(z=0.5), t0=arm(ses))
     s = ses.snapshot()["signal"][2]
     assert s == pytest.approx((0.5 - 0.1) / 0.9)  # default profile: deadzone 0.1, rescaled
     np.testing.assert_allclose(ses.snapshot()["tool"], start + np.array([0, 0, s * ses.scaling.k_p[2]]), atol=1e-3)
@@ -65,7 +76,7 @@ def test_position_mode_follows_and_returns_to_start():
 
 def test_deadman_released_holds():
     ses = Session()
-    t = run(ses, 0.3, sample(x=1.0))
+    t = run(ses, 0.3, sample(x=1.0), t0=arm(ses))
     t = run(ses, 0.5, sample(x=1.0, enable=False), t0=t)
     p = np.array(ses.snapshot()["tool"])
     run(ses, 0.5, sample(x=1.0, enable=False), t0=t)
@@ -75,7 +86,7 @@ def test_deadman_released_holds():
 
 def test_stale_input_stops_within_bound():
     ses = Session()
-    t = run(ses, 0.5, sample(x=1.0))
+    t = run(ses, 0.5, sample(x=1.0), t0=arm(ses))
     v_before = np.abs(ses.actuators.qdot).max()
     assert v_before > 0
     # the device goes silent: no new samples are fed
@@ -91,7 +102,7 @@ def test_stale_input_stops_within_bound():
 
 def test_unplugged_device_holds_and_warns():
     ses = Session()
-    t = run(ses, 0.3, sample(x=1.0))
+    t = run(ses, 0.3, sample(x=1.0), t0=arm(ses))
     ses.feed(None, t)
     t = run(ses, 0.3, feed=False, t0=t)
     p = np.array(ses.snapshot()["tool"])
@@ -102,7 +113,7 @@ def test_unplugged_device_holds_and_warns():
 
 def test_estop_stops_in_one_tick_and_latches():
     ses = Session(robot_name="offshore_crane")
-    t = run(ses, 1.0, sample(x=1.0))
+    t = run(ses, 1.0, sample(x=1.0), t0=arm(ses))
     assert np.abs(ses.actuators.qdot).max() > 0
     ses.estop()
     t += DT
@@ -116,8 +127,10 @@ def test_estop_stops_in_one_tick_and_latches():
     with pytest.raises(CommandError, match="E-STOP is latched"):
         ses.set_robot("scara")
     ses.reset()
-    run(ses, 0.5, sample(x=1.0), t0=t)
+    t = run(ses, 0.5, sample(x=1.0), t0=t)  # the stick still deflected at the reset does not count
     assert not ses.snapshot()["flags"]["estop"]
+    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-9)
+    run(ses, 0.5, sample(x=1.0), t0=arm(ses, t))
     assert np.linalg.norm(np.array(ses.snapshot()["tool"]) - p) > 1e-3
 
 
@@ -140,11 +153,12 @@ def test_bad_commands_leave_state_unchanged(tmp_path):
 
 def test_switching_robot_and_solver_while_running():
     ses = Session(robot_name="comau_smart5_3dof", solver_name="analytic")
-    t = run(ses, 0.2, sample(x=0.5))
+    t = run(ses, 0.2, sample(x=0.5), t0=arm(ses))
     ses.set_robot("kuka_youbot")  # no closed form: falls back to the Jacobian solver
     assert ses.robot_name == "kuka_youbot" and ses.solver_name == "jacobian"
+    assert not ses.snapshot()["flags"]["armed"]  # a robot change needs a fresh command
     ses.set_solver("ga")
-    run(ses, 0.2, sample(z=0.5), t0=t)
+    run(ses, 0.2, sample(z=0.5), t0=arm(ses, t))
     assert len(ses.snapshot()["q"]) == 5
 
 

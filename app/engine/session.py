@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from app.engine.alarms import AlarmList
 from app.errors import BosunError
 from app.ik import DEFAULT, make_solver
 from app.models.registry import load_robot
@@ -36,13 +37,14 @@ from app.teleop.mapping import (
     Scaling,
     default_scaling,
     position_target,
-    shape_input,
     velocity_command,
 )
-from app.teleop.profiles import DeviceProfile, default_profile, profile_for
+from app.teleop.pipeline import InputPipeline
+from app.teleop.profiles import DeviceProfile
 
 DEFAULT_ROBOT = "comau_smart5_3dof"
 DEFAULT_SOLVER = "jacobian"
+SINGULARITY_RATIO = 0.01  # σ_min/σ_max of the speed-scaled position Jacobian below this: alarm
 
 
 class CommandError(BosunError):
@@ -74,20 +76,17 @@ class Session:
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {self.mode!r}")
         self.estop_latched = False
         self.log_seq = 0
-        self.profile: DeviceProfile = default_profile()
-        self.profile_locked = False
-        self.sample: InputSample | None = None
-        self.sample_time = -math.inf
-        self.device_connected = False
+        self.input = InputPipeline(self.stale_timeout, note=self.note)
+        self.alarms = AlarmList("teleop", note=self.note)
         self.enabled = False
         self.stale = True
         self.signal = np.zeros(3)
+        self.command_point = None  # the operator's command as a point (eq. 1, or eq. 7 integrated)
         self.solver_cost = math.nan
         self.solver_time = 0.0
         self.solver_ok = True
         self.ticks = 0
         self.sim_time = 0.0
-        self._mode_button_prev = False
         self._load(self.robot_name, self.solver_name)
 
     # ------------------------------------------------------------------ logging
@@ -129,6 +128,7 @@ class Session:
             else:
                 raise CommandError(str(err)) from None
         self._load(robot_ref, solver)
+        self.input.disarm("robot changed")
         self.note("info", f"robot {self.robot_name} loaded ({self.robot.n_joints} joints, solver {solver})")
 
     def set_solver(self, name: str) -> None:
@@ -147,6 +147,8 @@ class Session:
             # position mode starts from where the tool is: releasing the stick returns here
             self.scaling = self.scaling.with_origin(self.robot.position(self.actuators.q))
             self.q_ref = self.actuators.q.copy()
+            self.command_point = None
+            self.input.disarm("mode changed")
             self.note("info", f"mode {mode}")
 
     def set_scaling(self, k_p=None, x_w=None, k_v=None) -> None:
@@ -162,9 +164,15 @@ class Session:
 
     def set_profile(self, profile: DeviceProfile | None) -> None:
         """Use this profile for every device (None: pick by device name again)."""
-        self.profile_locked = profile is not None
-        if profile is not None:
-            self.profile = profile
+        self.input.set_profile(profile)
+
+    @property
+    def profile(self) -> DeviceProfile:
+        return self.input.profile
+
+    def operator_changed(self, name: str) -> None:
+        """A new operator (or the same one reconnected): its first command must be a fresh one."""
+        self.input.disarm(f"operator {name} connected")
 
     def estop(self, source: str = "operator") -> None:
         """Stop all motion in this tick and latch."""
@@ -175,28 +183,20 @@ class Session:
         self.estop_latched = True
 
     def reset(self) -> None:
+        """Clear a latched E-STOP; the arm holds where it stands until the operator commands anew."""
         if self.estop_latched:
             self.estop_latched = False
             self.q_ref = self.actuators.q.copy()
+            self.command_point = None
             if self.mode == "position":
                 self.scaling = self.scaling.with_origin(self.robot.position(self.actuators.q))
-            self.note("info", "E-STOP reset")
+            self.input.disarm("E-STOP reset")
+            self.note("info", "E-STOP reset: holding; centre the stick and press enable to drive")
 
     # ------------------------------------------------------------------ input
     def feed(self, sample: InputSample | None, now: float) -> None:
-        """The latest reading of the input device (None: no device connected)."""
-        if sample is None:
-            if self.device_connected:
-                self.note("warning", "input device disconnected: holding")
-            self.device_connected = False
-            self.sample = None
-            return
-        if not self.device_connected:
-            self.note("info", f"input device {sample.device}")
-            if not self.profile_locked:
-                self.profile = profile_for(sample.device, len(sample.axes))
-        self.device_connected = True
-        self.sample, self.sample_time = sample, now
+        """The latest reading of the input device (None: no device connected), at engine receive time."""
+        self.input.feed(sample, now)
 
     # ------------------------------------------------------------------ control tick
     def _hold(self) -> None:
@@ -206,47 +206,98 @@ class Session:
         """One control step of length dt [s] at engine time ``now`` [s]."""
         self.ticks += 1
         self.sim_time += dt
-        sample = self.sample
-        self.stale = sample is None or (now - self.sample_time) > self.stale_timeout
+        inp = self.input.step(now)
+        if inp.stop:
+            self.estop(source=f"the stop button of {self.input.profile.name}")
+        self.stale, self.enabled = inp.stale, inp.enabled and not self.estop_latched
+        self.signal = inp.raw_signal[:3].copy()
         if self.estop_latched:
             self.actuators.stop()
             self._hold()
-            self.enabled = False
+            self.command_point = None
+            self._check_alarms(None, dt)
             return
-        if self.stale:
-            self.enabled = False
-            self._hold()
-            self.actuators.step(self.q_ref, dt)
-            return
-        prof = self.profile
-        mode_button = (
-            prof.mode_button is not None and prof.mode_button < len(sample.buttons) and sample.buttons[prof.mode_button]
-        )
-        if mode_button and not self._mode_button_prev:
+        if inp.mode_toggle:
             self.set_mode("position" if self.mode == "velocity" else "velocity")
-        self._mode_button_prev = bool(mode_button)
-        self.enabled = prof.enabled(sample.buttons)
-        self.signal = shape_input(prof.signal(sample.axes), prof.deadzone, prof.expo)
+            self.enabled = False
         if not self.enabled:
             self._hold()
+            self.command_point = None
             self.actuators.step(self.q_ref, dt)
+            self._check_alarms(None, dt)
             return
+        s = inp.signal[:3]
         budget = DEFAULT if solve_budget is None else solve_budget
+        xdot = None
         if self.mode == "position":
-            self.target = position_target(self.signal, self.scaling.k_p, self.scaling.x_w)  # eq. (1)
-            res = self.solver.solve_position(self.target, self.q_ref, time_budget=budget)
+            self.command_point = position_target(s, self.scaling.k_p, self.scaling.x_w)  # eq. (1)
+            res = self.solver.solve_position(self.command_point, self.q_ref, time_budget=budget)
             self.q_ref = res.q
+            self.target = np.asarray(self.command_point, dtype=float)
         else:
-            xdot = velocity_command(self.signal, self.scaling.k_v)  # eq. (2)
+            xdot = velocity_command(s, self.scaling.k_v)  # eq. (2)
+            x_ref = self.robot.position(self.q_ref)
             if np.any(xdot != 0.0):
+                # the operator's command as a point: eq. (7) integrated from where the reference was
+                start = x_ref if self.command_point is None else self.command_point
+                self.command_point = start + xdot * dt
                 res = self.solver.solve_velocity(self.q_ref, xdot, dt, time_budget=budget)  # eqs. (4), (7), (9)
+                self.target = x_ref + xdot * dt  # eq. (7): the solver's target this tick
                 self.q_ref = res.q
             else:
                 res = None  # released stick: stop and keep the last position
-            self.target = self.robot.position(self.q_ref)
+                self.command_point = None
+                self.target = x_ref
         if res is not None:
             self.solver_cost, self.solver_time, self.solver_ok = res.error, res.time_s, res.success
+        q_prev_ref = self.actuators.q.copy()
         self.actuators.step(self.q_ref, dt)
+        self._check_alarms(xdot, dt, q_prev_ref)
+
+    # ------------------------------------------------------------------ alarms
+    def _check_alarms(self, xdot, dt: float, q_before=None) -> None:
+        """Per tick: E-STOP, input, joint limits against the command, speed limiting, singularity."""
+        al = self.alarms
+        flags = self.input.flags()
+        al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
+        al.set(
+            "device_lost",
+            not self.input.connected and self.input.sample_time > -math.inf,
+            "warning",
+            "input device lost: holding",
+        )
+        al.set(
+            "stale_input",
+            self.input.connected and flags["stale_input"],
+            "warning",
+            f"stale input (nothing for {self.input.stale_timeout * 1e3:.0f} ms): holding",
+        )
+        lo, hi = self.robot.lower, self.robot.upper
+        tol = 1e-6 * np.maximum(1.0, hi - lo)
+        blocked = ""
+        limited = False
+        if xdot is not None and np.any(xdot != 0.0) and q_before is not None:
+            v_cmd = float(np.linalg.norm(xdot))
+            step = self.robot.position(self.q_ref) - self.robot.position(q_before)
+            progress = float(step @ xdot) / (v_cmd * dt * v_cmd) if v_cmd > 0 else 1.0
+            at_lo, at_hi = self.q_ref <= lo + tol, self.q_ref >= hi - tol
+            if progress < 0.5 and np.any(at_lo | at_hi):
+                k = int(np.flatnonzero(at_lo | at_hi)[0])
+                blocked = f"{self.robot.joint_names[k]} at its {'lower' if at_lo[k] else 'upper'} limit"
+            limited = not blocked and progress < 0.9
+        al.set("joint_limit", bool(blocked), "warning", f"{blocked}: commanded direction blocked")
+        al.set("speed_limited", limited, "info", "speed limited: k_v asks for more than the joints allow")
+        if self.ticks % 10 == 0:
+            ratio = self._sigma_ratio()
+            text = f"near a singularity (σ ratio {ratio:.3f})"
+            al.set("near_singularity", ratio < SINGULARITY_RATIO, "warning", text)
+
+    def _sigma_ratio(self) -> float:
+        """σ_min/σ_max of J·diag(joint speed limits) for the tool position: how evenly the joints, each at
+        its own speed, can move the tool in every direction (1: isotropic, 0: a direction is lost)."""
+        J = self.robot.jacobian(self.actuators.q)[:3] * self.robot.speed
+        sv = np.linalg.svd(J, compute_uv=False)
+        return float(sv[min(2, sv.size - 1)] / sv[0]) if sv[0] > 0 else 0.0
 
     # ------------------------------------------------------------------ state
     def snapshot(self) -> dict[str, Any]:
@@ -272,12 +323,7 @@ class Session:
             "solver_ok": bool(self.solver_ok),
             "scaling": {"k_p": list(self.scaling.k_p), "x_w": list(self.scaling.x_w), "k_v": list(self.scaling.k_v)},
             "box": [self.box.lower.tolist(), self.box.upper.tolist()],
-            "flags": {
-                "estop": self.estop_latched,
-                "stale_input": self.stale,
-                "enabled": self.enabled,
-                "device": self.device_connected,
-                "device_name": self.sample.device if self.sample is not None else "",
-                "profile": self.profile.name,
-            },
+            "command": None if self.command_point is None else np.asarray(self.command_point, float).tolist(),
+            "flags": {"estop": self.estop_latched, **self.input.flags(), "enabled": self.enabled},
+            "alarms": self.alarms.snapshot(),
         }

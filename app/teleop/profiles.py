@@ -9,6 +9,7 @@ Bosun, a user's own can be given by path).  Example::
     expo = 0.3
     enable_button = 0               # deadman: motion only while held; omit for none
     mode_button = 1                 # optional: toggles position/velocity
+    stop_button = 2                 # optional: E-STOP (latches in every engine)
 
     [axes.x]                        # tool x from raw axis 0
     index = 0
@@ -17,6 +18,8 @@ Bosun, a user's own can be given by path).  Example::
     invert = true                   # stick forward gives a negative raw value
     [axes.z]
     index = 2
+    [axes.w]                        # optional auxiliary axis (the Motion-Lab winch in REMOTE)
+    index = 3
 
 The profile for a device is the first whose ``match`` occurs in its name; unknown devices
 get :func:`default_profile`.
@@ -33,7 +36,7 @@ import numpy as np
 from app.errors import BosunError
 
 PROFILE_DIR = Path(__file__).resolve().parent / "profiles"
-AXES = ("x", "y", "z")
+AXES = ("x", "y", "z", "w")
 
 
 class ProfileError(BosunError):
@@ -49,24 +52,25 @@ class AxisMap:
 
 @dataclass(frozen=True)
 class DeviceProfile:
-    """Mapping of one device model to the signal s = (x, y, z) in [−1, 1]³."""
+    """Mapping of one device model to the signal s = (x, y, z, w) in [−1, 1]⁴ (w: auxiliary axis)."""
 
     name: str
     match: tuple[str, ...]
-    axes: tuple[AxisMap | None, AxisMap | None, AxisMap | None]
+    axes: tuple[AxisMap | None, ...]
     deadzone: float = 0.08
     expo: float = 0.0
     enable_button: int | None = None
     mode_button: int | None = None
     path: str | None = None
+    stop_button: int | None = None
 
     def matches(self, device_name: str) -> bool:
         low = device_name.lower()
         return any(m.lower() in low for m in self.match)
 
     def signal(self, axes: tuple[float, ...]) -> np.ndarray:
-        """Raw axes → unshaped s (x, y, z): picked, inverted, scaled, clipped to [−1, 1]; missing axes give 0."""
-        s = np.zeros(3)
+        """Raw axes → unshaped s (x, y, z, w): picked, inverted, scaled, clipped to [−1, 1]; missing axes give 0."""
+        s = np.zeros(len(AXES))
         for k, a in enumerate(self.axes):
             if a is not None and a.index < len(axes):
                 v = float(axes[a.index])
@@ -82,8 +86,8 @@ class DeviceProfile:
 
 
 def default_profile(n_axes: int = 3) -> DeviceProfile:
-    """For an unknown device: axes 0, 1, 2 as x, y (inverted: forward is +y), z; deadman on button 0."""
-    axes = tuple(AxisMap(i, invert=(i == 1)) if i < n_axes else None for i in range(3))
+    """For an unknown device: axes 0, 1, 2, 3 as x, y (inverted: forward is +y), z, w; deadman on button 0."""
+    axes = tuple(AxisMap(i, invert=(i == 1)) if i < n_axes else None for i in range(len(AXES)))
     return DeviceProfile(name="default", match=(), axes=axes, deadzone=0.1, expo=0.0, enable_button=0)
 
 
@@ -97,7 +101,7 @@ def parse_profile(text: str, path: str = "<string>") -> DeviceProfile:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise _err(path, f"TOML syntax error: {err}") from None
-    known = {"name", "match", "deadzone", "expo", "enable_button", "mode_button", "axes"}
+    known = {"name", "match", "deadzone", "expo", "enable_button", "mode_button", "stop_button", "axes"}
     unknown = set(data) - known
     if unknown:
         raise _err(path, f"unknown field(s): {', '.join(sorted(unknown))}")
@@ -127,7 +131,7 @@ def parse_profile(text: str, path: str = "<string>") -> DeviceProfile:
     axes_tbl = data.get("axes", {})
     if not isinstance(axes_tbl, dict) or set(axes_tbl) - set(AXES):
         raise _err(
-            path, f"[axes] may only have x, y, z, got {sorted(axes_tbl) if isinstance(axes_tbl, dict) else axes_tbl}"
+            path, f"[axes] may only have x, y, z, w, got {sorted(axes_tbl) if isinstance(axes_tbl, dict) else axes_tbl}"
         )
     axes: list[AxisMap | None] = []
     for ax in AXES:
@@ -145,9 +149,11 @@ def parse_profile(text: str, path: str = "<string>") -> DeviceProfile:
         if isinstance(sc, bool) or not isinstance(sc, int | float) or not 0 < sc <= 10:
             raise _err(path, f"axes.{ax}.scale must be a number in (0, 10]")
         axes.append(AxisMap(idx, inv, float(sc)))
-    return DeviceProfile(
-        name, tuple(match), tuple(axes), deadzone, expo, button("enable_button"), button("mode_button"), path
-    )
+    buttons = {k: button(k) for k in ("enable_button", "mode_button", "stop_button")}
+    used = [v for v in buttons.values() if v is not None]
+    if len(used) != len(set(used)):
+        raise _err(path, f"enable_button, mode_button and stop_button must be different buttons, got {buttons}")
+    return DeviceProfile(name, tuple(match), tuple(axes), deadzone, expo, path=path, **buttons)
 
 
 def load_profile(path: str | Path) -> DeviceProfile:
