@@ -12,6 +12,8 @@ import json
 import math
 import shutil
 import sys
+import threading
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
@@ -639,9 +641,20 @@ def cmd_joystick(args: argparse.Namespace) -> int:
 
         PygameJoysticks()  # initialise SDL's joystick subsystem before attaching
         virtual = VirtualJoystick(n_axes=4, n_buttons=8)
-        virtual.set_button(0, True)
-        virtual.set_axis(0, 0.5)
-        print("bosun joystick: a virtual joystick (x = 0.5, deadman held) stands in for hardware", flush=True)
+
+        def operator(vj=virtual) -> None:
+            """The arming gesture an operator makes: stick centred, press the deadman, then deflect."""
+            time.sleep(0.5)
+            vj.set_button(0, True)
+            time.sleep(0.3)
+            vj.set_axis(0, 0.5)
+
+        threading.Thread(target=operator, daemon=True).start()
+        print(
+            "bosun joystick: a virtual joystick stands in for hardware (centred, deadman pressed at 0.5 s, "
+            "x = 0.5 from 0.8 s)",
+            flush=True,
+        )
     try:
         sent = run_joystick_client(
             args.connect,

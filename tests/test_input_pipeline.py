@@ -101,7 +101,9 @@ def test_profile_without_enable_arms_through_neutral():
     p.set_profile(parse_profile("name='free'\n[axes.x]\nindex=0\n"))
     assert not feed_step(p, InputSample((0.9,), (), "free"), 0.0).enabled
     assert feed_step(p, InputSample((0.0,), (), "free"), 0.01).enabled
-    assert feed_step(p, InputSample((0.9,), (), "free"), 0.02).signal[0] == pytest.approx((0.9 - 0.08) / 0.92)  # deadzone rescaled
+    assert feed_step(p, InputSample((0.9,), (), "free"), 0.02).signal[0] == pytest.approx(
+        (0.9 - 0.08) / 0.92
+    )  # deadzone rescaled
 
 
 def test_profile_buttons_must_differ():

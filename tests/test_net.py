@@ -33,7 +33,8 @@ def test_round_trip_every_client_message():
         "set_solver": {"solver": "ga"},
         "set_mode": {"mode": "position"},
         "set_scaling": {"k_p": [1.0, 1.0, 1.0], "x_w": [0.0, 1.0, 2.0], "k_v": [0.1, 0.1, 0.1]},
-        "estop": {"reason": "test"},
+        "estop": {"reason": "test", "token": "t"},
+        "ack_alarm": {"key": "estop"},
         "reset": {},
         "release_operator": {},
         "set_sea": {"spectrum": "torsethaugen", "hs": 3.0, "tp": 9.0, "heading": 135.0},
@@ -163,6 +164,14 @@ def wait_for(client, predicate, timeout=5.0):
     raise AssertionError("state never satisfied the condition")
 
 
+def arm(client, n_axes=3):
+    """Stick centred with the deadman released, then pressed: the engine arms the input."""
+    for pressed in (False, True):
+        for _ in range(5):
+            client.send_input([0.0] * n_axes, [pressed], "stick")
+            time.sleep(0.005)
+
+
 def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
     srv = engine()
     viewer = Client(srv.url, role="viewer", name="viewer")
@@ -175,9 +184,18 @@ def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
             target=run_joystick_client, args=(srv.url,), kwargs={"rate": 200, "stop": stop}, daemon=True
         )
         try:
-            vj.set_button(0, True)  # deadman (default profile: button 0)
+            vj.set_button(0, True)  # deadman held and stick deflected before the client connects
             vj.set_axis(0, 0.8)  # +x
             th.start()
+            st_ = wait_for(viewer, lambda s: s["flags"]["device"])
+            time.sleep(0.5)
+            assert abs(viewer.latest_state()["tool"][0] - p0[0]) < 1e-6  # not armed: nothing moves
+            vj.set_axis(0, 0.0)  # the arming gesture: centred and released, then pressed
+            vj.set_button(0, False)
+            time.sleep(0.1)
+            vj.set_button(0, True)
+            time.sleep(0.1)
+            vj.set_axis(0, 0.8)
             st_ = wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.05)
             assert st_["flags"]["device"] and st_["operator"] == "joystick"
             # a second client cannot take the operator role while the first holds it
@@ -206,6 +224,7 @@ def test_estop_from_a_viewer_latches_and_reset_clears(engine):
     op = Client(srv.url, role="operator", name="op")
     viewer = Client(srv.url, role="viewer", name="v")
     try:
+        arm(op)
         for _ in range(100):
             op.send_input([1.0, 0.0, 0.0], [True], "stick")
             time.sleep(0.005)
@@ -230,9 +249,11 @@ def test_stale_network_input_stops(engine):
     op = Client(srv.url, role="operator", name="op")
     viewer = Client(srv.url, role="viewer", name="v")
     try:
+        arm(op)
         for _ in range(80):
             op.send_input([1.0, 0.0, 0.0], [True], "stick")
             time.sleep(0.005)
+        assert viewer.latest_state()["flags"]["enabled"]
         time.sleep(0.3)  # silence longer than the 200 ms stale timeout
         st_ = viewer.latest_state()
         assert st_["flags"]["stale_input"]

@@ -193,7 +193,38 @@ def test_estop_stops_within_limits(platform):
     with pytest.raises(PlatformError, match="E-STOP"):
         p.command("disengage")
     p.reset()
-    assert p.status == "neutral"
+    assert p.status == "holding"  # issue 12 item 3: a reset never moves a platform by itself
+    eta = p.eta
+    _run(p, 5.0)
+    np.testing.assert_allclose(p.eta, eta, atol=1e-12)
+    p.command("neutral")  # the operator's command: back to neutral at transfer speed
+    _run(p, 20.0)
+    assert p.status == "neutral" and np.allclose(p.eta, 0, atol=1e-6)
+
+
+def test_reset_keeps_a_settled_platform_settled_and_a_moving_one_holds(platform):
+    p = Platform(platform)  # SETTLED: at rest on the heave end stop
+    settled = p.eta
+    p.estop()
+    _run(p, 0.5)
+    p.reset()
+    _run(p, 5.0)
+    assert p.status == "settled"
+    np.testing.assert_allclose(p.eta, settled, atol=1e-12)
+    p.command("neutral")
+    _run(p, 0.5)
+    p.estop()  # stopped while raising, and reset before it has come to rest
+    _run(p, 0.02)
+    p.reset()
+    assert p.status == "holding"
+    _run(p, 2.0)
+    rest = p.eta
+    assert np.abs(p.eta_dot).max() == 0.0
+    _run(p, 5.0)
+    np.testing.assert_allclose(p.eta, rest, atol=1e-12)
+    p.command("settle")  # SETTLE from HOLDING
+    _run(p, 30.0)
+    assert p.status == "settled"
 
 
 def test_generator_refuses_bad_parameters(platform):

@@ -4,8 +4,11 @@ Each tick advances :class:`~app.sim.motionlab.MotionLab` in steps of 0.01 s.  Co
 messages, see docs/protocol.md): ``lab_platform`` (neutral / settle / engage / disengage),
 ``lab_source`` (simulation, generator, remote, timeseries with their parameters), ``lab_remote_pose``,
 ``lab_comau_mode``, ``lab_winch`` (mode and / or spring-return speed), ``lab_vvmc`` (on/off), plus
-``estop`` / ``reset``.  A joystick (``input``) drives the Comau tool point in REMOTE (axes 0–2, 0.25
-m/s at full stick, in the robot base frame) and the winch in REMOTE (axis 3, up to its speed limit).
+``estop`` / ``reset``.  Input (a joystick or the GUI's stick, through the one
+:class:`~app.teleop.pipeline.InputPipeline`: profile, deadzone, deadman, arming, stale halt) drives the
+Comau tool point in REMOTE (s_x, s_y, s_z; 0.25 m/s at full stick, in the robot base frame) and the
+winch in REMOTE (s_w, up to its speed limit).  After an E-STOP reset every machine holds where it
+stands until the operator commands it anew.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from app.engine.alarms import AlarmList
 from app.engine.session import CommandError, LogEntry
 from app.errors import BosunError
 from app.marine.vessel import VesselParticulars, parametric_rao
@@ -25,9 +29,9 @@ from app.models.lab import load_lab
 from app.models.stewart import StewartPlatform
 from app.sim.motionlab import REMOTE_TOOL_SPEED, MotionLab
 from app.sim.stewart import Generator, WaveSimulation, parse_timeseries_csv
+from app.teleop.pipeline import InputPipeline
 
 STEP = 0.01
-INPUT_TIMEOUT = 0.5  # s without a joystick sample: the remote commands go to zero
 
 
 @dataclass
@@ -44,8 +48,8 @@ class LabSession:
         self.lab = MotionLab(self.layout, at_work=True)
         self.names = [n for n, _ in self.layout.platforms]
         self._carry = 0.0
-        self.sample = None
-        self.sample_time = -math.inf
+        self.input = InputPipeline(note=self.note)
+        self.alarms = AlarmList("Motion-Lab", note=self.note)
         self._rao = None
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
         self.vvmc = False
@@ -127,6 +131,8 @@ class LabSession:
 
     def lab_comau_mode(self, mode: str) -> None:
         self._guard()
+        if mode == "remote":
+            self.input.disarm("Comau REMOTE selected")
         try:
             self.lab.set_comau_mode(mode)
         except BosunError as err:
@@ -137,6 +143,8 @@ class LabSession:
         self._guard()
         try:
             if mode is not None:
+                if mode == "remote":
+                    self.input.disarm("winch REMOTE selected")
                 self.lab.set_winch_mode(mode)
                 self.note("info", f"winch: {mode.upper()}")
             if speed is not None:
@@ -164,7 +172,12 @@ class LabSession:
         if self.estop_latched:
             self.estop_latched = False
             self.lab.reset()
-            self.note("info", "E-STOP reset: platforms NEUTRAL where they stand, Comau REMOTE, winch LOCAL")
+            self.input.disarm("E-STOP reset")
+            held = ", ".join(f"{n} {p.status.upper()}" for n, p in zip(self.names, self.lab.platforms, strict=True))
+            self.note("info", f"E-STOP reset: every machine holds where it stands ({held}, Comau HOLD, winch LOCAL)")
+
+    def operator_changed(self, name: str) -> None:
+        self.input.disarm(f"operator {name} connected")
 
     def _not_here(self, *_: Any) -> None:
         raise CommandError("this engine runs the Motion-Lab; robot, solver and scaling commands do not apply")
@@ -172,21 +185,58 @@ class LabSession:
     set_robot = set_solver = set_mode = set_scaling = _not_here
 
     def feed(self, sample, now: float) -> None:
-        self.sample, self.sample_time = sample, now
+        self.input.feed(sample, now)
 
     # ------------------------------------------------------------------ loop
     def _apply_input(self, now: float) -> None:
-        s = self.sample
+        inp = self.input.step(now)
+        if inp.stop:
+            self.estop(source=f"the stop button of {self.input.profile.name}")
         lab = self.lab
-        fresh = s is not None and now - self.sample_time <= INPUT_TIMEOUT and not self.estop_latched
-        axes = np.zeros(4)
-        if fresh:
-            a = np.asarray(s.axes[:4], dtype=float)
-            axes[: a.size] = np.where(np.abs(a) > 0.08, a, 0.0)  # dead zone
+        s = inp.signal if inp.enabled and not self.estop_latched else np.zeros(4)
         if lab.comau_mode == "remote":
-            lab.tool_velocity_cmd = REMOTE_TOOL_SPEED * axes[:3]
+            lab.tool_velocity_cmd = REMOTE_TOOL_SPEED * s[:3]
         if lab.winch.mode == "remote":
-            lab.winch.speed_command = self.layout.winch["speed"] * axes[3]
+            lab.winch.speed_command = self.layout.winch["speed"] * s[3]
+
+    def _check_alarms(self) -> None:
+        al, lab = self.alarms, self.lab
+        al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
+        fl = self.input.flags()
+        remote = lab.comau_mode == "remote" or lab.winch.mode == "remote"
+        al.set(
+            "device_lost",
+            remote and not fl["device"] and self.input.sample_time > -math.inf,
+            "warning",
+            "input device lost: Comau and winch hold",
+        )
+        al.set("stale_input", remote and fl["device"] and fl["stale_input"], "warning", "stale input: holding")
+        w = self.layout.winch
+        wire = lab.winch.length
+        top = wire <= w["min_length"] + 1e-3
+        end = top or wire >= w["max_length"] - 1e-3
+        al.set(
+            "winch_end_stop",
+            end,
+            "warning",
+            f"winch at its {'upper' if top else 'lower'} end stop (wire {wire:.2f} m)",
+        )
+        for k, name in enumerate(self.names):
+            al.set(
+                f"leg_limit_{name}",
+                lab.platforms[k].leg_clamped,
+                "warning",
+                f"{name}: target beyond an actuator stroke, scaled back (leg limit)",
+            )
+        al.set("payload_below_deck", self._payload_below_deck(), "critical", "payload below the EM1500 deck")
+
+    def _payload_below_deck(self) -> bool:
+        """The load inside EM1500's footprint and below its top plate (z-down body frame: z > 0)."""
+        lab = self.lab
+        H = lab.platform_pose(1)
+        p_b2 = H[:3, :3].T @ (lab.p_p_g() - H[:3, 3])
+        radius = float(np.max(np.linalg.norm(lab.models[1].b_b[:, :2], axis=1)))
+        return bool(np.hypot(p_b2[0], p_b2[1]) <= radius and p_b2[2] > 0.0)
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
         self._carry += dt
@@ -197,6 +247,7 @@ class LabSession:
         self._apply_input(now)
         for _ in range(min(n, 50)):  # never more than 0.5 s of catch-up in one tick
             self.lab.step(STEP)
+        self._check_alarms()
 
     # ------------------------------------------------------------------ state
     def _scene(self) -> dict[str, Any]:
@@ -246,6 +297,8 @@ class LabSession:
         return {
             "kind": "lab",
             "estop": self.estop_latched,
+            "flags": {"estop": self.estop_latched, **self.input.flags()},
+            "alarms": self.alarms.snapshot(),
             "t": lab.t,
             "platforms": plats,
             "comau": {

@@ -5,7 +5,10 @@ rejected and logged), run one control tick, publish the state every ``publish_ev
 ticks, then sleep to the next deadline (sleep, then a short spin for sub-millisecond
 accuracy).  Roles: the first client asking for ``operator`` gets it; others are viewers
 until it is released or its holder is silent for ``operator_timeout``.  E-STOP is
-accepted from every client.  A non-local bind needs a shared token from every client.
+accepted from every client, also one that has not said ``hello`` (an engine restarted under a
+client must still stop); where a token is set the ``estop`` must carry it.  A non-local bind
+needs a shared token from every client.  Once a second the loop checks itself: below 95 % of
+real time or more than 1 % of ticks late raises the ``engine_slow`` alarm.
 """
 
 from __future__ import annotations
@@ -135,6 +138,10 @@ class EngineServer:
         self._stop = threading.Event()
         self._pending_latency: tuple[float, int] | None = None
         self._log_sent = 0
+        self._unknown_logged: dict[bytes, float] = {}
+        self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
+        self.realtime_factor = 1.0
+        self.late_fraction = 0.0
 
     # ------------------------------------------------------------------ protocol
     def _reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
@@ -167,7 +174,18 @@ class EngineServer:
             return
         client = self.clients.get(ident)
         if client is None:
-            self._reject(ident, f"{mtype} before hello", re=mtype)
+            if mtype == "estop":  # STOP must never fail: accepted before or without hello
+                if self.token is not None and not secrets.compare_digest(msg.get("token", ""), self.token):
+                    self._reject(ident, "estop with a wrong or missing token", re="estop")
+                    return
+                self.session.estop(source=f"an unregistered client ({msg.get('reason', 'no reason')})")
+                self._reply(ident, "estop", True)
+                return
+            self.rejected += 1
+            if now - self._unknown_logged.get(ident, -math.inf) > 5.0:  # a re-hello hint, not a log flood
+                self._unknown_logged[ident] = now
+                log.warning("%s from %r before hello: told to say hello", mtype, ident[:32])
+            self._reply(ident, mtype, False, f"{mtype} before hello: say hello first (engine restarted?)")
             return
         client.last_seen = now
         if mtype == "bye":
@@ -216,6 +234,10 @@ class EngineServer:
                 self.session.set_scaling(msg.get("k_p"), msg.get("x_w"), msg.get("k_v"))
             elif mtype == "reset":
                 self.session.reset()
+            elif mtype == "ack_alarm":
+                alarms = getattr(self.session, "alarms", None)
+                n = alarms.ack(msg.get("key") or None) if alarms is not None else 0
+                self.session.note("info", f"{client.name} acknowledged {n} alarm{'s' if n != 1 else ''}")
             elif mtype in SCENE_MESSAGES:
                 handler = getattr(self.session, mtype, None)
                 if handler is None:
@@ -237,6 +259,9 @@ class EngineServer:
             if self.operator in (None, ident) or not self._operator_alive(now):
                 self.operator = ident
                 role = "operator"
+                changed = getattr(self.session, "operator_changed", None)
+                if changed is not None:  # a new (or reconnected) operator starts disarmed
+                    changed(msg["name"])
             else:
                 note = f"operator role is held by {self.clients[self.operator].name}; joined as viewer"
         self.clients[ident] = ClientInfo(msg["name"], role, now)
@@ -268,6 +293,8 @@ class EngineServer:
         snap["clients"] = len(self.clients)
         snap["rejected"] = self.rejected
         snap["rate"] = self.rate
+        snap["realtime_factor"] = self.realtime_factor
+        snap["late_fraction"] = self.late_fraction
         self.pub.send(encode("state", state=snap), zmq.NOBLOCK)
         for e in self.session.log:
             if e.seq > self._log_sent:
@@ -275,6 +302,27 @@ class EngineServer:
                 self._log_sent = e.seq
 
     # ------------------------------------------------------------------ loop
+    def _health(self, now: float) -> None:
+        """Once a second: real-time factor and late ticks of the last second, as an alarm."""
+        start, ticks0, missed0 = self._second
+        if now - start < 1.0:
+            return
+        ticks, missed = self.stats.ticks - ticks0, self.stats.missed - missed0
+        self.realtime_factor = ticks * self.dt / (now - start)
+        self.late_fraction = missed / max(1, ticks)
+        self._second = (now, self.stats.ticks, self.stats.missed)
+        alarms = getattr(self.session, "alarms", None)
+        if alarms is not None:
+            slow = self.realtime_factor < 0.95 or self.late_fraction > 0.01
+            alarms.set(
+                "engine_slow",
+                slow,
+                "warning",
+                f"engine at {100 * self.realtime_factor:.0f} % of real time, "
+                f"{100 * self.late_fraction:.1f} % of ticks late in the last second",
+                source="engine",
+            )
+
     def step(self, now: float) -> None:
         """One tick: requests, control, latency bookkeeping, publication."""
         self.poll_requests(now)
@@ -297,8 +345,10 @@ class EngineServer:
             if last_start is not None:
                 self.stats.periods.append(start - last_start)
             last_start = start
-            self.step(time.monotonic())
+            now = time.monotonic()
+            self.step(now)
             self.stats.ticks += 1
+            self._health(now)
             done = time.perf_counter()
             self.stats.work.append(done - start)
             next_t += self.dt

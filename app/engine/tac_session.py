@@ -4,7 +4,9 @@ Served by the same :class:`~app.engine.server.EngineServer` as the teleop sessio
 (``bosun server --plant tac``), usually at 50 Hz: each tick advances the simulation by the tick's
 time in steps of ``dt`` (0.01 s).  Commands: ``set_sea`` (spectrum, Hs, Tp, heading; restarts the
 sea), ``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane
-freeze where they are; latched until ``reset``).  Teleop commands are refused with a clear message.
+freeze where they are; latched until ``reset``).  After a reset they stay frozen until the operator
+selects a mode again.  Input runs through the one :class:`~app.teleop.pipeline.InputPipeline` (a
+profile's stop button latches the E-STOP here too).  Teleop commands are refused with a clear message.
 """
 
 from __future__ import annotations
@@ -16,10 +18,14 @@ from typing import Any
 
 import numpy as np
 
+from app.engine.alarms import AlarmList
 from app.engine.session import CommandError, LogEntry
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.sim.tac import MODES, TacScenario, TacSimulator
+from app.teleop.pipeline import InputPipeline
+
+SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
 
 # drawing only: the supply vessel's box (Lpp, B; deck at the crane base 3 m above CO, keel at T = 6 m)
 SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
@@ -38,6 +44,10 @@ class TacSession:
         self.sim = TacSimulator(self.scenario)
         self.system = self.sim.system
         self._carry = 0.0
+        self.holding = False  # after an E-STOP reset: frozen until a mode is commanded
+        self.input = InputPipeline(note=self.note)
+        self.alarms = AlarmList("crane head", note=self.note)
+        self._saturated = deque(maxlen=SATURATION_WINDOW)
         self.last: dict[str, Any] = {}
         self.sea_seq = 0
         self._publish_count = 0
@@ -72,9 +82,12 @@ class TacSession:
     def set_tac_mode(self, mode: str) -> None:
         if mode not in MODES:
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+        if self.estop_latched:
+            raise CommandError("E-STOP is latched; reset first")
         self.sim.set_mode(mode)
         self.scenario = self.sim.scenario
         self.mode = mode
+        self.holding = False
         self.note("info", f"compensation mode: {mode}")
 
     def estop(self, source: str = "operator") -> None:
@@ -83,18 +96,23 @@ class TacSession:
         self.estop_latched = True
 
     def reset(self) -> None:
+        """Clear a latched E-STOP; head and crane stay frozen until the operator selects a mode."""
         if self.estop_latched:
             self.estop_latched = False
-            self.sim.set_mode(self.sim.scenario.mode)  # controllers restart from where the machine is
-            self.note("info", "E-STOP reset")
+            self.holding = True
+            self.input.disarm("E-STOP reset")
+            self.note("info", "E-STOP reset: head and crane hold; select a compensation mode to resume")
+
+    def operator_changed(self, name: str) -> None:
+        self.input.disarm(f"operator {name} connected")
 
     def _teleop_only(self, *_: Any) -> None:
         raise CommandError("this engine runs the crane-head scene; robot, solver and stick commands do not apply")
 
     set_robot = set_solver = set_mode = set_scaling = _teleop_only
 
-    def feed(self, sample, now: float) -> None:  # joystick input is not used by this scene
-        return None
+    def feed(self, sample, now: float) -> None:
+        self.input.feed(sample, now)
 
     # ------------------------------------------------------------------ loop
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
@@ -103,9 +121,23 @@ class TacSession:
         if n <= 0:
             return
         self._carry -= n * self.scenario.dt
+        if self.input.step(now).stop:
+            self.estop(source=f"the stop button of {self.input.profile.name}")
         if self.sim.done:  # a long session: start a fresh sea record, the machine stays put
             self.set_sea(self.scenario.spectrum, self.scenario.hs, self.scenario.tp, self.scenario.heading)
-        c = self.sim.advance(n, frozen=self.estop_latched)
+        frozen = self.estop_latched or self.holding
+        c = self.sim.advance(n, frozen=frozen)
+        self._saturated.extend(c.saturated.tolist())
+        share = sum(self._saturated) / max(1, len(self._saturated))
+        al = self.alarms
+        al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
+        al.set("holding", self.holding and not self.estop_latched, "info", "head and crane hold: select a mode")
+        al.set(
+            "saturation",
+            not frozen and share > 0.05,
+            "warning",
+            f"crane head saturated {100 * share:.0f} % of the last {SATURATION_WINDOW * self.scenario.dt:g} s",
+        )
         if c.t.size:
             self.last = {
                 "t": float(c.t[-1]),
@@ -150,6 +182,9 @@ class TacSession:
         snap: dict[str, Any] = {
             "kind": "tac",
             "estop": self.estop_latched,
+            "holding": self.holding,
+            "flags": {"estop": self.estop_latched, **self.input.flags()},
+            "alarms": self.alarms.snapshot(),
             "sea": {"spectrum": sc.spectrum, "hs": sc.hs, "tp": sc.tp, "heading": sc.heading, "seq": self.sea_seq},
             "tac_mode": sc.mode,
             "x_d": self.system.x_d,

@@ -39,7 +39,8 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "set_solver": {"solver": ("str", True, 64)},
     "set_mode": {"mode": ("enum", True, MODES)},
     "set_scaling": {"k_p": ("vec3", False, 1e4), "x_w": ("vec3", False, 1e5), "k_v": ("vec3", False, 1e3)},
-    "estop": {"reason": ("str", False, 256)},
+    "estop": {"reason": ("str", False, 256), "token": ("str", False, 256)},
+    "ack_alarm": {"key": ("str", False, 64)},
     "reset": {},
     "release_operator": {},
     # crane-head scene (``bosun server --plant tac``)
@@ -109,5 +110,6 @@ ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
 
 #: messages only the operator may send (a viewer gets an error reply); E-STOP is anyone's
 OPERATOR_ONLY = frozenset(
-    {"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset"} | SCENE_MESSAGES
+    {"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset", "ack_alarm"}
+    | SCENE_MESSAGES
 )

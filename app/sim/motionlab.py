@@ -39,7 +39,7 @@ from app.sim.stewart import MotionFilter, Platform
 
 G = 9.81
 R_G_D = np.diag([1.0, -1.0, -1.0])  # {d} (z-down) in {g} (z-up): half a turn about x
-COMAU_MODES = ("settled", "remote", "motion_comp")
+COMAU_MODES = ("settled", "remote", "motion_comp", "hold")  # hold: after an E-STOP reset, until commanded
 WINCH_MODES = ("local", "remote", "motion_comp")
 REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
 
@@ -382,10 +382,12 @@ class MotionLab:
         self.winch.speed_command = 0.0
 
     def reset(self) -> None:
+        """After an E-STOP every machine holds where it stands until the operator commands it anew:
+        platforms SETTLED stay so, others HOLDING; the Comau HOLD; the winch LOCAL at zero speed."""
         self.frozen = False
         for p in self.platforms:
             p.reset()
-        self.set_comau_mode("remote")
+        self.set_comau_mode("hold")
         self.set_winch_mode("local")
 
     # ------------------------------------------------------------------ step
@@ -404,7 +406,7 @@ class MotionLab:
 
     def _step_robot(self, dt: float) -> None:
         f = self.joints
-        if self.frozen:
+        if self.frozen or self.comau_mode == "hold":  # brake at the acceleration limits to rest, then stay
             v = f.v + np.clip(-f.v, -f.accel * dt, f.accel * dt)
             f.a, f.v = (v - f.v) / dt, v
             f.x = np.clip(f.x + v * dt, f.lower, f.upper)

@@ -324,6 +324,7 @@ class Platform:
         self.gain = 0.0
         self.frozen = False
         self.leg_clamped = False
+        self.hold_pose: NDArray[np.float64] | None = None
 
     # ------------------------------------------------------------------ commands
     @property
@@ -338,13 +339,17 @@ class Platform:
             raise PlatformError(f"{self.model.name} is stopped (E-STOP); reset first")
         busy = self.transition
         if action == "neutral":
-            if self.mode != "settled" or busy:
-                raise PlatformError(f"{self.model.name}: NEUTRAL is reached from SETTLED (now {self.status.upper()})")
-            self.transition = "raising"
+            if self.mode not in ("settled", "holding") or busy:
+                raise PlatformError(
+                    f"{self.model.name}: NEUTRAL is reached from SETTLED or HOLDING (now {self.status.upper()})"
+                )
+            self.mode, self.transition = "settled" if self.mode == "settled" else "neutral", "raising"
         elif action == "settle":
-            if self.mode != "neutral" or busy:
-                raise PlatformError(f"{self.model.name}: SETTLE is done from NEUTRAL (now {self.status.upper()})")
-            self.transition = "settling"
+            if self.mode not in ("neutral", "holding") or busy:
+                raise PlatformError(
+                    f"{self.model.name}: SETTLE is done from NEUTRAL or HOLDING (now {self.status.upper()})"
+                )
+            self.mode, self.transition = "neutral", "settling"
         elif action == "engage":
             if self.mode != "neutral" or busy:
                 raise PlatformError(f"{self.model.name}: ENGAGE needs NEUTRAL (now {self.status.upper()})")
@@ -372,10 +377,19 @@ class Platform:
         self.frozen = True
 
     def reset(self) -> None:
-        """After an E-STOP: back to NEUTRAL where the platform stands (it is then raised/lowered by command)."""
+        """After an E-STOP: the platform holds where it stands until the operator commands it.
+
+        A platform that was SETTLED (at rest on its end stops) stays SETTLED; any other comes to
+        rest (still braking at its acceleration limits if the reset is early) and is HOLDING there;
+        from HOLDING the operator chooses NEUTRAL or SETTLE.
+        """
         if self.frozen:
             self.frozen = False
-            self.mode, self.transition, self.gain = "neutral", "", 0.0
+            self.gain = 0.0
+            if self.mode == "settled" and not self.transition:
+                return
+            self.mode, self.transition = "holding", ""
+            self.hold_pose = None  # taken when the platform is at rest
 
     # ------------------------------------------------------------------ step
     def _clamp_to_legs(self, eta: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -405,6 +419,13 @@ class Platform:
         target, v_ref = f.x.copy(), None
         if self.frozen:
             return self._stop_step(dt)
+        if self.mode == "holding":
+            if self.hold_pose is None:
+                x = self._stop_step(dt)
+                if np.all(f.v == 0.0):
+                    self.hold_pose = x
+                return x
+            return f.step(self.hold_pose, None, dt, TRANSFER_SPEED_FRACTION).copy()
         if self.mode == "engaged":
             self.t_source += dt
             if self.transition == "engaging":

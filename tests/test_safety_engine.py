@@ -1,0 +1,330 @@
+"""Issue 12, engine side: STOP that cannot silently fail, nothing moves unbidden, alarms.
+
+Each test names the item of the issue it covers (docs/safety.md lists them)."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from app.engine.alarms import AlarmList
+from app.engine.lab_session import LabSession
+from app.engine.server import EngineServer
+from app.engine.session import Session
+from app.engine.tac_session import TacSession
+from app.net.transport import Client, TransportError
+from app.teleop.devices import InputSample
+
+
+def serve(session, url="tcp://127.0.0.1:0", rate=500, token=None, duration=60.0):
+    srv = EngineServer(session, bind=url, rate=rate, publish_rate=min(50, rate), token=token)
+    th = threading.Thread(target=srv.run, kwargs={"duration": duration}, daemon=True)
+    th.start()
+    return srv, th
+
+
+def halt(srv, th):
+    srv.stop()
+    th.join(timeout=5)
+    srv.close()
+
+
+def wait_for(client, predicate, timeout=8.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        st_ = client.recv_state(0.5)
+        if st_ is not None and predicate(st_):
+            return st_
+    raise AssertionError("state never satisfied the condition")
+
+
+def arm(client, n_axes=3):
+    for pressed in (False, True):
+        for _ in range(5):
+            client.send_input([0.0] * n_axes, [pressed], "stick")
+            time.sleep(0.005)
+
+
+# ---------------------------------------------------------------------------- item 1
+def test_estop_reaches_a_restarted_engine_without_a_new_hello():
+    """Item 1: kill and restart the server on the same port; a client of the old one still stops it."""
+    srv, th = serve(Session())
+    url = srv.url
+    gui = Client(url, role="operator", name="gui")
+    halt(srv, th)
+    srv2, th2 = serve(Session(), url=url)
+    viewer = Client(url, role="viewer", name="viewer")
+    try:
+        gui.send("estop", reason="STOP button")  # the old identity: never said hello to this engine
+        assert wait_for(viewer, lambda s: s["flags"]["estop"])["flags"]["estop"]
+        # anything else before hello is answered with a hint to say hello again (no silent drop)
+        gui.send("reset")
+        reply = gui._wait_for(("reply",), re="reset")
+        assert not reply["ok"] and "say hello" in reply["error"]
+    finally:
+        gui.close()
+        viewer.close()
+        halt(srv2, th2)
+
+
+def test_estop_without_hello_needs_the_token_where_one_is_set():
+    srv, th = serve(Session(), token="s3cret")
+    import zmq
+
+    from app.net.codec import decode_engine, encode
+
+    raw = zmq.Context.instance().socket(zmq.DEALER)
+    raw.setsockopt(zmq.LINGER, 0)
+    raw.connect(srv.url)
+    viewer = Client(srv.url, role="viewer", name="v", token="s3cret")
+    try:
+        raw.send(encode("estop", reason="no token"))
+        assert raw.poll(3000)
+        assert not decode_engine(raw.recv())["ok"]
+        assert not viewer.latest_state()["flags"]["estop"]
+        raw.send(encode("estop", reason="with token", token="s3cret"))
+        assert raw.poll(3000)
+        assert decode_engine(raw.recv())["ok"]
+        assert wait_for(viewer, lambda s: s["flags"]["estop"])
+    finally:
+        raw.close(0)
+        viewer.close()
+        halt(srv, th)
+
+
+# ---------------------------------------------------------------------------- item 2 (reset with a held stick)
+def test_reset_with_the_stick_held_moves_nothing_over_the_network():
+    """Item 2: the operator keeps the stick deflected and enable held through STOP and reset."""
+    srv, th = serve(Session(robot_name="comau_smart5_3dof"))
+    op = Client(srv.url, role="operator", name="op")
+    viewer = Client(srv.url, role="viewer", name="v")
+    stop = threading.Event()
+
+    def hold_stick():
+        while not stop.is_set():
+            op.send_input([1.0, 0.0, 0.0], [True], "stick")
+            time.sleep(0.01)
+
+    try:
+        arm(op)
+        th_in = threading.Thread(target=hold_stick, daemon=True)
+        th_in.start()
+        p0 = np.array(viewer.latest_state()["tool"])
+        wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.02)
+        viewer.request("estop", reason="test")
+        wait_for(viewer, lambda s: s["flags"]["estop"])
+        time.sleep(0.2)
+        srv_p = np.array(viewer.latest_state()["tool"])
+        stop.set()
+        th_in.join(2)
+        op.request("reset")
+        stop.clear()
+        th_in = threading.Thread(target=hold_stick, daemon=True)
+        th_in.start()
+        st_ = wait_for(viewer, lambda s: not s["flags"]["estop"])
+        time.sleep(0.6)
+        st_ = viewer.latest_state()
+        assert not st_["flags"]["enabled"] and "centre the stick" in st_["flags"]["input_reason"]
+        np.testing.assert_allclose(st_["tool"], srv_p, atol=1e-6)
+    finally:
+        stop.set()
+        op.close()
+        viewer.close()
+        halt(srv, th)
+
+
+def test_a_reconnected_operator_starts_disarmed():
+    srv, th = serve(Session())
+    op = Client(srv.url, role="operator", name="op")
+    try:
+        arm(op)
+        for _ in range(5):
+            op.send_input([0.0, 0.0, 0.0], [True], "stick")
+            time.sleep(0.005)
+        assert op.latest_state()["flags"]["armed"]
+        op.send("hello", role="operator", name="op")  # the same client says hello again (reconnect)
+        time.sleep(0.1)
+        assert not op.latest_state()["flags"]["armed"]
+    finally:
+        op.close()
+        halt(srv, th)
+
+
+# ---------------------------------------------------------------------------- item 3
+def run_lab(ses, seconds, sample=None, t0=0.0, dt=0.02):
+    t = t0
+    for _ in range(round(seconds / dt)):
+        t += dt
+        if sample is not None:
+            ses.feed(sample, t)
+        ses.tick(t, dt)
+    return t
+
+
+def test_lab_reset_leaves_every_machine_where_it_stands():
+    """Item 3: EM8000 SETTLED → STOP → Reset: nothing rises, the Comau is not put into REMOTE."""
+    ses = LabSession()
+    t = run_lab(ses, 1.0)
+    before = ses.snapshot()
+    ses.estop()
+    t = run_lab(ses, 1.0, t0=t)
+    ses.reset()
+    t = run_lab(ses, 8.0, t0=t)
+    after = ses.snapshot()
+    for p0, p1 in zip(before["platforms"], after["platforms"], strict=True):
+        assert p1["status"] == "settled"
+        np.testing.assert_allclose(p1["eta"], p0["eta"], atol=1e-9)
+    assert after["comau"]["mode"] == "hold"
+    np.testing.assert_allclose(after["comau"]["q"], before["comau"]["q"], atol=1e-9)
+    assert after["winch"]["length"] == pytest.approx(before["winch"]["length"], abs=1e-9)
+
+
+def test_lab_reset_of_a_moving_platform_holds_it():
+    ses = LabSession()
+    ses.lab_platform("em8000", "neutral")  # raising
+    t = run_lab(ses, 1.5)
+    ses.estop()
+    t = run_lab(ses, 0.1, t0=t)
+    ses.reset()
+    t = run_lab(ses, 2.0, t0=t)
+    eta = np.array(ses.snapshot()["platforms"][0]["eta"])
+    run_lab(ses, 6.0, t0=t)
+    st_ = ses.snapshot()["platforms"][0]
+    assert st_["status"] == "holding"
+    np.testing.assert_allclose(st_["eta"], eta, atol=1e-9)
+
+
+def test_tac_reset_holds_until_a_mode_is_chosen():
+    ses = TacSession()
+    t = 0.0
+    for _ in range(50):
+        t += 0.02
+        ses.tick(t, 0.02)
+    ses.estop()
+    for _ in range(10):
+        t += 0.02
+        ses.tick(t, 0.02)
+    ses.reset()
+    a0 = np.array(ses.last["alpha"])
+    b0 = np.array(ses.last["beta"])
+    for _ in range(100):
+        t += 0.02
+        ses.tick(t, 0.02)
+    np.testing.assert_allclose(ses.last["alpha"], a0, atol=0)
+    np.testing.assert_allclose(ses.last["beta"], b0, atol=0)
+    assert ses.snapshot()["holding"]
+    ses.set_tac_mode("tac")
+    for _ in range(100):
+        t += 0.02
+        ses.tick(t, 0.02)
+    assert np.abs(np.array(ses.last["alpha"]) - a0).max() > 1e-4  # compensating again
+
+
+# ---------------------------------------------------------------------------- item 6
+def lab_sample(x=0.0, w=0.0, enable=True):
+    return InputSample((x, 0.0, 0.0, w), (enable,), "test stick")
+
+
+def test_lab_comau_and_winch_remote_use_the_input_pipeline():
+    """Item 6: deadman, arming and stale rules apply to the lab; REMOTE Comau and winch can be driven."""
+    ses = LabSession()
+    ses.lab_comau_mode("remote")
+    ses.lab_winch(mode="remote")
+    q0 = np.array(ses.snapshot()["comau"]["q"])
+    L0 = ses.snapshot()["winch"]["length"]
+    t = run_lab(ses, 1.0, lab_sample(x=1.0, w=-1.0))  # deflected and enabled from the start: not armed
+    np.testing.assert_allclose(ses.snapshot()["comau"]["q"], q0, atol=1e-9)
+    assert ses.snapshot()["winch"]["length"] == pytest.approx(L0, abs=1e-9)
+    t = run_lab(ses, 0.1, lab_sample(enable=False), t0=t)
+    t = run_lab(ses, 0.1, lab_sample(enable=True), t0=t)
+    p0 = np.array(ses.snapshot()["scene"]["tool"])
+    t = run_lab(ses, 1.0, lab_sample(x=1.0, w=-1.0), t0=t)
+    assert np.linalg.norm(np.array(ses.snapshot()["scene"]["tool"]) - p0) > 0.1
+    assert ses.snapshot()["winch"]["length"] < L0 - 0.1
+    # the device goes silent: stale after 0.2 s, the Comau and the winch brake and hold
+    t = run_lab(ses, 0.5, t0=t)
+    q1, L1 = np.array(ses.snapshot()["comau"]["q"]), ses.snapshot()["winch"]["length"]
+    run_lab(ses, 1.0, t0=t)
+    np.testing.assert_allclose(ses.snapshot()["comau"]["q"], q1, atol=1e-9)
+    assert ses.snapshot()["winch"]["length"] == pytest.approx(L1, abs=1e-3)  # the servo's settling tail only
+    assert abs(ses.snapshot()["winch"]["speed"]) < 1e-3 and ses.snapshot()["flags"]["stale_input"]
+
+
+def test_stop_button_latches_every_engine():
+    from app.teleop.profiles import parse_profile
+
+    prof = parse_profile("name='pad'\nenable_button=0\nstop_button=2\n[axes.x]\nindex=0\n")
+    for ses in (Session(), LabSession(), TacSession()):
+        ses.input.set_profile(prof)
+        ses.feed(InputSample((0.0,), (False, False, True), "pad"), 0.02)
+        ses.tick(0.02, 0.02)
+        assert ses.estop_latched, type(ses).__name__
+
+
+# ---------------------------------------------------------------------------- alarms (item 9 and deliverable 5)
+def test_alarm_life_cycle_and_first_out():
+    t = [0.0]
+    al = AlarmList("test", clock=lambda: t[0])
+    al.set("a", True, "critical", "first")
+    t[0] = 1.0
+    al.set("b", True, "warning", "second")
+    snap = {a["key"]: a for a in al.snapshot()}
+    assert snap["a"]["first_out"] and not snap["b"]["first_out"]
+    al.set("a", False)
+    assert {a["key"] for a in al.snapshot()} == {"a", "b"}  # cleared but unacknowledged: still shown
+    assert al.ack("a") == 1
+    assert {a["key"] for a in al.snapshot()} == {"b"}
+    al.ack()
+    assert al.snapshot()[0]["acked"] and al.snapshot()[0]["active"]  # acknowledged but still active
+    al.set("b", False)
+    assert al.snapshot() == []
+    with pytest.raises(ValueError, match="severity"):
+        al.set("c", True, "fatal")
+
+
+class SlowSession(Session):
+    def tick(self, now, dt, solve_budget=None):
+        super().tick(now, dt, solve_budget)
+        time.sleep(0.004)  # an overloaded machine: every tick takes twice its period
+
+
+def test_slow_engine_raises_an_alarm_and_ack_over_the_protocol():
+    """Item 9: an engine below real time says so (alarm in the state), and the operator acknowledges."""
+    srv, th = serve(SlowSession(), rate=500)
+    op = Client(srv.url, role="operator", name="op")
+    try:
+        st_ = wait_for(op, lambda s: any(a["key"] == "engine_slow" and a["active"] for a in s["alarms"]))
+        assert st_["realtime_factor"] < 0.95
+        op.request("ack_alarm", key="engine_slow")
+        wait_for(op, lambda s: all(a["acked"] for a in s["alarms"] if a["key"] == "engine_slow"))
+        viewer = Client(srv.url, role="viewer", name="v")
+        with pytest.raises(TransportError, match="only the operator"):
+            viewer.request("ack_alarm")
+        viewer.close()
+    finally:
+        op.close()
+        halt(srv, th)
+
+
+def test_teleop_alarms_estop_joint_limit_and_stale():
+    ses = Session(robot_name="scara")
+    dt, t = 0.002, 0.0
+    for en in (False, True):
+        t += dt
+        ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "stick"), t)
+        ses.tick(t, dt)
+    for _ in range(3000):  # drive +z into the prismatic joint's limit
+        t += dt
+        ses.feed(InputSample((0.0, 0.0, 1.0), (True,), "stick"), t)
+        ses.tick(t, dt)
+    keys = {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
+    assert "joint_limit" in keys, ses.snapshot()["alarms"]
+    for _ in range(200):
+        t += dt
+        ses.tick(t, dt)
+    keys = {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
+    assert "stale_input" in keys
+    ses.estop()
+    ses.tick(t + dt, dt)
+    assert any(a["key"] == "estop" and a["severity"] == "critical" for a in ses.snapshot()["alarms"])
