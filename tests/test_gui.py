@@ -45,6 +45,17 @@ def window(qtbot, engine, tmp_path):
     win.close()
 
 
+def hold_enable(qtbot, window, stick=None):
+    """The operator's arming gesture on the on-screen stick: neutral and released, then hold Shift."""
+    from PyQt5.QtCore import Qt
+
+    stick = stick or window.teleop.stick
+    stick.release_all()
+    qtbot.wait(150)
+    stick.key(Qt.Key_Shift, True)
+    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=5000)
+
+
 def test_fallback_2d_view_when_gl_is_unavailable(qtbot):
     assert os.environ["QT_QPA_PLATFORM"] == "offscreen"
     assert not gl_available()
@@ -77,9 +88,10 @@ def test_mode_and_solver_reach_the_engine(qtbot, window):
 def test_virtual_stick_moves_the_plotted_tool_point(qtbot, window):
     plots = window.teleop.plots
     qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=5000)
-    x0 = plots.ring.view()[-1, 4]
+    x0 = plots.ring.view()[-1, 7]
+    hold_enable(qtbot, window)
     window.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: plots.ring.view()[-1, 4] - x0 > 0.05, timeout=5000)
+    qtbot.waitUntil(lambda: plots.ring.view()[-1, 7] - x0 > 0.05, timeout=5000)
     window.teleop.stick.pad.set_position(0.0, 0.0, False)
     assert plots.frames_drawn > 0
 
@@ -90,9 +102,13 @@ def test_keyboard_drives_the_stick(qtbot, window):
     got = []
     window.teleop.stick.changed.connect(lambda *a: got.append(a))
     assert window.teleop.stick.key(Qt.Key_Up, True)
-    assert got[-1] == (0.0, 1.0, 0.0, True)
+    assert got[-1] == (0.0, 1.0, 0.0, 0.0, False)  # deflection alone does not enable
     window.teleop.stick.key(Qt.Key_Up, False)
-    assert got[-1] == (0.0, 0.0, 0.0, False)
+    assert got[-1] == (0.0, 0.0, 0.0, 0.0, False)
+    window.teleop.stick.key(Qt.Key_Shift, True)  # Shift is the enable (deadman), apart from deflection
+    assert got[-1] == (0.0, 0.0, 0.0, 0.0, True)
+    window.teleop.stick.key(Qt.Key_Shift, False)
+    assert got[-1] == (0.0, 0.0, 0.0, 0.0, False)
 
 
 def test_stop_latches_and_reset_clears(qtbot, window):
@@ -257,7 +273,11 @@ def test_arrow_keys_drive_the_tool(qtbot, window):
     plots = window.teleop.plots
     qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=5000)
     y0 = window.teleop.state["tool"][1]
+    qtbot.wait(150)  # neutral and released first
+    qtbot.keyPress(window.tabs, Qt.Key_Shift)
+    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=5000)
     qtbot.keyPress(window.tabs, Qt.Key_Up)
     qtbot.waitUntil(lambda: window.teleop.state["tool"][1] - y0 > 0.05, timeout=5000)
     qtbot.keyRelease(window.tabs, Qt.Key_Up)
+    qtbot.keyRelease(window.tabs, Qt.Key_Shift)
     qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=5000)

@@ -9,7 +9,6 @@ import pyqtgraph as pg
 from PyQt5.QtCore import QThread, pyqtSignal
 from PyQt5.QtWidgets import (
     QComboBox,
-    QFileDialog,
     QHBoxLayout,
     QLabel,
     QProgressBar,
@@ -24,6 +23,7 @@ from app.errors import BosunError
 from app.ik import solver_names
 from app.models.registry import load_robot
 from ui.glprobe import gl_available
+from ui.widgets.files import choose_file
 
 
 class StudyWorker(QThread):
@@ -198,20 +198,17 @@ class AnalysisTab(QWidget):
     def save_csv(self, path: str | None = None) -> None:
         if self.result is None:
             return
-        path = (
-            path
-            or QFileDialog.getSaveFileName(self, "Export CSV", os.path.join(os.getcwd(), "study.csv"), "CSV (*.csv)")[0]
-        )
-        if path:
-            try:
-                self.result.write_csv(path)
-            except OSError as err:
-                self.error.emit("Export failed", str(err))
+        if not path:
+            choose_file(self, "Export CSV", os.path.join(os.getcwd(), "study.csv"), "CSV (*.csv)", self.save_csv, True)
+            return
+        try:
+            self.result.write_csv(path)
+        except OSError as err:
+            self.error.emit("Export failed", str(err))
 
     def save_png(self, path: str | None = None) -> None:
-        path = (
-            path
-            or QFileDialog.getSaveFileName(self, "Export PNG", os.path.join(os.getcwd(), "study.png"), "PNG (*.png)")[0]
-        )
-        if path and not self.glw.grab().save(path, "PNG"):
+        if not path:
+            choose_file(self, "Export PNG", os.path.join(os.getcwd(), "study.png"), "PNG (*.png)", self.save_png, True)
+            return
+        if not self.glw.grab().save(path, "PNG"):
             self.error.emit("Export failed", f"could not write {path}")

@@ -20,7 +20,6 @@ from PyQt5.QtWidgets import (
     QCheckBox,
     QComboBox,
     QDoubleSpinBox,
-    QFileDialog,
     QFormLayout,
     QGridLayout,
     QGroupBox,
@@ -39,11 +38,14 @@ from app.marine.waves import spectrum as sea_spectrum
 from ui.glprobe import gl_available
 from ui.marine_tab import Ring
 from ui.scene_tab import SceneEngineMixin
+from ui.widgets.files import choose_file
+from ui.widgets.stick import VirtualStick
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 SOURCES = ("generator", "simulation", "remote", "timeseries")
+COMAU_MODES = ("settled", "remote", "motion_comp", "hold")
 
 
 def _bar(fmt: str = "%p %") -> QProgressBar:
@@ -254,9 +256,7 @@ class PlatformPanel(QWidget):
         return w
 
     def choose_csv(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "6-DOF time series", "", "CSV (*.csv);;all files (*)")
-        if path:
-            self.load_csv(path)
+        choose_file(self, "6-DOF time series", "", "CSV (*.csv);;all files (*)", self.load_csv)
 
     def load_csv(self, path: str) -> None:
         try:
@@ -301,7 +301,7 @@ class PlatformPanel(QWidget):
     # ------------------------------------------------------------------ state
     def update_state(self, p: dict, t: float) -> None:
         status = p["status"].upper()
-        color = {"ENGAGED": "#3c9", "NEUTRAL": "#39f", "SETTLED": "#999"}.get(status, "#fa3")
+        color = {"ENGAGED": "#3c9", "NEUTRAL": "#39f", "SETTLED": "#999", "HOLDING": "#e33"}.get(status, "#fa3")
         info = p.get("source_info", {})
         extra = ""
         if p["source"] == "simulation" and "hs" in info:
@@ -312,8 +312,8 @@ class PlatformPanel(QWidget):
             + (" &nbsp; <b style='color:#f80'>LEG LIMIT</b>" if p["leg_clamped"] else "")
         )
         engaged = p["mode"] == "engaged"
-        self.buttons["neutral"].setEnabled(p["status"] == "settled")
-        self.buttons["settle"].setEnabled(p["status"] == "neutral")
+        self.buttons["neutral"].setEnabled(p["status"] in ("settled", "holding"))
+        self.buttons["settle"].setEnabled(p["status"] in ("neutral", "holding"))
         self.buttons["engage"].setEnabled(p["status"] == "neutral")
         self.buttons["disengage"].setEnabled(engaged and p["status"] != "disengaging")
         self.apply.setEnabled(not engaged)
@@ -472,10 +472,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         cbox = QGroupBox("Comau SMART-5 NJ 110-3.0 (3-DOF, extension arm)")
         cl = QFormLayout(cbox)
         self.comau_mode = QComboBox()
-        self.comau_mode.addItems(["SETTLED", "REMOTE", "MOTION_COMP"])
-        self.comau_mode.activated.connect(
-            lambda i: self._send("lab_comau_mode", mode=("settled", "remote", "motion_comp")[i])
-        )
+        self.comau_mode.addItems([m.upper() for m in COMAU_MODES])
+        self.comau_mode.setToolTip("HOLD: after an E-STOP reset the robot holds until a mode is chosen")
+        self.comau_mode.model().item(COMAU_MODES.index("hold")).setEnabled(False)  # shown, not chosen
+        self.comau_mode.activated.connect(lambda i: self._send("lab_comau_mode", mode=COMAU_MODES[i]))
         cl.addRow("mode", self.comau_mode)
         self.joint_pos_bars = [_bar() for _ in range(3)]
         self.joint_speed_bars = [_bar() for _ in range(3)]
@@ -493,6 +493,14 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.winch_slider = SpringSlider()
         self.winch_slider.valueChanged.connect(self._slider)
         wl.addRow("speed (springs back)", self.winch_slider)
+        rbox = QGroupBox("REMOTE drive (Comau tool x, y, z; winch w)")
+        rl = QVBoxLayout(rbox)
+        self.stick = VirtualStick(aux_axis="w winch")
+        self.stick.setToolTip(
+            "drives the Comau tool point (REMOTE, 0.25 m/s at full stick) and the winch (REMOTE, slider w); "
+            "hold Shift or the ENABLE button (deadman); a joystick works the same way"
+        )
+        rl.addWidget(self.stick)
         self.vvmc = QPushButton("VVMC OFF")
         self.vvmc.setCheckable(True)
         self.vvmc.toggled.connect(lambda on: self._send("lab_vvmc", on=bool(on)))
@@ -502,6 +510,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         left = QVBoxLayout()
         left.addWidget(cbox)
         left.addWidget(wbox)
+        left.addWidget(rbox)
         left.addWidget(self.vvmc)
         left.addWidget(self.readout)
         left.addStretch(1)
@@ -588,7 +597,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             use = abs(c["qd"][k]) / c["speed"][k]
             _set_bar(self.joint_speed_bars[k], use, f"{100 * use:.0f} %")
         _set_bar(self.wire_bar, (w["length"] - w["min"]) / (w["max"] - w["min"]), f"{w['length']:.3f} m")
-        self.comau_mode.setCurrentIndex(("settled", "remote", "motion_comp").index(c["mode"]))
+        self.comau_mode.setCurrentIndex(COMAU_MODES.index(c["mode"]))
         self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w["mode"]))
         self.winch_slider.setEnabled(w["mode"] == "local")
         self.vvmc.blockSignals(True)

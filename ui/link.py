@@ -1,16 +1,204 @@
-"""The GUI's only way to the engine: a protocol client polled by a QTimer, as Qt signals."""
+"""The GUI's only way to an engine: a protocol client whose sockets live in their own thread.
+
+Why a thread: the GUI thread paints plots and 3D views and can stall for hundreds of
+milliseconds on a busy machine.  Input, STOP and keep-alives must not stall with it.  The
+worker thread owns the ZeroMQ sockets and
+
+* sends queued commands at once, an ``estop`` before anything else;
+* re-sends the latest input sample at a fixed rate (50 Hz) for as long as the GUI keeps
+  refreshing it (the GUI's own heartbeat: a GUI frozen for more than ``input_hold`` lets the
+  input go stale, so the engine holds);
+* detects a lost engine (no state for ``lost_after`` s) and reconnects by itself: it says
+  ``hello`` again, asking for the same role, and follows the state socket to its new address,
+  also when the engine was restarted on the same URL (an engine that answers "before hello"
+  is greeted at once);
+* pings twice a second (keeps the operator role).
+
+The GUI thread reads what arrived through a QTimer and gets Qt signals; it never touches a socket.
+"""
 
 from __future__ import annotations
 
+import collections
 import contextlib
+import threading
 import time
 from typing import Any
 
 import zmq
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
-from app.net.codec import ProtocolError, decode_engine
-from app.net.transport import Client, TransportError
+from app.net.codec import ProtocolError, decode_engine, encode
+from app.net.transport import Client, TransportError, client_view_of
+
+INPUT_RATE = 50.0  # Hz: input re-sent at this rate while the GUI keeps it fresh
+INPUT_HOLD = 0.5  # s: the GUI must refresh the input at least this often, or it is no longer sent
+
+
+class _Worker(threading.Thread):
+    """Owns the client's sockets (handed over after the first, blocking hello)."""
+
+    def __init__(self, client: Client, role: str, name: str, token: str | None, lost_after: float) -> None:
+        super().__init__(daemon=True, name=f"engine-link-{name}")
+        self.client = client
+        self.role_wanted, self.name, self.token = role, name, token
+        self.lost_after = lost_after
+        self.lock = threading.Lock()
+        self.outbox: collections.deque = collections.deque()
+        self.estop_queued = 0
+        self.estop_reason = ""
+        self.input: tuple | None = None  # (axes, buttons, device, t_set)
+        self.device_lost: str | None = None
+        self.latest: dict[str, Any] | None = None
+        self.state_seq = 0
+        self.events: collections.deque = collections.deque(maxlen=2000)  # ("log"|"reply"|"conn"|"welcome", ...)
+        self.connected = True
+        self.role = client.role
+        self.stop_flag = threading.Event()
+        self._last_state = time.monotonic()
+        self._last_ping = 0.0
+        self._last_input = 0.0
+        self._last_hello = 0.0
+        self._sent_input_key = None
+
+    # ------------------------------------------------------------------ called from the GUI thread
+    def queue(self, mtype: str, fields: dict[str, Any]) -> None:
+        with self.lock:
+            if mtype == "estop":
+                self.estop_queued += 1
+                self.estop_reason = fields.get("reason", "")
+            else:
+                self.outbox.append((mtype, fields))
+
+    def set_input(self, axes, buttons, device: str) -> None:
+        with self.lock:
+            self.input = (tuple(axes), tuple(bool(b) for b in buttons), device, time.monotonic())
+            self.device_lost = None
+
+    def clear_input(self, device: str) -> None:
+        """No input from this GUI for this engine any more (tab left, device gone)."""
+        with self.lock:
+            self.input = None
+            self.device_lost = device
+
+    # ------------------------------------------------------------------ the thread
+    def _send(self, mtype: str, **fields: Any) -> bool:
+        try:
+            self.client.dealer.send(encode(mtype, **fields), zmq.NOBLOCK)
+            return True
+        except (zmq.ZMQError, ProtocolError):
+            return False
+
+    def _hello(self, now: float) -> None:
+        self._last_hello = now
+        hello: dict[str, Any] = {"role": self.role_wanted, "name": self.name}
+        if self.token is not None:
+            hello["token"] = self.token
+        self._send("hello", **hello)
+
+    def _welcome(self, msg: dict[str, Any]) -> None:
+        self.role = msg["role"]
+        url = client_view_of(msg["state_url"], self.client.url)
+        if url != self.client.state_url:
+            with contextlib.suppress(zmq.ZMQError):
+                self.client.sub.disconnect(self.client.state_url)
+            self.client.sub.connect(url)
+            self.client.state_url = url
+        self.events.append(("welcome", self.role, msg.get("note", "")))
+
+    def _flush(self, now: float) -> None:
+        with self.lock:
+            n_estop, reason = self.estop_queued, self.estop_reason
+            self.estop_queued = 0
+            out = list(self.outbox)
+            self.outbox.clear()
+            inp, lost = self.input, self.device_lost
+            self.device_lost = None
+        for _ in range(min(n_estop, 1)):
+            fields: dict[str, Any] = {"reason": reason[:256]}
+            if self.token is not None:
+                fields["token"] = self.token
+            self._send("estop", **fields)
+        for mtype, fields in out:
+            self._send(mtype, **fields)
+        if lost is not None:
+            self._send("device_lost", device=lost[:128])
+            self._sent_input_key = None
+        if inp is not None and now - inp[3] <= INPUT_HOLD:
+            key = inp[:3]
+            if key != self._sent_input_key or now - self._last_input >= 1.0 / INPUT_RATE:
+                self.client.seq += 1
+                ok = self._send(
+                    "input",
+                    seq=self.client.seq,
+                    t_send=time.monotonic(),
+                    axes=[float(a) for a in inp[0][:16]],
+                    buttons=list(inp[1][:64]),
+                    device=inp[2][:128],
+                )
+                if ok:
+                    self._last_input, self._sent_input_key = now, key
+        if now - self._last_ping >= 0.5:
+            self._last_ping = now
+            self._send("ping")
+
+    def _receive(self, now: float) -> None:
+        for sock in (self.client.sub, self.client.dealer):
+            for _ in range(500):
+                try:
+                    data = sock.recv(zmq.NOBLOCK)
+                except zmq.Again:
+                    break
+                except zmq.ZMQError:
+                    return
+                try:
+                    msg = decode_engine(data)
+                except ProtocolError:
+                    continue
+                t = msg["type"]
+                if t == "state":
+                    with self.lock:
+                        self.latest = msg["state"]
+                        self.state_seq += 1
+                    self._last_state = now
+                elif t == "log":
+                    self.events.append(("log", msg["level"], msg["text"]))
+                elif t == "welcome":
+                    self._welcome(msg)
+                elif t == "reply":
+                    err = msg.get("error", "")
+                    if not msg["ok"] and "before hello" in err:
+                        if now - self._last_hello > 0.2:  # the engine restarted under us: greet it
+                            self._hello(now)
+                        continue
+                    if msg["re"] != "ping":
+                        self.events.append(("reply", msg["re"], msg["ok"], err))
+
+    def run(self) -> None:
+        poller = zmq.Poller()
+        poller.register(self.client.sub, zmq.POLLIN)
+        poller.register(self.client.dealer, zmq.POLLIN)
+        while not self.stop_flag.is_set():
+            now = time.monotonic()
+            try:
+                self._flush(now)
+                self._receive(now)
+            except zmq.ZMQError:
+                pass
+            silent = now - self._last_state
+            if self.connected and silent > self.lost_after:
+                self.connected = False
+                self.events.append(("conn", False, f"lost the engine connection (no state for {self.lost_after:g} s)"))
+            elif not self.connected and silent < self.lost_after:
+                self.connected = True
+                self.events.append(("conn", True, "engine connection restored"))
+            if not self.connected and now - self._last_hello > 0.5:
+                self._hello(now)  # reconnect: a restarted engine needs a new hello, the same one keeps us
+            with contextlib.suppress(zmq.ZMQError):
+                poller.poll(5)
+
+    def stop(self) -> None:
+        self.stop_flag.set()
 
 
 class EngineLink(QObject):
@@ -18,7 +206,7 @@ class EngineLink(QObject):
 
     Signals
     -------
-    state(dict)            every state snapshot
+    state(dict)            the newest state snapshot (at most once per GUI poll)
     log(str, str)          level, text of engine log lines
     reply(str, bool, str)  request type, ok, error text
     connection(bool, str)  engine reachable or lost, with a message
@@ -35,71 +223,64 @@ class EngineLink(QObject):
         role: str = "operator",
         name: str = "bosun-gui",
         token: str | None = None,
-        lost_after: float = 1.5,
+        lost_after: float = 1.0,
         parent: QObject | None = None,
     ) -> None:
         super().__init__(parent)
-        self.client = Client(url, role=role, name=name, token=token)
+        self.client = Client(url, role=role, name=name, token=token)  # raises TransportError: no engine
+        self.url = url
         self.role = self.client.role
         self.note = self.client.note
         self.lost_after = lost_after
-        self.last_state_time = time.monotonic()
-        self.connected = True
         self.latest: dict[str, Any] | None = None
+        self._seen_seq = 0
+        self._worker = _Worker(self.client, role, name, token, lost_after)
+        self._worker.start()
         self._timer = QTimer(self)
         self._timer.setInterval(10)
         self._timer.timeout.connect(self.poll)
         self._timer.start()
-        self._ping = QTimer(self)
-        self._ping.setInterval(500)  # keeps the operator role alive while the stick is idle
-        self._ping.timeout.connect(lambda: self.send("ping"))
-        self._ping.start()
 
-    # ------------------------------------------------------------------ sending
+    @property
+    def connected(self) -> bool:
+        return self._worker.connected
+
+    # ------------------------------------------------------------------ sending (thread-safe queues)
     def send(self, mtype: str, **fields: Any) -> None:
-        try:
-            self.client.send(mtype, **fields)
-        except zmq.ZMQError as err:
-            self.connection.emit(False, f"cannot send to the engine: {err}")
+        self._worker.queue(mtype, fields)
 
     def send_input(self, axes, buttons, device: str) -> None:
-        with contextlib.suppress(zmq.ZMQError):
-            self.client.send_input(axes, buttons, device)
+        self._worker.set_input(axes, buttons, device)
 
-    # ------------------------------------------------------------------ receiving
+    def clear_input(self, device: str = "") -> None:
+        self._worker.clear_input(device)
+
+    # ------------------------------------------------------------------ receiving (GUI thread)
     def poll(self) -> None:
-        newest = None
-        for sock in (self.client.sub, self.client.dealer):
-            for _ in range(500):
-                try:
-                    data = sock.recv(zmq.NOBLOCK)
-                except zmq.Again:
-                    break
-                try:
-                    msg = decode_engine(data)
-                except ProtocolError:
-                    continue
-                if msg["type"] == "state":
-                    newest = msg["state"]
-                elif msg["type"] == "log":
-                    self.log.emit(msg["level"], msg["text"])
-                elif msg["type"] == "reply" and msg["re"] != "ping":
-                    self.reply.emit(msg["re"], msg["ok"], msg.get("error", ""))
-        now = time.monotonic()
-        if newest is not None:
-            self.last_state_time = now
+        w = self._worker
+        while w.events:
+            ev = w.events.popleft()
+            if ev[0] == "log":
+                self.log.emit(ev[1], ev[2])
+            elif ev[0] == "reply":
+                self.reply.emit(ev[1], ev[2], ev[3])
+            elif ev[0] == "conn":
+                self.connection.emit(ev[1], ev[2])
+            elif ev[0] == "welcome":
+                self.role, self.note = ev[1], ev[2]
+                if ev[1] != "operator" and w.role_wanted == "operator":
+                    self.log.emit("warning", f"reconnected as {ev[1]}: {ev[2]}")
+        with w.lock:
+            seq, newest = w.state_seq, w.latest
+        if seq != self._seen_seq and newest is not None:
+            self._seen_seq = seq
             self.latest = newest
-            if not self.connected:
-                self.connected = True
-                self.connection.emit(True, "engine connection restored")
             self.state.emit(newest)
-        elif self.connected and now - self.last_state_time > self.lost_after:
-            self.connected = False
-            self.connection.emit(False, f"lost the engine connection (no state for {self.lost_after:g} s)")
 
     def close(self) -> None:
         self._timer.stop()
-        self._ping.stop()
+        self._worker.stop()
+        self._worker.join(timeout=2)
         self.client.close()
 
 

@@ -182,8 +182,11 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.mode = QComboBox()
         self.mode.addItems(["off", "tac", "cooperative"])
         self.mode.setCurrentText("tac")
-        self.mode.setToolTip("off: head locked; tac: the head compensates (paper); cooperative: crane joins in")
-        self.mode.currentTextChanged.connect(lambda m: self._send("set_tac_mode", mode=m))
+        self.mode.setToolTip(
+            "off: head locked; tac: the head compensates (paper); cooperative: crane joins in. "
+            "After an E-STOP reset the head and crane hold until a mode is chosen here again"
+        )
+        self.mode.activated.connect(lambda i: self._send("set_tac_mode", mode=self.mode.itemText(i)))
         self.start = QPushButton("Start crane-head engine")
         self.start.clicked.connect(self.connect_engine)
         form.addRow(self.start)
@@ -294,6 +297,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         ratio = f"{rms_c / rms_s:.1%}" if rms_s > 1e-9 else "—"
         flag = "<span style='color:#e08020'><b>SATURATED</b></span>" if s["saturated"] else "inside workspace"
         stop = "<span style='color:#e03030'><b>E-STOP latched</b></span><br>" if state.get("estop") else ""
+        if state.get("holding") and not state.get("estop"):
+            stop = "<span style='color:#e08020'><b>HOLDING</b>: choose a mode to resume</span><br>"
         self.readout.setText(
             f"{stop}t = {s['t']:.1f} s — mode <b>{state['tac_mode']}</b>, {flag}<br>"
             f"sea: {sea['spectrum']} Hs {sea['hs']:g} m, Tp {sea['tp']:g} s, {sea['heading']:g}°<br>"

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import os
 
-from PyQt5.QtCore import QObject, QTimer, pyqtSignal
+from PyQt5.QtCore import QObject, Qt, QTimer, pyqtSignal
 from PyQt5.QtWidgets import (
     QButtonGroup,
     QCheckBox,
     QComboBox,
     QDoubleSpinBox,
-    QFileDialog,
     QFormLayout,
+    QFrame,
     QGridLayout,
     QGroupBox,
     QHBoxLayout,
@@ -20,6 +20,7 @@ from PyQt5.QtWidgets import (
     QProgressBar,
     QPushButton,
     QRadioButton,
+    QScrollArea,
     QSplitter,
     QVBoxLayout,
     QWidget,
@@ -28,6 +29,7 @@ from PyQt5.QtWidgets import (
 from app.ik import solver_names
 from app.models.registry import list_robots
 from ui.csv_logger import SIGNALS, StateCsvLogger
+from ui.widgets.files import choose_file
 from ui.widgets.plots import LivePlots, UtilisationBars
 from ui.widgets.stick import VirtualStick
 from ui.widgets.view3d import make_robot_view
@@ -36,20 +38,27 @@ MANUAL = "on-screen stick / keyboard"
 
 
 class InputManager(QObject):
-    """Polls the chosen input at 100 Hz and streams it to the engine.
+    """Polls the chosen input at 100 Hz and hands it to the engine of the tab on screen.
 
-    Sources: any joystick pygame sees (hot-plug) or the on-screen stick and keyboard.
+    Sources: any joystick pygame sees (hot-plug) or the on-screen stick and keyboard of that tab.
+    The main window sets ``link`` (the engine that receives input, or None) and ``stick`` (the
+    on-screen stick of the tab on screen, or None).  The link's own thread re-sends the sample at a
+    fixed rate, so a busy GUI does not starve the engine of input.  A joystick's stop button (from
+    its profile) emits ``stop_pressed`` whatever tab is shown.
     """
 
     sample = pyqtSignal(tuple, tuple, str)  # axes, buttons, device (for the live display)
     devices_changed = pyqtSignal(list)
     notice = pyqtSignal(str, str)  # level, text (not "event": that would shadow QObject.event)
+    stop_pressed = pyqtSignal(str)  # device name
 
     def __init__(self, link, parent=None) -> None:
         super().__init__(parent)
         self.link = link
+        self.stick = None
         self.choice = MANUAL
-        self.manual = (0.0, 0.0, 0.0, False)
+        self._stop_prev = False
+        self._profile = None
         try:
             from app.teleop.devices import PygameJoysticks
 
@@ -63,8 +72,22 @@ class InputManager(QObject):
         self.timer.timeout.connect(self.poll)
         self.timer.start()
 
-    def set_manual(self, x: float, y: float, z: float, held: bool) -> None:
-        self.manual = (x, y, z, held)
+    def route(self, link, stick) -> None:
+        """Input now goes to ``link`` (None: nowhere), the on-screen source is ``stick``."""
+        if link is not self.link and self.link is not None:
+            self.link.clear_input(self.choice[:128])  # the engine left behind holds at once
+        self.link, self.stick = link, stick
+
+    def _check_stop(self, joy) -> None:
+        from app.teleop.profiles import profile_for
+
+        if self._profile is None or self._profile[0] != joy.device:
+            self._profile = (joy.device, profile_for(joy.device, len(joy.axes)))
+        b = self._profile[1].stop_button
+        pressed = b is not None and b < len(joy.buttons) and bool(joy.buttons[b])
+        if pressed and not self._stop_prev:
+            self.stop_pressed.emit(joy.device)
+        self._stop_prev = pressed
 
     def poll(self) -> None:
         joy = None
@@ -75,20 +98,24 @@ class InputManager(QObject):
                 level = "warning" if ev.kind == "removed" else "info"
                 text = f"joystick {ev.device} {'unplugged: the robot holds' if ev.kind == 'removed' else 'plugged in'}"
                 self.notice.emit(level, text)
-                if ev.kind == "removed" and ev.device == self.choice:
-                    self.link.send("device_lost", device=ev.device[:128])
+                if ev.kind == "removed" and ev.device == self.choice and self.link is not None:
+                    self.link.clear_input(ev.device[:128])
             names = self.sticks.devices()
             if names != self.known:
                 self.known = names
                 self.devices_changed.emit(names)
         if self.choice != MANUAL:
             if joy is not None:
-                self.link.send_input(joy.axes[:16], joy.buttons[:64], joy.device[:128])
+                self._check_stop(joy)
+                if self.link is not None:
+                    self.link.send_input(joy.axes[:16], joy.buttons[:64], joy.device[:128])
                 self.sample.emit(joy.axes, joy.buttons, joy.device)
             return
-        x, y, z, held = self.manual
-        # the default profile reads axes (0, 1 inverted, 2) and button 0 as the deadman
-        axes, buttons = (x, -y, z), (held,)
+        if self.stick is None or self.link is None:
+            return
+        x, y, z, w, enabled = self.stick.values()
+        # the default profile reads axes (0, 1 inverted, 2, 3) and button 0 as the deadman
+        axes, buttons = (x, -y, z, w), (enabled,)
         self.link.send_input(axes, buttons, MANUAL)
         self.sample.emit(axes, buttons, MANUAL)
 
@@ -108,8 +135,14 @@ class TeleopTab(QWidget):
 
         # ---------------------------------------------------------- controls
         controls = QWidget()
+
         cl = QVBoxLayout(controls)
-        split.addWidget(controls)
+        area = QScrollArea()  # only the controls scroll; the 3D view and plots keep the full height
+        area.setWidget(controls)
+        area.setWidgetResizable(True)
+        area.setFrameShape(QFrame.NoFrame)
+        area.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
+        split.addWidget(area)
 
         g = QGroupBox("Manipulator")
         f = QFormLayout(g)
@@ -146,6 +179,34 @@ class TeleopTab(QWidget):
         f.addRow("mode", mode_row)
         cl.addWidget(g)
 
+        g = QGroupBox("Input")
+        il = QVBoxLayout(g)
+        self.device = QComboBox()
+        self.device.addItem(MANUAL)
+        self.device.setToolTip(
+            "input device: a joystick (hot-plug) or the on-screen stick and keyboard "
+            "(hold Shift to enable; arrows: x/y, Page Up/Down: z)"
+        )
+        il.addWidget(self.device)
+        self.axes_bars = []
+        axes_row = QHBoxLayout()
+        for k in range(6):
+            b = QProgressBar()
+            b.setRange(-1000, 1000)
+            b.setTextVisible(False)
+            b.setMaximumHeight(10)
+            b.setMinimumWidth(20)
+            b.setToolTip(f"raw axis {k} of the input device, in [−1, 1]")
+            self.axes_bars.append(b)
+            axes_row.addWidget(b)
+        il.addLayout(axes_row)
+        self.buttons_label = QLabel("buttons: –")
+        self.buttons_label.setToolTip("buttons held on the input device")
+        il.addWidget(self.buttons_label)
+        self.stick = VirtualStick()
+        il.addWidget(self.stick)
+        cl.addWidget(g)
+
         g = QGroupBox("Workspace scaling (eqs. 1–2)")
         grid = QGridLayout(g)
         self.k_p = self._spin(0.0, 1e4, 3, "k_p: tool displacement per full stick deflection [m]")
@@ -164,32 +225,6 @@ class TeleopTab(QWidget):
         grid.addWidget(self.apply_scaling, 2, 3)
         cl.addWidget(g)
 
-        g = QGroupBox("Input")
-        il = QVBoxLayout(g)
-        self.device = QComboBox()
-        self.device.addItem(MANUAL)
-        self.device.setToolTip(
-            "input device: a joystick (hot-plug) or the on-screen stick and keyboard (arrows: x/y, Page Up/Down: z)"
-        )
-        il.addWidget(self.device)
-        self.axes_bars = []
-        axes_row = QHBoxLayout()
-        for k in range(6):
-            b = QProgressBar()
-            b.setRange(-1000, 1000)
-            b.setTextVisible(False)
-            b.setMaximumHeight(10)
-            b.setToolTip(f"raw axis {k} of the input device, in [−1, 1]")
-            self.axes_bars.append(b)
-            axes_row.addWidget(b)
-        il.addLayout(axes_row)
-        self.buttons_label = QLabel("buttons: –")
-        self.buttons_label.setToolTip("buttons held on the input device")
-        il.addWidget(self.buttons_label)
-        self.stick = VirtualStick()
-        il.addWidget(self.stick)
-        cl.addWidget(g)
-
         g = QGroupBox("CSV logger")
         lg = QFormLayout(g)
         path_row = QHBoxLayout()
@@ -204,14 +239,14 @@ class TeleopTab(QWidget):
         self.log_duration = self._spin(0.0, 86400.0, 1, "logging duration [s] of engine time; 0 = until stopped")
         self.log_duration.setValue(60.0)
         lg.addRow("duration [s]", self.log_duration)
-        sig_row = QHBoxLayout()
+        sig_row = QGridLayout()
         self.log_signals = {}
-        for name in SIGNALS:
+        for k, name in enumerate(SIGNALS):
             cb = QCheckBox(name)
             cb.setChecked(name in ("q", "tool", "target"))
             cb.setToolTip(f"log '{name}' columns")
             self.log_signals[name] = cb
-            sig_row.addWidget(cb)
+            sig_row.addWidget(cb, k // 4, k % 4)
         lg.addRow("signals", sig_row)
         self.log_button = QPushButton("Start logging")
         self.log_button.setToolTip("start or stop writing engine states to the CSV file")
@@ -231,10 +266,14 @@ class TeleopTab(QWidget):
         split.addWidget(middle)
         self.plots = LivePlots()
         split.addWidget(self.plots)
-        split.setSizes([330, 520, 520])
+        for combo in (self.robot, self.solver, self.device):  # long names must not widen the column
+            combo.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(14)
+        area.setMinimumWidth(min(460, controls.minimumSizeHint().width() + 18))
+        split.setSizes([area.minimumWidth(), 400, 460])
 
         self.inputs = InputManager(link, self)
-        self.stick.changed.connect(self.inputs.set_manual)
+        self.inputs.stick = self.stick
         self.inputs.sample.connect(self.show_sample)
         self.inputs.devices_changed.connect(self._devices)
         self.device.activated.connect(lambda _i: setattr(self.inputs, "choice", self.device.currentText()))
@@ -253,9 +292,8 @@ class TeleopTab(QWidget):
 
     # ------------------------------------------------------------------ commands
     def choose_xml(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Open robot XML", os.getcwd(), "Robot files (*.xml)")
-        if path:
-            self.load_robot_file(path)
+        """A non-modal file chooser: STOP and the rest of the window stay live while it is open."""
+        self.file_dialog = choose_file(self, "Open robot XML", os.getcwd(), "Robot files (*.xml)", self.load_robot_file)
 
     def load_robot_file(self, path: str) -> None:
         self.link.send("set_robot", robot=path)
@@ -326,9 +364,7 @@ class TeleopTab(QWidget):
 
     # ------------------------------------------------------------------ logger
     def _browse_log(self) -> None:
-        path, _ = QFileDialog.getSaveFileName(self, "Log file", self.log_path.text(), "CSV (*.csv)")
-        if path:
-            self.log_path.setText(path)
+        choose_file(self, "Log file", self.log_path.text(), "CSV (*.csv)", self.log_path.setText, save=True)
 
     def toggle_logger(self) -> None:
         if self.logger is None:

@@ -30,7 +30,8 @@ class Ring:
 
 
 class LivePlots(QWidget):
-    """X/Y/Z target vs reached, joint values with limit bands, solver error and time."""
+    """X/Y/Z: the operator's command, the solver's target and the reached point; joints with limit
+    bands; solver error and time."""
 
     frame = pyqtSignal()  # emitted after each redraw: other views refresh at the same frame rate
 
@@ -41,7 +42,9 @@ class LivePlots(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         self.glw = pg.GraphicsLayoutWidget()
         lay.addWidget(self.glw)
-        self.p_xyz = self.glw.addPlot(row=0, col=0, title="tool x, y, z: target (dashed) vs reached [m]")
+        self.p_xyz = self.glw.addPlot(
+            row=0, col=0, title="tool x, y, z [m]: command (dotted), solver target (dashed), reached"
+        )
         self.p_q = self.glw.addPlot(row=1, col=0, title="joints (limit bands shaded) [rad, m]")
         self.p_s = self.glw.addPlot(row=2, col=0, title="solver: error [m] (red), time [ms] (blue)")
         for p in (self.p_xyz, self.p_q, self.p_s):
@@ -53,7 +56,11 @@ class LivePlots(QWidget):
             # scrolling axis would re-render its text every frame (the main paint cost)
             p.setXRange(-seconds, 0.0, padding=0.0)
             p.disableAutoRange()  # y is re-fitted about once a second in redraw(), for the same reason
-        self.p_xyz.setToolTip("tool position in the robot's world frame [m]")
+        self.p_xyz.setToolTip(
+            "tool position in the robot's world frame [m]. Thick dotted: the operator's command (eq. 1 in position "
+            "mode; eq. 7 integrated in velocity mode, from the reference when the stick was deflected; absent while "
+            "nothing is commanded). Dashed: the solver's target this tick. Solid: the reached tool point."
+        )
         self.p_q.setToolTip("joint values [rad or m] with their limits as bands")
         self.p_s.setToolTip("last solve: position error [m] and solve time [ms]")
         self.p_xyz.addLegend(offset=(5, 5))
@@ -62,6 +69,7 @@ class LivePlots(QWidget):
             c = COLORS[k]
             self.cur_xyz.append(
                 (
+                    self.p_xyz.plot(pen=pg.mkPen(c, width=4, style=pg.QtCore.Qt.DotLine), connect="finite"),
                     self.p_xyz.plot(pen=pg.mkPen(c, width=1, style=pg.QtCore.Qt.DashLine)),
                     self.p_xyz.plot(pen=pg.mkPen(c, width=2), name=name),
                 )
@@ -88,7 +96,7 @@ class LivePlots(QWidget):
 
     def _reset(self, state: dict) -> None:
         n = len(state["q"])
-        self.ring = Ring(self.size, 1 + 6 + n + 2)
+        self.ring = Ring(self.size, 1 + 9 + n + 2)
         self.robot = state["robot"]
         for c in self.cur_q:
             self.p_q.removeItem(c)
@@ -106,12 +114,14 @@ class LivePlots(QWidget):
             self.cur_q.append(self.p_q.plot(pen=pg.mkPen(c, width=2), name=state["joint_names"][j]))
 
     def add_state(self, state: dict) -> None:
-        if self.ring is None or state["robot"] != self.robot or len(state["q"]) != self.ring.data.shape[1] - 9:
+        if self.ring is None or state["robot"] != self.robot or len(state["q"]) != self.ring.data.shape[1] - 12:
             self._reset(state)
         err = state.get("solver_error")
+        command = state.get("command") or (np.nan, np.nan, np.nan)
         self.ring.push(
             [
                 state["t"],
+                *command,
                 *state["target"],
                 *state["tool"],
                 *state["q"],
@@ -125,16 +135,17 @@ class LivePlots(QWidget):
             return
         d = self.ring.view()
         t = d[:, 0] - d[-1, 0]
-        for k, (c_target, c_tool) in enumerate(self.cur_xyz):
-            c_target.setData(t, d[:, 1 + k])
-            c_tool.setData(t, d[:, 4 + k])
+        for k, (c_command, c_target, c_tool) in enumerate(self.cur_xyz):
+            c_command.setData(t, d[:, 1 + k], connect="finite")
+            c_target.setData(t, d[:, 4 + k])
+            c_tool.setData(t, d[:, 7 + k])
         for j, c in enumerate(self.cur_q):
-            c.setData(t, d[:, 7 + j])
+            c.setData(t, d[:, 10 + j])
         self.cur_err.setData(t, d[:, -2])
         self.cur_time.setData(t, d[:, -1])
         if self.frames_drawn % 30 == 0:
-            self._fit_y(self.p_xyz, d[:, 1:7])
-            self._fit_y(self.p_q, d[:, 7:-2])
+            self._fit_y(self.p_xyz, d[:, 1:10])
+            self._fit_y(self.p_q, d[:, 10:-2])
             self._fit_y(self.p_s, d[:, -2:])
         self.frames_drawn += 1
         self.frame.emit()

@@ -1,14 +1,25 @@
-"""Status area as in the lab's HMI: timestamped log, a light per subsystem, a big STOP."""
+"""Status area as in the lab's HMI: a light per subsystem, the alarm list, a timestamped log, a big STOP."""
 
 from __future__ import annotations
 
 import time
 
-from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QFont
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QPlainTextEdit, QPushButton, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import (
+    QHBoxLayout,
+    QLabel,
+    QPlainTextEdit,
+    QPushButton,
+    QSizePolicy,
+    QSplitter,
+    QVBoxLayout,
+    QWidget,
+)
 
-LIGHT = {"ok": "#3c9d3c", "warn": "#e0a020", "error": "#d9534f", "off": "#666666"}
+from ui.widgets.alarms import AlarmPanel
+
+LIGHT = {"ok": "#3c9d3c", "warn": "#e0a020", "error": "#d9534f", "off": "#666666", "unknown": "#8a8aa0"}
 
 
 class StatusLight(QLabel):
@@ -16,6 +27,8 @@ class StatusLight(QLabel):
         super().__init__(parent)
         self.name = name
         self.setToolTip(tooltip)
+        self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)  # a long detail is cut, not widening
+        self.setMinimumWidth(120)
         self.state = "off"
         self.set("off")
 
@@ -35,6 +48,8 @@ class StatusPanel(QWidget):
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
         lay = QHBoxLayout(self)
+        lay.setContentsMargins(4, 2, 4, 2)
+        self.setMaximumHeight(230)  # the machines stay in view on a 800-px screen
         left = QVBoxLayout()
         lights = QHBoxLayout()
         self.lights = {
@@ -43,18 +58,24 @@ class StatusPanel(QWidget):
             "plant": StatusLight("plant", "simulated manipulator: moving, holding, E-STOP"),
         }
         for w in self.lights.values():
-            lights.addWidget(w)
-        lights.addStretch(1)
+            lights.addWidget(w, 1)
         left.addLayout(lights)
+        split = QSplitter(Qt.Horizontal)
+        self.alarms = AlarmPanel()
+        split.addWidget(self.alarms)
         self.log_view = QPlainTextEdit()
         self.log_view.setReadOnly(True)
         self.log_view.setMaximumBlockCount(2000)
-        self.log_view.setToolTip("event log (UTC time stamps)")
-        left.addWidget(self.log_view)
+        self.log_view.setToolTip("event log (UTC time stamps); always scrolled to the newest line")
+        self.log_view.setFocusPolicy(Qt.NoFocus)
+        split.addWidget(self.log_view)
+        split.setSizes([560, 440])
+        left.addWidget(split, 1)
         lay.addLayout(left, 1)
         right = QVBoxLayout()
         self.stop = QPushButton("STOP")
-        self.stop.setMinimumSize(150, 90)
+        self.stop.setFocusPolicy(Qt.NoFocus)  # never takes the keyboard: Space stays STOP everywhere
+        self.stop.setMinimumSize(150, 80)
         f = QFont()
         f.setPointSize(22)
         f.setBold(True)
@@ -63,14 +84,21 @@ class StatusPanel(QWidget):
             "QPushButton { background: #c9302c; color: white; border-radius: 8px; }"
             "QPushButton:pressed { background: #8b1e1b; }"
         )
-        self.stop.setToolTip("E-STOP: stops all motion within one engine tick and latches (Space or Esc)")
+        self.stop.setToolTip(
+            "E-STOP: stops every machine within one engine tick and latches (Space, from any tab or dialog, "
+            "or the joystick's stop button)"
+        )
         self.stop.clicked.connect(self.stop_clicked)
         right.addWidget(self.stop)
         self.latched = QLabel("")
         self.latched.setStyleSheet("color: #d9534f; font-weight: bold;")
         right.addWidget(self.latched)
         self.reset = QPushButton("Reset E-STOP")
-        self.reset.setToolTip("clear a latched E-STOP (operator only)")
+        self.reset.setFocusPolicy(Qt.NoFocus)
+        self.reset.setToolTip(
+            "clear a latched E-STOP (operator only); every machine keeps holding until you command it anew: "
+            "centre the stick and press enable, or choose a mode"
+        )
         self.reset.setEnabled(False)
         self.reset.clicked.connect(self.reset_clicked)
         right.addWidget(self.reset)
@@ -80,6 +108,8 @@ class StatusPanel(QWidget):
     def add_log(self, level: str, text: str) -> None:
         stamp = time.strftime("%H:%M:%S", time.gmtime())
         self.log_view.appendPlainText(f"{stamp}  {level.upper():7s} {text}")
+        bar = self.log_view.verticalScrollBar()
+        bar.setValue(bar.maximum())  # always the newest entry, also after the operator scrolled up
 
     def show_estop(self, latched: bool) -> None:
         if latched == getattr(self, "_latched_shown", None):
@@ -87,3 +117,9 @@ class StatusPanel(QWidget):
         self._latched_shown = latched
         self.latched.setText("E-STOP LATCHED" if latched else "")
         self.reset.setEnabled(latched)
+
+    def set_lost(self) -> None:
+        """The engine is out of reach: nothing is known about input or plant."""
+        self.lights["engine"].set("error", "LOST")
+        self.lights["input"].set("unknown", "unknown")
+        self.lights["plant"].set("unknown", "unknown")

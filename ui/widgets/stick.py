@@ -6,7 +6,7 @@ from typing import ClassVar
 
 from PyQt5.QtCore import QPointF, Qt, pyqtSignal
 from PyQt5.QtGui import QBrush, QColor, QPainter, QPen
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSlider, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSlider, QVBoxLayout, QWidget
 
 
 class StickPad(QWidget):
@@ -74,32 +74,63 @@ class StickPad(QWidget):
 
 
 class VirtualStick(QWidget):
-    """Pad for x/y plus a z slider; emits (x, y, z, held) whenever anything changes."""
+    """Pad for x/y, a z slider, an optional auxiliary slider (w) and a separate ENABLE (deadman).
 
-    changed = pyqtSignal(float, float, float, bool)
+    Deflection and enable are separate, as on a joystick: the pad and sliders spring back to
+    neutral when released, the enable is held with the ENABLE button or the Shift key.  So in
+    position mode releasing the pad while enable is held returns the tool to x_w, and releasing
+    enable holds the machine where it is.  Emits ``changed(x, y, z, w, enabled)`` on every change.
+    """
 
-    def __init__(self, parent=None) -> None:
+    changed = pyqtSignal(float, float, float, float, bool)
+
+    def __init__(self, parent=None, aux_axis: str | None = None) -> None:
         super().__init__(parent)
         lay = QHBoxLayout(self)
         self.pad = StickPad()
         lay.addWidget(self.pad, 1)
-        col = QVBoxLayout()
-        col.addWidget(QLabel("z"))
-        self.z = QSlider(Qt.Vertical)
-        self.z.setRange(-100, 100)
-        self.z.setToolTip("z deflection in [−1, 1]; springs back to 0 when released")
-        self.z.sliderReleased.connect(lambda: self.z.setValue(0))
-        col.addWidget(self.z, 1)
-        lay.addLayout(col)
-        self.pad.moved.connect(self._emit)
-        self.z.valueChanged.connect(lambda _v: self._emit(self.pad.x, self.pad.y, self.pad.held))
+        self.z = self._slider(lay, "z", "z deflection in [−1, 1] (Page Up/Down); springs back to 0 when released")
+        self.w = (
+            self._slider(lay, aux_axis, f"{aux_axis} in [−1, 1]; springs back to 0 when released") if aux_axis else None
+        )
+        self.enable = QPushButton("ENABLE\n(hold)")
+        self.enable.setToolTip(
+            "deadman: motion only while held (or hold Shift). After a reset, a mode or robot change the engine "
+            "waits for the stick at neutral and a fresh press of enable"
+        )
+        self.enable.setMinimumWidth(70)
+        self.enable.setStyleSheet("QPushButton:pressed { background: #3c9d3c; color: white; }")
+        self.enable.pressed.connect(self._changed)
+        self.enable.released.connect(self._changed)
+        lay.addWidget(self.enable)
+        self.pad.moved.connect(lambda *_: self._changed())
         self.keys: dict[int, bool] = {}
 
-    def _emit(self, x: float, y: float, held: bool) -> None:
-        z = self.z.value() / 100.0
-        self.changed.emit(x, y, z, held or self.z.isSliderDown() or z != 0.0)
+    def _slider(self, lay, label: str, tip: str) -> QSlider:
+        col = QVBoxLayout()
+        col.addWidget(QLabel(label.split()[0]))
+        sl = QSlider(Qt.Vertical)
+        sl.setRange(-100, 100)
+        sl.setToolTip(tip)
+        sl.sliderReleased.connect(lambda: sl.setValue(0))
+        sl.valueChanged.connect(lambda _v: self._changed())
+        col.addWidget(sl, 1)
+        lay.addLayout(col)
+        return sl
 
-    # keyboard: arrows for x/y, Page Up/Down for z, while held
+    @property
+    def enabled(self) -> bool:
+        return self.enable.isDown() or self.keys.get(Qt.Key_Shift, False)
+
+    def values(self) -> tuple[float, float, float, float, bool]:
+        z = self.z.value() / 100.0
+        w = self.w.value() / 100.0 if self.w is not None else 0.0
+        return self.pad.x, self.pad.y, z, w, self.enabled
+
+    def _changed(self) -> None:
+        self.changed.emit(*self.values())
+
+    # keyboard: arrows for x/y, Page Up/Down for z, Shift = enable, while held
     KEYMAP: ClassVar[dict[int, tuple[int, int]]] = {
         Qt.Key_Left: (0, -1),
         Qt.Key_Right: (0, 1),
@@ -108,18 +139,43 @@ class VirtualStick(QWidget):
         Qt.Key_PageDown: (2, -1),
         Qt.Key_PageUp: (2, 1),
     }
+    KEYS = frozenset({*KEYMAP, Qt.Key_Shift})
 
     def key(self, key: int, pressed: bool) -> bool:
-        if key not in self.KEYMAP:
+        """A key press or release; True when it belongs to the stick (arrows, Page Up/Down, Shift)."""
+        if key not in self.KEYS:
             return False
+        if self.keys.get(key, False) == pressed:
+            return True  # auto-repeat or a repeated release: nothing changes
         self.keys[key] = pressed
+        self._apply_keys()
+        return True
+
+    def _apply_keys(self) -> None:
         v = [0.0, 0.0, 0.0]
         for k, down in self.keys.items():
-            if down:
+            if down and k in self.KEYMAP:
                 axis, sign = self.KEYMAP[k]
                 v[axis] += sign
-        held = any(self.keys.values())
-        self.pad.x, self.pad.y = v[0], v[1]
+        if any(self.keys.get(k) for k in self.KEYMAP) or not self.pad.held:
+            self.pad.x, self.pad.y = v[0], v[1]
+            self.pad.update()
+        self.z.blockSignals(True)
+        self.z.setValue(int(100 * v[2]) if not self.z.isSliderDown() else self.z.value())
+        self.z.blockSignals(False)
+        self._changed()
+
+    def release_all(self) -> None:
+        """Every key, the pad and the sliders back to neutral, enable released (focus loss, tab change)."""
+        self.keys.clear()
+        self.pad.held = False
+        self.pad.x = self.pad.y = 0.0
         self.pad.update()
-        self.changed.emit(v[0], v[1], v[2], held)
-        return True
+        for sl in (self.z, self.w):
+            if sl is not None:
+                sl.blockSignals(True)
+                sl.setSliderDown(False)
+                sl.setValue(0)
+                sl.blockSignals(False)
+        self.enable.setDown(False)
+        self._changed()

@@ -1,0 +1,127 @@
+"""The alarm list: every engine's alarms and the GUI's own, with acknowledge one / all.
+
+Rows: first-out mark, time raised, severity, source, text, state (ACTIVE / cleared), and whether
+acknowledged.  Active unacknowledged alarms come first (critical before warning), then the rest,
+newest first.  An alarm leaves the list once it is both cleared and acknowledged.
+"""
+
+from __future__ import annotations
+
+import time
+
+from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtGui import QBrush, QColor
+from PyQt5.QtWidgets import (
+    QAbstractItemView,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QPushButton,
+    QSizePolicy,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
+)
+
+COLUMNS = ("", "time", "severity", "source", "alarm", "state")
+SEVERITY_RANK = {"critical": 0, "warning": 1, "info": 2}
+ROW_COLOR = {"critical": "#5a1d1b", "warning": "#5a4a12", "info": "#1f3a52"}
+
+
+class AlarmPanel(QWidget):
+    """Shows merged alarm lists; ``ack(origin, key)`` asks the owner to acknowledge (key "" = all of origin)."""
+
+    ack = pyqtSignal(str, str)
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        head = QHBoxLayout()
+        self.title = QLabel("Alarms: none")
+        self.title.setStyleSheet("font-weight: bold;")
+        head.addWidget(self.title, 1)
+        self.ack_one = QPushButton("Acknowledge")
+        self.ack_one.setToolTip("acknowledge the selected alarm")
+        self.ack_one.clicked.connect(self._ack_selected)
+        self.ack_all = QPushButton("Acknowledge all")
+        self.ack_all.clicked.connect(self._ack_everything)
+        for b in (self.ack_one, self.ack_all):
+            b.setFocusPolicy(Qt.NoFocus)  # Space is STOP; a focused button would swallow it
+            head.addWidget(b)
+        lay.addLayout(head)
+        self.table = QTableWidget(0, len(COLUMNS))
+        self.table.setHorizontalHeaderLabels(COLUMNS)
+        self.table.verticalHeader().setVisible(False)
+        self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
+        self.table.setSelectionMode(QAbstractItemView.SingleSelection)
+        self.table.setEditTriggers(QAbstractItemView.NoEditTriggers)
+        self.table.setFocusPolicy(Qt.NoFocus)
+        h = self.table.horizontalHeader()
+        for k in range(len(COLUMNS)):
+            h.setSectionResizeMode(k, QHeaderView.ResizeToContents)
+        h.setSectionResizeMode(4, QHeaderView.Stretch)
+        self.table.setMinimumHeight(60)
+        self.table.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Expanding)  # long alarms never widen the window
+        self.title.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+        self.setMinimumWidth(300)
+        lay.addWidget(self.table, 1)
+        self.rows: list[dict] = []
+        self._shown: tuple = ()
+
+    @staticmethod
+    def ordered(alarms: list[dict]) -> list[dict]:
+        return sorted(
+            alarms,
+            key=lambda a: (not (a["active"] and not a["acked"]), SEVERITY_RANK.get(a["severity"], 3), -a["t_raised"]),
+        )
+
+    def set_alarms(self, alarms: list[dict]) -> None:
+        """Each alarm dict as published by an engine, plus ``origin`` (which engine or "gui")."""
+        rows = self.ordered(alarms)
+        key = tuple((a["origin"], a["key"], a["active"], a["acked"], a["text"], a["first_out"]) for a in rows)
+        if key == self._shown:
+            return
+        self._shown = key
+        self.rows = rows
+        selected = self._selected_key()
+        self.table.setRowCount(len(rows))
+        for r, a in enumerate(rows):
+            stamp = time.strftime("%H:%M:%S", time.gmtime(a["t_raised"]))
+            state = ("ACTIVE" if a["active"] else "cleared") + ("" if a["acked"] else ", unacknowledged")
+            cells = ("1st" if a["first_out"] else "", stamp, a["severity"].upper(), a["source"], a["text"], state)
+            for c, text in enumerate(cells):
+                item = QTableWidgetItem(text)
+                if a["active"] and not a["acked"]:
+                    item.setBackground(QBrush(QColor(ROW_COLOR.get(a["severity"], "#333"))))
+                    item.setForeground(QBrush(QColor("white")))
+                elif not a["active"]:
+                    item.setForeground(QBrush(QColor("#888")))
+                if c == 0:
+                    item.setToolTip("first out: the first alarm raised while none was active")
+                self.table.setItem(r, c, item)
+            if (a["origin"], a["key"]) == selected:
+                self.table.selectRow(r)
+        n_active = sum(a["active"] for a in rows)
+        n_new = sum(not a["acked"] for a in rows)
+        self.title.setText(f"Alarms: {n_active} active, {n_new} unacknowledged" if rows else "Alarms: none")
+        crit = any(a["active"] and not a["acked"] and a["severity"] == "critical" for a in rows)
+        self.title.setStyleSheet(f"font-weight: bold; color: {'#d9534f' if crit else 'palette(text)'};")
+
+    def _selected_key(self) -> tuple[str, str] | None:
+        r = self.table.currentRow()
+        if 0 <= r < len(self.rows) and self.table.selectionModel().isRowSelected(r, self.table.rootIndex()):
+            return self.rows[r]["origin"], self.rows[r]["key"]
+        return None
+
+    def _ack_selected(self) -> None:
+        sel = self._selected_key()
+        if sel is None and self.rows:  # nothing selected: the top row (the newest most severe)
+            sel = self.rows[0]["origin"], self.rows[0]["key"]
+        if sel is not None:
+            self.ack.emit(*sel)
+
+    def _ack_everything(self) -> None:
+        for origin in sorted({a["origin"] for a in self.rows}):
+            self.ack.emit(origin, "")
