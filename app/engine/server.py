@@ -339,6 +339,7 @@ class EngineServer:
         """Run until :meth:`stop` (or for ``duration`` seconds)."""
         next_t = time.perf_counter()
         end = math.inf if duration is None else next_t + duration
+        self._second = (time.monotonic(), self.stats.ticks, self.stats.missed)  # health counts from the loop's start
         last_start = None
         while not self._stop.is_set() and next_t < end:
             start = time.perf_counter()
