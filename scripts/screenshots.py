@@ -1,8 +1,9 @@
 """Make docs/screenshots/*.png by running the real app (engine process + GUI) under Xvfb.
 
-    xvfb-run -s "-screen 0 1600x1000x24" .venv/bin/python scripts/screenshots.py
+    xvfb-run -s "-screen 0 1280x800x24" .venv/bin/python scripts/screenshots.py
 
-Drives the on-screen stick for a few seconds so the plots and the view have something to show.
+Drives the on-screen stick for a few seconds (the arming gesture first: stick centred, then enable
+held with Shift) so the plots and the view have something to show.
 """
 
 from __future__ import annotations
@@ -54,8 +55,7 @@ def main() -> int:
         marine_link_factory=marine_link,
         lab_link_factory=lab_link,
     )
-    win.resize(1600, 1000)
-    win.show()
+    win.show()  # the window sizes itself to the screen (at most 1280 × 800)
     pump(app, 1.5)
     OUT.mkdir(parents=True, exist_ok=True)
     only_lab = "--lab-only" in sys.argv
@@ -105,13 +105,20 @@ def motion_lab(app: QApplication, win: MainWindow) -> None:
 
 
 def other_tabs(app: QApplication, win: MainWindow) -> None:
+    from PyQt5.QtCore import Qt
+
     stick = win.teleop.stick
+    stick.release_all()
+    pump(app, 0.3)
+    stick.key(Qt.Key_Shift, True)  # enable, pressed with the stick at neutral: the engine arms
+    pump(app, 0.3)
     for x, y, z, secs in ((0.8, 0.0, 0.0, 2.0), (0.0, 0.8, 0.4, 2.0), (-0.6, -0.5, -0.5, 2.0)):
         stick.pad.set_position(x, y, True)
         stick.z.setValue(int(100 * z))
         pump(app, secs)
     stick.pad.set_position(0.0, 0.0, False)
     stick.z.setValue(0)
+    stick.key(Qt.Key_Shift, False)
     pump(app, 0.8)
     win.grab().save(str(OUT / "teleop.png"))
     win.status.stop.click()

@@ -441,3 +441,56 @@ def test_property_random_gui_events_never_leave_a_machine_moving_unbidden(qtbot,
     win.reset()
     win.tabs.setCurrentIndex(0)
     qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=5000)
+
+
+def test_item9_csv_logger_keeps_every_state_while_the_gui_stalls(qtbot, rig, tmp_path):
+    import csv
+
+    win, _ = rig
+    path = tmp_path / "log.csv"
+    win.teleop.log_path.setText(str(path))
+    win.teleop.log_duration.setValue(0.0)
+    win.teleop.start_logger()
+    qtbot.wait(500)
+    time.sleep(1.5)  # the GUI thread is blocked; the link's thread keeps every state it receives
+    qtbot.wait(1000)
+    win.teleop.stop_logger()
+    with open(path) as f:
+        rows = list(csv.reader(f))[1:]
+    t = np.array([float(r[0]) for r in rows])
+    expected = (t[-1] - t[0]) * 50.0  # the engine publishes 50 states per second of its time
+    assert len(rows) >= 0.9 * expected and len(rows) > 80, (len(rows), expected)
+    assert np.all(np.diff(t) > 0)
+
+
+def test_item1_a_dead_child_engine_is_restarted_and_found_again(qtbot, tmp_path):
+    from ui.engine_process import EngineProcess
+
+    proc = EngineProcess()
+    win = MainWindow(
+        EngineLink(proc.url, lost_after=0.5),
+        engine=proc,
+        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
+    )
+    qtbot.addWidget(win)
+    win.show()
+    try:
+        qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=10000)
+        proc.proc.kill()  # the engine process dies under the GUI
+        qtbot.waitUntil(lambda: proc.restarts == 1, timeout=10000)
+        assert "engine process exited" in log_text(win)
+        qtbot.waitUntil(lambda: win.link.connected and win.status.lights["engine"].state != "error", timeout=15000)
+        win.estop()
+        qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=10000)
+    finally:
+        win.close()
+        proc.stop()
+
+
+def test_leaving_a_tab_releases_its_engine_without_a_device_alarm(qtbot, rig):
+    win, _ = rig
+    arm(qtbot, win)
+    win.tabs.setCurrentWidget(win.analysis)  # input now goes nowhere: the teleop engine holds, disarmed
+    qtbot.waitUntil(lambda: not state(win)["flags"]["device"] and not state(win)["flags"]["armed"], timeout=5000)
+    qtbot.wait(500)
+    assert not any(a["key"] in ("device_lost", "stale_input") for a in state(win)["alarms"])

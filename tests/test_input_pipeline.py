@@ -149,3 +149,18 @@ def test_property_enabled_only_after_a_fresh_arming_gesture(events):
             assert all(e for _, e in history[press:])
         else:
             assert not np.any(out.signal)
+
+
+def test_gesture_and_stop_edges_survive_several_samples_in_one_tick():
+    """A loaded engine drains many samples before one control tick: no edge may be lost."""
+    p = InputPipeline()
+    p.set_profile(PAD)
+    p.feed(s(), 0.001)  # neutral, released
+    p.feed(s(enable=True), 0.002)  # pressed at neutral
+    p.feed(s(x=0.6, enable=True), 0.003)
+    out = p.step(0.004)
+    assert out.enabled and out.signal[0] > 0.5
+    p.feed(s(x=0.6, enable=True, stop=True), 0.005)  # the stop button pressed and released between ticks
+    p.feed(s(x=0.6, enable=True, stop=False), 0.006)
+    assert p.step(0.007).stop
+    assert not p.step(0.008).stop

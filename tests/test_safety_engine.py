@@ -328,3 +328,73 @@ def test_teleop_alarms_estop_joint_limit_and_stale():
     ses.estop()
     ses.tick(t + dt, dt)
     assert any(a["key"] == "estop" and a["severity"] == "critical" for a in ses.snapshot()["alarms"])
+
+
+def active_keys(ses):
+    return {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
+
+
+def test_lab_alarms_winch_end_stop_leg_limit_and_payload_below_the_deck():
+    ses = LabSession()
+    t = run_lab(ses, 0.2)
+    ses.lab_winch(mode="local")
+    ses.lab_winch(speed=1.0)  # paying out wire (z-down): the winch runs to its lower end stop
+    for _ in range(40):
+        t = run_lab(ses, 0.25, t0=t)
+        ses.lab_winch(speed=1.0)
+        if "winch_end_stop" in active_keys(ses):
+            break
+    assert "winch_end_stop" in active_keys(ses), ses.snapshot()["winch"]
+    # the tool is on the work point 1.4 m above EM1500's deck: 2.5 m of wire puts the load through it
+    H = ses.lab.platform_pose(1)
+    below = (H[:3, :3].T @ (ses.lab.p_p_g() - H[:3, 3]))[2]  # z-down body frame: positive is below the plate
+    assert below > 0.5 and "payload_below_deck" in active_keys(ses)
+    ses.lab_winch(speed=-1.0)  # haul in: the alarm clears (it stays listed until acknowledged)
+    for _ in range(40):
+        t = run_lab(ses, 0.25, t0=t)
+        ses.lab_winch(speed=-1.0)
+    assert "payload_below_deck" not in active_keys(ses)
+    assert any(a["key"] == "payload_below_deck" and not a["acked"] for a in ses.snapshot()["alarms"])
+    ses.lab.platforms[0].leg_clamped = True
+    ses._check_alarms()
+    assert "leg_limit_em8000" in active_keys(ses)
+
+
+def test_tac_saturation_alarm_names_the_share_of_time():
+    from app.sim.tac import TacScenario
+
+    ses = TacSession(TacScenario(duration=1e5, hs=4.5, tp=9.0, mode="tac"))
+    t = 0.0
+    for _ in range(1000):  # 20 s at Hs 4.5 m: the head alone saturates part of the time
+        t += 0.02
+        ses.tick(t, 0.02)
+        if "saturation" in active_keys(ses):
+            break
+    alarm = next(a for a in ses.snapshot()["alarms"] if a["key"] == "saturation")
+    assert "% of the last 10 s" in alarm["text"]
+
+
+def test_speed_limited_and_singularity_alarms():
+    ses = Session(robot_name="comau_smart5_3dof")
+    ses.set_scaling(k_v=[50.0, 50.0, 50.0])  # far beyond what the joints allow
+    dt, t = 0.002, 0.0
+    for en in (False, True):
+        t += dt
+        ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "stick"), t)
+        ses.tick(t, dt)
+    for _ in range(50):
+        t += dt
+        ses.feed(InputSample((1.0, 0.0, 0.0), (True,), "stick"), t)
+        ses.tick(t, dt)
+    assert "speed_limited" in active_keys(ses)
+    ratios = []
+    rng = np.random.default_rng(3)
+    for _ in range(400):  # find a configuration near a singularity and check the alarm follows it
+        ses.actuators.q[:] = rng.uniform(ses.robot.lower, ses.robot.upper)
+        ratios.append(ses._sigma_ratio())
+        if ratios[-1] < 0.01:
+            break
+    assert ratios[-1] < 0.01
+    ses.ticks = 10  # the singularity measure is evaluated every 10th tick
+    ses._check_alarms(None, dt)
+    assert "near_singularity" in active_keys(ses)

@@ -83,6 +83,7 @@ def run_gui(
         lab_link_factory=scene_link("lab", connect_lab),
     )
     app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
+    win.child_engines = marine_engines  # restarted by the window's watchdog if they die
     win.show()  # sized by MainWindow.fit_to_screen: at most 1280×800, never past the screen
     if quit_after is not None:
         QTimer.singleShot(int(quit_after * 1000), win.close)

@@ -1,8 +1,9 @@
-"""Start the engine as a child process of the GUI (the desktop default)."""
+"""Start the engine as a child process of the GUI (the desktop default), and start it again if it dies."""
 
 from __future__ import annotations
 
 import re
+import socket
 import subprocess
 import sys
 import time
@@ -10,8 +11,19 @@ import time
 from app.net.transport import TransportError
 
 
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that is free now (the engine keeps it across restarts)."""
+    with socket.socket() as so:
+        so.bind(("127.0.0.1", 0))
+        return so.getsockname()[1]
+
+
 class EngineProcess:
-    """``python -m app server`` on a free loopback port; stopped with the GUI."""
+    """``python -m app server`` on a loopback port of its own; stopped with the GUI.
+
+    The port is chosen once, so :meth:`restart` brings the engine back on the same URL and the
+    GUI's link finds it again by itself (a new ``hello``; the new engine starts holding, disarmed).
+    """
 
     def __init__(
         self,
@@ -21,26 +33,44 @@ class EngineProcess:
         timeout: float = 30.0,
         plant: str = "teleop",
     ) -> None:
-        cmd = [sys.executable, "-m", "app", "server", "--bind", "tcp://127.0.0.1:0", "--plant", plant]
+        self.plant = plant
+        self.timeout = timeout
+        self.cmd = [sys.executable, "-m", "app", "server", "--bind", f"tcp://127.0.0.1:{free_port()}", "--plant", plant]
         if plant == "teleop":
-            cmd += ["--robot", robot, "--solver", solver, "--mode", mode]
-        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            self.cmd += ["--robot", robot, "--solver", solver, "--mode", mode]
         self.url = None
-        deadline = time.monotonic() + timeout
+        self.restarts = 0
+        self._start()
+
+    def _start(self) -> None:
+        self.proc = subprocess.Popen(self.cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        url = None
+        deadline = time.monotonic() + self.timeout
         while time.monotonic() < deadline:
             line = self.proc.stdout.readline()
             if not line:
                 break
             m = re.search(r"requests on (tcp://\S+),", line)
             if m:
-                self.url = m.group(1)
+                url = m.group(1)
                 break
-        if self.url is None:
+        if url is None:
             err = self.proc.stderr.read() if self.proc.poll() is not None else ""
             self.stop()
             raise TransportError(
                 f"the engine did not start: {err.strip().splitlines()[-1] if err.strip() else 'timeout'}"
             )
+        self.url = url
+
+    def exited(self) -> int | None:
+        """The exit code if the process has ended, else None."""
+        return self.proc.poll()
+
+    def restart(self) -> None:
+        """Start the engine again on the same URL (after it died)."""
+        self.stop()
+        self.restarts += 1
+        self._start()
 
     def stop(self) -> None:
         if self.proc.poll() is None:

@@ -48,9 +48,10 @@ class _Worker(threading.Thread):
         self.estop_queued = 0
         self.estop_reason = ""
         self.input: tuple | None = None  # (axes, buttons, device, t_set)
-        self.device_lost: str | None = None
+        self.device_lost: tuple[str, bool] | None = None  # (device, released deliberately)
         self.latest: dict[str, Any] | None = None
         self.state_seq = 0
+        self.history: collections.deque = collections.deque(maxlen=3000)  # every state, for loggers (60 s at 50/s)
         self.events: collections.deque = collections.deque(maxlen=2000)  # ("log"|"reply"|"conn"|"welcome", ...)
         self.connected = True
         self.role = client.role
@@ -75,11 +76,12 @@ class _Worker(threading.Thread):
             self.input = (tuple(axes), tuple(bool(b) for b in buttons), device, time.monotonic())
             self.device_lost = None
 
-    def clear_input(self, device: str) -> None:
-        """No input from this GUI for this engine any more (tab left, device gone)."""
+    def clear_input(self, device: str, released: bool) -> None:
+        """No input from this GUI for this engine any more: ``released`` (the operator left its tab)
+        or the device is gone."""
         with self.lock:
             self.input = None
-            self.device_lost = device
+            self.device_lost = (device, released)
 
     # ------------------------------------------------------------------ the thread
     def _send(self, mtype: str, **fields: Any) -> bool:
@@ -122,7 +124,7 @@ class _Worker(threading.Thread):
         for mtype, fields in out:
             self._send(mtype, **fields)
         if lost is not None:
-            self._send("device_lost", device=lost[:128])
+            self._send("device_lost", device=lost[0][:128], released=lost[1])
             self._sent_input_key = None
         if inp is not None and now - inp[3] <= INPUT_HOLD:
             key = inp[:3]
@@ -160,6 +162,7 @@ class _Worker(threading.Thread):
                     with self.lock:
                         self.latest = msg["state"]
                         self.state_seq += 1
+                        self.history.append(msg["state"])
                     self._last_state = now
                 elif t == "log":
                     self.events.append(("log", msg["level"], msg["text"]))
@@ -206,13 +209,16 @@ class EngineLink(QObject):
 
     Signals
     -------
-    state(dict)            the newest state snapshot (at most once per GUI poll)
+    state(dict)            the newest state snapshot (at most once per GUI poll: displays)
+    states(list)           every snapshot received since the last poll, oldest first (loggers: none is lost
+                           when the GUI is slow)
     log(str, str)          level, text of engine log lines
     reply(str, bool, str)  request type, ok, error text
     connection(bool, str)  engine reachable or lost, with a message
     """
 
     state = pyqtSignal(dict)
+    states = pyqtSignal(list)
     log = pyqtSignal(str, str)
     reply = pyqtSignal(str, bool, str)
     connection = pyqtSignal(bool, str)
@@ -252,8 +258,8 @@ class EngineLink(QObject):
     def send_input(self, axes, buttons, device: str) -> None:
         self._worker.set_input(axes, buttons, device)
 
-    def clear_input(self, device: str = "") -> None:
-        self._worker.clear_input(device)
+    def clear_input(self, device: str = "", released: bool = True) -> None:
+        self._worker.clear_input(device, released)
 
     # ------------------------------------------------------------------ receiving (GUI thread)
     def poll(self) -> None:
@@ -272,6 +278,10 @@ class EngineLink(QObject):
                     self.log.emit("warning", f"reconnected as {ev[1]}: {ev[2]}")
         with w.lock:
             seq, newest = w.state_seq, w.latest
+            batch = list(w.history)
+            w.history.clear()
+        if batch:
+            self.states.emit(batch)
         if seq != self._seen_seq and newest is not None:
             self._seen_seq = seq
             self.latest = newest

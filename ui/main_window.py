@@ -195,6 +195,11 @@ class MainWindow(QMainWindow):
         self._alarm_timer.setInterval(200)
         self._alarm_timer.timeout.connect(self._refresh_alarms)
         self._alarm_timer.start()
+        self.child_engines: list = []  # scene engine processes started by the GUI (the teleop one is ``engine``)
+        self._watchdog = QTimer(self)
+        self._watchdog.setInterval(1000)
+        self._watchdog.timeout.connect(self.watch_engines)
+        self._watchdog.start()
         self.restore()
         self.teleop.inputs.route(link, self.teleop.stick)
         app = QApplication.instance()
@@ -211,6 +216,21 @@ class MainWindow(QMainWindow):
         if self.motion_lab.link is not None:
             out["Motion-Lab"] = self.motion_lab.link
         return out
+
+    def watch_engines(self) -> None:
+        """A child engine process that died is started again on its URL; its link reconnects by itself
+        and the new engine starts holding, its input disarmed."""
+        if not self.isVisible():
+            return
+        for proc in ([self.engine] if self.engine is not None else []) + list(self.child_engines):
+            code = proc.exited()
+            if code is None:
+                continue
+            self.status.add_log("error", f"the {proc.plant} engine process exited (code {code}): restarting it")
+            try:
+                proc.restart()
+            except Exception as err:  # it does not come back: say so, keep trying on the next tick
+                self.show_error("Engine not restarted", str(err))
 
     # ------------------------------------------------------------------ keyboard
     def _stick_of_current_tab(self):
@@ -403,6 +423,11 @@ class MainWindow(QMainWindow):
             self.status.lights["input"].set("ok" if f.get("armed", True) else "warn", detail)
         else:
             self.status.lights["input"].set("warn", "no input")
+        rt, late = state.get("realtime_factor", 1.0), state.get("late_fraction", 0.0)
+        if rt < 0.95 or late > 0.01:
+            self.status.lights["engine"].set("warn", f"slow: {100 * rt:.0f} % real time, {100 * late:.0f} % late")
+        elif self.link.connected:
+            self.status.lights["engine"].set("ok", "connected")
         choice = (state["robot"], state["solver"], state["mode"])
         if choice != getattr(self, "_choice", None):
             self._choice = choice
@@ -460,6 +485,7 @@ class MainWindow(QMainWindow):
     def closeEvent(self, ev) -> None:
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("windowState", self.saveState())
+        self._watchdog.stop()
         app = QApplication.instance()
         app.removeEventFilter(self)
         self.teleop.stop_logger()

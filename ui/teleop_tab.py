@@ -75,7 +75,7 @@ class InputManager(QObject):
     def route(self, link, stick) -> None:
         """Input now goes to ``link`` (None: nowhere), the on-screen source is ``stick``."""
         if link is not self.link and self.link is not None:
-            self.link.clear_input(self.choice[:128])  # the engine left behind holds at once
+            self.link.clear_input(self.choice[:128], released=True)  # the engine left behind holds at once
         self.link, self.stick = link, stick
 
     def _check_stop(self, joy) -> None:
@@ -99,7 +99,7 @@ class InputManager(QObject):
                 text = f"joystick {ev.device} {'unplugged: the robot holds' if ev.kind == 'removed' else 'plugged in'}"
                 self.notice.emit(level, text)
                 if ev.kind == "removed" and ev.device == self.choice and self.link is not None:
-                    self.link.clear_input(ev.device[:128])
+                    self.link.clear_input(ev.device[:128], released=False)
             names = self.sticks.devices()
             if names != self.known:
                 self.known = names
@@ -279,6 +279,7 @@ class TeleopTab(QWidget):
         self.device.activated.connect(lambda _i: setattr(self.inputs, "choice", self.device.currentText()))
         self._dirty = False
         link.state.connect(self.on_state)
+        link.states.connect(self.log_states)
         link.reply.connect(self.on_reply)
         self.plots.frame.connect(self.refresh)
 
@@ -327,12 +328,17 @@ class TeleopTab(QWidget):
         self.buttons_label.setText(f"buttons: {' '.join(held) if held else '–'}   ({device})")
 
     def on_state(self, state: dict) -> None:
-        """Every state is logged and buffered; widgets are refreshed once per plot frame."""
+        """The newest state; widgets are refreshed from it once per plot frame."""
         self.state = state
-        self.plots.add_state(state)
         self._dirty = True
-        if self.logger is not None and not self.logger.add(state):
-            self.stop_logger()
+
+    def log_states(self, states: list) -> None:
+        """Every snapshot the engine published goes to the plots' buffer and the CSV logger, also when the
+        GUI lags behind the stream."""
+        for st in states:
+            self.plots.add_state(st)
+            if self.logger is not None and not self.logger.add(st):
+                self.stop_logger()
 
     def refresh(self) -> None:
         """Once per frame (30/s): view, bars and controls from the newest state."""

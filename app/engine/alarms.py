@@ -51,11 +51,31 @@ class AlarmList:
         self._note = note or (lambda level, text: None)
         self._clock = clock
         self.items: dict[str, Alarm] = {}
+        self._streak: dict[str, tuple[bool, int]] = {}
 
-    def set(self, key: str, active: bool, severity: str = "warning", text: str = "", source: str | None = None) -> None:
-        """State a condition; raises, updates or clears the alarm ``key``."""
+    def set(
+        self,
+        key: str,
+        active: bool,
+        severity: str = "warning",
+        text: str = "",
+        source: str | None = None,
+        debounce: int = 1,
+    ) -> None:
+        """State a condition; raises, updates or clears the alarm ``key``.
+
+        ``debounce``: the condition must hold (or be gone) on this many consecutive calls before the
+        alarm is raised (or cleared), so a condition that flickers tick by tick is one alarm, not many.
+        """
         if severity not in SEVERITIES:
             raise ValueError(f"severity must be one of {SEVERITIES}, got {severity!r}")
+        if debounce > 1:
+            last, n = self._streak.get(key, (active, 0))
+            n = n + 1 if last == active else 1
+            self._streak[key] = (active, n)
+            current = self.items.get(key)
+            if n < debounce and (current is not None and current.active) != active:
+                return
         a = self.items.get(key)
         if active:
             if a is None or not a.active:

@@ -13,7 +13,6 @@ stands until the operator commands it anew.
 
 from __future__ import annotations
 
-import math
 import time
 from collections import deque
 from dataclasses import dataclass, field
@@ -184,8 +183,8 @@ class LabSession:
 
     set_robot = set_solver = set_mode = set_scaling = _not_here
 
-    def feed(self, sample, now: float) -> None:
-        self.input.feed(sample, now)
+    def feed(self, sample, now: float, released: bool = False) -> None:
+        self.input.feed(sample, now, released)
 
     # ------------------------------------------------------------------ loop
     def _apply_input(self, now: float) -> None:
@@ -206,7 +205,7 @@ class LabSession:
         remote = lab.comau_mode == "remote" or lab.winch.mode == "remote"
         al.set(
             "device_lost",
-            remote and not fl["device"] and self.input.sample_time > -math.inf,
+            remote and self.input.lost,
             "warning",
             "input device lost: Comau and winch hold",
         )

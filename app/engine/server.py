@@ -221,7 +221,7 @@ class EngineServer:
                 self._pending_latency = (msg["t_send"], msg["seq"])
             return
         if mtype == "device_lost":
-            self.session.feed(None, now)
+            self.session.feed(None, now, released=bool(msg.get("released", False)))
             return
         try:
             if mtype == "set_robot":

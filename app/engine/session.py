@@ -194,9 +194,9 @@ class Session:
             self.note("info", "E-STOP reset: holding; centre the stick and press enable to drive")
 
     # ------------------------------------------------------------------ input
-    def feed(self, sample: InputSample | None, now: float) -> None:
+    def feed(self, sample: InputSample | None, now: float, released: bool = False) -> None:
         """The latest reading of the input device (None: no device connected), at engine receive time."""
-        self.input.feed(sample, now)
+        self.input.feed(sample, now, released)
 
     # ------------------------------------------------------------------ control tick
     def _hold(self) -> None:
@@ -227,6 +227,7 @@ class Session:
             self._check_alarms(None, dt)
             return
         s = inp.signal[:3]
+        q_ref_before = self.q_ref.copy()
         budget = DEFAULT if solve_budget is None else solve_budget
         xdot = None
         if self.mode == "position":
@@ -250,19 +251,21 @@ class Session:
                 self.target = x_ref
         if res is not None:
             self.solver_cost, self.solver_time, self.solver_ok = res.error, res.time_s, res.success
-        q_prev_ref = self.actuators.q.copy()
         self.actuators.step(self.q_ref, dt)
-        self._check_alarms(xdot, dt, q_prev_ref)
+        self._check_alarms(xdot, dt, q_ref_before)
 
     # ------------------------------------------------------------------ alarms
     def _check_alarms(self, xdot, dt: float, q_before=None) -> None:
-        """Per tick: E-STOP, input, joint limits against the command, speed limiting, singularity."""
+        """Per tick: E-STOP, input, joint limits against the command, speed limiting, singularity.
+
+        ``q_before``: the joint reference before this tick's solve; the reference's tool step is
+        compared with the commanded one (velocity mode)."""
         al = self.alarms
         flags = self.input.flags()
         al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
         al.set(
             "device_lost",
-            not self.input.connected and self.input.sample_time > -math.inf,
+            self.input.lost,
             "warning",
             "input device lost: holding",
         )
@@ -285,8 +288,11 @@ class Session:
                 k = int(np.flatnonzero(at_lo | at_hi)[0])
                 blocked = f"{self.robot.joint_names[k]} at its {'lower' if at_lo[k] else 'upper'} limit"
             limited = not blocked and progress < 0.9
-        al.set("joint_limit", bool(blocked), "warning", f"{blocked}: commanded direction blocked")
-        al.set("speed_limited", limited, "info", "speed limited: k_v asks for more than the joints allow")
+        n = max(1, round(0.1 / dt))  # 100 ms: one alarm per episode, not one per tick
+        al.set("joint_limit", bool(blocked), "warning", f"{blocked}: commanded direction blocked", debounce=n)
+        al.set(
+            "speed_limited", limited, "info", "speed limited: k_v asks for more than the joints allow", debounce=n
+        )
         if self.ticks % 10 == 0:
             ratio = self._sigma_ratio()
             text = f"near a singularity (σ ratio {ratio:.3f})"

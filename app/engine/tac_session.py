@@ -111,8 +111,8 @@ class TacSession:
 
     set_robot = set_solver = set_mode = set_scaling = _teleop_only
 
-    def feed(self, sample, now: float) -> None:
-        self.input.feed(sample, now)
+    def feed(self, sample, now: float, released: bool = False) -> None:
+        self.input.feed(sample, now, released)
 
     # ------------------------------------------------------------------ loop
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:

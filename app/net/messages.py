@@ -34,7 +34,7 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
         "buttons": ("bools", True, 64),
         "device": ("str", True, 128),
     },
-    "device_lost": {"device": ("str", False, 128)},
+    "device_lost": {"device": ("str", False, 128), "released": ("bool", False, None)},
     "set_robot": {"robot": ("str", True, 1024)},
     "set_solver": {"solver": ("str", True, 64)},
     "set_mode": {"mode": ("enum", True, MODES)},

@@ -94,6 +94,9 @@ class InputPipeline:
         self._deadman_prev = False
         self._stop_prev = False
         self._mode_prev = False
+        self._stop_edge = self._mode_edge = False
+        self._raw, self._deadman = np.zeros(4), False
+        self.released = False
         self.disarm_reason = "start-up"
         self.stale_count = 0
         self._was_stale = True
@@ -116,53 +119,48 @@ class InputPipeline:
         self.disarm_reason = reason
 
     # ------------------------------------------------------------------ input
-    def feed(self, sample: InputSample | None, now: float) -> None:
-        """The latest reading of the device (None: unplugged), stamped with the engine's receive time."""
+    def feed(self, sample: InputSample | None, now: float, released: bool = False) -> None:
+        """A reading of the device (None: unplugged), stamped with the engine's receive time.
+
+        ``released`` with None: the operator turned to another machine (the GUI left this engine's
+        tab); it holds and disarms like an unplug, without the device-lost alarm.  The arming
+        gesture and the stop / mode button edges are evaluated here, sample by sample, so none is
+        lost when several samples arrive within one control tick."""
         if sample is None:
-            if self.connected:
+            if self.connected and not released:
                 self._note("warning", "input device disconnected: holding")
             self.connected = False
+            self.released = released
             self.sample = None
-            self.disarm("device lost")
+            self.disarm("input released" if released else "device lost")
             return
+        self.released = False
         if not self.connected or (self.sample is not None and self.sample.device != sample.device):
             self._note("info", f"input device {sample.device}")
             if not self.profile_locked:
                 self.profile = profile_for(sample.device, len(sample.axes))
             self.disarm("new device")
+        if self._was_stale:  # back after silence: edges count from this sample on
+            self._deadman_prev = self._stop_prev = self._mode_prev = False
+            self._was_stale = False
         self.connected = True
         self.sample, self.sample_time = sample, now
+        self._gesture(sample)
 
-    def _button(self, index: int | None) -> bool:
-        b = self.sample.buttons if self.sample is not None else ()
-        return index is not None and index < len(b) and bool(b[index])
-
-    def _state(self, sig, raw, enabled, deadman, stale, stop, mode, reason) -> InputState:
-        return InputState(sig, raw, enabled, self.armed, deadman, stale, self.connected, stop, mode, reason)
-
-    def step(self, now: float) -> InputState:
-        """Evaluate the chain at engine time ``now``; call once per control tick."""
+    def _gesture(self, sample: InputSample) -> None:
         prof = self.profile
-        sample = self.sample
-        stale = sample is None or (now - self.sample_time) > self.stale_timeout
-        if stale:
-            if not self._was_stale and sample is not None:
-                self.stale_count += 1
-                self._note("warning", f"input stale (nothing for {self.stale_timeout * 1e3:.0f} ms): holding")
-            self._was_stale = True
-            if self.armed or self._seen_neutral_released:
-                self.disarm("stale input" if sample is not None else "no input")
-            self._deadman_prev = self._stop_prev = self._mode_prev = False
-            why = "input device unplugged" if not self.connected and sample is None else "no fresh input"
-            self.last = self._state(np.zeros(4), np.zeros(4), False, False, True, False, False, why)
-            return self.last
-        self._was_stale = False
         raw = shape_input(prof.signal(sample.axes), prof.deadzone, prof.expo)
         neutral = not np.any(raw)
         deadman = prof.enabled(sample.buttons)
         has_enable = prof.enable_button is not None
-        stop_btn, mode_btn = self._button(prof.stop_button), self._button(prof.mode_button)
-        stop, mode_toggle = stop_btn and not self._stop_prev, mode_btn and not self._mode_prev
+        b = sample.buttons
+
+        def held(index: int | None) -> bool:
+            return index is not None and index < len(b) and bool(b[index])
+
+        stop_btn, mode_btn = held(prof.stop_button), held(prof.mode_button)
+        self._stop_edge |= stop_btn and not self._stop_prev
+        self._mode_edge |= mode_btn and not self._mode_prev
         self._stop_prev, self._mode_prev = stop_btn, mode_btn
         if self.armed and not deadman:
             self.disarm("enable released")
@@ -174,6 +172,28 @@ class InputPipeline:
                 self.armed = True
                 self._note("info", "input armed: the operator drives")
         self._deadman_prev = deadman
+        self._raw, self._deadman = raw, deadman
+
+    def _state(self, sig, raw, enabled, deadman, stale, stop, mode, reason) -> InputState:
+        return InputState(sig, raw, enabled, self.armed, deadman, stale, self.connected, stop, mode, reason)
+
+    def step(self, now: float) -> InputState:
+        """Evaluate the chain at engine time ``now``; call once per control tick."""
+        stop, mode_toggle = self._stop_edge, self._mode_edge
+        self._stop_edge = self._mode_edge = False
+        sample = self.sample
+        stale = sample is None or (now - self.sample_time) > self.stale_timeout
+        if stale:
+            if not self._was_stale and sample is not None:
+                self.stale_count += 1
+                self._note("warning", f"input stale (nothing for {self.stale_timeout * 1e3:.0f} ms): holding")
+            self._was_stale = True
+            if self.armed or self._seen_neutral_released:
+                self.disarm("stale input" if sample is not None else "no input")
+            why = "input device unplugged" if not self.connected and sample is None else "no fresh input"
+            self.last = self._state(np.zeros(4), np.zeros(4), False, False, True, stop, False, why)
+            return self.last
+        raw, deadman = self._raw, self._deadman
         enabled = self.armed and deadman
         if enabled:
             reason = ""
@@ -186,6 +206,11 @@ class InputPipeline:
         return self.last
 
     # ------------------------------------------------------------------ state
+    @property
+    def lost(self) -> bool:
+        """A device that was sending is gone (unplugged or silent link), not deliberately released."""
+        return not self.connected and self.sample_time > -math.inf and not self.released
+
     def flags(self) -> dict:
         s = self.last
         return {
