@@ -510,7 +510,6 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         left = QVBoxLayout()
         left.addWidget(cbox)
         left.addWidget(wbox)
-        left.addWidget(rbox)
         left.addWidget(self.vvmc)
         left.addWidget(self.readout)
         left.addStretch(1)
@@ -528,6 +527,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         for p in (self.joint_plot, self.wire_plot):
             p.showGrid(x=True, y=True, alpha=0.3)
         right = QVBoxLayout()
+        rbox.setMaximumHeight(200)
+        right.addWidget(rbox)
         right.addWidget(self.joint_plot, 2)
         right.addWidget(self.wire_plot, 1)
         grid.addWidget(lw, 0, 0)

@@ -419,7 +419,7 @@ class MainWindow(QMainWindow):
         else:
             self.status.lights["plant"].set("warn", "holding")
         if f["device"] and not f["stale_input"]:
-            detail = f["device_name"][:24] + ("" if f.get("armed", True) else " (not armed)")
+            detail = ("" if f.get("armed", True) else "not armed: ") + f["device_name"][:32]
             self.status.lights["input"].set("ok" if f.get("armed", True) else "warn", detail)
         else:
             self.status.lights["input"].set("warn", "no input")

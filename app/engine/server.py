@@ -321,6 +321,7 @@ class EngineServer:
                 f"engine at {100 * self.realtime_factor:.0f} % of real time, "
                 f"{100 * self.late_fraction:.1f} % of ticks late in the last second",
                 source="engine",
+                debounce=2,  # two seconds in a row: one alarm per episode, not one per second
             )
 
     def step(self, now: float) -> None:

@@ -80,6 +80,10 @@ class AlarmPanel(QWidget):
     def set_alarms(self, alarms: list[dict]) -> None:
         """Each alarm dict as published by an engine, plus ``origin`` (which engine or "gui")."""
         rows = self.ordered(alarms)
+        # first-out across every engine: of the alarms their engines marked first, the earliest still shown
+        firsts = [a for a in rows if a["first_out"]]
+        first = min(firsts, key=lambda a: a["t_raised"]) if firsts else None
+        rows = [{**a, "first_out": a is first} for a in rows]
         key = tuple((a["origin"], a["key"], a["active"], a["acked"], a["text"], a["first_out"]) for a in rows)
         if key == self._shown:
             return

@@ -43,10 +43,10 @@ class LivePlots(QWidget):
         self.glw = pg.GraphicsLayoutWidget()
         lay.addWidget(self.glw)
         self.p_xyz = self.glw.addPlot(
-            row=0, col=0, title="tool x, y, z [m]: command (dotted), solver target (dashed), reached"
+            row=0, col=0, title="tool x, y, z [m]"
         )
-        self.p_q = self.glw.addPlot(row=1, col=0, title="joints (limit bands shaded) [rad, m]")
-        self.p_s = self.glw.addPlot(row=2, col=0, title="solver: error [m] (red), time [ms] (blue)")
+        self.p_q = self.glw.addPlot(row=1, col=0, title="joints [rad, m] (limits shaded)")
+        self.p_s = self.glw.addPlot(row=2, col=0, title="solver error [m] (red), time [ms] (blue)")
         for p in (self.p_xyz, self.p_q, self.p_s):
             p.showGrid(x=True, y=True, alpha=0.25)
             p.setClipToView(True)
@@ -63,7 +63,10 @@ class LivePlots(QWidget):
         )
         self.p_q.setToolTip("joint values [rad or m] with their limits as bands")
         self.p_s.setToolTip("last solve: position error [m] and solve time [ms]")
-        self.p_xyz.addLegend(offset=(5, 5))
+        self.p_xyz.addLegend(offset=(5, 5), colCount=5)
+        grey = (170, 170, 170)
+        for label, style, width in (("command", pg.QtCore.Qt.DotLine, 4), ("solver target", pg.QtCore.Qt.DashLine, 1)):
+            self.p_xyz.plot([], [], pen=pg.mkPen(grey, width=width, style=style), name=label)  # legend keys
         self.cur_xyz = []
         for k, name in enumerate("xyz"):
             c = COLORS[k]
