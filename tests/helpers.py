@@ -8,3 +8,25 @@ import numpy as np
 def random_q(robot, rng: np.random.Generator, n: int) -> np.ndarray:
     """n configurations drawn uniformly inside the joint limits, shape (n, dof)."""
     return rng.uniform(robot.lower, robot.upper, size=(n, robot.n_joints))
+
+
+def wait_for(client, predicate, timeout: float = 8.0) -> dict:
+    """The first state snapshot (from a protocol Client) that satisfies predicate, within timeout [s]."""
+    import time
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        st_ = client.recv_state(0.5)
+        if st_ is not None and predicate(st_):
+            return st_
+    raise AssertionError("state never satisfied the condition")
+
+
+def arm(client, n_axes: int = 3) -> None:
+    """Stick centred with the deadman released, then pressed: the engine arms the input."""
+    import time
+
+    for pressed in (False, True):
+        for _ in range(5):
+            client.send_input([0.0] * n_axes, [pressed], "stick")
+            time.sleep(0.005)

@@ -19,6 +19,7 @@ from app.net.transport import Client, TransportError, check_url, is_local
 from app.teleop.client import run_joystick_client
 from app.teleop.devices import PygameJoysticks
 from app.teleop.virtual import VirtualJoystick
+from tests.helpers import arm, wait_for
 
 
 # ------------------------------------------------------------------ codec
@@ -153,23 +154,6 @@ def engine():
         srv.stop()
         th.join(timeout=5)
         srv.close()
-
-
-def wait_for(client, predicate, timeout=5.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        st_ = client.recv_state(0.5)
-        if st_ is not None and predicate(st_):
-            return st_
-    raise AssertionError("state never satisfied the condition")
-
-
-def arm(client, n_axes=3):
-    """Stick centred with the deadman released, then pressed: the engine arms the input."""
-    for pressed in (False, True):
-        for _ in range(5):
-            client.send_input([0.0] * n_axes, [pressed], "stick")
-            time.sleep(0.005)
 
 
 def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):

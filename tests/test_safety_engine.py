@@ -15,6 +15,7 @@ from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.transport import Client, TransportError
 from app.teleop.devices import InputSample
+from tests.helpers import arm, wait_for
 
 
 def serve(session, url="tcp://127.0.0.1:0", rate=500, token=None, duration=60.0):
@@ -28,22 +29,6 @@ def halt(srv, th):
     srv.stop()
     th.join(timeout=5)
     srv.close()
-
-
-def wait_for(client, predicate, timeout=8.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        st_ = client.recv_state(0.5)
-        if st_ is not None and predicate(st_):
-            return st_
-    raise AssertionError("state never satisfied the condition")
-
-
-def arm(client, n_axes=3):
-    for pressed in (False, True):
-        for _ in range(5):
-            client.send_input([0.0] * n_axes, [pressed], "stick")
-            time.sleep(0.005)
 
 
 # ---------------------------------------------------------------------------- item 1
