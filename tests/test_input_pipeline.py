@@ -96,14 +96,36 @@ def test_stop_button_is_a_rising_edge_even_when_disarmed():
     assert feed_step(p, s(stop=True), 0.03).stop
 
 
-def test_profile_without_enable_arms_through_neutral():
+def test_profile_without_enable_never_drives():
+    """No deadman, no driving: a profile must name an enable button to move anything."""
     p = InputPipeline()
-    p.set_profile(parse_profile("name='free'\n[axes.x]\nindex=0\n"))
-    assert not feed_step(p, InputSample((0.9,), (), "free"), 0.0).enabled
-    assert feed_step(p, InputSample((0.0,), (), "free"), 0.01).enabled
-    assert feed_step(p, InputSample((0.9,), (), "free"), 0.02).signal[0] == pytest.approx(
-        (0.9 - 0.08) / 0.92
-    )  # deadzone rescaled
+    p.set_profile(parse_profile("name='free'\nstop_button=1\n[axes.x]\nindex=0\n"))
+    for k, x in enumerate((0.0, 0.9, 0.0, 0.9)):
+        out = feed_step(p, InputSample((x,), (False, False), "free"), 0.01 * k)
+        assert not out.enabled and not np.any(out.signal)
+    assert "no enable (deadman) button" in out.reason
+    assert feed_step(p, InputSample((0.0,), (False, True), "free"), 0.1).stop  # its stop button still stops
+
+
+def test_mode_button_held_through_a_stale_gap_does_not_toggle_again():
+    p = InputPipeline()
+    p.set_profile(PAD)
+    assert feed_step(p, s(mode=True), 0.0).mode_toggle
+    assert p.step(0.5).stale  # silence
+    assert not feed_step(p, s(mode=True), 0.6).mode_toggle  # still the same press
+
+
+def test_unused_axes_need_not_be_centred_to_arm():
+    """A throttle (w) left off centre does not block arming an arm that drives x, y, z only."""
+    p = InputPipeline(axes=3)
+    p.set_profile(PAD)
+    feed_step(p, s(w=0.7), 0.0)
+    out = feed_step(p, s(w=0.7, enable=True), 0.01)
+    assert out.enabled and out.signal[3] == 0.0
+    lab = InputPipeline(axes=4)
+    lab.set_profile(PAD)
+    feed_step(lab, s(w=0.7), 0.0)
+    assert not feed_step(lab, s(w=0.7, enable=True), 0.01).enabled  # the lab drives w: it must be centred
 
 
 def test_profile_buttons_must_differ():

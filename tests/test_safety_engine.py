@@ -383,3 +383,73 @@ def test_speed_limited_and_singularity_alarms():
     ses.ticks = 10  # the singularity measure is evaluated every 10th tick
     ses._check_alarms(None, dt)
     assert "near_singularity" in active_keys(ses)
+
+
+# ---------------------------------------------------------------------------- second review's findings
+def teleop_arm(ses, t, dt=0.002):
+    for en in (False, True):
+        t += dt
+        ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "stick"), t)
+        ses.tick(t, dt)
+    assert ses.snapshot()["flags"]["enabled"]
+    return t
+
+
+def teleop_run(ses, t, seconds, x=0.0, enable=True, dt=0.002):
+    for _ in range(round(seconds / dt)):
+        t += dt
+        ses.feed(InputSample((x, 0.0, 0.0), (enable,), "stick"), t)
+        ses.tick(t, dt)
+    return t
+
+
+def test_position_mode_arming_at_neutral_never_moves_the_tool():
+    """Re-arming after the tool was left away from x_w (released enable) must not pull it back to x_w."""
+    ses = Session(robot_name="comau_smart5_3dof", mode="position")
+    t = teleop_arm(ses, 0.0)
+    t = teleop_run(ses, t, 2.0, x=0.8)
+    t = teleop_run(ses, t, 0.5, x=0.8, enable=False)  # enable released while deflected: holds there
+    held = np.array(ses.snapshot()["tool"])
+    t = teleop_run(ses, t, 0.1, x=0.0, enable=False)
+    t = teleop_arm(ses, t)
+    teleop_run(ses, t, 1.0, x=0.0)
+    np.testing.assert_allclose(ses.snapshot()["tool"], held, atol=1e-6)
+
+
+def test_scaling_and_solver_changes_disarm():
+    ses = Session(robot_name="comau_smart5_3dof", mode="position")
+    t = teleop_arm(ses, 0.0)
+    p = np.array(ses.snapshot()["tool"])
+    ses.set_scaling(x_w=list(p + [0.3, 0.0, 0.0]))
+    teleop_run(ses, t, 1.0, x=0.0)
+    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-6)
+    assert not ses.snapshot()["flags"]["armed"]
+    t = teleop_arm(ses, t + 1.0)
+    ses.set_solver("ga")
+    assert not ses.snapshot()["flags"]["armed"]
+
+
+def test_vvmc_off_puts_the_comau_in_remote_disarmed():
+    ses = LabSession()
+    ses.input.axes = 4
+    t = run_lab(ses, 0.1, lab_sample(enable=False))
+    t = run_lab(ses, 0.1, lab_sample(enable=True), t0=t)
+    ses.lab_vvmc(True)
+    t = run_lab(ses, 0.5, lab_sample(x=1.0), t0=t)
+    ses.lab_vvmc(False)  # REMOTE now, with the stick still deflected and enable held
+    t = run_lab(ses, 2.0, lab_sample(x=1.0), t0=t)  # the robot brakes from its MOTION_COMP travel
+    q = np.array(ses.snapshot()["comau"]["q"])
+    run_lab(ses, 1.0, lab_sample(x=1.0), t0=t)
+    assert ses.snapshot()["comau"]["mode"] == "remote" and not ses.snapshot()["flags"]["armed"]
+    np.testing.assert_allclose(ses.snapshot()["comau"]["q"], q, atol=1e-6)
+
+
+def test_local_winch_speed_returns_to_zero_when_not_refreshed():
+    ses = LabSession()
+    t = run_lab(ses, 0.2)
+    L0 = ses.snapshot()["winch"]["length"]
+    ses.lab_winch(speed=0.2)  # one slider message, then nothing (a lost GUI, a slider moved by the wheel)
+    t = run_lab(ses, 0.1, t0=t)
+    time.sleep(0.35)
+    run_lab(ses, 5.0, t0=t)
+    assert abs(ses.snapshot()["winch"]["length"] - L0) < 0.05 and ses.lab.winch.speed_command == 0.0

@@ -77,8 +77,8 @@ def test_shipped_profiles_load_and_match():
 
 def test_profile_signal_inverts_and_picks_axes():
     prof = profile_for("Logitech Extreme 3D Pro", 4)
-    # x, y (inverted), z, w (the throttle, inverted: pushed forward is +w)
-    np.testing.assert_allclose(prof.signal((0.5, -0.25, 0.8, 0.9)), [0.5, 0.25, 0.8, -0.9])
+    # x, y (inverted), z; no w: the throttle does not spring back, so it commands nothing
+    np.testing.assert_allclose(prof.signal((0.5, -0.25, 0.8, 0.9)), [0.5, 0.25, 0.8, 0.0])
     np.testing.assert_allclose(default_profile(2).signal((0.3, 0.6)), [0.3, -0.6, 0.0, 0.0])
     assert prof.enabled((True, False)) and not prof.enabled((False, True)) and not prof.enabled(())
 

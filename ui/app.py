@@ -66,12 +66,13 @@ def run_gui(
             if url is not None:
                 return EngineLink(url, role="operator", token=token, name=f"bosun-gui-{plant}")
             proc = EngineProcess(plant=plant)
-            marine_engines.append(proc)
             try:
-                return EngineLink(proc.url, role="operator", name=f"bosun-gui-{plant}")
+                link = EngineLink(proc.url, role="operator", name=f"bosun-gui-{plant}")
             except TransportError:
                 proc.stop()
                 raise
+            marine_engines.append(proc)  # watched (restarted if it dies) only once its link is up
+            return link
 
         return make
 

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import collections
 import re
 import socket
 import subprocess
 import sys
+import threading
 import time
 
 from app.net.transport import TransportError
@@ -40,6 +42,7 @@ class EngineProcess:
             self.cmd += ["--robot", robot, "--solver", solver, "--mode", mode]
         self.url = None
         self.restarts = 0
+        self.output: collections.deque[str] = collections.deque(maxlen=200)
         self._start()
 
     def _start(self) -> None:
@@ -61,6 +64,13 @@ class EngineProcess:
                 f"the engine did not start: {err.strip().splitlines()[-1] if err.strip() else 'timeout'}"
             )
         self.url = url
+        # keep reading what the engine prints: a full pipe would block its loop (the last lines are kept)
+        for pipe in (self.proc.stdout, self.proc.stderr):
+            threading.Thread(target=self._drain, args=(pipe,), daemon=True).start()
+
+    def _drain(self, pipe) -> None:
+        for line in iter(pipe.readline, ""):
+            self.output.append(line.rstrip())
 
     def exited(self) -> int | None:
         """The exit code if the process has ended, else None."""

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtCore import Qt, QTimer, pyqtSignal
 from PyQt5.QtWidgets import (
     QCheckBox,
     QComboBox,
@@ -336,13 +336,27 @@ class PlatformPanel(QWidget):
 
 
 class SpringSlider(QSlider):
-    """A slider that springs back to zero when released (the lab HMI's winch speed control)."""
+    """The lab HMI's winch speed control: a value only while the handle is held, zero otherwise.
+
+    No keyboard focus, no wheel, no jumps by clicking the groove: any value not held by the mouse
+    springs back to zero at once, so nothing but a held handle commands the winch.
+    """
 
     def __init__(self) -> None:
         super().__init__(Qt.Horizontal)
         self.setRange(-100, 100)
         self.setValue(0)
+        self.setFocusPolicy(Qt.NoFocus)
+        self.setPageStep(0)
         self.sliderReleased.connect(lambda: self.setValue(0))
+        self.valueChanged.connect(self._spring)
+
+    def _spring(self, value: int) -> None:
+        if value != 0 and not self.isSliderDown():
+            self.setValue(0)
+
+    def wheelEvent(self, ev) -> None:
+        ev.ignore()
 
 
 class LabScene2D(QWidget):
@@ -492,6 +506,9 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         wl.addRow("wire length", self.wire_bar)
         self.winch_slider = SpringSlider()
         self.winch_slider.valueChanged.connect(self._slider)
+        self._slider_timer = QTimer(self)  # the engine zeroes a LOCAL speed not refreshed for 0.3 s
+        self._slider_timer.setInterval(100)
+        self._slider_timer.timeout.connect(lambda: self._slider(self.winch_slider.value()))
         wl.addRow("speed (springs back)", self.winch_slider)
         rbox = QGroupBox("REMOTE drive (Comau tool x, y, z; winch w)")
         rl = QVBoxLayout(rbox)
@@ -575,6 +592,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self._send(mtype, **fields)
 
     def _slider(self, value: int) -> None:
+        if self.winch_slider.isSliderDown() and not self._slider_timer.isActive():
+            self._slider_timer.start()
+        elif not self.winch_slider.isSliderDown():
+            self._slider_timer.stop()
         if self.state is not None:
             vmax = self.state["winch"]["speed_max"]
             self._send("lab_winch", speed=vmax * value / 100.0)

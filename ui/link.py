@@ -32,7 +32,7 @@ from app.net.codec import ProtocolError, decode_engine, encode
 from app.net.transport import Client, TransportError, client_view_of
 
 INPUT_RATE = 50.0  # Hz: input re-sent at this rate while the GUI keeps it fresh
-INPUT_HOLD = 0.5  # s: the GUI must refresh the input at least this often, or it is no longer sent
+INPUT_HOLD = 0.25  # s: the GUI must refresh the input this often, or it is no longer sent (a frozen GUI stops)
 
 
 class _Worker(threading.Thread):
@@ -43,7 +43,7 @@ class _Worker(threading.Thread):
         self.client = client
         self.role_wanted, self.name, self.token = role, name, token
         self.lost_after = lost_after
-        self.lock = threading.Lock()
+        self.lock = threading.RLock()
         self.outbox: collections.deque = collections.deque()
         self.estop_queued = 0
         self.estop_reason = ""
@@ -66,6 +66,9 @@ class _Worker(threading.Thread):
     def queue(self, mtype: str, fields: dict[str, Any]) -> None:
         with self.lock:
             if mtype == "estop":
+                # STOP goes out first, and a reset the operator gave before it but not yet sent is dropped:
+                # a Reset click followed by STOP must end stopped, whatever order one worker pass sends them in
+                self.outbox = collections.deque(m for m in self.outbox if m[0] != "reset")
                 self.estop_queued += 1
                 self.estop_reason = fields.get("reason", "")
             else:
@@ -126,7 +129,7 @@ class _Worker(threading.Thread):
         if lost is not None:
             self._send("device_lost", device=lost[0][:128], released=lost[1])
             self._sent_input_key = None
-        if inp is not None and now - inp[3] <= INPUT_HOLD:
+        if inp is not None and now - inp[3] <= INPUT_HOLD and self.connected:  # never replayed to a new engine
             key = inp[:3]
             if key != self._sent_input_key or now - self._last_input >= 1.0 / INPUT_RATE:
                 self.client.seq += 1
@@ -188,6 +191,8 @@ class _Worker(threading.Thread):
                 self._receive(now)
             except zmq.ZMQError:
                 pass
+            except Exception as err:  # a bug here must not silently stop the link: say it, go on
+                self.events.append(("log", "error", f"engine link: {type(err).__name__}: {err}"))
             silent = now - self._last_state
             if self.connected and silent > self.lost_after:
                 self.connected = False
@@ -240,6 +245,7 @@ class EngineLink(QObject):
         self.lost_after = lost_after
         self.latest: dict[str, Any] | None = None
         self._seen_seq = 0
+        self._dead_reported = False
         self._worker = _Worker(self.client, role, name, token, lost_after)
         self._worker.start()
         self._timer = QTimer(self)
@@ -249,7 +255,7 @@ class EngineLink(QObject):
 
     @property
     def connected(self) -> bool:
-        return self._worker.connected
+        return self._worker.connected and self._worker.is_alive()
 
     # ------------------------------------------------------------------ sending (thread-safe queues)
     def send(self, mtype: str, **fields: Any) -> None:
@@ -264,6 +270,9 @@ class EngineLink(QObject):
     # ------------------------------------------------------------------ receiving (GUI thread)
     def poll(self) -> None:
         w = self._worker
+        if not w.is_alive() and not self._dead_reported:
+            self._dead_reported = True
+            self.connection.emit(False, "the engine link's thread stopped")
         while w.events:
             ev = w.events.popleft()
             if ev[0] == "log":
@@ -291,7 +300,8 @@ class EngineLink(QObject):
         self._timer.stop()
         self._worker.stop()
         self._worker.join(timeout=2)
-        self.client.close()
+        if not self._worker.is_alive():  # never close sockets a running thread still uses
+            self.client.close()
 
 
 __all__ = ["EngineLink", "TransportError"]

@@ -16,6 +16,7 @@ Safety rules the window keeps (docs/safety.md lists each with its test):
 
 from __future__ import annotations
 
+import threading
 import time
 
 import pyqtgraph as pg
@@ -177,6 +178,8 @@ class MainWindow(QMainWindow):
         self.analysis.error.connect(self.show_error)
         self.teleop.inputs.notice.connect(self.on_input_event)
         self.teleop.inputs.stop_pressed.connect(lambda dev: self.estop(f"stop button of {dev}"))
+        self.crane_head.on_link = lambda lk: self._watch_link("crane head", lk)
+        self.motion_lab.on_link = lambda lk: self._watch_link("Motion-Lab", lk)
         self.crane_head.notice.connect(self.on_marine_notice)
         self.motion_lab.notice.connect(self.on_marine_notice)
         self.status.alarms.ack.connect(self.acknowledge)
@@ -185,7 +188,7 @@ class MainWindow(QMainWindow):
         self.status.add_log("info", f"connected to the engine at {link.client.url} as {link.role}")
         if link.note:
             self.status.add_log("warning", link.note)
-        self.estop_pending: dict[str, list[float]] = {}  # origin -> [t_sent, t_last_send]
+        self.estop_pending: dict[str, list] = {}  # origin -> [t_sent, t_last_send, (engine_id, estops) at send]
         self.lost: set[str] = set()
         self._confirm = QTimer(self)
         self._confirm.setInterval(10)
@@ -196,6 +199,7 @@ class MainWindow(QMainWindow):
         self._alarm_timer.timeout.connect(self._refresh_alarms)
         self._alarm_timer.start()
         self.child_engines: list = []  # scene engine processes started by the GUI (the teleop one is ``engine``)
+        self._restart_errors: list[str] = []
         self._watchdog = QTimer(self)
         self._watchdog.setInterval(1000)
         self._watchdog.timeout.connect(self.watch_engines)
@@ -222,15 +226,24 @@ class MainWindow(QMainWindow):
         and the new engine starts holding, its input disarmed."""
         if not self.isVisible():
             return
+        while self._restart_errors:
+            self.show_error("Engine not restarted", self._restart_errors.pop(0))
         for proc in ([self.engine] if self.engine is not None else []) + list(self.child_engines):
             code = proc.exited()
-            if code is None:
+            if code is None or getattr(proc, "restarting", False):
                 continue
             self.status.add_log("error", f"the {proc.plant} engine process exited (code {code}): restarting it")
-            try:
-                proc.restart()
-            except Exception as err:  # it does not come back: say so, keep trying on the next tick
-                self.show_error("Engine not restarted", str(err))
+            proc.restarting = True
+            # off the GUI thread: STOP and the keyboard stay live while the new process starts
+            threading.Thread(target=self._restart, args=(proc,), daemon=True).start()
+
+    def _restart(self, proc) -> None:
+        try:
+            proc.restart()
+        except Exception as err:  # it does not come back: the next watchdog tick tries again
+            self._restart_errors.append(str(err))
+        finally:
+            proc.restarting = False
 
     # ------------------------------------------------------------------ keyboard
     def _stick_of_current_tab(self):
@@ -282,9 +295,14 @@ class MainWindow(QMainWindow):
     def _tab_changed(self, i: int) -> None:
         self.release_keys()
         w = self.tabs.widget(i)
-        for origin, tab in (("crane head", self.crane_head), ("Motion-Lab", self.motion_lab)):
-            if w is tab and tab.link is None and tab.connect_engine():
-                tab.link.connection.connect(lambda ok, msg, o=origin: self.on_connection(ok, msg, o))
+        for tab in (self.crane_head, self.motion_lab):
+            if w is tab:
+                tab.connect_engine()
+        self._route_input()
+
+    def _watch_link(self, origin: str, link) -> None:
+        """A scene link however it was made (first view, the tab's Start button): lost engine, input."""
+        link.connection.connect(lambda ok, msg, o=origin: self.on_connection(ok, msg, o))
         self._route_input()
 
     def _route_input(self) -> None:
@@ -311,7 +329,8 @@ class MainWindow(QMainWindow):
         for origin, link in self.links().items():
             link.send("estop", reason=why[:200])
             if origin not in self.estop_pending:
-                self.estop_pending[origin] = [now, now]
+                st = getattr(link, "latest", None) or {}
+                self.estop_pending[origin] = [now, now, (st.get("engine_id"), st.get("estops", 0))]
         self.status.add_log("error", f"STOP ({why}): E-STOP sent to {', '.join(self.links())}; awaiting confirmation")
         self._update_banner()
 
@@ -320,16 +339,26 @@ class MainWindow(QMainWindow):
         st = getattr(link, "latest", None) if link is not None else None
         return bool(st) and bool(st.get("flags", {}).get("estop", st.get("estop", False)))
 
+    def _confirms(self, origin: str, before: tuple) -> bool:
+        """The engine's newest state shows the latch and counts an estop received after ours was sent
+        (or comes from a new engine instance): an older latched state never confirms a new STOP."""
+        link = self.links().get(origin)
+        st = getattr(link, "latest", None) or {}
+        if not self._latched(origin) or origin in self.lost or not link.connected:
+            return False
+        engine_id, estops = before
+        return st.get("engine_id") != engine_id or st.get("estops", 0) > estops
+
     def _check_estop(self) -> None:
         now = time.monotonic()
         links = self.links()
         for origin in list(self.estop_pending):
-            t_sent, t_last = self.estop_pending[origin]
+            t_sent, t_last, before = self.estop_pending[origin]
             link = links.get(origin)
             if link is None:
                 del self.estop_pending[origin]
                 continue
-            if self._latched(origin) and origin not in self.lost:
+            if self._confirms(origin, before):
                 del self.estop_pending[origin]
                 self.gui_alarms.set(f"estop_unconfirmed:{origin}", False)
                 self.status.add_log("info", f"E-STOP confirmed by the {origin} engine ({1e3 * (now - t_sent):.0f} ms)")
@@ -357,7 +386,7 @@ class MainWindow(QMainWindow):
     def _update_banner(self) -> None:
         latched = [o for o in self.links() if self._latched(o)]
         self.status.show_estop(bool(latched))
-        late = [o for o, (t0, _) in self.estop_pending.items() if time.monotonic() - t0 > ESTOP_CONFIRM_S]
+        late = [o for o, (t0, *_) in self.estop_pending.items() if time.monotonic() - t0 > ESTOP_CONFIRM_S]
         if late:
             text, color = f"E-STOP NOT CONFIRMED ({', '.join(late)}): the engine did not answer", "#b00000"
         elif latched:

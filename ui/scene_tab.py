@@ -13,6 +13,7 @@ class SceneEngineMixin:
     engine_label = "scene"
     link = None
     link_factory = None
+    on_link = None  # called with each new link (the main window watches it: lost engine, STOP)
 
     def connect_engine(self) -> bool:
         if self.link is not None:
@@ -30,6 +31,8 @@ class SceneEngineMixin:
         self.link.log.connect(lambda lvl, text: self.notice.emit(lvl, f"{self.engine_label}: {text}"))
         self._set_enabled(True)
         self.notice.emit("info", f"{self.engine_label} engine connected")
+        if self.on_link is not None:
+            self.on_link(self.link)
         return True
 
     def _send(self, mtype: str, **fields) -> None:

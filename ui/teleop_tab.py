@@ -57,8 +57,8 @@ class InputManager(QObject):
         self.link = link
         self.stick = None
         self.choice = MANUAL
-        self._stop_prev = False
-        self._profile = None
+        self._stop_prev: dict[str, bool] = {}
+        self._profiles: dict = {}
         try:
             from app.teleop.devices import PygameJoysticks
 
@@ -78,22 +78,25 @@ class InputManager(QObject):
             self.link.clear_input(self.choice[:128], released=True)  # the engine left behind holds at once
         self.link, self.stick = link, stick
 
-    def _check_stop(self, joy) -> None:
+    def _check_stops(self) -> None:
+        """The stop button of every connected joystick (from its profile) stops every engine, selected or not."""
         from app.teleop.profiles import profile_for
 
-        if self._profile is None or self._profile[0] != joy.device:
-            self._profile = (joy.device, profile_for(joy.device, len(joy.axes)))
-        b = self._profile[1].stop_button
-        pressed = b is not None and b < len(joy.buttons) and bool(joy.buttons[b])
-        if pressed and not self._stop_prev:
-            self.stop_pressed.emit(joy.device)
-        self._stop_prev = pressed
+        for name, buttons in self.sticks.buttons_of_all():
+            if name not in self._profiles:
+                self._profiles[name] = profile_for(name, 0)
+            b = self._profiles[name].stop_button
+            pressed = b is not None and b < len(buttons) and buttons[b]
+            if pressed and not self._stop_prev.get(name, False):
+                self.stop_pressed.emit(name)
+            self._stop_prev[name] = pressed
 
     def poll(self) -> None:
         joy = None
         if self.sticks is not None:
             self.sticks.select = None if self.choice == MANUAL else self.choice
             joy = self.sticks.poll()
+            self._check_stops()
             for ev in self.sticks.take_events():
                 level = "warning" if ev.kind == "removed" else "info"
                 text = f"joystick {ev.device} {'unplugged: the robot holds' if ev.kind == 'removed' else 'plugged in'}"
@@ -106,7 +109,6 @@ class InputManager(QObject):
                 self.devices_changed.emit(names)
         if self.choice != MANUAL:
             if joy is not None:
-                self._check_stop(joy)
                 if self.link is not None:
                     self.link.send_input(joy.axes[:16], joy.buttons[:64], joy.device[:128])
                 self.sample.emit(joy.axes, joy.buttons, joy.device)

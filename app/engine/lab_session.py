@@ -31,6 +31,7 @@ from app.sim.stewart import Generator, WaveSimulation, parse_timeseries_csv
 from app.teleop.pipeline import InputPipeline
 
 STEP = 0.01
+LOCAL_SPEED_TIMEOUT = 0.3  # s: a LOCAL winch speed not refreshed this long returns to zero
 
 
 @dataclass
@@ -47,8 +48,9 @@ class LabSession:
         self.lab = MotionLab(self.layout, at_work=True)
         self.names = [n for n, _ in self.layout.platforms]
         self._carry = 0.0
-        self.input = InputPipeline(note=self.note)
+        self.input = InputPipeline(note=self.note, axes=4)
         self.alarms = AlarmList("Motion-Lab", note=self.note)
+        self._local_speed_time = -np.inf
         self._rao = None
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
         self.vvmc = False
@@ -151,11 +153,13 @@ class LabSession:
                     raise CommandError("the speed slider drives the winch in LOCAL mode only")
                 lim = self.layout.winch["speed"]
                 self.lab.winch.speed_command = float(np.clip(speed, -lim, lim))
+                self._local_speed_time = time.monotonic()  # the GUI resends while the slider is held
         except BosunError as err:
             raise CommandError(str(err)) from None
 
     def lab_vvmc(self, on: bool) -> None:
         self._guard()
+        self.input.disarm("VVMC switched")  # off puts the Comau in REMOTE: a held stick must not drive it
         self.lab.set_vvmc(on)
         self.vvmc = on
         self.note("info", f"VVMC {'ON: Comau and winch MOTION_COMP' if on else 'OFF: Comau REMOTE, winch LOCAL'}")
@@ -197,6 +201,8 @@ class LabSession:
             lab.tool_velocity_cmd = REMOTE_TOOL_SPEED * s[:3]
         if lab.winch.mode == "remote":
             lab.winch.speed_command = self.layout.winch["speed"] * s[3]
+        elif lab.winch.mode == "local" and time.monotonic() - self._local_speed_time > LOCAL_SPEED_TIMEOUT:
+            lab.winch.speed_command = 0.0  # the spring-return slider is not being held (or the GUI is gone)
 
     def _check_alarms(self) -> None:
         al, lab = self.alarms, self.lab
@@ -296,7 +302,7 @@ class LabSession:
         return {
             "kind": "lab",
             "estop": self.estop_latched,
-            "flags": {"estop": self.estop_latched, **self.input.flags()},
+            "flags": self.input.flags(self.estop_latched),
             "alarms": self.alarms.snapshot(),
             "t": lab.t,
             "platforms": plats,

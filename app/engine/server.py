@@ -139,6 +139,8 @@ class EngineServer:
         self._pending_latency: tuple[float, int] | None = None
         self._log_sent = 0
         self._unknown_logged: dict[bytes, float] = {}
+        self.engine_id = secrets.token_hex(4)  # a new value each start: clients tell a restarted engine apart
+        self.estops = 0  # estop messages received: clients confirm a STOP by a state counting theirs
         self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
         self.realtime_factor = 1.0
         self.late_fraction = 0.0
@@ -179,6 +181,7 @@ class EngineServer:
                     self._reject(ident, "estop with a wrong or missing token", re="estop")
                     return
                 self.session.estop(source=f"an unregistered client ({msg.get('reason', 'no reason')})")
+                self.estops += 1
                 self._reply(ident, "estop", True)
                 return
             self.rejected += 1
@@ -199,6 +202,7 @@ class EngineServer:
             return
         if mtype == "estop":
             self.session.estop(source=client.name)
+            self.estops += 1
             self._reply(ident, "estop", True)
             return
         if mtype == "release_operator":
@@ -293,6 +297,7 @@ class EngineServer:
         snap["clients"] = len(self.clients)
         snap["rejected"] = self.rejected
         snap["rate"] = self.rate
+        snap["engine_id"], snap["estops"] = self.engine_id, self.estops
         snap["realtime_factor"] = self.realtime_factor
         snap["late_fraction"] = self.late_fraction
         self.pub.send(encode("state", state=snap), zmq.NOBLOCK)

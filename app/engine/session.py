@@ -87,6 +87,7 @@ class Session:
         self.solver_ok = True
         self.ticks = 0
         self.sim_time = 0.0
+        self._armed_prev = False
         self._load(self.robot_name, self.solver_name)
 
     # ------------------------------------------------------------------ logging
@@ -137,6 +138,7 @@ class Session:
         except BosunError as err:
             raise CommandError(str(err)) from None
         self.solver, self.solver_name = solver, name
+        self.input.disarm("solver changed")
         self.note("info", f"solver {name}")
 
     def set_mode(self, mode: str) -> None:
@@ -161,6 +163,7 @@ class Session:
             self.scaling = new.validate()
         except ValueError as err:
             raise CommandError(str(err)) from None
+        self.input.disarm("scaling changed")  # a new k_p, x_w or k_v never moves an armed arm by itself
 
     def set_profile(self, profile: DeviceProfile | None) -> None:
         """Use this profile for every device (None: pick by device name again)."""
@@ -209,6 +212,10 @@ class Session:
         inp = self.input.step(now)
         if inp.stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
+        if inp.armed and not self._armed_prev and self.mode == "position":
+            # position mode starts from where the tool is at every arming: arming at neutral never moves it
+            self.scaling = self.scaling.with_origin(self.robot.position(self.q_ref))
+        self._armed_prev = inp.armed
         self.stale, self.enabled = inp.stale, inp.enabled and not self.estop_latched
         self.signal = inp.raw_signal[:3].copy()
         if self.estop_latched:
@@ -330,6 +337,6 @@ class Session:
             "scaling": {"k_p": list(self.scaling.k_p), "x_w": list(self.scaling.x_w), "k_v": list(self.scaling.k_v)},
             "box": [self.box.lower.tolist(), self.box.upper.tolist()],
             "command": None if self.command_point is None else np.asarray(self.command_point, float).tolist(),
-            "flags": {"estop": self.estop_latched, **self.input.flags(), "enabled": self.enabled},
+            "flags": {**self.input.flags(self.estop_latched), "enabled": self.enabled},
             "alarms": self.alarms.snapshot(),
         }

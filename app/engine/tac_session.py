@@ -183,7 +183,7 @@ class TacSession:
             "kind": "tac",
             "estop": self.estop_latched,
             "holding": self.holding,
-            "flags": {"estop": self.estop_latched, **self.input.flags()},
+            "flags": self.input.flags(self.estop_latched),
             "alarms": self.alarms.snapshot(),
             "sea": {"spectrum": sc.spectrum, "hs": sc.hs, "tp": sc.tp, "heading": sc.heading, "seq": self.sea_seq},
             "tac_mode": sc.mode,

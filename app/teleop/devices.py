@@ -104,6 +104,13 @@ class PygameJoysticks:
         buttons = tuple(bool(js.get_button(i)) for i in range(js.get_numbuttons()))
         return InputSample(axes, buttons, js.get_name())
 
+    def buttons_of_all(self) -> list[tuple[str, tuple[bool, ...]]]:
+        """(name, buttons) of every open device, after :meth:`poll` (a stop button works on any of them)."""
+        return [
+            (js.get_name(), tuple(bool(js.get_button(i)) for i in range(js.get_numbuttons())))
+            for js in self._open.values()
+        ]
+
     def take_events(self) -> list[DeviceEvent]:
         ev, self.events = self.events, []
         return ev

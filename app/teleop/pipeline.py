@@ -9,11 +9,11 @@ the crane head and the Motion-Lab.  One :class:`InputPipeline` per engine does i
 2. **Deadzone and expo** (:func:`~app.teleop.mapping.shape_input`).
 3. **Deadman.**  The profile's enable button must be held.
 4. **Arming** (zero-position interlock).  After start-up, E-STOP reset, a new operator
-   (reconnect), a mode or robot change, a stale or lost device, or a released deadman, the
-   input is *disarmed*: a deflected stick or an enable still held does not count.  It arms
-   again only when the stick has been seen at neutral with the enable released, and then the
-   enable is pressed while the stick is still at neutral.  Devices without an enable button
-   arm when the stick has passed through neutral.
+   (reconnect), a mode, robot, solver, scaling or profile change, a stale or lost device, or a
+   released deadman, the input is *disarmed*: a deflected stick or an enable still held does
+   not count.  It arms again only when the stick has been seen at neutral with the enable
+   released, and then the enable is pressed while the stick is still at neutral.  A profile
+   without an enable button never drives (its stop button still works).
 5. **Stale halt.**  A sample counts for ``stale_timeout`` seconds from the engine's *receive*
    time (never the sender's clock); older, it commands nothing and disarms.
 6. **Unplug.**  ``feed(None)`` (device lost) commands nothing and disarms.
@@ -77,12 +77,16 @@ class InputPipeline:
     ----------
     stale_timeout : float
         Seconds a sample stays valid after the engine received it (default 0.2).
+    axes : int
+        How many of s = (x, y, z, w) the scene uses (3 for an arm, 4 with the lab winch); the others
+        are passed as zero and need not be at neutral to arm (a throttle lever does not centre).
     note : callable(level, text), optional
         Where device and arming events are logged.
     """
 
-    def __init__(self, stale_timeout: float = STALE_TIMEOUT, note=None) -> None:
+    def __init__(self, stale_timeout: float = STALE_TIMEOUT, note=None, axes: int = 3) -> None:
         self.stale_timeout = float(stale_timeout)
+        self.axes = int(axes)  # the scene drives s[:axes]; only those must be at neutral to arm
         self._note = note or (lambda level, text: None)
         self.profile: DeviceProfile = default_profile()
         self.profile_locked = False
@@ -108,6 +112,8 @@ class InputPipeline:
         self.profile_locked = profile is not None
         if profile is not None:
             self.profile = profile
+        elif self.sample is not None:
+            self.profile = profile_for(self.sample.device, len(self.sample.axes))
         self.disarm("profile changed")
 
     def disarm(self, reason: str) -> None:
@@ -140,8 +146,8 @@ class InputPipeline:
             if not self.profile_locked:
                 self.profile = profile_for(sample.device, len(sample.axes))
             self.disarm("new device")
-        if self._was_stale:  # back after silence: edges count from this sample on
-            self._deadman_prev = self._stop_prev = self._mode_prev = False
+        if self._was_stale:  # back after silence: enable must be pressed anew (buttons held through stay held)
+            self._deadman_prev = False
             self._was_stale = False
         self.connected = True
         self.sample, self.sample_time = sample, now
@@ -150,9 +156,10 @@ class InputPipeline:
     def _gesture(self, sample: InputSample) -> None:
         prof = self.profile
         raw = shape_input(prof.signal(sample.axes), prof.deadzone, prof.expo)
+        raw[self.axes :] = 0.0
         neutral = not np.any(raw)
-        deadman = prof.enabled(sample.buttons)
         has_enable = prof.enable_button is not None
+        deadman = has_enable and prof.enabled(sample.buttons)  # no enable button: no deadman, never drives
         b = sample.buttons
 
         def held(index: int | None) -> bool:
@@ -165,9 +172,9 @@ class InputPipeline:
         if self.armed and not deadman:
             self.disarm("enable released")
         if not self.armed:
-            if neutral and (not deadman or not has_enable):
+            if neutral and not deadman:
                 self._seen_neutral_released = True
-            pressed = deadman and (not self._deadman_prev or not has_enable)
+            pressed = deadman and not self._deadman_prev
             if self._seen_neutral_released and neutral and pressed:
                 self.armed = True
                 self._note("info", "input armed: the operator drives")
@@ -197,6 +204,8 @@ class InputPipeline:
         enabled = self.armed and deadman
         if enabled:
             reason = ""
+        elif self.profile.enable_button is None:
+            reason = f"profile {self.profile.name} has no enable (deadman) button: it cannot drive"
         elif not deadman:
             reason = "enable released"
         else:
@@ -211,11 +220,13 @@ class InputPipeline:
         """A device that was sending is gone (unplugged or silent link), not deliberately released."""
         return not self.connected and self.sample_time > -math.inf and not self.released
 
-    def flags(self) -> dict:
+    def flags(self, estop: bool = False) -> dict:
+        """Input flags for a snapshot; ``estop``: the scene's latch (nothing is enabled while latched)."""
         s = self.last
         return {
+            "estop": estop,
             "stale_input": s.stale,
-            "enabled": s.enabled and self.armed,
+            "enabled": s.enabled and self.armed and not estop,
             "armed": self.armed,
             "deadman": s.deadman,
             "device": self.connected,

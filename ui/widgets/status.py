@@ -88,7 +88,7 @@ class StatusPanel(QWidget):
             "E-STOP: stops every machine within one engine tick and latches (Space, from any tab or dialog, "
             "or the joystick's stop button)"
         )
-        self.stop.clicked.connect(self.stop_clicked)
+        self.stop.pressed.connect(self.stop_clicked)  # on press: a press that slides off still stops
         right.addWidget(self.stop)
         self.latched = QLabel("")
         self.latched.setStyleSheet("color: #d9534f; font-weight: bold;")
