@@ -297,9 +297,7 @@ class Session:
             limited = not blocked and progress < 0.9
         n = max(1, round(0.1 / dt))  # 100 ms: one alarm per episode, not one per tick
         al.set("joint_limit", bool(blocked), "warning", f"{blocked}: commanded direction blocked", debounce=n)
-        al.set(
-            "speed_limited", limited, "info", "speed limited: k_v asks for more than the joints allow", debounce=n
-        )
+        al.set("speed_limited", limited, "info", "speed limited: k_v asks for more than the joints allow", debounce=n)
         if self.ticks % 10 == 0:
             ratio = self._sigma_ratio()
             text = f"near a singularity (σ ratio {ratio:.3f})"

@@ -42,9 +42,7 @@ class LivePlots(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         self.glw = pg.GraphicsLayoutWidget()
         lay.addWidget(self.glw)
-        self.p_xyz = self.glw.addPlot(
-            row=0, col=0, title="tool x, y, z [m]"
-        )
+        self.p_xyz = self.glw.addPlot(row=0, col=0, title="tool x, y, z [m]")
         self.p_q = self.glw.addPlot(row=1, col=0, title="joints [rad, m] (limits shaded)")
         self.p_s = self.glw.addPlot(row=2, col=0, title="solver error [m] (red), time [ms] (blue)")
         for p in (self.p_xyz, self.p_q, self.p_s):
