@@ -52,6 +52,7 @@ from ui.widgets.status import StatusPanel
 
 ESTOP_CONFIRM_S = 0.1  # the engine's state must show the latch within this, else an alarm
 MAX_SIZE = (1280, 800)
+MESSAGE_COLORS = {"error": "#7a2421", "info": "#1f4e79"}
 
 
 class FitTabs(QTabWidget):
@@ -87,7 +88,6 @@ class MessageBar(QFrame):
 
     def __init__(self) -> None:
         super().__init__()
-        self.setStyleSheet("MessageBar { background: #7a2421; border-radius: 4px; } QLabel { color: white; }")
         lay = QHBoxLayout(self)
         lay.setContentsMargins(8, 2, 4, 2)
         self.text = QLabel("")
@@ -101,7 +101,10 @@ class MessageBar(QFrame):
         lay.addWidget(close)
         self.hide()
 
-    def show_message(self, title: str, message: str) -> None:
+    def show_message(self, title: str, message: str, level: str = "error") -> None:
+        self.setStyleSheet(
+            f"MessageBar {{ background: {MESSAGE_COLORS[level]}; border-radius: 4px; }} QLabel {{ color: white; }}"
+        )
         first = message.strip().splitlines()[0] if message.strip() else ""
         self.text.setText(f"<b>{title}</b>: {first}")
         self.text.setToolTip(message)
@@ -320,7 +323,7 @@ class MainWindow(QMainWindow):
     def show_keys(self) -> None:
         """The shortcut overlay, in the message area (non-blocking)."""
         self.status.add_log("info", KEYS_HELP.replace("\n", " "))
-        self.message_bar.show_message("Keys", KEYS_HELP)
+        self.message_bar.show_message("Keys", KEYS_HELP, level="info")
         self.message_bar.text.setText(KEYS_HTML)
 
     # ------------------------------------------------------------------ STOP and reset
