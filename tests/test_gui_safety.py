@@ -600,3 +600,42 @@ def test_any_joysticks_stop_button_stops_every_engine(qtbot, rig, monkeypatch):
         assert "stop button of" in log_text(win)
     finally:
         vj.detach()
+
+
+def test_stop_stays_live_while_a_scene_engine_starts(qtbot, tmp_path):
+    """Opening a scene tab starts its engine in the background: Space stops the running engines meanwhile."""
+    teleop = Engine("teleop", rate=200)
+    labs = []
+
+    class SlowStarter:
+        def start_process(self):
+            time.sleep(1.5)  # a slow machine starting a new engine process
+            labs.append(Engine("lab"))
+            return labs[-1].url
+
+        def link(self, url):
+            return EngineLink(url, name="gui-lab")
+
+    win = MainWindow(
+        EngineLink(teleop.url),
+        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
+        lab_link_factory=SlowStarter(),
+        use_gl=False,
+    )
+    qtbot.addWidget(win)
+    win.show()
+    try:
+        qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=10000)
+        t0 = time.monotonic()
+        win.tabs.setCurrentWidget(win.motion_lab)
+        assert time.monotonic() - t0 < 1.0 and win.motion_lab.link is None  # did not wait for the engine
+        key(win.tabs.tabBar(), Qt.Key_Space)
+        qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=5000)
+        assert win.motion_lab.link is None  # the confirmation came while the lab engine was still starting
+        qtbot.waitUntil(lambda: win.motion_lab.state is not None, timeout=20000)
+        assert "Motion-Lab" in win.links()
+    finally:
+        win.close()
+        teleop.kill()
+        for lab in labs:
+            lab.kill()

@@ -59,29 +59,40 @@ def run_gui(
         raise BosunError(str(err)) from None
     marine_engines: list = []
 
-    def scene_link(plant: str, url: str | None):
-        """A scene (crane head, Motion-Lab) runs in its own engine process, started on first use."""
+    class SceneStarter:
+        """A scene (crane head, Motion-Lab) runs in its own engine process, started on first use: the
+        process in a background thread (``start_process``), the link in the GUI thread (``link``)."""
 
-        def make():
-            if url is not None:
-                return EngineLink(url, role="operator", token=token, name=f"bosun-gui-{plant}")
-            proc = EngineProcess(plant=plant)
+        def __init__(self, plant: str, url: str | None) -> None:
+            self.plant, self.url, self.proc = plant, url, None
+
+        def start_process(self) -> str:
+            if self.url is not None:
+                return self.url
+            self.proc = EngineProcess(plant=self.plant)
+            return self.proc.url
+
+        def link(self, url: str):
+            name = f"bosun-gui-{self.plant}"
             try:
-                link = EngineLink(proc.url, role="operator", name=f"bosun-gui-{plant}")
+                link = EngineLink(url, role="operator", token=token if self.url else None, name=name)
             except TransportError:
-                proc.stop()
+                if self.proc is not None:
+                    self.proc.stop()
                 raise
-            marine_engines.append(proc)  # watched (restarted if it dies) only once its link is up
+            if self.proc is not None:
+                marine_engines.append(self.proc)  # watched (restarted if it dies) only once its link is up
             return link
 
-        return make
+        def __call__(self):
+            return self.link(self.start_process())
 
     win = MainWindow(
         link,
         engine=engine,
         settings=settings,
-        marine_link_factory=scene_link("tac", connect_tac),
-        lab_link_factory=scene_link("lab", connect_lab),
+        marine_link_factory=SceneStarter("tac", connect_tac),
+        lab_link_factory=SceneStarter("lab", connect_lab),
     )
     app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
     win.child_engines = marine_engines  # restarted by the window's watchdog if they die

@@ -1,6 +1,22 @@
-"""What the scene tabs (Crane head, Motion-Lab) share: their own engine link, made on first view."""
+"""What the scene tabs (Crane head, Motion-Lab) share: their own engine link, made on first view.
+
+A factory that can start its engine apart from linking to it (``start_process()`` → URL, then
+``link(url)``) has the slow part — a new engine process, about a second — run in a thread, so the
+window (and Space = STOP) stays live while the engine starts; a plain callable factory is called
+directly.
+"""
 
 from __future__ import annotations
+
+import threading
+
+from PyQt5.QtCore import QObject, pyqtSignal
+
+
+class _Started(QObject):
+    """Carries the result of a background engine start back to the GUI thread."""
+
+    done = pyqtSignal(str, str)  # url, error
 
 
 class SceneEngineMixin:
@@ -15,13 +31,41 @@ class SceneEngineMixin:
     link_factory = None
     on_link = None  # called with each new link (the main window watches it: lost engine, STOP)
 
+    _starting = None
+
     def connect_engine(self) -> bool:
+        """Link the tab to its engine; False while it is starting in the background or when it failed."""
         if self.link is not None:
             return True
-        if self.link_factory is None:
+        if self.link_factory is None or self._starting is not None:
             return False
+        if hasattr(self.link_factory, "start_process"):
+            self._starting = _Started()
+            self._starting.done.connect(self._engine_started)
+            self.notice.emit("info", f"{self.engine_label} engine starting…")
+            bridge, factory = self._starting, self.link_factory
+
+            def run() -> None:
+                try:
+                    bridge.done.emit(factory.start_process(), "")
+                except Exception as err:
+                    bridge.done.emit("", str(err) or type(err).__name__)
+
+            threading.Thread(target=run, daemon=True).start()
+            return False
+        return self._linked(self.link_factory)
+
+    def _engine_started(self, url: str, error: str) -> None:
+        self._starting = None
+        if error:
+            self.notice.emit("error", f"{self.engine_label} engine: {error}")
+            self._engine_failed(RuntimeError(error))
+            return
+        self._linked(lambda: self.link_factory.link(url))
+
+    def _linked(self, make) -> bool:
         try:
-            self.link = self.link_factory()
+            self.link = make()
         except Exception as err:  # the engine did not start: say why, keep the tab usable
             self.notice.emit("error", f"{self.engine_label} engine: {err}")
             self._engine_failed(err)
