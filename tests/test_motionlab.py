@@ -49,7 +49,7 @@ def test_quaternion_convention():
     ("edit", "message"),
     [
         (('quat="6.0198987883E-5', 'quat="0.5'), r"motionlab.xml:\d+: <frame> quat must be a unit quaternion"),
-        (('start_length="1.0"', 'start_length="9"'), r"start_length must lie between"),
+        (('start_length="0.8"', 'start_length="9"'), r"start_length must lie between"),
         (
             ('<crane robot="comau_smart5_3dof" on="em8000"', '<crane robot="comau_smart5_3dof" on="em1500"'),
             r"first platform",
