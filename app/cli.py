@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import shutil
 import sys
 import threading
@@ -616,6 +617,15 @@ def cmd_server(args: argparse.Namespace) -> int:
     )
     server = EngineServer(session, bind=args.bind, rate=rate, publish_rate=pub, token=args.token)
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    if getattr(args, "exit_with_parent", False):
+        parent = os.getppid()
+
+        def watch_parent() -> None:
+            while os.getppid() == parent:  # re-parented: the GUI is gone (killed, crashed)
+                time.sleep(0.5)
+            server.stop()
+
+        threading.Thread(target=watch_parent, daemon=True).start()
     print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
     print(f"  requests on {server.url}, state on {server.state_url}", flush=True)
     try:
@@ -938,6 +948,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--token", default=None, help="shared secret every client must present")
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
+    p.add_argument(
+        "--exit-with-parent",
+        action="store_true",
+        help="stop when the process that started this engine ends (the GUI's own engines use it)",
+    )
     p.set_defaults(func=cmd_server)
 
     p = sub.add_parser("joystick", help="stream a local joystick to an engine (the input client)")

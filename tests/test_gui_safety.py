@@ -8,6 +8,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,8 @@ from app.engine.server import EngineServer
 from app.engine.session import Session
 from ui.link import EngineLink
 from ui.main_window import MainWindow
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def free_port() -> int:
@@ -217,6 +220,9 @@ def test_item4_held_arrow_on_the_tab_bar_does_not_switch_tabs_or_latch(qtbot, ri
     qtbot.waitUntil(lambda: state(win)["flags"]["enabled"] and abs(state(win)["signal"][0]) > 0.5, timeout=5000)
     win.tabs.setCurrentIndex(1)  # a tab change releases every key, whatever the key release did
     assert win.teleop.stick.values() == (0.0, 0.0, 0.0, 0.0, False)
+    for _ in range(5):
+        key(bar, Qt.Key_Right, autorep=True)  # still held on the Analysis tab: it must not walk the tabs
+    assert win.tabs.currentIndex() == 1 and win.crane_head.link is None
     qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=5000)
     qtbot.wait(300)
     q = np.array(state(win)["q"])
@@ -639,3 +645,29 @@ def test_stop_stays_live_while_a_scene_engine_starts(qtbot, tmp_path):
         teleop.kill()
         for lab in labs:
             lab.kill()
+
+
+def test_engines_the_gui_started_end_when_the_gui_is_killed():
+    """A GUI killed outright (no clean close) leaves no engine running behind it."""
+    code = (
+        "import time\nfrom ui.engine_process import EngineProcess\n"
+        "e = EngineProcess()\nprint(e.proc.pid, flush=True)\ntime.sleep(120)\n"
+    )
+    gui = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, cwd=str(ROOT))
+    try:
+        pid = int(gui.stdout.readline())
+    finally:
+        gui.kill()
+        gui.wait(timeout=10)
+
+    def running() -> bool:
+        try:
+            with open(f"/proc/{pid}/status") as f:
+                return "\nState:\tZ" not in f.read()
+        except FileNotFoundError:
+            return False
+
+    deadline = time.monotonic() + 15
+    while running() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not running()

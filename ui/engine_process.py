@@ -37,7 +37,9 @@ class EngineProcess:
     ) -> None:
         self.plant = plant
         self.timeout = timeout
-        self.cmd = [sys.executable, "-m", "app", "server", "--bind", f"tcp://127.0.0.1:{free_port()}", "--plant", plant]
+        url = f"tcp://127.0.0.1:{free_port()}"
+        # --exit-with-parent: a GUI that is killed or crashes leaves no engine running behind it
+        self.cmd = [sys.executable, "-m", "app", "server", "--bind", url, "--plant", plant, "--exit-with-parent"]
         if plant == "teleop":
             self.cmd += ["--robot", robot, "--solver", solver, "--mode", mode]
         self.url = None

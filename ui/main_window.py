@@ -191,6 +191,7 @@ class MainWindow(QMainWindow):
         self.status.add_log("info", f"connected to the engine at {link.client.url} as {link.role}")
         if link.note:
             self.status.add_log("warning", link.note)
+        self._owned_keys: set[int] = set()  # stick keys pressed and not yet released
         self.estop_pending: dict[str, list] = {}  # origin -> [t_sent, t_last_send, (engine_id, estops) at send]
         self.lost: set[str] = set()
         self._confirm = QTimer(self)
@@ -282,9 +283,20 @@ class MainWindow(QMainWindow):
             if stick is not None and key in stick.KEYS and self.isActiveWindow() and not self._typing():
                 if not ev.isAutoRepeat():
                     stick.key(key, t == QEvent.KeyPress)
+                    if t == QEvent.KeyPress:
+                        self._owned_keys.add(key)
+                if t == QEvent.KeyRelease and not ev.isAutoRepeat():
+                    self._owned_keys.discard(key)
                 return True  # auto-repeat too: arrows never switch tabs or move a combo box
+            if key in self._owned_keys:
+                # a key pressed for the stick and still held after a tab change: its auto-repeats and
+                # release are swallowed too (they would walk the tab bar and start scene engines)
+                if t == QEvent.KeyRelease and not ev.isAutoRepeat():
+                    self._owned_keys.discard(key)
+                return True
         elif t == QEvent.WindowDeactivate and obj is self:
             self.release_keys()
+            self._owned_keys.clear()  # their releases go to another window
         return False
 
     def _focus_changed(self, old, new) -> None:
@@ -294,6 +306,7 @@ class MainWindow(QMainWindow):
     def _app_state(self, state) -> None:
         if state != Qt.ApplicationActive:
             self.release_keys()
+            self._owned_keys.clear()
 
     def _tab_changed(self, i: int) -> None:
         self.release_keys()
