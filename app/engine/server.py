@@ -13,6 +13,7 @@ real time or more than 1 % of ticks late raises the ``engine_slow`` alarm.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import secrets
@@ -139,6 +140,7 @@ class EngineServer:
         self._pending_latency: tuple[float, int] | None = None
         self._log_sent = 0
         self._unknown_logged: dict[bytes, float] = {}
+        self._limited: dict[str, float] = {}
         self.engine_id = secrets.token_hex(4)  # a new value each start: clients tell a restarted engine apart
         self.estops = 0  # estop messages received: clients confirm a STOP by a state counting theirs
         self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
@@ -154,9 +156,15 @@ class EngineServer:
 
     def _reject(self, ident: bytes, reason: str, re: str | None = None) -> None:
         self.rejected += 1
-        log.warning("rejected message from %r: %s", ident[:32], reason)
+        self._log_limited(f"reject:{reason[:40]}", f"rejected message from {ident[:32]!r}: {reason}", note=False)
         if re is not None:
             self._reply(ident, re, False, reason)
+
+    def _token_ok(self, msg: dict[str, Any]) -> bool:
+        """Constant-time token check on UTF-8 bytes (compare_digest refuses non-ASCII str)."""
+        if self.token is None:
+            return True
+        return secrets.compare_digest(str(msg.get("token", "")).encode(), self.token.encode())
 
     def _operator_alive(self, now: float) -> bool:
         if self.operator is None or self.operator not in self.clients:
@@ -164,20 +172,46 @@ class EngineServer:
         return now - self.clients[self.operator].last_seen <= self.operator_timeout
 
     def handle(self, ident: bytes, data: bytes, now: float) -> None:
-        """Validate and dispatch one message from a client."""
+        """Validate and dispatch one message from a client; nothing a message does escapes the loop.
+
+        Any exception a handler raises (a bug, a value the checks missed) becomes a refusal to that
+        client and one rate-limited log line; the engine keeps running and keeps its E-STOP."""
+        self._current_type = "invalid"
+        try:
+            self._handle(ident, data, now)
+        except Exception as err:  # the boundary: a message can be refused, never kill or freeze the engine
+            self.rejected += 1
+            self._log_limited("internal", f"message refused by an internal error: {type(err).__name__}: {err}")
+            with contextlib.suppress(Exception):
+                self._reply(ident, self._current_type, False, f"refused: internal error ({type(err).__name__})")
+
+    def _log_limited(self, key: str, text: str, every: float = 5.0, note: bool = True) -> None:
+        """One log line per ``key`` and ``every`` seconds (the loop never floods its log)."""
+        now = time.monotonic()
+        if now - self._limited.get(key, -math.inf) >= every:
+            if len(self._limited) > 1000:
+                self._limited.clear()
+            self._limited[key] = now
+            log.warning("%s", text)
+            if note:
+                with contextlib.suppress(Exception):
+                    self.session.note("warning", text[:1000])
+
+    def _handle(self, ident: bytes, data: bytes, now: float) -> None:
         try:
             msg = decode(data)
         except ProtocolError as err:
             self._reject(ident, str(err), re="invalid")
             return
         mtype = msg["type"]
+        self._current_type = mtype
         if mtype == "hello":
             self._hello(ident, msg, now)
             return
         client = self.clients.get(ident)
         if client is None:
             if mtype == "estop":  # STOP must never fail: accepted before or without hello
-                if self.token is not None and not secrets.compare_digest(msg.get("token", ""), self.token):
+                if not self._token_ok(msg):
                     self._reject(ident, "estop with a wrong or missing token", re="estop")
                     return
                 self.session.estop(source=f"an unregistered client ({msg.get('reason', 'no reason')})")
@@ -255,7 +289,7 @@ class EngineServer:
         self._reply(ident, mtype, True)
 
     def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
-        if self.token is not None and not secrets.compare_digest(msg.get("token", ""), self.token):
+        if not self._token_ok(msg):
             self._reject(ident, "hello with a wrong or missing token", re="hello")
             return
         role, note = "viewer", ""
@@ -333,7 +367,12 @@ class EngineServer:
         """One tick: requests, control, latency bookkeeping, publication."""
         self.poll_requests(now)
         budget = 0.4 * self.dt
-        self.session.tick(now, self.dt, solve_budget=budget)
+        try:
+            self.session.tick(now, self.dt, solve_budget=budget)
+        except Exception as err:  # a failing control step stops the machines and says so; the loop goes on
+            with contextlib.suppress(Exception):
+                self.session.estop(source=f"the engine itself ({type(err).__name__} in the control step)")
+            self._log_limited("tick", f"control step failed: {type(err).__name__}: {err}; E-STOP latched")
         if self._pending_latency is not None:
             t_send, _ = self._pending_latency
             self.stats.latencies.append(time.monotonic() - t_send)

@@ -47,11 +47,18 @@ class SeaStateError(BosunError):
     """Sea-state parameters that cannot be used."""
 
 
+#: the sea states Bosun simulates: Hs [m] and Tp [s] (WMO 0–9 seas; beyond them no spectrum here applies,
+#: and a vanishing Hs or Tp would only underflow the formulas below)
+HS_RANGE = (0.01, 30.0)
+TP_RANGE = (1.0, 40.0)
+
+
 def check_sea(hs: float, tp: float) -> None:
-    if not (math.isfinite(hs) and hs > 0):
-        raise SeaStateError(f"Hs must be a positive number of metres, got {hs}")
-    if not (math.isfinite(tp) and tp > 0):
-        raise SeaStateError(f"Tp must be a positive number of seconds, got {tp}")
+    """The one check of a sea state (CLI, API and engine commands alike): ranges, then breaking."""
+    if not (math.isfinite(hs) and HS_RANGE[0] <= hs <= HS_RANGE[1]):
+        raise SeaStateError(f"Hs must be a positive number of metres in [{HS_RANGE[0]:g}, {HS_RANGE[1]:g}], got {hs}")
+    if not (math.isfinite(tp) and TP_RANGE[0] <= tp <= TP_RANGE[1]):
+        raise SeaStateError(f"Tp must be a positive number of seconds in [{TP_RANGE[0]:g}, {TP_RANGE[1]:g}], got {tp}")
     # DNV-RP-C205 §3.5.5.4: average steepness S_p = 2π Hs/(g Tp²) at most 1/15 for Tp ≤ 8 s,
     # 1/25 for Tp ≥ 15 s, linear between; steeper seas break
     sp = 2 * math.pi * hs / (G * tp**2)

@@ -1,0 +1,195 @@
+"""Issue 13 (first part): no message can kill or freeze an engine.
+
+Every server here is bound to 127.0.0.1; loops are bounded in count and time."""
+
+import threading
+import time
+
+import pytest
+import zmq
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from app.engine.lab_session import LabSession
+from app.engine.server import EngineServer
+from app.engine.session import Session
+from app.engine.tac_session import TacSession
+from app.marine.waves import SeaStateError, check_sea
+from app.net.codec import encode
+from app.net.transport import Client, TransportError
+from tests.helpers import wait_for
+
+
+@pytest.fixture
+def serve():
+    started = []
+
+    def start(session, token=None, rate=200):
+        srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 50), token=token)
+        th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
+        th.start()
+        started.append((srv, th))
+        return srv, th
+
+    yield start
+    for srv, th in started:
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()
+
+
+def raw_socket(url):
+    sock = zmq.Context.instance().socket(zmq.DEALER)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.connect(url)
+    return sock
+
+
+def test_non_ascii_token_is_refused_not_fatal(serve):
+    """Item 1: one hello with token "é" killed a token-protected engine (compare_digest TypeError)."""
+    srv, th = serve(Session(), token="s3cret")
+    with pytest.raises(TransportError, match="wrong or missing token"):
+        Client(srv.url, role="operator", name="x", token="é", timeout=2.0)
+    raw = raw_socket(srv.url)
+    try:
+        raw.send(encode("estop", reason="x", token="ünïcode"))
+        assert raw.poll(3000)
+    finally:
+        raw.close(0)
+    assert th.is_alive()
+    ok = Client(srv.url, role="viewer", name="ok", token="s3cret")
+    try:
+        ok.request("ping")
+    finally:
+        ok.close()
+
+
+@pytest.mark.parametrize(
+    "session, mtype, fields",
+    [
+        (TacSession, "set_sea", {"spectrum": "jonswap", "hs": 2.0, "tp": 1e-300, "heading": 90.0}),
+        (TacSession, "set_sea", {"spectrum": "torsethaugen", "hs": 1e-300, "tp": 1.0, "heading": 90.0}),
+        (LabSession, "lab_source", {"platform": "em8000", "source": "simulation", "tp": 1e-300}),
+    ],
+)
+def test_schema_valid_scene_commands_that_divided_by_zero_are_refused(serve, session, mtype, fields):
+    """Item 5: these killed the crane-head and lab engines (ZeroDivisionError escaped the loop)."""
+    srv, th = serve(session(), rate=50)
+    op = Client(srv.url, role="operator", name="op")
+    try:
+        with pytest.raises(TransportError, match=r"(Hs|Tp) must be a positive number"):
+            op.request(mtype, **fields)
+        op.request("ping")
+        assert th.is_alive()
+        op.request("estop")
+        assert wait_for(op, lambda s: s.get("estop") or s.get("flags", {}).get("estop"))
+    finally:
+        op.close()
+
+
+def test_check_sea_bounds():
+    for hs, tp in ((2.0, 1e-300), (1e-300, 1.0), (2.0, 0.5), (31.0, 12.0), (2.0, 41.0)):
+        with pytest.raises(SeaStateError, match="must be a positive number"):
+            check_sea(hs, tp)
+    check_sea(0.01, 1.0)  # the smallest sea there is: fine (not breaking)
+
+
+class BrokenSession(Session):
+    """A session with a bug in a command and in its control step."""
+
+    fail_tick = False
+
+    def set_mode(self, mode):
+        raise RuntimeError("a bug in a command handler")
+
+    def tick(self, now, dt, solve_budget=None):
+        if self.fail_tick:
+            raise ValueError("a bug in the control step")
+        super().tick(now, dt, solve_budget)
+
+
+def test_a_bug_in_a_handler_or_the_control_step_never_stops_the_loop(serve):
+    ses = BrokenSession()
+    srv, th = serve(ses)
+    op = Client(srv.url, role="operator", name="op")
+    try:
+        with pytest.raises(TransportError, match="internal error"):
+            op.request("set_mode", mode="position")
+        op.request("ping")
+        ses.fail_tick = True
+        time.sleep(0.3)
+        assert th.is_alive()
+        ses.fail_tick = False
+        st_ = wait_for(op, lambda s: s["flags"]["estop"])  # a failing step latched the E-STOP
+        assert st_["flags"]["estop"]
+    finally:
+        op.close()
+
+
+def test_ten_thousand_rejected_messages_do_not_freeze_a_gui_started_engine():
+    """Item 2: the GUI's engine logged every rejection into a pipe nobody read and froze at ~64 KB."""
+    from ui.engine_process import EngineProcess
+
+    proc = EngineProcess()
+    raw = raw_socket(proc.url)
+    op = None
+    try:
+        for k in range(10_000):
+            raw.send(b"\xff\xfe junk %d" % k)
+        op = Client(proc.url, role="operator", name="op", timeout=10.0)
+        op.request("estop", reason="after the flood")
+        assert wait_for(op, lambda s: s["flags"]["estop"], timeout=15.0)["rejected"] >= 1000
+    finally:
+        raw.close(0)
+        if op is not None:
+            op.close()
+        proc.stop()
+
+
+_scene_fields = st.fixed_dictionaries(
+    {},
+    optional={
+        "platform": st.sampled_from(["em8000", "em1500", "nope", ""]),
+        "source": st.sampled_from(["simulation", "generator", "remote", "timeseries"]),
+        "action": st.sampled_from(["neutral", "settle", "engage", "disengage"]),
+        "hs": st.floats(0, 30),
+        "tp": st.floats(0, 40),
+        "heading": st.floats(-720, 720),
+        "amplitude": st.lists(st.floats(-1e6, 1e6), max_size=6),
+        "frequency": st.lists(st.floats(-1e3, 1e3), max_size=6),
+        "phase": st.lists(st.floats(-1e3, 1e3), max_size=6),
+        "scale": st.lists(st.floats(-10, 20), max_size=6),
+        "eta": st.lists(st.floats(-1e3, 1e3), max_size=6),
+        "csv": st.text(max_size=200),
+        "seed": st.integers(0, 2**31),
+        "mode": st.sampled_from(["settled", "remote", "motion_comp", "local", "off", "tac"]),
+        "speed": st.floats(-10, 10),
+        "on": st.booleans(),
+    },
+)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    mtype=st.sampled_from(["lab_platform", "lab_source", "lab_remote_pose", "lab_comau_mode", "lab_winch", "lab_vvmc"]),
+    fields=_scene_fields,
+)
+def test_fuzzed_lab_commands_never_kill_the_engine(serve, lab_engine, mtype, fields):
+    """Hostile scene commands through a live lab engine: each is answered, and a ping after it too."""
+    op = lab_engine
+    op.send(mtype, **fields)
+    op.request("ping")
+
+
+@pytest.fixture(scope="module")
+def lab_engine():
+    srv = EngineServer(LabSession(), bind="tcp://127.0.0.1:0", rate=50, publish_rate=25)
+    th = threading.Thread(target=srv.run, kwargs={"duration": 300.0}, daemon=True)
+    th.start()
+    op = Client(srv.url, role="operator", name="fuzzer")
+    yield op
+    assert th.is_alive()
+    op.close()
+    srv.stop()
+    th.join(timeout=5)
+    srv.close()
