@@ -665,6 +665,10 @@ def cmd_joystick(args: argparse.Namespace) -> int:
             "x = 0.5 from 0.8 s)",
             flush=True,
         )
+    import signal
+
+    stop = threading.Event()  # SIGTERM stops streaming cleanly: the client says bye, the engine holds
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
         sent = run_joystick_client(
             args.connect,
@@ -672,6 +676,7 @@ def cmd_joystick(args: argparse.Namespace) -> int:
             device=args.device,
             rate=args.rate,
             duration=args.duration,
+            stop=stop,
             on_event=lambda t: print(f"bosun joystick: {t}", flush=True),
         )
     except TransportError as err:

@@ -193,3 +193,74 @@ def lab_engine():
     srv.stop()
     th.join(timeout=5)
     srv.close()
+
+
+def _bosun():
+    import sys
+    from pathlib import Path
+
+    return str(Path(sys.executable).with_name("bosun"))
+
+
+def test_sigterm_stops_the_joystick_client_which_says_bye(serve):
+    """Issue 13 item 6: SIGTERM did not stop `bosun joystick` (SDL took the signal): it kept streaming."""
+    import os
+    import signal
+    import subprocess
+
+    srv, _ = serve(Session())
+    viewer = Client(srv.url, role="viewer", name="v")
+    js = subprocess.Popen(
+        [_bosun(), "joystick", "--connect", srv.url, "--virtual", "--duration", "60"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "SDL_VIDEODRIVER": "dummy"},
+    )
+    try:
+        wait_for(viewer, lambda s: s["operator"] == "joystick", timeout=20.0)
+        js.send_signal(signal.SIGTERM)
+        out, err = js.communicate(timeout=15)
+        assert js.returncode == 0, err
+        assert "sent" in out and "Traceback" not in err
+        wait_for(viewer, lambda s: s["operator"] == "", timeout=5.0)  # it said bye: the role is free
+    finally:
+        if js.poll() is None:
+            js.kill()
+        viewer.close()
+
+
+def test_sigterm_closes_the_gui_and_its_engine(tmp_path):
+    import os
+    import signal
+    import subprocess
+
+    env = {**os.environ, "QT_QPA_PLATFORM": "offscreen", "XDG_CONFIG_HOME": str(tmp_path)}
+    gui = subprocess.Popen([_bosun(), "gui"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + 30
+        engines = []
+        while time.monotonic() < deadline and not engines:
+            time.sleep(0.5)
+            out = subprocess.run(["pgrep", "-P", str(gui.pid)], capture_output=True, text=True).stdout
+            engines = [int(p) for p in out.split()]
+        assert engines, "the GUI did not start its engine"
+        time.sleep(2.0)
+        gui.send_signal(signal.SIGTERM)
+        _, err = gui.communicate(timeout=20)
+        assert "Traceback" not in err
+        def running(pid: int) -> bool:
+            try:
+                with open(f"/proc/{pid}/status") as f:
+                    return "\nState:\tZ" not in f.read()
+            except FileNotFoundError:
+                return False
+
+        deadline = time.monotonic() + 10
+        while any(running(p) for p in engines) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not any(running(p) for p in engines)
+    finally:
+        if gui.poll() is None:
+            gui.kill()
+            pytest.fail("SIGTERM did not close the GUI")

@@ -96,6 +96,10 @@ def run_gui(
     )
     app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
     win.child_engines = marine_engines  # restarted by the window's watchdog if they die
+    import signal
+
+    signal.signal(signal.SIGTERM, lambda *_: win.close())  # closes cleanly: engines stopped, links said bye
+    signal.signal(signal.SIGINT, lambda *_: win.close())
     win.show()  # sized by MainWindow.fit_to_screen: at most 1280×800, never past the screen
     if quit_after is not None:
         QTimer.singleShot(int(quit_after * 1000), win.close)

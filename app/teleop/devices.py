@@ -58,6 +58,8 @@ class PygameJoysticks:
     def __init__(self, select: str | None = None) -> None:
         if "DISPLAY" not in os.environ and "WAYLAND_DISPLAY" not in os.environ:
             os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+        # SDL would take SIGINT/SIGTERM for its own quit event: the process must stay stoppable by them
+        os.environ.setdefault("SDL_NO_SIGNAL_HANDLERS", "1")
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         import pygame
 
