@@ -249,6 +249,7 @@ def test_sigterm_closes_the_gui_and_its_engine(tmp_path):
         gui.send_signal(signal.SIGTERM)
         _, err = gui.communicate(timeout=20)
         assert "Traceback" not in err
+
         def running(pid: int) -> bool:
             try:
                 with open(f"/proc/{pid}/status") as f:
