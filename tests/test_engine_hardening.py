@@ -265,3 +265,43 @@ def test_sigterm_closes_the_gui_and_its_engine(tmp_path):
         if gui.poll() is None:
             gui.kill()
             pytest.fail("SIGTERM did not close the GUI")
+
+
+# ---------------------------------------------------------------------------- robot files (deliverable 2, part)
+def _scara():
+    from pathlib import Path
+
+    return (Path(__file__).resolve().parents[1] / "robots" / "scara.xml").read_text()
+
+
+def test_a_doctype_or_entity_in_a_robot_file_is_refused_with_its_name():
+    from app.models.xml import RobotXmlError, parse_robot_xml
+
+    text = _scara()
+    head, rest = text.split("<robot", 1)
+    with_dtd = head + '<!DOCTYPE robot [<!ENTITY x "42">]>\n<robot' + rest
+    with pytest.raises(RobotXmlError, match=r"evil\.xml:1: a DOCTYPE"):
+        parse_robot_xml(with_dtd, "evil.xml")
+    entity = with_dtd.replace("<description>", "<description>&x;", 1)
+    with pytest.raises(RobotXmlError, match=r"evil\.xml"):
+        parse_robot_xml(entity, "evil.xml")
+
+
+@pytest.mark.parametrize("bad", ["1e", "1E", "1e+", "1.e", "INF", "NaN", "0x10"])
+def test_numbers_the_schema_lets_through_but_float_refuses_are_named(bad):
+    import re
+
+    from app.models.xml import RobotXmlError, parse_robot_xml
+
+    text = re.sub(r' d="[^"]*"', f' d="{bad}"', _scara(), count=1)
+    with pytest.raises(RobotXmlError, match=r"odd\.xml:\d+: .*"):
+        parse_robot_xml(text, "odd.xml")
+
+
+def test_parse_number_agrees_with_float_on_what_it_accepts():
+    from app.models.xml import parse_number
+
+    for ok in ("1", "-2.5", "+.5", "3.", "1e3", "1.5E-2", " 7 "):
+        assert parse_number(ok) == float(ok)
+    for bad in ("1e", "1.e", "e3", "", "1 2", "inf", "1e999", "nan", "1_000"):
+        assert parse_number(bad) is None

@@ -10,6 +10,7 @@ The format is documented in ``robots/README.md``.
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 from pathlib import Path
 
@@ -75,11 +76,36 @@ def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
         root = etree.fromstring(data, parser)
     except etree.XMLSyntaxError as err:
         raise RobotXmlError(path, err.lineno, f"XML syntax error: {_strip_location(err.msg)}") from None
+    if root.getroottree().docinfo.doctype:
+        raise RobotXmlError(path, 1, "a DOCTYPE (DTD, entities) is not allowed in a robot file")
     schema = _schema()
-    if not schema.validate(root):
+    try:
+        valid = schema.validate(root)
+    except etree.Error as err:  # e.g. an entity reference left unresolved in element text
+        raise RobotXmlError(path, None, f"schema: cannot validate ({err})") from None
+    if not valid:
         first = schema.error_log[0]
         raise RobotXmlError(path, first.line, f"schema: {first.message}")
-    return _Reader(path, root).robot()
+    try:
+        return _Reader(path, root).robot()
+    except RobotXmlError:
+        raise
+    except (ArithmeticError, ValueError, TypeError, IndexError, KeyError) as err:
+        # a boundary: a file that slips past the checks is refused with its name, never a traceback
+        raise RobotXmlError(path, None, f"cannot be used ({type(err).__name__}: {err})") from None
+
+
+#: xs:double as a finite decimal: what the schema and float() both accept (no INF, NaN, '1e', '1.e')
+_NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+
+
+def parse_number(raw: str) -> float | None:
+    """The one number parser of robot files: a finite decimal or None (the caller names the place)."""
+    text = raw.strip()
+    if not _NUMBER.match(text):
+        return None
+    value = float(text)
+    return value if math.isfinite(value) else None
 
 
 def _strip_location(msg: str) -> str:
@@ -107,16 +133,17 @@ class _Reader:
                 raise self.fail(el, f"<{el.tag}> needs attribute '{attr}'")
             value = default
         else:
-            value = float(raw)  # the schema guarantees an xs:double
-            if not math.isfinite(value):
+            value = parse_number(raw)
+            if value is None:
                 raise self.fail(el, f"<{el.tag}> attribute '{attr}' is {raw.strip()}; give a finite number")
         return value * self.angle_scale if angle else value
 
     def vec3(self, el: etree._Element, attr: str, angle: bool = False) -> np.ndarray:
         raw = el.get(attr, "0 0 0")
-        v = np.array([float(x) for x in raw.split()])
-        if not np.all(np.isfinite(v)):
-            raise self.fail(el, f"<{el.tag}> attribute '{attr}' has a value that is not finite: '{raw}'")
+        vals = [parse_number(x) for x in raw.split()]
+        if len(vals) != 3 or any(v is None for v in vals):
+            raise self.fail(el, f"<{el.tag}> attribute '{attr}' needs three finite numbers, got '{raw}'")
+        v = np.array(vals, dtype=float)
         return v * self.angle_scale if angle else v
 
     def frame(self, el: etree._Element | None) -> np.ndarray:
@@ -234,7 +261,7 @@ class _Reader:
             upper=hi,
             speed=speed,
             accel=accel,
-            sign=float(el.get("sign", "1")),
+            sign=self.num(el, "sign", 1.0),
             offset=self.num(el, "offset", 0.0, angle=angular),
         )
 
