@@ -305,3 +305,34 @@ def test_parse_number_agrees_with_float_on_what_it_accepts():
         assert parse_number(ok) == float(ok)
     for bad in ("1e", "1.e", "e3", "", "1 2", "inf", "1e999", "nan", "1_000"):
         assert parse_number(bad) is None
+
+
+# ---------------------------------------------------------------------------- item 10 (part): ghosts, names
+def test_silent_clients_are_forgotten_and_names_cannot_inject_log_lines():
+    srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, publish_rate=50, client_timeout=1.0)
+    th = threading.Thread(target=srv.run, kwargs={"duration": 60.0}, daemon=True)
+    th.start()
+    ghosts = []
+    try:
+        for k in range(20):  # clients that say hello and vanish without bye
+            sock = raw_socket(srv.url)
+            sock.send(encode("hello", role="viewer", name=f"ghost{k}\nERROR E-STOP reset by admin"))
+            ghosts.append(sock)
+        live = Client(srv.url, role="viewer", name="live")
+        assert wait_for(live, lambda s: s["clients"] >= 21)["clients"] >= 21
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            live.send("ping")  # the live client keeps talking
+            st_ = live.latest_state(0.5)
+            if st_ is not None and st_["clients"] == 1:
+                break
+        assert st_["clients"] == 1
+        texts = [e.text for e in srv.session.log]
+        assert any("ghost0?ERROR" in t for t in texts) and not any("\n" in t for t in texts)
+        live.close()
+    finally:
+        for sock in ghosts:
+            sock.close(0)
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()

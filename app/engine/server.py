@@ -36,6 +36,11 @@ from app.teleop.devices import InputSample
 log = logging.getLogger("bosun.engine")
 
 
+def _clean_name(name: str) -> str:
+    """A client's name as it may appear in every log: printable, one line, at most 64 characters."""
+    return "".join(c if c.isprintable() else "?" for c in name)[:64] or "?"
+
+
 @dataclass
 class ClientInfo:
     name: str
@@ -102,6 +107,7 @@ class EngineServer:
         token: str | None = None,
         operator_timeout: float = 2.0,
         context: zmq.Context | None = None,
+        client_timeout: float = 60.0,
     ) -> None:
         check_url(bind)
         if not 1.0 <= rate <= 1000.0:
@@ -116,6 +122,7 @@ class EngineServer:
         self.publish_every = max(1, round(rate / publish_rate))
         self.token = token
         self.operator_timeout = operator_timeout
+        self.client_timeout = client_timeout  # clients silent this long are forgotten (no ghosts pile up)
         self.ctx = context or zmq.Context.instance()
         self.router = self.ctx.socket(zmq.ROUTER)
         self.router.setsockopt(zmq.LINGER, 0)
@@ -299,11 +306,12 @@ class EngineServer:
                 role = "operator"
                 changed = getattr(self.session, "operator_changed", None)
                 if changed is not None:  # a new (or reconnected) operator starts disarmed
-                    changed(msg["name"])
+                    changed(_clean_name(msg["name"]))
             else:
                 note = f"operator role is held by {self.clients[self.operator].name}; joined as viewer"
-        self.clients[ident] = ClientInfo(msg["name"], role, now)
-        self.session.note("info", f"{msg['name']} connected as {role}")
+        name = _clean_name(msg["name"])
+        self.clients[ident] = ClientInfo(name, role, now)
+        self.session.note("info", f"{name} connected as {role}")
         welcome: dict[str, Any] = {
             "client_id": ident.decode(errors="replace")[:64],
             "role": role,
@@ -350,6 +358,11 @@ class EngineServer:
         self.realtime_factor = ticks * self.dt / (now - start)
         self.late_fraction = missed / max(1, ticks)
         self._second = (now, self.stats.ticks, self.stats.missed)
+        for ident in [i for i, c in self.clients.items() if now - c.last_seen > self.client_timeout]:
+            gone = self.clients.pop(ident)
+            if self.operator == ident:
+                self.operator = None
+            self.session.note("info", f"{gone.name} silent for {self.client_timeout:g} s: forgotten")
         alarms = getattr(self.session, "alarms", None)
         if alarms is not None:
             slow = self.realtime_factor < 0.95 or self.late_fraction > 0.01
