@@ -30,3 +30,12 @@ def arm(client, n_axes: int = 3) -> None:
         for _ in range(5):
             client.send_input([0.0] * n_axes, [pressed], "stick")
             time.sleep(0.005)
+
+
+def process_running(pid: int) -> bool:
+    """True while the process exists and is not a zombie (Linux /proc)."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return "\nState:\tZ" not in f.read()
+    except FileNotFoundError:
+        return False

@@ -17,7 +17,7 @@ from app.engine.tac_session import TacSession
 from app.marine.waves import SeaStateError, check_sea
 from app.net.codec import encode
 from app.net.transport import Client, TransportError
-from tests.helpers import wait_for
+from tests.helpers import process_running, wait_for
 
 
 @pytest.fixture
@@ -250,17 +250,10 @@ def test_sigterm_closes_the_gui_and_its_engine(tmp_path):
         _, err = gui.communicate(timeout=20)
         assert "Traceback" not in err
 
-        def running(pid: int) -> bool:
-            try:
-                with open(f"/proc/{pid}/status") as f:
-                    return "\nState:\tZ" not in f.read()
-            except FileNotFoundError:
-                return False
-
         deadline = time.monotonic() + 10
-        while any(running(p) for p in engines) and time.monotonic() < deadline:
+        while any(process_running(p) for p in engines) and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert not any(running(p) for p in engines)
+        assert not any(process_running(p) for p in engines)
     finally:
         if gui.poll() is None:
             gui.kill()

@@ -22,6 +22,7 @@ from PyQt5.QtWidgets import QApplication
 
 from app.engine.server import EngineServer
 from app.engine.session import Session
+from tests.helpers import process_running
 from ui.link import EngineLink
 from ui.main_window import MainWindow
 
@@ -660,14 +661,7 @@ def test_engines_the_gui_started_end_when_the_gui_is_killed():
         gui.kill()
         gui.wait(timeout=10)
 
-    def running() -> bool:
-        try:
-            with open(f"/proc/{pid}/status") as f:
-                return "\nState:\tZ" not in f.read()
-        except FileNotFoundError:
-            return False
-
     deadline = time.monotonic() + 15
-    while running() and time.monotonic() < deadline:
+    while process_running(pid) and time.monotonic() < deadline:
         time.sleep(0.2)
-    assert not running()
+    assert not process_running(pid)
