@@ -23,7 +23,9 @@ class RobotXmlError(BosunError):
     def __init__(self, path: str, line: int | None, message: str) -> None:
         self.path = path
         self.line = line
-        self.message = message
+        message = " ".join(str(message).split())  # one line: parser messages end in newlines
+        self.message = message if len(message) <= 300 else message[:299] + "…"
+        message = self.message
         where = f"{path}:{line}" if line else path
         super().__init__(f"{where}: {message}")
 

@@ -5,11 +5,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pathlib import Path
+
 from app.engine.session import CommandError, Session
 from app.sim.actuators import JointActuators
 from app.teleop.devices import InputSample
 from app.teleop.profiles import default_profile
 
+ROOT = Path(__file__).resolve().parents[1]
 DT = 0.002  # 500 Hz
 
 
@@ -135,7 +138,7 @@ def test_estop_stops_in_one_tick_and_latches():
 
 
 def test_bad_commands_leave_state_unchanged(tmp_path):
-    ses = Session(robot_name="scara")
+    ses = Session(robot_name="scara", robots_dirs=(str(tmp_path),))
     bad = tmp_path / "bad.xml"
     bad.write_text("<robot>")
     with pytest.raises(CommandError, match=r"bad\.xml:1: XML syntax error"):
@@ -154,12 +157,87 @@ def test_bad_commands_leave_state_unchanged(tmp_path):
 def test_switching_robot_and_solver_while_running():
     ses = Session(robot_name="comau_smart5_3dof", solver_name="analytic")
     t = run(ses, 0.2, sample(x=0.5), t0=arm(ses))
+    q_moving = ses.actuators.q.copy()
+    with pytest.raises(CommandError, match="the robot is moving"):  # issue 13: no reload mid-motion
+        ses.set_robot("kuka_youbot")
+    assert ses.robot_name == "comau_smart5_3dof"
+    t = run(ses, 1.0, sample(enable=False), t0=t)  # released: the arm comes to rest
+    assert not ses.moving() and np.linalg.norm(ses.actuators.q - q_moving) < 0.1
     ses.set_robot("kuka_youbot")  # no closed form: falls back to the Jacobian solver
     assert ses.robot_name == "kuka_youbot" and ses.solver_name == "jacobian"
     assert not ses.snapshot()["flags"]["armed"]  # a robot change needs a fresh command
     ses.set_solver("ga")
     run(ses, 0.2, sample(z=0.5), t0=arm(ses, t))
     assert len(ses.snapshot()["q"]) == 5
+
+
+def test_reloading_the_same_robot_at_rest_keeps_the_arm_where_it_stands():
+    ses = Session(robot_name="comau_smart5_3dof")
+    t = run(ses, 0.5, sample(x=0.5, z=0.5), t0=arm(ses))
+    t = run(ses, 1.0, sample(enable=False), t0=t)
+    q = ses.actuators.q.copy()
+    assert np.linalg.norm(q - 0.5 * (ses.robot.lower + ses.robot.upper)) > 1e-2  # it has moved
+    ses.set_robot("comau_smart5_3dof")
+    np.testing.assert_array_equal(ses.actuators.q, q)  # no jump to mid-range
+
+
+def test_set_robot_reads_paths_only_inside_the_allowed_robot_folders(tmp_path, monkeypatch):
+    """Issue 13, item 9: set_robot parsed /etc/shadow, echoed its content and told which files exist."""
+    monkeypatch.delenv("BOSUN_ROBOTS_DIR", raising=False)
+    secret = tmp_path / "outside" / "secret.xml"
+    secret.parent.mkdir()
+    secret.write_text("<robot>top secret content</robot>")
+    allowed = tmp_path / "robots"
+    allowed.mkdir()
+    (allowed / "arm.xml").write_text((ROOT / "robots" / "scara.xml").read_text())
+    (allowed / "escape.xml").symlink_to(secret)
+    ses = Session(robot_name="comau_smart5_3dof", robots_dirs=(str(allowed),))
+    for ref in [
+        "/etc/shadow",
+        "/etc/passwd.xml",
+        str(secret),
+        str(tmp_path / "outside" / "absent.xml"),
+        str(allowed / ".." / "outside" / "secret.xml"),
+        str(allowed / "escape.xml"),
+        "../outside/secret.xml",
+    ]:
+        with pytest.raises(CommandError) as info:
+            ses.set_robot(ref)
+        assert "top secret" not in str(info.value)
+        assert (
+            "outside the allowed" in str(info.value)
+            or "must end in .xml" in str(info.value)
+            or "not found" in str(info.value)
+        )
+    # the same answer whether or not the outside file exists: no existence oracle
+    msgs = []
+    for ref in (str(secret), str(tmp_path / "outside" / "absent.xml")):
+        with pytest.raises(CommandError) as info:
+            ses.set_robot(ref)
+        msgs.append(str(info.value).replace("secret", "X").replace("absent", "X"))
+    assert msgs[0] == msgs[1]
+    ses.set_robot(str(allowed / "arm.xml"))
+    assert ses.robot_name == "scara"
+    ses.set_robot("arm.xml")  # relative: looked up in the allowed folders
+    assert ses.robot_name == "scara"
+
+
+def test_robot_files_are_size_checked_before_reading(tmp_path):
+    big = tmp_path / "big.xml"
+    with open(big, "wb") as fh:
+        fh.truncate(2_000_000_000)  # sparse: reading it whole would take seconds and 2 GB
+    ses = Session(robot_name="scara", robots_dirs=(str(tmp_path),))
+    with pytest.raises(CommandError, match="at most 1000000"):
+        ses.set_robot(str(big))
+
+
+def test_a_client_can_send_its_own_robot_file_as_text():
+    ses = Session(robot_name="comau_smart5_3dof")
+    ses.set_robot("my/arm.xml", xml=(ROOT / "robots" / "scara.xml").read_text())
+    assert ses.robot_name == "scara"
+    with pytest.raises(CommandError, match=r"^arm\.xml:1: XML syntax error"):
+        ses.set_robot("/home/me/my/arm.xml", xml="<robot>")
+    assert ses.robot_name == "scara"
 
 
 def test_mode_button_toggles():

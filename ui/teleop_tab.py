@@ -28,6 +28,7 @@ from PyQt5.QtWidgets import (
 
 from app.ik import solver_names
 from app.models.registry import list_robots
+from app.net.messages import MAX_ROBOT_TEXT
 from ui.csv_logger import SIGNALS, StateCsvLogger
 from ui.widgets.files import choose_file
 from ui.widgets.plots import LivePlots, UtilisationBars
@@ -299,7 +300,18 @@ class TeleopTab(QWidget):
         self.file_dialog = choose_file(self, "Open robot XML", os.getcwd(), "Robot files (*.xml)", self.load_robot_file)
 
     def load_robot_file(self, path: str) -> None:
-        self.link.send("set_robot", robot=path)
+        """Send the chosen file's text: the engine reads no path outside its robot folders."""
+        name = os.path.basename(path)
+        try:
+            size = os.path.getsize(path)
+            if size > MAX_ROBOT_TEXT:
+                raise ValueError(f"{size} bytes; files over {MAX_ROBOT_TEXT} bytes go in a robot folder")
+            with open(path, encoding="utf-8") as fh:
+                text = fh.read(MAX_ROBOT_TEXT + 1)
+        except (OSError, UnicodeDecodeError, ValueError) as err:
+            self.error.emit("Robot not loaded", f"{name}: {getattr(err, 'strerror', None) or err}")
+            return
+        self.link.send("set_robot", robot=name, xml=text)
 
     def set_mode(self, mode: str) -> None:
         self.link.send("set_mode", mode=mode)

@@ -270,7 +270,7 @@ class EngineServer:
             return
         try:
             if mtype == "set_robot":
-                self.session.set_robot(msg["robot"])
+                self.session.set_robot(msg["robot"], msg.get("xml"))
             elif mtype == "set_solver":
                 self.session.set_solver(msg["solver"])
             elif mtype == "set_mode":

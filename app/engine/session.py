@@ -27,7 +27,7 @@ import numpy as np
 from app.engine.alarms import AlarmList
 from app.errors import BosunError
 from app.ik import DEFAULT, make_solver
-from app.models.registry import load_robot
+from app.models.registry import allowed_dirs, load_robot, load_robot_text
 from app.models.serial import SerialRobot
 from app.models.workspace import workspace_box
 from app.sim.actuators import JointActuators
@@ -51,6 +51,18 @@ class CommandError(BosunError):
     """A command the engine refuses; nothing has changed."""
 
 
+def _label(ref: str) -> str:
+    """The file name a client gave its robot text, as shown in errors."""
+    name = ref.replace("\\", "/").rsplit("/", 1)[-1]
+    return "".join(ch if ch.isprintable() else "?" for ch in name)[:80] or "<robot text>"
+
+
+def _one_line(text: str, n: int = 300) -> str:
+    """An error for a client: one line, at most n characters."""
+    text = " ".join(text.split())
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
 @dataclass
 class LogEntry:
     seq: int
@@ -69,6 +81,7 @@ class Session:
     stale_timeout: float = 0.2
     actuator_tau: float = 0.05
     seed: int = 0
+    robots_dirs: tuple = ()  # folders set_robot may read besides the library (``--robots-dir``)
     log: deque = field(default_factory=lambda: deque(maxlen=200))
 
     def __post_init__(self) -> None:
@@ -96,12 +109,15 @@ class Session:
         self.log.append(LogEntry(self.log_seq, time.time(), level, text))
 
     # ------------------------------------------------------------------ commands
-    def _load(self, robot_ref: str, solver_name: str) -> None:
-        robot = load_robot(robot_ref)
+    def _load(self, robot_ref: str, solver_name: str, robot=None) -> None:
+        robot = load_robot(robot_ref) if robot is None else robot
         if not isinstance(robot, SerialRobot):
             raise CommandError(f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms")
         solver = make_solver(solver_name, robot, seed=self.seed)
         q0 = 0.5 * (robot.lower + robot.upper)
+        old = getattr(self, "robot", None)
+        if old is not None and old.joint_names == robot.joint_names and np.all(robot.within_limits(self.actuators.q)):
+            q0 = self.actuators.q.copy()  # the same joints reloaded: the arm stays where it stands
         act = JointActuators(robot.lower, robot.upper, robot.speed, robot.accel, self.actuator_tau, q0)
         box = workspace_box(robot)
         # everything built: now switch (a failure above leaves the old robot in place)
@@ -111,24 +127,40 @@ class Session:
         self.target = robot.position(self.q_ref)
         self.scaling = default_scaling(box, self.target)
 
-    def set_robot(self, robot_ref: str) -> None:
-        """Load a robot by library name or path; on any error the previous robot stays."""
+    def moving(self) -> bool:
+        """Whether any joint moves faster than 0.1 % of its speed limit."""
+        return bool(np.any(np.abs(self.actuators.qdot) > 1e-3 * self.robot.speed))
+
+    def set_robot(self, robot_ref: str, xml: str | None = None) -> None:
+        """Load a robot; on any error the previous robot stays.
+
+        ``robot_ref`` is a library name or a path inside the allowed robot folders (the
+        library, ``$BOSUN_ROBOTS_DIR``, :attr:`robots_dirs`); with ``xml`` the client sent the
+        file's text and ``robot_ref`` only names it.  Refused while the arm moves.
+        """
         if self.estop_latched:
             raise CommandError("E-STOP is latched; reset before changing the robot")
+        if self.moving():
+            raise CommandError("the robot is moving; release ENABLE and let it come to rest before changing the robot")
         solver = self.solver_name
         try:
-            robot = load_robot(robot_ref)
+            if xml is not None:
+                robot = load_robot_text(xml, _label(robot_ref))
+            else:
+                robot = load_robot(robot_ref, allowed=allowed_dirs(self.robots_dirs))
             if not isinstance(robot, SerialRobot):
                 raise CommandError(
                     f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms"
                 )
-            make_solver(solver, robot)
-        except BosunError as err:
-            if "no closed-form solution" in str(err):
+            try:
+                make_solver(solver, robot)
+            except BosunError as err:
+                if "no closed-form solution" not in str(err):
+                    raise
                 solver = DEFAULT_SOLVER
-            else:
-                raise CommandError(str(err)) from None
-        self._load(robot_ref, solver)
+            self._load(robot_ref, solver, robot)
+        except BosunError as err:
+            raise CommandError(_one_line(str(err))) from None
         self.input.disarm("robot changed")
         self.note("info", f"robot {self.robot_name} loaded ({self.robot.n_joints} joints, solver {solver})")
 

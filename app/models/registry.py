@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import difflib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +17,7 @@ from app.models.delta import DeltaHead
 from app.models.serial import SerialRobot
 from app.models.spec import RobotSpec
 from app.models.stewart import StewartPlatform
-from app.models.xml import parse_robot_file
+from app.models.xml import MAX_FILE_BYTES, parse_robot_file, parse_robot_xml
 
 #: mechanism type -> factory building its kinematic model from a spec
 MODEL_FACTORIES: dict[str, Callable[[RobotSpec], Any]] = {
@@ -27,12 +27,13 @@ MODEL_FACTORIES: dict[str, Callable[[RobotSpec], Any]] = {
 }
 
 ENV_ROBOTS_DIR = "BOSUN_ROBOTS_DIR"
+LIBRARY_DIR = Path(__file__).resolve().parents[2] / "robots"
 
 
 def robots_dir() -> Path:
     """The robot library: ``$BOSUN_ROBOTS_DIR`` if set, else ``robots/`` of this checkout."""
     env = os.environ.get(ENV_ROBOTS_DIR)
-    return Path(env) if env else Path(__file__).resolve().parents[2] / "robots"
+    return Path(env) if env else LIBRARY_DIR
 
 
 def list_robots() -> list[str]:
@@ -66,12 +67,79 @@ def resolve(name_or_path: str | os.PathLike[str]) -> Path:
     raise RobotNotFoundError(f"unknown robot '{text}'{hint} (library: {', '.join(names)})")
 
 
-def load_spec(name_or_path: str | os.PathLike[str]) -> RobotSpec:
-    """Parse and validate the robot file named by ``name_or_path``."""
-    return parse_robot_file(resolve(name_or_path))
+def allowed_dirs(extra: Sequence[str | os.PathLike[str]] = ()) -> list[Path]:
+    """Folders a remote ``set_robot`` may read: the library, ``$BOSUN_ROBOTS_DIR`` and ``extra``."""
+    out: list[Path] = []
+    for d in (LIBRARY_DIR, robots_dir(), *map(Path, extra)):
+        real = Path(d).expanduser().resolve()
+        if real not in out:
+            out.append(real)
+    return out
 
 
-def load_robot(name_or_path: str | os.PathLike[str]) -> Any:
+def resolve_allowed(name_or_path: str, folders: Sequence[Path]) -> Path:
+    """Like :func:`resolve`, but a path must lie inside one of ``folders`` (symlinks resolved).
+
+    A path outside them is refused before anything on the disk is looked at, so the answer
+    says nothing about which files exist; a relative path is looked up in each folder.
+    """
+    text = os.fspath(name_or_path)
+    if not (text.endswith(".xml") or os.sep in text or "/" in text):
+        return resolve(text)
+    if not text.endswith(".xml"):
+        raise RobotNotFoundError(f"a robot path must end in .xml: {_quoted(text)}")
+    given = Path(text).expanduser()
+
+    def inside(p: Path) -> bool:
+        return any(p.is_relative_to(d) for d in folders)
+
+    if given.is_absolute():
+        # lexically first, so a path outside says nothing about what exists there
+        if not inside(Path(os.path.normpath(given))) or not inside(given.resolve()):
+            raise RobotNotFoundError(
+                f"robot path {_quoted(text)} is outside the allowed robot folders "
+                f"({', '.join(str(d) for d in folders)}); start the engine with --robots-dir to add one"
+            )
+        if not given.resolve().is_file():
+            raise RobotNotFoundError(f"robot file not found: {_quoted(text)}")
+        return given.resolve()
+    for d in folders:
+        real = (d / given).resolve()
+        if inside(real) and real.is_file():
+            return real
+    raise RobotNotFoundError(f"robot file not found in the allowed robot folders: {_quoted(text)}")
+
+
+def _quoted(text: str, n: int = 80) -> str:
+    text = "".join(ch if ch.isprintable() else "?" for ch in text)
+    return repr(text if len(text) <= n else text[: n - 1] + "…")
+
+
+def load_spec(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> RobotSpec:
+    """Parse and validate the robot file named by ``name_or_path`` (inside ``allowed`` when given)."""
+    path = resolve(name_or_path) if allowed is None else resolve_allowed(os.fspath(name_or_path), allowed)
+    return parse_robot_file(path)
+
+
+def build_model(spec: RobotSpec) -> Any:
+    """The kinematic model of a parsed robot file."""
+    factory = MODEL_FACTORIES.get(spec.type)
+    if factory is None:
+        raise RobotTypeError(
+            f"robot '{spec.name}' is a {spec.type} mechanism; no {spec.type} kinematics are available yet"
+        )
+    return factory(spec)
+
+
+def load_robot_text(text: str | bytes, label: str) -> Any:
+    """The model of robot XML sent as text (a client's own file); ``label`` names it in errors."""
+    size = len(text.encode("utf-8") if isinstance(text, str) else text)
+    if size > MAX_FILE_BYTES:
+        raise RobotNotFoundError(f"{label}: {size} bytes; a robot file is at most {MAX_FILE_BYTES}")
+    return build_model(parse_robot_xml(text, label))
+
+
+def load_robot(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> Any:
     """The kinematic model of a robot (``SerialRobot`` for serial chains).
 
     Raises
@@ -81,10 +149,4 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Any:
     RobotTypeError
         The mechanism type has no kinematic model registered.
     """
-    spec = load_spec(name_or_path)
-    factory = MODEL_FACTORIES.get(spec.type)
-    if factory is None:
-        raise RobotTypeError(
-            f"robot '{spec.name}' is a {spec.type} mechanism; no {spec.type} kinematics are available yet"
-        )
-    return factory(spec)
+    return build_model(load_spec(name_or_path, allowed))

@@ -47,6 +47,8 @@ class SerialRobot:
         Joint acceleration limits; ``inf`` where the file gives none.
     """
 
+    kind = "serial"
+
     def __init__(self, spec: RobotSpec) -> None:
         if spec.serial is None:
             raise TypeError(f"robot {spec.name} is of type {spec.type}, not serial")

@@ -52,11 +52,24 @@ def sample_positions(robot, n: int, rng: np.random.Generator) -> NDArray[np.floa
     return robot.position(sample_configurations(robot, n, rng))
 
 
+MAX_CORNERS = 4096
+
+
+def limit_corners(robot, rng: np.random.Generator) -> NDArray[np.float64]:
+    """Joint vectors with every joint at a limit: all 2ⁿ when 2ⁿ ≤ 4,096, else 4,096 seeded ones."""
+    n = robot.n_joints
+    if 2**n <= MAX_CORNERS:
+        pick = (np.arange(2**n)[:, None] >> np.arange(n)) & 1
+    else:
+        pick = rng.integers(0, 2, size=(MAX_CORNERS, n))
+    return np.where(pick.astype(bool), robot.upper, robot.lower)
+
+
 def workspace_box(robot, n_samples: int = DEFAULT_SAMPLES, seed: int = 0, pad: float = 0.01) -> WorkspaceBox:
     """Box enclosing the tool positions of ``n_samples`` seeded random configurations.
 
-    Joint limits are sampled too (each limit corner of the first three joints is
-    included), and the box is grown by ``pad`` of its size on every side, since random
+    Joint-limit corners are sampled too (all 2ⁿ of them up to n = 12, else 4,096 seeded
+    ones: never a 2ⁿ array), and the box is grown by ``pad`` of its size on every side, since random
     samples fall just short of the true extremes.  Cached on the robot for the default
     arguments.
     """
@@ -66,9 +79,7 @@ def workspace_box(robot, n_samples: int = DEFAULT_SAMPLES, seed: int = 0, pad: f
         return cached[1]
     rng = np.random.default_rng(seed)
     q = sample_configurations(robot, n_samples, rng)
-    corners = np.array(np.meshgrid(*[[lo, hi] for lo, hi in zip(robot.lower, robot.upper, strict=True)]))
-    corners = corners.reshape(robot.n_joints, -1).T[:4096]
-    p = robot.position(np.vstack([q, corners]))
+    p = robot.position(np.vstack([q, limit_corners(robot, rng)]))
     lo, hi = p.min(axis=0), p.max(axis=0)
     margin = pad * (hi - lo).max()
     box = WorkspaceBox(lo - margin, hi + margin)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 from functools import lru_cache
 from pathlib import Path
 
@@ -32,6 +33,28 @@ from app.models.spec import (
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "robots" / "robot.xsd"
 MAX_FILE_BYTES = 1_000_000
 
+#: At most this many actuated joints in a serial chain (and links in the table).  Past a dozen
+#: joints a chain is no manipulator Bosun drives, and the solvers' cost grows with n.
+MAX_JOINTS = 12
+MAX_LINKS = 24
+
+#: Physical bounds of every number in a robot file, in SI units after conversion (rad, m, s):
+#: kind -> (lowest, highest, unit).  Documented in robots/README.md, "Physical bounds".
+BOUNDS: dict[str, tuple[float, float, str]] = {
+    "length": (-1000.0, 1000.0, "m"),  # DH a and d, offsets, points, prismatic limits
+    "size": (1e-3, 1000.0, "m"),  # Delta link lengths, Stewart leg lengths
+    "angle": (-40 * math.pi, 40 * math.pi, "rad"),  # DH angles, rpy, revolute limits (±20 turns)
+    "speed": (1e-6, 1000.0, "/s"),  # rad/s or m/s
+    "accel": (1e-6, 1e5, "/s²"),  # rad/s² or m/s²
+    "factor": (-100.0, 100.0, ""),  # coupling ratios
+    "time": (1e-4, 1000.0, "s"),  # motor time constant
+    "gain": (0.0, 1e6, ""),  # PID gains
+    "ratio": (1e-6, 1e6, ""),  # motor gain
+}
+
+#: seeded joint-space samples at which a serial chain's FK and Jacobian must be finite
+N_CHECK_SAMPLES = 64
+
 
 @lru_cache(maxsize=1)
 def _schema() -> etree.XMLSchema:
@@ -42,7 +65,15 @@ def parse_robot_file(path: str | Path) -> RobotSpec:
     """Read and parse a robot file; see :func:`parse_robot_xml`."""
     path = Path(path)
     try:
-        data = path.read_bytes()
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise RobotXmlError(str(path), None, "not a regular file")
+        if info.st_size > MAX_FILE_BYTES:  # checked before reading: a 1 GB file is never read
+            raise RobotXmlError(
+                str(path), None, f"file is {info.st_size} bytes; a robot file is at most {MAX_FILE_BYTES}"
+            )
+        with path.open("rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
     except OSError as err:
         raise RobotXmlError(str(path), None, f"cannot read file: {err.strerror or err}") from None
     return parse_robot_xml(data, str(path))
@@ -108,6 +139,12 @@ def parse_number(raw: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def _short(raw: str, n: int = 40) -> str:
+    """A file value quoted in a message: stripped, one line, at most n characters."""
+    text = " ".join(raw.split())
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
 def _strip_location(msg: str) -> str:
     # lxml appends ", line N, column M" to syntax messages; the line is reported already.
     head, sep, _ = msg.rpartition(", line ")
@@ -126,7 +163,10 @@ class _Reader:
     def fail(self, el: etree._Element, message: str) -> RobotXmlError:
         return RobotXmlError(self.path, el.sourceline, message)
 
-    def num(self, el: etree._Element, attr: str, default: float | None = None, angle: bool = False) -> float:
+    def num(
+        self, el: etree._Element, attr: str, default: float | None = None, angle: bool = False, bound: str = ""
+    ) -> float:
+        """The attribute as a finite number in SI units, inside ``BOUNDS[bound]`` when given."""
         raw = el.get(attr)
         if raw is None:
             if default is None:
@@ -135,16 +175,37 @@ class _Reader:
         else:
             value = parse_number(raw)
             if value is None:
-                raise self.fail(el, f"<{el.tag}> attribute '{attr}' is {raw.strip()}; give a finite number")
-        return value * self.angle_scale if angle else value
+                raise self.fail(el, f"<{el.tag}> attribute '{attr}' is {_short(raw)}; give a finite number")
+        value = value * self.angle_scale if angle else value
+        if bound:
+            self.bounded(el, attr, value, bound, raw, angle)
+        return value
+
+    def bounded(
+        self, el: etree._Element, attr: str, value: float, bound: str, raw: str | None, angle: bool = False
+    ) -> None:
+        lo, hi, unit = BOUNDS[bound]
+        if bound in ("speed", "accel"):
+            unit = ("rad" if angle else "m") + unit
+        if not lo <= value <= hi:
+            shown = "" if raw is None else f" ({_short(raw)} in the file)"
+            unit = f" {unit}" if unit else ""
+            raise self.fail(
+                el,
+                f"<{el.tag}> attribute '{attr}' is {value:.6g}{unit}{shown}; must be within "
+                f"[{lo:.6g}, {hi:.6g}]{unit} (the {bound} bound, robots/README.md)",
+            )
 
     def vec3(self, el: etree._Element, attr: str, angle: bool = False) -> np.ndarray:
         raw = el.get(attr, "0 0 0")
         vals = [parse_number(x) for x in raw.split()]
         if len(vals) != 3 or any(v is None for v in vals):
-            raise self.fail(el, f"<{el.tag}> attribute '{attr}' needs three finite numbers, got '{raw}'")
+            raise self.fail(el, f"<{el.tag}> attribute '{attr}' needs three finite numbers, got '{_short(raw)}'")
         v = np.array(vals, dtype=float)
-        return v * self.angle_scale if angle else v
+        v = v * self.angle_scale if angle else v
+        for x in v:
+            self.bounded(el, attr, float(x), "angle" if angle else "length", raw)
+        return v
 
     def frame(self, el: etree._Element | None) -> np.ndarray:
         if el is None:
@@ -156,12 +217,13 @@ class _Reader:
             raise self.fail(el, f"{what}: min ({lo:g}) must be less than max ({hi:g})")
 
     def limits(self, el: etree._Element, angular: bool, what: str) -> tuple[float, float, float, float | None]:
-        lo = self.num(el, "min", angle=angular)
-        hi = self.num(el, "max", angle=angular)
+        position = "angle" if angular else "length"
+        lo = self.num(el, "min", angle=angular, bound=position)
+        hi = self.num(el, "max", angle=angular, bound=position)
         # Compare in file units so the message shows the numbers the user wrote.
         self.ordered(el, self.num(el, "min"), self.num(el, "max"), what)
-        speed = self.num(el, "speed", angle=angular)
-        accel = self.num(el, "accel", angle=angular) if el.get("accel") is not None else None
+        speed = self.num(el, "speed", angle=angular, bound="speed")
+        accel = self.num(el, "accel", angle=angular, bound="accel") if el.get("accel") is not None else None
         return lo, hi, speed, accel
 
     # ------------------------------------------------------------------ robot
@@ -181,16 +243,90 @@ class _Reader:
             path=self.path,
         )
         if kind == "serial":
-            return RobotSpec(**common, serial=self.serial(mech))
-        if kind == "delta":
-            return RobotSpec(**common, delta=self.delta(mech))
-        return RobotSpec(**common, stewart=self.stewart(mech))
+            spec = RobotSpec(**common, serial=self.serial(mech))
+        elif kind == "delta":
+            spec = RobotSpec(**common, delta=self.delta(mech))
+        else:
+            spec = RobotSpec(**common, stewart=self.stewart(mech))
+        self.check_model(spec, mech)
+        return spec
+
+    # ------------------------------------------------------------------ the model as physics
+    def check_model(self, spec: RobotSpec, mech: etree._Element) -> None:
+        """Build the kinematic model and check it where the file's numbers cannot show a fault.
+
+        Serial: tool position and Jacobian finite at the mid-range pose, every limit corner of
+        the first three joints and seeded samples inside the limits.  Delta: an assembly exists
+        at the mid-range arm angles with a finite Jacobian.  Stewart: every leg reaches the
+        neutral pose and each pose limit taken alone (the others at 0) within its stroke.
+        """
+        from app.models.delta import DeltaHead
+        from app.models.serial import SerialRobot
+        from app.models.stewart import StewartPlatform
+
+        if spec.serial is not None:
+            robot = SerialRobot(spec)
+            rng = np.random.default_rng(0)
+            q = rng.uniform(robot.lower, robot.upper, size=(N_CHECK_SAMPLES, robot.n_joints))
+            q[0] = 0.5 * (robot.lower + robot.upper)
+            with np.errstate(all="ignore"):
+                bad = ~(
+                    np.all(np.isfinite(robot.position(q)), axis=-1)
+                    & np.all(np.isfinite(robot.jacobian(q)), axis=(-2, -1))
+                )
+            if bad.any():
+                raise self.fail(mech, "the chain's tool position or Jacobian is not finite inside the joint limits")
+        elif spec.delta is not None:
+            head = DeltaHead(spec)
+            alpha = np.full(3, 0.5 * (head.lower[0] + head.upper[0]))
+            try:
+                with np.errstate(all="ignore"):
+                    ok = np.all(np.isfinite(head.fk(alpha))) and np.all(np.isfinite(head.jacobian(alpha)))
+            except (ValueError, np.linalg.LinAlgError):
+                ok = False
+            if not ok:
+                raise self.fail(
+                    mech, "the Delta head cannot be assembled at mid-range arm angles (check l_k, l_a, l_r, l_p)"
+                )
+        else:
+            self.check_stewart(StewartPlatform(spec), mech)
+
+    def check_stewart(self, platform, mech: etree._Element) -> None:
+        legs_el = mech.find("legs")
+        poses = [("the neutral pose", np.zeros(6))]
+        for i, name in enumerate(STEWART_DOFS):
+            for end, value in (("min", platform.pose_min[i]), ("max", platform.pose_max[i])):
+                if value != 0.0:
+                    eta = np.zeros(6)
+                    eta[i] = value
+                    poses.append((f"{name} {end}", eta))
+        lengths = platform.leg_lengths(np.array([eta for _, eta in poses]))
+        lo, hi = platform.leg_min, platform.leg_max
+        tol = 1e-9 * max(1.0, hi)
+        for (what, _), row in zip(poses, lengths, strict=True):
+            k = int(np.argmax(np.maximum(lo - row, row - hi)))
+            if not lo - tol <= row[k] <= hi + tol:
+                raise self.fail(
+                    legs_el,
+                    f"leg {k + 1} needs {row[k]:.4g} m at {what}, outside its stroke [{lo:g}, {hi:g}] m; "
+                    "every leg must reach the neutral pose and each pose limit alone",
+                )
 
     # ------------------------------------------------------------------ serial
     def serial(self, el: etree._Element) -> SerialSpec:
         links: list[LinkSpec] = []
         joints: list[dict] = []
-        for i, link_el in enumerate(el.findall("link")):
+        link_els = el.findall("link")
+        movers = [x for x in link_els if x.get("joint") != "fixed"]
+        if len(movers) > MAX_JOINTS:
+            raise self.fail(
+                movers[MAX_JOINTS], f"{len(movers)} joints; a serial robot has at most {MAX_JOINTS} (robots/README.md)"
+            )
+        if len(link_els) > MAX_LINKS:
+            raise self.fail(
+                link_els[MAX_LINKS], f"{len(link_els)} links; a serial robot has at most {MAX_LINKS} (robots/README.md)"
+            )
+        for i, link_el in enumerate(link_els):
             kind = link_el.get("joint")
             name = link_el.get("name") or str(i + 1)
             dh = link_el.find("dh")
@@ -214,10 +350,10 @@ class _Reader:
                 LinkSpec(
                     name=name,
                     kind=kind,
-                    theta=self.num(dh, "theta", 0.0, angle=True),
-                    d=self.num(dh, "d", 0.0),
-                    a=self.num(dh, "a"),
-                    alpha=self.num(dh, "alpha", angle=True),
+                    theta=self.num(dh, "theta", 0.0, angle=True, bound="angle"),
+                    d=self.num(dh, "d", 0.0, bound="length"),
+                    a=self.num(dh, "a", bound="length"),
+                    alpha=self.num(dh, "alpha", angle=True, bound="angle"),
                     joint=joint_index,
                 )
             )
@@ -238,7 +374,7 @@ class _Reader:
                     )
                 if other == j["name"]:
                     raise self.fail(c_el, f"joint {j['name']}: coupling to itself; use sign and offset instead")
-                coupling.append((names.index(other), self.num(c_el, "factor")))
+                coupling.append((names.index(other), self.num(c_el, "factor", bound="factor")))
             del j["element"]
             joint_specs.append(JointSpec(**j, coupling=tuple(coupling)))
         return SerialSpec(
@@ -262,7 +398,7 @@ class _Reader:
             speed=speed,
             accel=accel,
             sign=self.num(el, "sign", 1.0),
-            offset=self.num(el, "offset", 0.0, angle=angular),
+            offset=self.num(el, "offset", 0.0, angle=angular, bound="angle" if angular else "length"),
         )
 
     # ------------------------------------------------------------------ delta
@@ -273,23 +409,23 @@ class _Reader:
             raise self.fail(arms[0], f"delta arms must have index 1, 2 and 3 once each, got {indices}")
         rotations = np.zeros(3)
         for a in arms:
-            rotations[int(a.get("index")) - 1] = self.num(a, "rot_x", angle=True)
+            rotations[int(a.get("index")) - 1] = self.num(a, "rot_x", angle=True, bound="angle")
         lo, hi, speed, accel = self.limits(el.find("limits"), True, "delta arm limits")
         motor = el.find("motor")
         pid = el.find("pid")
         spec = DeltaSpec(
-            l_k=self.num(el, "l_k"),
-            l_a=self.num(el, "l_a"),
-            l_r=self.num(el, "l_r"),
-            l_p=self.num(el, "l_p"),
+            l_k=self.num(el, "l_k", bound="size"),
+            l_a=self.num(el, "l_a", bound="size"),
+            l_r=self.num(el, "l_r", bound="size"),
+            l_p=self.num(el, "l_p", bound="size"),
             arm_rotations=rotations,
             alpha_min=lo,
             alpha_max=hi,
             speed=speed,
             accel=accel,
-            motor_time_constant=self.num(motor, "time_constant") if motor is not None else None,
-            motor_gain=self.num(motor, "gain") if motor is not None else None,
-            pid=(self.num(pid, "kp"), self.num(pid, "ki"), self.num(pid, "kd")) if pid is not None else None,
+            motor_time_constant=self.num(motor, "time_constant", bound="time") if motor is not None else None,
+            motor_gain=self.num(motor, "gain", bound="ratio") if motor is not None else None,
+            pid=tuple(self.num(pid, k, bound="gain") for k in ("kp", "ki", "kd")) if pid is not None else None,
         )
         if spec.l_r <= abs(spec.l_p - spec.l_k):
             raise self.fail(
@@ -302,7 +438,7 @@ class _Reader:
         base = np.array([self.vec3(p, "xyz") for p in el.find("base_joints").findall("point")])
         plat = np.array([self.vec3(p, "xyz") for p in el.find("platform_joints").findall("point")])
         legs = el.find("legs")
-        leg_min, leg_max = self.num(legs, "min_length"), self.num(legs, "max_length")
+        leg_min, leg_max = self.num(legs, "min_length", bound="size"), self.num(legs, "max_length", bound="size")
         self.ordered(legs, leg_min, leg_max, "leg length")
         dofs = {}
         for d in el.find("pose_limits").findall("dof"):
@@ -322,8 +458,8 @@ class _Reader:
             platform_joints_b=plat,
             leg_min=leg_min,
             leg_max=leg_max,
-            leg_speed=self.num(legs, "speed"),
-            leg_accel=self.num(legs, "accel") if legs.get("accel") is not None else None,
+            leg_speed=self.num(legs, "speed", bound="speed"),
+            leg_accel=self.num(legs, "accel", bound="accel") if legs.get("accel") is not None else None,
             pose_min=rows[:, 0],
             pose_max=rows[:, 1],
             speed_max=rows[:, 2],

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 PROTOCOL_VERSION = 1
 MAX_MESSAGE_BYTES = 65_536
+MAX_ROBOT_TEXT = 60_000  # robot XML sent by a client in set_robot (larger files go in a robot folder)
 
 ROLES = ("operator", "viewer")
 MODES = ("position", "velocity")
@@ -35,7 +36,7 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
         "device": ("str", True, 128),
     },
     "device_lost": {"device": ("str", False, 128), "released": ("bool", False, None)},
-    "set_robot": {"robot": ("str", True, 1024)},
+    "set_robot": {"robot": ("str", True, 1024), "xml": ("str", False, MAX_ROBOT_TEXT)},
     "set_solver": {"solver": ("str", True, 64)},
     "set_mode": {"mode": ("enum", True, MODES)},
     "set_scaling": {"k_p": ("vec3", False, 1e4), "x_w": ("vec3", False, 1e5), "k_v": ("vec3", False, 1e3)},
