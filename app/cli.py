@@ -621,9 +621,7 @@ def _make_session(args: argparse.Namespace):
     for folder in folders:
         if not Path(folder).is_dir():
             raise BosunError(f"--robots-dir {folder}: not a folder")
-    return Session(
-        robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0, robots_dirs=tuple(folders)
-    )
+    return Session(robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0, robots_dirs=tuple(folders))
 
 
 def cmd_server(args: argparse.Namespace) -> int:

@@ -1,11 +1,11 @@
 """Engine session: mapping to motion, safety rules, command errors, and the limits property."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from pathlib import Path
 
 from app.engine.session import CommandError, Session
 from app.sim.actuators import JointActuators

@@ -7,8 +7,8 @@ and the engine alike."""
 import io
 import math
 import subprocess
-import time
 import sys
+import time
 from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
@@ -150,9 +150,13 @@ def test_values_outside_the_physical_bounds_are_refused_by_name(old, new, words)
 
 
 def chain(n: int) -> str:
-    link = '<link joint="revolute"><dh a="0.1" alpha="90"/><joint name="q{i}"><limits min="-90" max="90" speed="90"/></joint></link>'
+    link = (
+        '<link joint="revolute"><dh a="0.1" alpha="90"/>'
+        '<joint name="q{i}"><limits min="-90" max="90" speed="90"/></joint></link>'
+    )
     links = "".join(link.format(i=i) for i in range(n))
-    return f'<robot name="c" type="serial" angle_unit="deg"><description>d</description><source>s</source><serial>{links}</serial></robot>'
+    head = '<robot name="c" type="serial" angle_unit="deg"><description>d</description><source>s</source>'
+    return f"{head}<serial>{links}</serial></robot>"
 
 
 def test_joint_count_has_a_documented_maximum():
