@@ -628,11 +628,20 @@ def cmd_server(args: argparse.Namespace) -> int:
     import signal
 
     from app.engine.server import EngineServer
+    from app.net.security import ENV_OPERATOR_SECRET, ServerCurve
     from app.net.transport import check_url, is_local
 
     check_url(args.bind)
-    if not is_local(args.bind) and not args.token:
-        raise BosunError(f"binding to the non-local address {args.bind} needs a shared token (--token)")
+    if (args.curve_secret is None) != (args.curve_clients is None):
+        raise BosunError("--curve-secret and --curve-clients go together")
+    curve = ServerCurve.from_files(args.curve_secret, args.curve_clients) if args.curve_secret else None
+    if not is_local(args.bind) and curve is None:
+        raise BosunError(
+            f"binding to the non-local address {args.bind} needs CURVE keys (--curve-secret, --curve-clients); "
+            "make them with 'bosun keys' (README: remote operation)"
+        )
+    # the launch secret of a GUI's own engine comes in the environment, never on the command line
+    operator_secret = os.environ.pop(ENV_OPERATOR_SECRET, None) or None
     session = _make_session(args)
     rate = args.rate if args.rate is not None else (50.0 if args.plant in ("tac", "lab") else 500.0)
     pub = (
@@ -640,7 +649,16 @@ def cmd_server(args: argparse.Namespace) -> int:
         if args.publish_rate is not None
         else (25.0 if args.plant in ("tac", "lab") else 50.0)
     )
-    server = EngineServer(session, bind=args.bind, rate=rate, publish_rate=pub, token=args.token)
+    server = EngineServer(
+        session,
+        bind=args.bind,
+        rate=rate,
+        publish_rate=pub,
+        token=args.token,
+        curve=curve,
+        operator_secret=operator_secret,
+        operator_timeout=args.operator_timeout,
+    )
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
     if getattr(args, "exit_with_parent", False):
         parent = os.getppid()
@@ -661,6 +679,19 @@ def cmd_server(args: argparse.Namespace) -> int:
         server.close()
     st = server.stats.summary()
     print(f"bosun server: stopped after {st['ticks']} ticks, {st['missed_deadlines']} missed deadlines", flush=True)
+    return 0
+
+
+def cmd_keys(args: argparse.Namespace) -> int:
+    from app.net.security import create_keys, load_public
+
+    public, secret = create_keys(args.dir, args.name)
+    print(f"public key  {public}  ({load_public(public).decode()})")
+    print(f"secret key  {secret}  (mode 0600: keep it on this machine)")
+    print(
+        "engine:  bosun server --bind tcp://0.0.0.0:5555 --curve-secret KEYS/engine.key_secret --curve-clients ALLOWED/"
+    )
+    print("client:  bosun joystick --connect tcp://HOST:5555 --curve-secret KEYS/me.key_secret --server-key engine.key")
     return 0
 
 
@@ -692,12 +723,19 @@ def cmd_joystick(args: argparse.Namespace) -> int:
         )
     import signal
 
-    stop = threading.Event()  # SIGTERM stops streaming cleanly: the client says bye, the engine holds
+    from app.net.security import ClientCurve
+
+    if (args.curve_secret is None) != (args.server_key is None):
+        raise BosunError("--curve-secret and --server-key go together")
+    curve = ClientCurve.from_files(args.curve_secret, args.server_key) if args.curve_secret else None
+    stop = threading.Event()  # SIGTERM and Ctrl-C stop streaming cleanly: the client says bye, the engine holds
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
     try:
         sent = run_joystick_client(
             args.connect,
             token=args.token,
+            curve=curve,
             device=args.device,
             rate=args.rate,
             duration=args.duration,
@@ -977,7 +1015,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--bind",
         default="tcp://127.0.0.1:5555",
         help="request URL: tcp://HOST:PORT or ipc://PATH (default tcp://127.0.0.1:5555); "
-        "a non-local address needs --token",
+        "a non-local address needs CURVE keys (--curve-secret and --curve-clients)",
     )
     add_engine_args(p)
     p.add_argument(
@@ -992,7 +1030,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--publish-rate", type=_positive_float, default=None, help="state messages per second (default 50; tac 25)"
     )
-    p.add_argument("--token", default=None, help="shared secret every client must present")
+    p.add_argument("--token", default=None, help="shared token every client must present (loopback testing only)")
+    p.add_argument(
+        "--curve-secret", default=None, metavar="FILE", help="the engine's CURVE secret key file (bosun keys)"
+    )
+    p.add_argument(
+        "--curve-clients", default=None, metavar="DIR", help="folder of the client public keys (*.key) allowed in"
+    )
+    p.add_argument(
+        "--operator-timeout",
+        type=_positive_float,
+        default=5.0,
+        help="seconds without a message before the operator role lapses (default 5; a warning at 2)",
+    )
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.add_argument(
         "--exit-with-parent",
@@ -1003,12 +1053,25 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("joystick", help="stream a local joystick to an engine (the input client)")
     p.add_argument("--connect", required=True, help="the engine's request URL, e.g. tcp://127.0.0.1:5555")
-    p.add_argument("--token", default=None, help="shared secret of the engine")
+    p.add_argument("--token", default=None, help="shared token of the engine (loopback testing)")
+    p.add_argument("--curve-secret", default=None, metavar="FILE", help="this client's CURVE secret key (bosun keys)")
+    p.add_argument("--server-key", default=None, metavar="FILE", help="the engine's CURVE public key")
     p.add_argument("--device", default=None, help="use the first joystick whose name contains this")
     p.add_argument("--rate", type=_positive_float, default=100.0, help="input messages per second (default 100)")
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.add_argument("--virtual", action="store_true", help="attach an SDL virtual joystick (no hardware needed)")
     p.set_defaults(func=cmd_joystick)
+
+    p = sub.add_parser(
+        "keys",
+        help="make a CURVE key pair for remote operation (NAME.key public, NAME.key_secret secret)",
+        description="Writes NAME.key (public: give it to the other side) and NAME.key_secret (keep it; mode "
+        "0600) in ZeroMQ's certificate format. The engine needs its own secret key and a folder with each "
+        "allowed client's public key; a client needs its own secret key and the engine's public key.",
+    )
+    p.add_argument("name", help="name of the pair, e.g. engine or operator-laptop")
+    p.add_argument("--dir", default="keys", help="folder to write into (default ./keys)")
+    p.set_defaults(func=cmd_keys)
     return parser
 
 

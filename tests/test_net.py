@@ -131,9 +131,9 @@ def test_urls():
             check_url(bad)
 
 
-def test_non_local_bind_needs_token():
-    with pytest.raises(TransportError, match="needs a shared token"):
-        EngineServer(Session(), bind="tcp://0.0.0.0:0")
+def test_non_local_bind_needs_curve_keys_a_token_is_not_enough():
+    with pytest.raises(TransportError, match="needs CURVE keys"):
+        EngineServer(Session(), bind="tcp://0.0.0.0:0", token="s3cret")
 
 
 # ------------------------------------------------------------------ engine over sockets
@@ -322,9 +322,9 @@ def test_separate_processes_server_joystick_viewer():
         srv.wait(timeout=10)
 
 
-def test_cli_server_refuses_public_bind_without_token(capsys):
+def test_cli_server_refuses_public_bind_without_curve_keys(capsys):
     from app.cli import main
 
     assert main(["server", "--bind", "tcp://0.0.0.0:0", "--duration", "0.1"]) == 2
     err = capsys.readouterr().err
-    assert "needs a shared token" in err and err.count("\n") == 1
+    assert "needs CURVE keys" in err and err.count("\n") == 1

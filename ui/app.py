@@ -25,6 +25,7 @@ def run_gui(
     quit_after: float | None = None,
     connect_tac: str | None = None,
     connect_lab: str | None = None,
+    curve=None,
 ) -> int:
     """Open the main window; start a child engine unless ``connect`` names a running one."""
     if not has_display():
@@ -52,7 +53,13 @@ def run_gui(
                 mode=mode or str(settings.value("mode", "velocity")),
             )
             connect = engine.url
-        link = EngineLink(connect, role="operator", token=token)
+        link = EngineLink(
+            connect,
+            role="operator",
+            token=token,
+            secret=engine.secret if engine is not None else None,  # only this GUI operates its own engine
+            curve=curve if engine is None else None,
+        )
     except TransportError as err:
         if engine is not None:
             engine.stop()
@@ -75,7 +82,14 @@ def run_gui(
         def link(self, url: str):
             name = f"bosun-gui-{self.plant}"
             try:
-                link = EngineLink(url, role="operator", token=token if self.url else None, name=name)
+                link = EngineLink(
+                    url,
+                    role="operator",
+                    token=token if self.url else None,
+                    name=name,
+                    secret=self.proc.secret if self.proc is not None else None,
+                    curve=curve if self.url else None,
+                )
             except TransportError:
                 if self.proc is not None:
                     self.proc.stop()
@@ -116,7 +130,9 @@ def register(sub, helpers) -> None:
         default=None,
         help="attach to a running 'bosun server' at this URL (default: start an engine process)",
     )
-    p.add_argument("--token", default=None, help="shared secret of that engine")
+    p.add_argument("--token", default=None, help="shared token of that engine (loopback testing)")
+    p.add_argument("--curve-secret", default=None, metavar="FILE", help="this GUI's CURVE secret key (bosun keys)")
+    p.add_argument("--server-key", default=None, metavar="FILE", help="the remote engine's CURVE public key")
     p.add_argument(
         "--connect-tac",
         default=None,
@@ -131,8 +147,17 @@ def register(sub, helpers) -> None:
     p.add_argument("--solver", default=None, help="solver for a new engine")
     p.add_argument("--mode", choices=["position", "velocity"], default=None, help="mode for a new engine")
     p.add_argument("--quit-after", type=helpers["positive_float"], default=None, help=argparse.SUPPRESS)
+
+    def curve_of(a):
+        from app.net.security import ClientCurve
+
+        if (a.curve_secret is None) != (a.server_key is None):
+            raise BosunError("--curve-secret and --server-key go together")
+        return ClientCurve.from_files(a.curve_secret, a.server_key) if a.curve_secret else None
+
     p.set_defaults(
         func=lambda a: run_gui(
+            curve=curve_of(a),
             connect=a.connect,
             token=a.token,
             robot=a.robot,

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import collections
+import os
 import re
+import secrets
 import socket
 import subprocess
 import sys
 import threading
 import time
 
+from app.net.security import ENV_OPERATOR_SECRET
 from app.net.transport import TransportError
 
 
@@ -42,13 +45,17 @@ class EngineProcess:
         self.cmd = [sys.executable, "-m", "app", "server", "--bind", url, "--plant", plant, "--exit-with-parent"]
         if plant == "teleop":
             self.cmd += ["--robot", robot, "--solver", solver, "--mode", mode]
+        # only a hello with this secret gets the operator role: another program on the host can watch, not
+        # drive; it goes in the child's environment (readable by this user only), never on its command line
+        self.secret = secrets.token_urlsafe(32)
         self.url = None
         self.restarts = 0
         self.output: collections.deque[str] = collections.deque(maxlen=200)
         self._start()
 
     def _start(self) -> None:
-        self.proc = subprocess.Popen(self.cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        env = dict(os.environ, **{ENV_OPERATOR_SECRET: self.secret})
+        self.proc = subprocess.Popen(self.cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         url = None
         deadline = time.monotonic() + self.timeout
         while time.monotonic() < deadline:

@@ -601,6 +601,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self._send("lab_winch", speed=vmax * value / 100.0)
 
     def on_reply(self, re: str, ok: bool, error: str) -> None:
+        if not ok and "no longer the operator" in error:
+            self.notice.emit("error", f"Motion-Lab: operator role lost: {error}")
         if not ok and (re.startswith("lab_") or re == "reset"):
             self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
 

@@ -96,10 +96,7 @@ class _Worker(threading.Thread):
 
     def _hello(self, now: float) -> None:
         self._last_hello = now
-        hello: dict[str, Any] = {"role": self.role_wanted, "name": self.name}
-        if self.token is not None:
-            hello["token"] = self.token
-        self._send("hello", **hello)
+        self._send("hello", **dict(self.client.hello_fields, role=self.role_wanted))
 
     def _welcome(self, msg: dict[str, Any]) -> None:
         self.role = msg["role"]
@@ -236,9 +233,12 @@ class EngineLink(QObject):
         token: str | None = None,
         lost_after: float = 1.0,
         parent: QObject | None = None,
+        secret: str | None = None,
+        curve=None,
     ) -> None:
         super().__init__(parent)
-        self.client = Client(url, role=role, name=name, token=token)  # raises TransportError: no engine
+        # raises TransportError: no engine
+        self.client = Client(url, role=role, name=name, token=token, secret=secret, curve=curve)
         self.url = url
         self.role = self.client.role
         self.note = self.client.note

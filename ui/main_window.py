@@ -502,6 +502,9 @@ class MainWindow(QMainWindow):
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if ok and re in ("set_robot", "set_solver", "set_mode", "reset", "estop"):
             self.status.add_log("info", f"{re}: done")
+        if not ok and "no longer the operator" in error:  # the engine gave the role away: say it, loudly
+            self.gui_alarms.set("role_lost", True, "critical", f"Operator role lost: {error}", source="engine link")
+            self.show_error("Operator role lost", error)
 
     def on_input_event(self, level: str, text: str) -> None:
         self.status.add_log(level, text)

@@ -265,6 +265,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         )
 
     def on_reply(self, re: str, ok: bool, error: str) -> None:
+        if not ok and "no longer the operator" in error:
+            self.notice.emit("error", f"crane head: operator role lost: {error}")
         if not ok and re in ("set_sea", "set_tac_mode", "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
 

@@ -3,12 +3,15 @@
 Each tick: drain the request socket (commands, input; each message validated, bad ones
 rejected and logged), run one control tick, publish the state every ``publish_every``
 ticks, then sleep to the next deadline (sleep, then a short spin for sub-millisecond
-accuracy).  Roles: the first client asking for ``operator`` gets it; others are viewers
-until it is released or its holder is silent for ``operator_timeout``.  E-STOP is
-accepted from every client, also one that has not said ``hello`` (an engine restarted under a
-client must still stop); where a token is set the ``estop`` must carry it.  A non-local bind
-needs a shared token from every client.  Once a second the loop checks itself: below 95 % of
-real time or more than 1 % of ticks late raises the ``engine_slow`` alarm.
+accuracy).  Roles: the first client asking for ``operator`` gets it (where a launch secret is
+set, only a client presenting it); others are viewers.  The role lapses only after
+``operator_timeout`` (5 s) without any message from its holder, with a warning to every client
+at ``lapse_warning`` (2 s); the displaced holder is then told so in a refusal of what it sends.
+E-STOP is accepted from every client, also one that has not said ``hello`` (an engine restarted
+under a client must still stop); where a token is set the ``estop`` must carry it.  A
+non-local bind needs CURVE keys (:mod:`app.net.security`).  Failed authentications are counted
+and throttled.  Once a second the loop checks itself: below 95 % of real time or more than 1 % of
+ticks late raises the ``engine_slow`` alarm.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from app.engine.session import CommandError, Session
 from app.errors import BosunError
 from app.net.codec import ProtocolError, decode, encode
 from app.net.messages import OPERATOR_ONLY, SCENE_MESSAGES
+from app.net.security import AuthThrottle, CurveAuthenticator, ServerCurve
 from app.net.transport import TransportError, check_url, is_local, state_url_for
 from app.teleop.devices import InputSample
 
@@ -46,6 +50,7 @@ class ClientInfo:
     name: str
     role: str
     last_seen: float
+    refused_at: float = -math.inf  # last explicit refusal of its input (at most one a second)
 
 
 @dataclass
@@ -105,23 +110,34 @@ class EngineServer:
         rate: float = 500.0,
         publish_rate: float = 50.0,
         token: str | None = None,
-        operator_timeout: float = 2.0,
+        operator_timeout: float = 5.0,
         context: zmq.Context | None = None,
         client_timeout: float = 60.0,
+        curve: ServerCurve | None = None,
+        operator_secret: str | None = None,
+        lapse_warning: float = 2.0,
     ) -> None:
         check_url(bind)
         if not 1.0 <= rate <= 1000.0:
             raise TransportError(f"rate must be between 1 and 1000 Hz, got {rate:g}")
         if not 0.1 <= publish_rate <= rate:
             raise TransportError(f"publish rate must be between 0.1 Hz and the loop rate, got {publish_rate:g}")
-        if not is_local(bind) and not token:
-            raise TransportError(f"binding to the non-local address {bind} needs a shared token (--token)")
+        if not is_local(bind) and curve is None:
+            raise TransportError(
+                f"binding to the non-local address {bind} needs CURVE keys (--curve-secret, --curve-clients; "
+                "see 'bosun keys' and the README, remote operation)"
+            )
         self.session = session
         self.rate = rate
         self.dt = 1.0 / rate
         self.publish_every = max(1, round(rate / publish_rate))
         self.token = token
+        self.operator_secret = operator_secret
         self.operator_timeout = operator_timeout
+        self.lapse_warning = min(lapse_warning, operator_timeout)
+        self.auth = AuthThrottle()
+        self._displaced: dict[bytes, str] = {}  # former operators -> why they lost the role
+        self._warned_silence = False
         self.client_timeout = client_timeout  # clients silent this long are forgotten (no ghosts pile up)
         self.ctx = context or zmq.Context.instance()
         self.router = self.ctx.socket(zmq.ROUTER)
@@ -131,6 +147,13 @@ class EngineServer:
         self.pub = self.ctx.socket(zmq.PUB)
         self.pub.setsockopt(zmq.LINGER, 0)
         self.pub.setsockopt(zmq.SNDHWM, 1000)
+        self.authenticator = None
+        if curve is not None:
+            self.authenticator = CurveAuthenticator(self.ctx, curve.clients_dir, self.auth)
+            self.authenticator.start()
+            curve.apply(self.router)
+            curve.apply(self.pub)
+        self.curve = curve
         try:
             self.router.bind(bind)
             self.pub.bind(state_url_for(bind))
@@ -168,15 +191,81 @@ class EngineServer:
             self._reply(ident, re, False, reason)
 
     def _token_ok(self, msg: dict[str, Any]) -> bool:
-        """Constant-time token check on UTF-8 bytes (compare_digest refuses non-ASCII str)."""
+        """Constant-time token check on UTF-8 bytes (compare_digest refuses non-ASCII str), throttled:
+        past 10 failures a second further tries are refused unexamined, so guessing cannot run fast."""
         if self.token is None:
             return True
-        return secrets.compare_digest(str(msg.get("token", "")).encode(), self.token.encode())
+        if not self.auth.allowed():
+            return False
+        ok = secrets.compare_digest(str(msg.get("token", "")).encode(), self.token.encode())
+        if not ok:
+            self.auth.failed()
+        return ok
+
+    def _secret_ok(self, msg: dict[str, Any]) -> bool:
+        """Whether a hello may have the operator role under this engine's launch secret."""
+        if self.operator_secret is None:
+            return True
+        if not self.auth.allowed():
+            return False
+        ok = secrets.compare_digest(str(msg.get("secret", "")).encode(), self.operator_secret.encode())
+        if not ok:
+            self.auth.failed()
+        return ok
+
+    def _check_operator(self, now: float) -> None:
+        """Warn every client when the operator falls silent; lapse the role after operator_timeout."""
+        if self.operator is None:
+            return
+        holder = self.clients.get(self.operator)
+        silent = now - holder.last_seen if holder is not None else math.inf
+        if silent <= self.lapse_warning:
+            self._warned_silence = False
+            return
+        name = holder.name if holder is not None else "?"
+        if silent > self.operator_timeout:
+            self._lapse(f"the role lapsed after {self.operator_timeout:g} s without a message from {name}")
+        elif not self._warned_silence:
+            self._warned_silence = True
+            self.session.note(
+                "warning",
+                f"operator {name} silent for {self.lapse_warning:g} s: the role lapses at {self.operator_timeout:g} s",
+            )
+
+    def _lapse(self, why: str) -> None:
+        ident = self.operator
+        self.operator = None
+        self._warned_silence = False
+        if ident is None:
+            return
+        holder = self.clients.get(ident)
+        if holder is not None:
+            holder.role = "viewer"
+        if len(self._displaced) > 1000:
+            self._displaced.clear()
+        self._displaced[ident] = why
+        self.session.note("warning", f"operator role free: {why}")  # its input went stale long ago: holding
 
     def _operator_alive(self, now: float) -> bool:
         if self.operator is None or self.operator not in self.clients:
             return False
         return now - self.clients[self.operator].last_seen <= self.operator_timeout
+
+    def _refuse_displaced(self, ident: bytes, client, mtype: str, now: float) -> None:
+        """A former operator's command: an explicit refusal (for input at most once a second)."""
+        why = self._displaced[ident]
+        holder = self.clients[self.operator].name if self.operator in self.clients else "nobody"
+        if mtype == "input":
+            if now - client.refused_at < 1.0:
+                self.rejected += 1
+                return
+            client.refused_at = now
+        self._reject(
+            ident,
+            f"{client.name} is no longer the operator: {why}; held by {holder} now. "
+            "Say hello as operator to take the role back when it is free",
+            re=mtype,
+        )
 
     def handle(self, ident: bytes, data: bytes, now: float) -> None:
         """Validate and dispatch one message from a client; nothing a message does escapes the loop.
@@ -254,7 +343,9 @@ class EngineServer:
             self._reply(ident, mtype, True)
             return
         if mtype in OPERATOR_ONLY and ident != self.operator:
-            if mtype == "input":
+            if ident in self._displaced:
+                self._refuse_displaced(ident, client, mtype, now)
+            elif mtype == "input":
                 self._reject(ident, f"input from viewer {client.name}")
             else:
                 self._reject(ident, f"{mtype}: only the operator may do this", re=mtype)
@@ -300,9 +391,15 @@ class EngineServer:
             self._reject(ident, "hello with a wrong or missing token", re="hello")
             return
         role, note = "viewer", ""
-        if msg["role"] == "operator":
-            if self.operator in (None, ident) or not self._operator_alive(now):
+        if msg["role"] == "operator" and not self._secret_ok(msg):
+            note = "the operator role of this engine belongs to the program that started it; joined as viewer"
+        elif msg["role"] == "operator":
+            if self.operator not in (None, ident) and not self._operator_alive(now):
+                self._lapse(f"the role lapsed after {self.operator_timeout:g} s of silence")
+            if self.operator in (None, ident):
                 self.operator = ident
+                self._displaced.pop(ident, None)
+                self._warned_silence = False
                 role = "operator"
                 changed = getattr(self.session, "operator_changed", None)
                 if changed is not None:  # a new (or reconnected) operator starts disarmed
@@ -342,6 +439,9 @@ class EngineServer:
         snap["engine_id"], snap["estops"] = self.engine_id, self.estops
         snap["realtime_factor"] = self.realtime_factor
         snap["late_fraction"] = self.late_fraction
+        snap["auth_failures"] = self.auth.failures
+        holder = self.clients.get(self.operator) if self.operator else None
+        snap["operator_silent"] = round(time.monotonic() - holder.last_seen, 3) if holder else 0.0
         self.pub.send(encode("state", state=snap), zmq.NOBLOCK)
         for e in self.session.log:
             if e.seq > self._log_sent:
@@ -379,6 +479,7 @@ class EngineServer:
     def step(self, now: float) -> None:
         """One tick: requests, control, latency bookkeeping, publication."""
         self.poll_requests(now)
+        self._check_operator(now)
         budget = 0.4 * self.dt
         try:
             self.session.tick(now, self.dt, solve_budget=budget)
@@ -428,3 +529,6 @@ class EngineServer:
         for s in (getattr(self, "router", None), getattr(self, "pub", None)):
             if s is not None:
                 s.close(0)
+        if getattr(self, "authenticator", None) is not None:
+            self.authenticator.stop()
+            self.authenticator = None

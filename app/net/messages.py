@@ -25,7 +25,12 @@ MODES = ("position", "velocity")
 
 # ------------------------------------------------------------------ client -> engine
 CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
-    "hello": {"role": ("enum", True, ROLES), "name": ("str", True, 64), "token": ("str", False, 256)},
+    "hello": {
+        "role": ("enum", True, ROLES),
+        "name": ("str", True, 64),
+        "token": ("str", False, 256),
+        "secret": ("str", False, 256),
+    },
     "bye": {},
     "ping": {"seq": ("int", False, 2**62)},
     "input": {

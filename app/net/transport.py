@@ -20,6 +20,7 @@ import zmq
 
 from app.errors import BosunError
 from app.net.codec import ProtocolError, decode_engine, encode
+from app.net.security import ClientCurve
 
 DEFAULT_URL = "tcp://127.0.0.1:5555"
 
@@ -87,7 +88,11 @@ class Client:
     name : str
         Shown in the engine's log.
     token : str, optional
-        Shared secret for an engine bound to a non-local address.
+        Shared token of an engine that asks for one (loopback testing).
+    secret : str, optional
+        The launch secret of an engine this program started (the operator role needs it).
+    curve : ClientCurve, optional
+        CURVE keys for an engine bound to a non-local address (encrypted, authenticated).
     timeout : float
         Seconds to wait for ``welcome`` and for replies.
     """
@@ -100,13 +105,18 @@ class Client:
         token: str | None = None,
         timeout: float = 3.0,
         context: zmq.Context | None = None,
+        secret: str | None = None,
+        curve: ClientCurve | None = None,
     ) -> None:
         self.url = check_url(url)
+        self.curve = curve
         self.ctx = context or zmq.Context.instance()
         self.timeout = timeout
         self.dealer = self.ctx.socket(zmq.DEALER)
         self.dealer.setsockopt(zmq.LINGER, 0)
         self.dealer.setsockopt(zmq.IDENTITY, f"{name}-{uuid.uuid4().hex[:8]}".encode())
+        if curve is not None:
+            curve.apply(self.dealer)
         self.dealer.connect(self.url)
         self.sub: zmq.Socket | None = None
         self.role = None
@@ -114,8 +124,20 @@ class Client:
         hello: dict[str, Any] = {"role": role, "name": name}
         if token is not None:
             hello["token"] = token
+        if secret is not None:
+            hello["secret"] = secret
+        self.hello_fields = hello  # what a reconnecting link says again
         self.send("hello", **hello)
-        welcome = self._wait_for(("welcome", "reply"))
+        try:
+            welcome = self._wait_for(("welcome", "reply"))
+        except TransportError as err:
+            self.close()
+            if curve is not None:
+                raise TransportError(
+                    f"{err} (CURVE: is this client's public key in the engine's allowed folder, "
+                    "and is the engine's public key the right one?)"
+                ) from None
+            raise
         if welcome["type"] == "reply":
             self.close()
             raise TransportError(f"engine refused the connection: {welcome.get('error', 'no reason given')}")
@@ -127,6 +149,8 @@ class Client:
         self.sub.setsockopt(zmq.LINGER, 0)
         self.sub.setsockopt(zmq.CONFLATE, 0)
         self.sub.setsockopt(zmq.SUBSCRIBE, b"")
+        if curve is not None:
+            curve.apply(self.sub)
         self.sub.connect(self.state_url)
 
     # ------------------------------------------------------------------ sending

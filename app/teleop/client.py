@@ -6,14 +6,30 @@ import threading
 import time
 from collections.abc import Callable
 
+import zmq
+
+from app.net.codec import ProtocolError, decode_engine
+from app.net.security import ClientCurve
 from app.net.transport import Client
 from app.teleop.devices import PygameJoysticks
+
+KEEPALIVE = 0.5  # s between pings while no device streams (the operator role lapses after 5 s of silence)
+FIND_DEVICE = 1.0  # s to wait for SDL to list a joystick at start-up
+
+
+class NoDeviceError(RuntimeError):
+    """No joystick at start-up: nothing to stream."""
+
+
+class RoleLostError(RuntimeError):
+    """The engine says this client is no longer its operator."""
 
 
 def run_joystick_client(
     url: str,
     *,
     token: str | None = None,
+    curve: ClientCurve | None = None,
     device: str | None = None,
     rate: float = 100.0,
     duration: float | None = None,
@@ -23,19 +39,30 @@ def run_joystick_client(
 ) -> int:
     """Stream joystick samples as ``input`` messages until stopped; returns the number sent.
 
-    A device that disappears is reported once as ``device_lost`` (the engine then holds
-    the robot); when one is plugged in again streaming resumes.
+    With no joystick at start-up it raises :class:`NoDeviceError` before taking the operator
+    role.  A device that disappears later is reported once as ``device_lost`` (the engine then
+    holds the robot); the client keeps its role with keep-alive pings until one is plugged in
+    again.  When the engine refuses input because the role has gone to someone else it raises
+    :class:`RoleLostError` with the engine's reason.
     """
     say = on_event or (lambda text: None)
     sticks = PygameJoysticks(select=device)
-    client = Client(url, role="operator", name=name, token=token)
+    deadline = time.monotonic() + FIND_DEVICE
+    while sticks.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    if sticks.poll() is None:
+        sticks.close()
+        which = f" matching '{device}'" if device else ""
+        raise NoDeviceError(f"no joystick{which} found; plug one in (or try --virtual)")
+    client = Client(url, role="operator", name=name, token=token, curve=curve)
     if client.role != "operator":
         client.close()
+        sticks.close()
         raise RuntimeError(client.note or "the engine did not grant the operator role")
     stop = stop or threading.Event()
     period = 1.0 / rate
     end = time.monotonic() + duration if duration is not None else float("inf")
-    sent, had_device = 0, None
+    sent, had_device, last_ping = 0, None, 0.0
     try:
         while not stop.is_set() and time.monotonic() < end:
             t0 = time.monotonic()
@@ -45,14 +72,33 @@ def run_joystick_client(
             if sample is None:
                 if had_device is not False:
                     client.send("device_lost", device=(had_device or "")[:128] if isinstance(had_device, str) else "")
-                    say("no joystick: the engine holds the robot")
+                    say("no joystick: the engine holds the robot; waiting for one (the role is kept)")
                 had_device = False
+                if t0 - last_ping >= KEEPALIVE:
+                    client.send("ping")
+                    last_ping = t0
             else:
                 client.send_input(sample.axes[:16], sample.buttons[:64], sample.device[:128])
                 had_device = sample.device
                 sent += 1
+            _check_replies(client)
             time.sleep(max(0.0, period - (time.monotonic() - t0)))
     finally:
         client.close()
         sticks.close()
     return sent
+
+
+def _check_replies(client: Client) -> None:
+    """Raise RoleLostError on the engine's refusal of our input or keep-alive (other replies are dropped)."""
+    for _ in range(100):
+        try:
+            data = client.dealer.recv(zmq.NOBLOCK)
+        except zmq.Again:
+            return
+        try:
+            msg = decode_engine(data)
+        except ProtocolError:
+            continue
+        if msg["type"] == "reply" and not msg["ok"] and msg.get("re") in ("input", "device_lost"):
+            raise RoleLostError(msg.get("error", "the engine refused our input"))
