@@ -8,11 +8,13 @@ traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import shutil
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Sequence
@@ -303,13 +305,40 @@ def _out_dir(args: argparse.Namespace, kind: str) -> Path:
 
 
 def _make_out(args: argparse.Namespace, default: str) -> Path:
-    """``--out`` (or out/DEFAULT), created; a folder that cannot be made is a one-line error."""
+    """``--out`` (or out/DEFAULT): its parent created now, the folder itself only by :func:`_atomic_dir`
+    when the study is complete; a folder that cannot be made is a one-line error."""
     out = Path(args.out) if args.out else Path("out") / default
+    if out.exists() and not out.is_dir():
+        raise BosunError(f"output folder {out} is a file")
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        out.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise BosunError(f"cannot create output folder {out}: {err.strerror or err}") from None
     return out
+
+
+@contextlib.contextmanager
+def _atomic_dir(out: Path):
+    """Write a study's files into a hidden ``.NAME.partial-XXXX`` folder beside ``out``; rename it to
+    ``out`` only when every file is written.  An interrupted or failed run leaves ``out`` as it was
+    (the previous complete run, or nothing) and removes its partial folder; only a SIGKILL can leave
+    one, and its name says it is partial."""
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    except OSError as err:
+        raise BosunError(f"cannot create output folder {out}: {err.strerror or err}") from None
+    try:
+        yield tmp
+        old = None
+        if out.exists():
+            old = out.with_name(f".{out.name}.old-{os.getpid()}")
+            out.rename(old)
+        tmp.rename(out)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
@@ -380,7 +409,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         solver_options=opts,
         progress=_progress_bar(f"{robot.name}/{args.solver}"),
     )
-    summary = _save_study(result, out, "error_distribution", plot_error_distribution)
+    with _atomic_dir(out) as tmp:
+        summary = _save_study(result, tmp, "error_distribution", plot_error_distribution)
     if args.json:
         _print_json({**summary, "out": str(out)})
     else:
@@ -410,7 +440,8 @@ def cmd_track(args: argparse.Namespace) -> int:
         solver_options=opts,
         progress=_progress_bar(f"{robot.name}/{args.solver}"),
     )
-    summary = _save_study(result, out, "tracking", plot_tracking)
+    with _atomic_dir(out) as tmp:
+        summary = _save_study(result, tmp, "tracking", plot_tracking)
     if args.json:
         _print_json({**summary, "out": str(out)})
     else:
@@ -474,7 +505,8 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     on = simulate(sc, True, progress=lambda k: bar(k, 2 * n))
     off = simulate(sc, False, progress=lambda k: bar(n + k, 2 * n))
     speed = 2 * sc.duration / (time.perf_counter() - t0)
-    doc = save_runs(sc, on, off, out, speed)
+    with _atomic_dir(out) as tmp:
+        doc = save_runs(sc, on, off, tmp, speed)
     if args.json:
         _print_json({**doc, "out": str(out)})
     else:
@@ -511,7 +543,8 @@ def cmd_sim_tac(args: argparse.Namespace) -> int:
     out = _make_out(args, f"tac_{sc.mode}_hs{sc.hs:g}")
     bar = _progress_bar(f"sim tac {sc.mode}", unit="step")
     result = simulate(sc, progress=bar)
-    doc = save_run(result, out)
+    with _atomic_dir(out) as tmp:
+        doc = save_run(result, tmp)
     if args.json:
         _print_json({**doc, "out": str(out)})
     else:
@@ -543,7 +576,8 @@ def cmd_sim_sweep(args: argparse.Namespace) -> int:
         _scenario(args, hs=hs)
     out = _make_out(args, "tac_sweep")
     rows = sweep(base, hs_values, modes, jobs=args.jobs, progress=_progress_bar("tac sweep", unit="run"))
-    doc = save_sweep(rows, base, out)
+    with _atomic_dir(out) as tmp:
+        doc = save_sweep(rows, base, tmp)
     if args.json:
         _print_json({**doc, "out": str(out)})
     else:
@@ -1089,12 +1123,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         # the GUI when it is installed, else the robot library
         args = parser.parse_args(["gui"] if "gui" in _commands(parser) else ["robots"])
+    import signal
+
+    def terminated(*_):  # SIGTERM ends a study like Ctrl-C: its partial output removed, one line, status 130
+        raise KeyboardInterrupt
+
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, terminated) if main_thread else None  # server, joystick, GUI: own
     try:
         return args.func(args)
     except BosunError as err:
         print(f"bosun: error: {err}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
+        print("bosun: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)

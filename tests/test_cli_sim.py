@@ -129,3 +129,52 @@ def test_sim_vvmc_bad_input_is_one_line(capsys, tmp_path, argv, message):
     code, _, err = run(capsys, "sim", "vvmc", *argv, "--out", str(tmp_path))
     assert code == 2
     assert message in err and "Traceback" not in err
+
+
+# ---------------------------------------------------------------------------- issue 13: atomic study outputs
+def test_an_interrupted_save_leaves_the_previous_complete_output_and_no_partial_files(capsys, tmp_path, monkeypatch):
+    import app.analysis.tac_report as report
+
+    out = tmp_path / "run"
+    assert main(["sim", "tac", "--duration", "5", "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def interrupted(result, folder):
+        (folder / "timeseries.csv").write_text("t,x\n0.0,")  # half written when Ctrl-C comes
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report, "save_run", interrupted)
+    assert main(["sim", "tac", "--duration", "5", "--hs", "2", "--out", str(out)]) == 130
+    assert "bosun: interrupted" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # the complete run, untouched
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # no partial folder left
+    assert main(["sim", "tac", "--duration", "5", "--out", str(tmp_path / "new")]) == 130
+    assert not (tmp_path / "new").exists()
+
+
+def test_sigint_or_sigterm_at_any_moment_of_a_study_leaves_it_complete_or_absent(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    for k, (sig, delay) in enumerate([(signal.SIGINT, 1.5), (signal.SIGTERM, 2.5), (signal.SIGINT, 3.5)]):
+        out = tmp_path / f"run{k}"
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "app", "sim", "tac", "--duration", "30", "--out", str(out)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        time.sleep(delay)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=120)
+        assert "Traceback" not in err
+        if out.exists():  # finished before the signal: complete
+            summary = json.loads((out / "summary.json").read_text())
+            with open(out / "timeseries.csv") as fh:
+                rows = sum(1 for _ in fh) - 1
+            assert rows == summary.get("samples", rows) and rows >= 3000
+        else:
+            assert proc.returncode == 130 and "interrupted" in err
+        assert not [p for p in tmp_path.iterdir() if ".partial-" in p.name]

@@ -466,9 +466,10 @@ def test_item9_csv_logger_keeps_every_state_while_the_gui_stalls(qtbot, rig, tmp
     with open(path) as f:
         rows = list(csv.reader(f))[1:]
     t = np.array([float(r[0]) for r in rows])
-    expected = (t[-1] - t[0]) * 50.0  # the engine publishes 50 states per second of its time
-    assert len(rows) >= 0.9 * expected and len(rows) > 80, (len(rows), expected)
-    assert np.all(np.diff(t) > 0)
+    # the engine publishes one state every 4 ticks of 5 ms: consecutive rows 20 ms of engine time apart
+    # means not one published state was lost (the logger kept 83.1 % of them before)
+    assert len(rows) > 80
+    np.testing.assert_allclose(np.diff(t), 0.02, atol=1e-6)
 
 
 def test_item1_a_dead_child_engine_is_restarted_and_found_again(qtbot, tmp_path):

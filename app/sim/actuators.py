@@ -6,13 +6,34 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 
+def braking_speed(distance: ArrayLike, accel: ArrayLike, dt: float) -> NDArray[np.float64]:
+    """Largest speed from which braking at ``accel``, step by step, stops within ``distance``.
+
+    Exact for the discrete steps: braking from v moves dt·Σ_{i=0..m} (v − i·a·dt) with
+    m = ⌊v/(a dt)⌋ (the last, partial step included), a continuous increasing function of v that is
+    linear in v for each m, so v = (d/dt + a dt m(m+1)/2)/(m+1) on the piece where
+    m·a·dt ≤ v ≤ (m+1)·a·dt, i.e. for the largest m with dt·a dt·m(m+1)/2 ≤ d.  The continuous
+    formula −a dt/2 + √((a dt/2)² + 2 a d) is only an estimate of it, and braking onto a limit from
+    it needed up to 12.5 % more than the acceleration limit (issue 13).  With no acceleration limit
+    (inf) the answer is d/dt.
+    """
+    a = np.asarray(accel, dtype=float)
+    d = np.maximum(np.asarray(distance, dtype=float), 0.0)
+    finite = np.isfinite(a)
+    h = np.where(finite, a, 1.0) * dt
+    # m: the largest whole number of full braking steps, dt·h·m(m+1)/2 ≤ d; S(v) = d on its piece
+    m = np.floor(np.maximum(np.sqrt(0.25 + 2.0 * d / (h * dt)) - 0.5, 0.0))
+    v = (d / dt + 0.5 * h * m * (m + 1.0)) / (m + 1.0)
+    return np.where(finite, v, d / dt)
+
+
 class JointActuators:
     """Per-joint first-order servo: q̇_des = (q_ref − q)/τ, then limited.
 
-    Each step the desired speed is clipped to the speed limit, to the braking speed that
-    still stops before the nearest position limit with the acceleration limit, and to the
-    change the acceleration limit allows in one step.  The position is therefore never
-    driven past a limit, and speed and acceleration stay within theirs (up to rounding).
+    Each step the desired speed is clipped to the intersection of the speed limit, the change
+    the acceleration limit allows in one step and the exact discrete braking speed towards each
+    position limit (:func:`braking_speed`, the bound :class:`~app.sim.stewart.MotionFilter` uses).
+    The position is therefore never driven past a limit, and speed and acceleration stay within theirs (up to rounding).
     E-STOP (:meth:`stop`) zeroes the speed at once: a stop takes priority over the
     acceleration limit.
 
@@ -50,29 +71,18 @@ class JointActuators:
         self.qddot = np.zeros_like(self.q)
 
     def _braking_speed(self, distance: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
-        """Largest speed from which decelerating at the limit, step by step, stops within ``distance``.
-
-        Discrete stop distance from v: v·dt·(k+1)/2 with k = v/(a·dt) steps ⇒
-        v = −a·dt/2 + sqrt((a·dt/2)² + 2·a·d).
-        """
-        a = self.accel
-        d = np.maximum(distance, 0.0)
-        finite = np.isfinite(a)
-        half = np.where(finite, a, 0.0) * dt / 2.0
-        v = -half + np.sqrt(half**2 + 2.0 * np.where(finite, a, 0.0) * d)
-        return np.where(finite, v, d / dt)
+        return braking_speed(distance, self.accel, dt)
 
     def step(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Advance by dt toward q_ref; returns the new position."""
         q_ref = np.clip(np.asarray(q_ref, dtype=float), self.lower, self.upper)
-        v = (q_ref - self.q) / self.tau
-        v = np.clip(v, -self.speed, self.speed)
-        v = np.minimum(v, self._braking_speed(self.upper - self.q, dt))
-        v = np.maximum(v, -self._braking_speed(self.q - self.lower, dt))
-        # never overshoot the reference within one step
-        v = np.clip(v, -np.abs(q_ref - self.q) / dt, np.abs(q_ref - self.q) / dt)
-        dv = np.clip(v - self.qdot, -self.accel * dt, self.accel * dt)
-        v = self.qdot + dv
+        gap = np.abs(q_ref - self.q) / dt
+        v_des = np.clip((q_ref - self.q) / self.tau, -gap, gap)  # never past the reference in one step
+        # the admissible speeds: acceleration, speed and exact braking towards each limit (as MotionFilter)
+        dv = self.accel * dt
+        hi = np.minimum(np.minimum(self.qdot + dv, self.speed), self._braking_speed(self.upper - self.q, dt))
+        lo = np.maximum(np.maximum(self.qdot - dv, -self.speed), -self._braking_speed(self.q - self.lower, dt))
+        v = np.clip(v_des, lo, np.maximum(hi, lo))  # hi < lo only by rounding
         q_new = np.clip(self.q + v * dt, self.lower, self.upper)
         v = (q_new - self.q) / dt
         self.qddot = (v - self.qdot) / dt

@@ -32,6 +32,7 @@ from app.marine.vessel import VesselMotion, significant_response
 from app.marine.waves import spectrum as sea_spectrum
 from app.marine.waves import wave_components
 from app.models.stewart import StewartPlatform
+from app.sim.actuators import braking_speed
 
 MODES = ("settled", "neutral", "engaged")
 SOURCES = ("simulation", "generator", "remote", "timeseries")
@@ -77,23 +78,7 @@ class MotionFilter:
         self.a = np.zeros_like(self.x)
 
     def _braking(self, d: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
-        """Largest speed from which braking at the limit, step by step, stops within distance d.
-
-        Braking from v moves dt·Σ_{i=0..m} (v − i·a·dt), m = ⌊v/(a dt)⌋ (the last, partial step
-        included), a continuous increasing function of v; for each m it is linear in v, so
-        v = (d/dt + a dt m(m+1)/2)/(m+1) on the piece where m·a·dt ≤ v ≤ (m+1)·a·dt.
-        """
-        a = self.accel
-        h = a * dt
-        d = np.maximum(d, 0.0)
-        n_c = np.maximum(-0.5 + np.sqrt(0.25 + 2.0 * d / (a * dt * dt)), 0.0)  # continuous estimate
-        best = np.full_like(d, np.inf)
-        for off in (-1, 0, 1):
-            m = np.maximum(np.floor(n_c) + off, 0.0)
-            v = (d / dt + h * m * (m + 1) / 2.0) / (m + 1)
-            ok = (v >= m * h * (1 - 1e-12)) & (v <= (m + 1) * h * (1 + 1e-12))
-            best = np.where(ok, np.minimum(best, v), best)
-        return np.where(np.isfinite(best), best, -h / 2 + np.sqrt(h * h / 4 + 2 * a * d))
+        return braking_speed(d, self.accel, dt)
 
     def step(
         self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
