@@ -705,6 +705,11 @@ def cmd_server(args: argparse.Namespace) -> int:
         threading.Thread(target=watch_parent, daemon=True).start()
     print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
     print(f"  requests on {server.url}, state on {server.state_url}", flush=True)
+    if curve is not None:
+        n_keys = len(list(curve.clients_dir.glob("*.key")))
+        print(f"  CURVE: encrypted; {n_keys} allowed client key(s) in {curve.clients_dir}", flush=True)
+    if operator_secret:
+        print("  the operator role needs this engine's launch secret", flush=True)
     try:
         server.run(duration=args.duration)
     except KeyboardInterrupt:
@@ -720,12 +725,12 @@ def cmd_keys(args: argparse.Namespace) -> int:
     from app.net.security import create_keys, load_public
 
     public, secret = create_keys(args.dir, args.name)
-    print(f"public key  {public}  ({load_public(public).decode()})")
-    print(f"secret key  {secret}  (mode 0600: keep it on this machine)")
-    print(
-        "engine:  bosun server --bind tcp://0.0.0.0:5555 --curve-secret KEYS/engine.key_secret --curve-clients ALLOWED/"
-    )
-    print("client:  bosun joystick --connect tcp://HOST:5555 --curve-secret KEYS/me.key_secret --server-key engine.key")
+    print(f"public key  {public}  ({load_public(public).decode()}): give it to the other side")
+    print(f"secret key  {secret}  (mode 0600): keep it on this machine")
+    print("an engine uses its secret key and a folder of allowed client public keys:")
+    print("  bosun server --bind tcp://0.0.0.0:5555 --curve-secret ENGINE.key_secret --curve-clients ALLOWED_DIR")
+    print("a client uses its secret key and the engine's public key:")
+    print("  bosun joystick --connect tcp://HOST:5555 --curve-secret CLIENT.key_secret --server-key ENGINE.key")
     return 0
 
 

@@ -32,3 +32,27 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip("../shared/data is not present")
     return SHARED_DATA
+
+
+@pytest.fixture
+def serve():
+    """Start engines on 127.0.0.1 (free port) in threads: ``serve(session, token=None, rate=200, **server_kw)``
+    returns (server, thread); every one is stopped and closed after the test."""
+    import threading
+
+    from app.engine.server import EngineServer
+
+    started = []
+
+    def start(session, token=None, rate=200, **kw):
+        srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 50), token=token, **kw)
+        th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
+        th.start()
+        started.append((srv, th))
+        return srv, th
+
+    yield start
+    for srv, th in started:
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()

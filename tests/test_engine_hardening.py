@@ -20,24 +20,6 @@ from app.net.transport import Client, TransportError
 from tests.helpers import process_running, wait_for
 
 
-@pytest.fixture
-def serve():
-    started = []
-
-    def start(session, token=None, rate=200):
-        srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 50), token=token)
-        th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-        th.start()
-        started.append((srv, th))
-        return srv, th
-
-    yield start
-    for srv, th in started:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
-
-
 def raw_socket(url):
     sock = zmq.Context.instance().socket(zmq.DEALER)
     sock.setsockopt(zmq.LINGER, 0)

@@ -5,7 +5,6 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -22,21 +21,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture
-def serve():
-    started = []
-
-    def start(**kw):
-        srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, publish_rate=50, **kw)
-        th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-        th.start()
-        started.append((srv, th))
-        return srv
-
-    yield start
-    for srv, th in started:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
+def serve_session(serve):
+    """An engine around a fresh teleop session; returns the server."""
+    return lambda **kw: serve(Session(), **kw)[0]
 
 
 @pytest.fixture
@@ -57,8 +44,8 @@ def keys(tmp_path):
 
 
 # ---------------------------------------------------------------------------- CURVE
-def test_curve_admits_an_allowed_key_and_refuses_others_counting_the_failures(serve, keys):
-    srv = serve(curve=keys["server"])
+def test_curve_admits_an_allowed_key_and_refuses_others_counting_the_failures(serve_session, keys):
+    srv = serve_session(curve=keys["server"])
     op = Client(srv.url, role="operator", name="op", curve=keys["op"], timeout=5.0)
     try:
         assert op.role == "operator"
@@ -94,8 +81,8 @@ def test_a_non_loopback_bind_needs_curve_and_works_with_it(keys):
 
 
 # ---------------------------------------------------------------------------- token throttling
-def test_wrong_tokens_are_throttled_and_counted(serve):
-    srv = serve(token="s3cret")
+def test_wrong_tokens_are_throttled_and_counted(serve_session):
+    srv = serve_session(token="s3cret")
     for k in range(30):
         with pytest.raises(TransportError, match="wrong or missing token"):
             Client(srv.url, role="viewer", name=f"guess{k}", token=f"guess{k}", timeout=2.0)
@@ -112,8 +99,8 @@ def test_wrong_tokens_are_throttled_and_counted(serve):
 
 
 # ---------------------------------------------------------------------------- launch secret
-def test_only_the_holder_of_the_launch_secret_operates(serve):
-    srv = serve(operator_secret="launch-secret")
+def test_only_the_holder_of_the_launch_secret_operates(serve_session):
+    srv = serve_session(operator_secret="launch-secret")
     stranger = Client(srv.url, role="operator", name="stranger", timeout=3.0)
     gui = Client(srv.url, role="operator", name="gui", secret="launch-secret", timeout=3.0)
     try:
@@ -145,8 +132,8 @@ def test_a_gui_started_engine_takes_its_secret_from_the_environment_not_the_comm
 
 
 # ---------------------------------------------------------------------------- roles
-def test_the_role_lapses_only_after_the_timeout_with_a_warning_and_the_displaced_operator_is_told(serve):
-    srv = serve(operator_timeout=1.5, lapse_warning=0.5)
+def test_the_role_lapses_only_after_the_timeout_with_a_warning_and_the_displaced_operator_is_told(serve_session):
+    srv = serve_session(operator_timeout=1.5, lapse_warning=0.5)
     first = Client(srv.url, role="operator", name="first", timeout=3.0)
     viewer = Client(srv.url, role="viewer", name="watcher", timeout=3.0)
     second = None
@@ -181,8 +168,8 @@ def test_the_role_lapses_only_after_the_timeout_with_a_warning_and_the_displaced
                 c.close()
 
 
-def test_keep_alives_keep_the_role_without_input(serve):
-    srv = serve(operator_timeout=1.0, lapse_warning=0.4)
+def test_keep_alives_keep_the_role_without_input(serve_session):
+    srv = serve_session(operator_timeout=1.0, lapse_warning=0.4)
     op = Client(srv.url, role="operator", name="op", timeout=3.0)
     try:
         end = time.monotonic() + 2.5
@@ -196,8 +183,8 @@ def test_keep_alives_keep_the_role_without_input(serve):
         op.close()
 
 
-def test_bosun_joystick_without_a_joystick_exits_with_a_clear_message(serve):
-    srv = serve()
+def test_bosun_joystick_without_a_joystick_exits_with_a_clear_message(serve_session):
+    srv = serve_session()
     env = dict(os.environ, SDL_JOYSTICK_DISABLED="1", SDL_VIDEODRIVER="dummy")
     proc = subprocess.run(
         [sys.executable, "-m", "app", "joystick", "--connect", srv.url],

@@ -191,24 +191,21 @@ class EngineServer:
             self._reply(ident, re, False, reason)
 
     def _token_ok(self, msg: dict[str, Any]) -> bool:
-        """Constant-time token check on UTF-8 bytes (compare_digest refuses non-ASCII str), throttled:
-        past 10 failures a second further tries are refused unexamined, so guessing cannot run fast."""
-        if self.token is None:
-            return True
-        if not self.auth.allowed():
-            return False
-        ok = secrets.compare_digest(str(msg.get("token", "")).encode(), self.token.encode())
-        if not ok:
-            self.auth.failed()
-        return ok
+        """The hello's or estop's token, where this engine has one."""
+        return self._matches(msg.get("token", ""), self.token)
 
     def _secret_ok(self, msg: dict[str, Any]) -> bool:
         """Whether a hello may have the operator role under this engine's launch secret."""
-        if self.operator_secret is None:
+        return self._matches(msg.get("secret", ""), self.operator_secret)
+
+    def _matches(self, given: Any, expected: str | None) -> bool:
+        """Constant-time comparison on UTF-8 bytes (compare_digest refuses non-ASCII str), throttled:
+        past 10 failures a second further tries are refused unexamined, so guessing cannot run fast."""
+        if expected is None:
             return True
         if not self.auth.allowed():
             return False
-        ok = secrets.compare_digest(str(msg.get("secret", "")).encode(), self.operator_secret.encode())
+        ok = secrets.compare_digest(str(given).encode(), expected.encode())
         if not ok:
             self.auth.failed()
         return ok
