@@ -676,6 +676,14 @@ def cmd_server(args: argparse.Namespace) -> int:
         )
     # the launch secret of a GUI's own engine comes in the environment, never on the command line
     operator_secret = os.environ.pop(ENV_OPERATOR_SECRET, None) or None
+    from app.models import kernels
+
+    # compile (or load from the on-disk cache) before the first tick: never in the control loop
+    compile_s = kernels.warm_up(
+        progress=lambda k, n: print(f"bosun server: compiled kernels {k}/{n}", flush=True) if k == n else None
+    )
+    if compile_s > 1.0:
+        print(f"bosun server: kernels compiled in {compile_s:.1f} s (cached for the next start)", flush=True)
     session = _make_session(args)
     rate = args.rate if args.rate is not None else (50.0 if args.plant in ("tac", "lab") else 500.0)
     pub = (

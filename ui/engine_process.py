@@ -35,7 +35,7 @@ class EngineProcess:
         robot: str = "comau_smart5_3dof",
         solver: str = "jacobian",
         mode: str = "velocity",
-        timeout: float = 30.0,
+        timeout: float = 120.0,  # a first start after install may compile the kernels (~25 s)
         plant: str = "teleop",
     ) -> None:
         self.plant = plant

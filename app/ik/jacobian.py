@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
+from app.models import kernels
 
 
 class JacobianSolver(Solver):
@@ -122,6 +123,23 @@ class JacobianSolver(Solver):
         return Jw, e, float(np.linalg.norm(e))
 
     def _descend(self, q: NDArray[np.float64], x_t: NDArray[np.float64], deadline: float):
+        """Iterate DLS steps from q; (best q, its error, iterations).
+
+        Position targets run in the compiled kernel (:func:`app.models.kernels.descend`, the same
+        steps); it checks no clock, so the time budget is checked between descents (one descent
+        is at most ``max_iterations`` steps of a few microseconds).  Poses and
+        ``robot.use_kernels = False`` run the NumPy reference below."""
+        if self._target_R is None and getattr(self.robot, "use_kernels", False):
+            r = self.robot
+            best_q, best_err, iterations = kernels.descend(
+                *r.kernel_args, np.asarray(q, dtype=float), np.asarray(x_t, dtype=float), r.lower, r.upper,
+                np.asarray(self.max_step, dtype=float), float(self.lambda_max), float(self.epsilon),
+                float(self.e_ref), float(self.k_avoid), float(self.tolerance), int(self.max_iterations),
+            )  # fmt: skip
+            return best_q, float(best_err), int(iterations)
+        return self._descend_reference(q, x_t, deadline)
+
+    def _descend_reference(self, q: NDArray[np.float64], x_t: NDArray[np.float64], deadline: float):
         best_q, best_err, iterations = q, math.inf, 0
         stall = 0
         while iterations < self.max_iterations:

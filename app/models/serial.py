@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.errors import JointInputError
 from app.geometry import dh_transform
+from app.models import kernels
 from app.models.spec import RobotSpec
 
 
@@ -85,6 +86,13 @@ class SerialRobot:
             offset[joint.link] += joint.offset
             for k, factor in joint.coupling:
                 M[joint.link, k] += factor
+        # the compiled kernels' arguments (app/models/kernels.py); use_kernels=False: the NumPy reference
+        self.kernel_args = tuple(
+            np.ascontiguousarray(x, dtype=float)
+            for x in (self._theta0, self._d0, self._a, self._cos_alpha, self._sin_alpha, self._M_theta, self._M_d,
+                      self.T_world_base, self.T_flange_tool)
+        )  # fmt: skip
+        self.use_kernels = kernels.ENABLED
 
     # ------------------------------------------------------------------ input
     def check_q(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -133,6 +141,9 @@ class SerialRobot:
             link i (TAC paper eq. 39, premultiplied by the base transform), and the
             last index the tool frame (flange · ``T_flange_tool``).
         """
+        q = np.asarray(q, dtype=float)
+        if self.use_kernels and q.ndim == 1 and q.shape[0] == self.n_joints:
+            return kernels.frames(*self.kernel_args, q)
         theta, d = self.dh_variables(q)
         A = dh_transform(theta, d, self._a, self._alpha)  # (..., L, 4, 4)
         batch = A.shape[:-3]
@@ -157,6 +168,10 @@ class SerialRobot:
         building 4×4 matrices: several times faster on a GA population.
         """
         q = np.asarray(q, dtype=float)
+        if self.use_kernels and q.shape[-1:] == (self.n_joints,) and q.ndim <= 2:
+            if q.ndim == 1:
+                return kernels.position(*self.kernel_args, q)
+            return kernels.positions(*self.kernel_args, np.ascontiguousarray(q))
         if q.ndim == 1:
             return self._position_one(q)
         theta, d = self.dh_variables(q)
@@ -197,6 +212,9 @@ class SerialRobot:
         -------
         ndarray, shape (..., 6, n_joints)
         """
+        q = np.asarray(q, dtype=float)
+        if self.use_kernels and q.ndim == 1 and q.shape[0] == self.n_joints:
+            return kernels.jacobian_from_frames(kernels.frames(*self.kernel_args, q), self._M_theta, self._M_d)
         F = self.frames(q)
         z = F[..., :-2, :3, 2]  # z_{i-1} for links i = 1..L, shape (..., L, 3)
         o = F[..., :-2, :3, 3]  # o_{i-1}

@@ -1,0 +1,194 @@
+"""Compiled hot paths of serial kinematics and the damped-least-squares solver.
+
+Numba (``@njit(cache=True)``: machine code cached on disk beside this file, so only the first run
+after an install or an edit compiles) turns these loop-style functions into native code; without
+numba, or with ``BOSUN_JIT=0`` in the environment, the same Python functions run interpreted.
+Either way the plain-NumPy methods of :class:`~app.models.serial.SerialRobot` and
+:class:`~app.ik.jacobian.JacobianSolver` stay as the reference path: ``tests/test_kernels.py``
+runs both on the same seeded inputs and asserts equal results (1e-12).
+
+The chain's constants are passed as arrays (``SerialRobot.kernel_args``):
+θ₀, d₀, a, cos α, sin α (L,), M_θ, M_d (L, n), T_world_base, T_flange_tool (4, 4).
+The DH link is A = Rz(θ) Tz(d) Tx(a) Rx(α) (standard DH, TAC paper eq. 39).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import numpy as np
+
+try:  # numba is a dependency; the interpreted path keeps Bosun working where it cannot be installed
+    import numba
+except ImportError:  # pragma: no cover - exercised only without numba
+    numba = None
+
+ENABLED = numba is not None and os.environ.get("BOSUN_JIT", "1") != "0"
+
+
+def _jit(fn):
+    return numba.njit(cache=True, nogil=True)(fn) if ENABLED else fn
+
+
+@_jit
+def frames(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q):
+    """World poses of frame 0, every DH frame and the tool: (L + 2, 4, 4)."""
+    L = theta0.shape[0]
+    theta = theta0 + M_theta @ q
+    d = d0 + M_d @ q
+    F = np.empty((L + 2, 4, 4))
+    F[0] = T_base
+    T = T_base.copy()
+    A = np.zeros((4, 4))
+    A[3, 3] = 1.0
+    for i in range(L):
+        ct, st = math.cos(theta[i]), math.sin(theta[i])
+        A[0, 0], A[0, 1], A[0, 2], A[0, 3] = ct, -st * ca[i], st * sa[i], a[i] * ct
+        A[1, 0], A[1, 1], A[1, 2], A[1, 3] = st, ct * ca[i], -ct * sa[i], a[i] * st
+        A[2, 0], A[2, 1], A[2, 2], A[2, 3] = 0.0, sa[i], ca[i], d[i]
+        T = T @ A
+        F[i + 1] = T
+    F[L + 1] = T @ T_tool
+    return F
+
+
+@_jit
+def jacobian_from_frames(F, M_theta, M_d):
+    """Geometric Jacobian (6, n) of the tool point in the world frame from :func:`frames`."""
+    L = F.shape[0] - 2
+    n = M_theta.shape[1]
+    o_tool = F[L + 1, :3, 3]
+    J_theta = np.empty((6, L))
+    J_d = np.zeros((6, L))
+    for i in range(L):
+        z = F[i, :3, 2]
+        r = o_tool - F[i, :3, 3]
+        J_theta[0, i] = z[1] * r[2] - z[2] * r[1]
+        J_theta[1, i] = z[2] * r[0] - z[0] * r[2]
+        J_theta[2, i] = z[0] * r[1] - z[1] * r[0]
+        J_theta[3:, i] = z
+        J_d[:3, i] = z
+    J = np.zeros((6, n))
+    J += J_theta @ M_theta
+    J += J_d @ M_d
+    return J
+
+
+@_jit
+def position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q):
+    """Tool point (3,): the links applied to it last link first (no 4×4 products)."""
+    L = theta0.shape[0]
+    theta = theta0 + M_theta @ q
+    d = d0 + M_d @ q
+    x, y, z = T_tool[0, 3], T_tool[1, 3], T_tool[2, 3]
+    for i in range(L - 1, -1, -1):
+        y, z = ca[i] * y - sa[i] * z, sa[i] * y + ca[i] * z + d[i]
+        x = x + a[i]
+        c, s = math.cos(theta[i]), math.sin(theta[i])
+        x, y = c * x - s * y, s * x + c * y
+    p = np.empty(3)
+    for k in range(3):
+        p[k] = T_base[k, 0] * x + T_base[k, 1] * y + T_base[k, 2] * z + T_base[k, 3]
+    return p
+
+
+@_jit
+def positions(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q):
+    """Tool points of many configurations: Q (m, n) → (m, 3)."""
+    out = np.empty((Q.shape[0], 3))
+    for k in range(Q.shape[0]):
+        out[k] = position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q[k])
+    return out
+
+
+@_jit
+def damped_step(J, e, q, lo, hi, max_step, lambda_max, epsilon, e_ref, k_avoid, avoid):
+    """One DLS step with active-set clamping (the same steps as ``JacobianSolver.damped_step``)."""
+    m, n = J.shape
+    active = np.ones(n)
+    dq = np.zeros(n)
+    ee = 0.0
+    for k in range(e.shape[0]):
+        ee += e[k] * e[k]
+    for _ in range(n + 1):
+        Ja = J * active
+        U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
+        rank_rows = max(1, min(int(active.sum()), m))
+        s_min = s[:rank_rows].min()
+        lam2 = lambda_max**2 * (1.0 - (s_min / epsilon) ** 2) if s_min < epsilon else 0.0
+        lam2 *= min(1.0, ee / e_ref**2)
+        s_big = max(s.max(), 1.0)
+        s_inv = np.zeros_like(s)
+        for k in range(s.shape[0]):
+            denom = s[k] ** 2 + lam2
+            if denom > 1e-24 * s_big**2:
+                s_inv[k] = s[k] / denom
+        J_pinv = (Vt.T * s_inv) @ U.T
+        dq = J_pinv @ e
+        if avoid and k_avoid > 0:
+            N = np.eye(n) - J_pinv @ Ja
+            dq += N @ (-k_avoid * (q - 0.5 * (lo + hi)) * active)
+        dq *= active
+        ratio = np.max(np.abs(dq) / max_step)
+        if ratio > 1:
+            dq /= ratio
+        again = False
+        for k in range(n):
+            out = (q[k] <= lo[k] + 1e-12 and dq[k] < 0) or (q[k] >= hi[k] - 1e-12 and dq[k] > 0)
+            if out and active[k] > 0:
+                active[k] = 0.0
+                again = True
+        if not again:
+            break
+    return dq
+
+
+@_jit
+def descend(
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q, x_t, lo, hi, max_step, lambda_max, epsilon, e_ref,
+    k_avoid, tolerance, max_iterations,
+):  # fmt: skip
+    """Position-only DLS descent from q (``JacobianSolver._descend`` without its clock): (best_q, best_err, it)."""
+    best_q, best_err, iterations, stall = q, np.inf, 0, 0
+    while iterations < max_iterations:
+        iterations += 1
+        F = frames(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q)
+        J = jacobian_from_frames(F, M_theta, M_d)[:3].copy()
+        e = x_t - F[F.shape[0] - 1, :3, 3]
+        err = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+        if err < best_err - 1e-12:
+            stall = 0 if err < 0.999 * best_err else stall + 1
+            best_q, best_err = q, err
+        else:
+            stall += 1
+        if err <= tolerance or stall > 15:
+            break
+        step = damped_step(J, e, q, lo, hi, max_step, lambda_max, epsilon, e_ref, k_avoid, True)
+        q = np.minimum(np.maximum(q + step, lo), hi)
+    return best_q, best_err, iterations
+
+
+def warm_up(progress=None) -> float:
+    """Compile (or load from the on-disk cache) every kernel now, not in a control tick; seconds taken."""
+    t0 = time.perf_counter()
+    if not ENABLED:
+        return 0.0
+    L, n = 3, 3
+    z3, zLn = np.zeros(L), np.zeros((L, n))
+    eye = np.eye(4)
+    args = (z3, z3, np.ones(L), np.ones(L), z3, np.eye(L, n), zLn, eye, eye)
+    steps = [
+        lambda: frames(*args, np.zeros(n)),
+        lambda: jacobian_from_frames(frames(*args, np.zeros(n)), np.eye(L, n), zLn),
+        lambda: positions(*args, np.zeros((2, n))),
+        lambda: descend(
+            *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
+        ),
+    ]
+    for k, step in enumerate(steps):
+        step()
+        if progress is not None:
+            progress(k + 1, len(steps))
+    return time.perf_counter() - t0
