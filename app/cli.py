@@ -614,28 +614,47 @@ def cmd_bench(args: argparse.Namespace) -> int:
     rows = bench_ik(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik"))
     if args.json:
         _print_json(
-            {"benchmark": "ik", "machine": _machine(), "targets": args.targets, "seed": args.seed, "results": rows}
+            {
+                "benchmark": "ik",
+                "machine": _machine(),
+                "kernels": _kernels_on(),
+                "targets": args.targets,
+                "seed": args.seed,
+                "results": rows,
+            }
         )
         return 0
-    print(f"bosun bench ik: {args.targets} seeded reachable targets per robot, default time budget 100 ms")
-    print(f"machine: {_machine()}")
+    print(
+        f"bosun bench ik: {args.targets} seeded reachable targets per robot; cold = default start, warm = targets "
+        "1 cm apart from the previous solution; success = error < 1 mm inside the limits; budget 100 ms"
+    )
+    print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
     print(
         _table(
-            ["robot", "solver", "median [ms]", "p95 [ms]", "success", "median error [m]"],
+            ["robot", "solver", "start", "median [ms]", "p95 [ms]", "p99 [ms]", "success", "own test", "median err"],
             [
                 [
                     r["robot"],
                     r["solver"],
-                    f"{r['median_ms']:.2f}",
+                    r["start"],
+                    f"{r['median_ms']:.3f}",
                     f"{r['p95_ms']:.2f}",
-                    f"{r['success_rate']:.0%}",
-                    f"{r['median_error_m']:.2e}",
+                    f"{r['p99_ms']:.2f}",
+                    f"{r['success_rate']:.1%}",
+                    f"{r['own_success_rate']:.1%}",
+                    f"{r['median_error_m']:.1e}",
                 ]
                 for r in rows
             ],
         )
     )
     return 0
+
+
+def _kernels_on() -> bool:
+    from app.models import kernels
+
+    return kernels.ENABLED
 
 
 def _make_session(args: argparse.Namespace):
@@ -961,7 +980,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="benchmarks (not tests): bench ik")
     bench = p.add_subparsers(dest="bench", metavar="WHAT", parser_class=_Parser, required=True)
     b = bench.add_parser("ik", help="median/p95 solve time and success per robot and solver")
-    b.add_argument("--targets", type=int, default=50, help="seeded reachable targets per robot (default 50)")
+    b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
     b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
     b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
     b.add_argument("--json", action="store_true", help="machine-readable output")

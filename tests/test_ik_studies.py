@@ -65,11 +65,22 @@ def test_tracking_with_jacobian_warm_start():
 
 
 def test_bench_ik_rows():
-    rows = bench_ik([load_robot("offshore_crane")], targets=3)
-    assert [r["solver"] for r in rows] == ["ga", "jacobian", "analytic"]
+    rows = bench_ik([load_robot("offshore_crane")], targets=5)
+    assert [(r["solver"], r["start"]) for r in rows] == [
+        (s, m) for s in ("ga", "jacobian", "analytic") for m in ("cold", "warm")
+    ]
     for r in rows:
-        assert r["targets"] == 3 and 0 <= r["success_rate"] <= 1 and r["p95_ms"] >= r["median_ms"] > 0
-    assert rows[2]["success_rate"] == 1.0
+        assert r["targets"] == 5 and 0 <= r["success_rate"] <= 1 and r["p99_ms"] >= r["p95_ms"] >= r["median_ms"] > 0
+    assert rows[4]["success_rate"] == rows[5]["success_rate"] == 1.0  # analytic: exact, inside the limits
+
+
+def test_warm_targets_are_one_centimetre_apart_and_reachable():
+    from app.analysis.ik_studies import warm_path
+
+    robot = load_robot("kuka_youbot")
+    X = warm_path(robot, 200, np.random.default_rng(1))
+    gaps = np.linalg.norm(np.diff(X, axis=0), axis=1)
+    assert X.shape == (200, 3) and np.median(gaps) == pytest.approx(0.01, rel=0.05) and gaps.max() < 0.03
 
 
 # ------------------------------------------------------------------ CLI
