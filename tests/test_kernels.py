@@ -99,3 +99,28 @@ def test_warm_up_compiles_every_kernel_and_says_how_long():
     seen = []
     seconds = kernels.warm_up(progress=lambda k, n: seen.append((k, n)))
     assert seconds >= 0 and seen[-1][0] == seen[-1][1] == len(seen)
+
+
+@pytest.mark.parametrize("name", ["comau_smart5_3dof", "kuka_youbot", "scara"])
+def test_the_one_call_warm_solve_returns_what_the_reference_path_returns(name):
+    """Teleoperation's case (targets 1 cm apart, each from the previous solution) through the compiled
+    one-call path and through the whole NumPy path: the same q, error, iterations and verdict."""
+    from app.analysis.ik_studies import warm_path
+
+    robot = load_robot(name)
+    solver = make_solver("jacobian", robot, seed=0)
+    X = warm_path(robot, 120, np.random.default_rng(7))
+    runs = []
+    for flag in (True, False):
+        robot.use_kernels = flag
+        q, out = solver.solve_position(X[0]).q, []
+        for x in X[1:]:
+            res = solver.solve_position(x, q)
+            q = res.q
+            out.append((res.q, res.error, res.iterations, res.success, res.position))
+        runs.append(out)
+    robot.use_kernels = True
+    for (qa, ea, ia, sa, pa), (qb, eb, ib, sb, pb) in zip(*runs, strict=True):
+        np.testing.assert_allclose(qa, qb, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(pa, pb, rtol=0, atol=1e-12)
+        assert abs(ea - eb) <= 1e-12 and ia == ib and sa == sb

@@ -126,6 +126,13 @@ class Solver(ABC):
     # ---------------------------------------------------------------- helpers
     def check_target(self, target: ArrayLike) -> NDArray[np.float64]:
         """A target as a finite float array of shape (3,), else :class:`IKError`."""
+        if (
+            type(target) is np.ndarray
+            and target.shape == (3,)
+            and target.dtype == np.float64
+            and math.isfinite(target[0] + target[1] + target[2])
+        ):
+            return target  # the common case, without the general path's array calls
         try:
             x = np.asarray(target, dtype=float).reshape(-1)
         except (TypeError, ValueError):
@@ -139,6 +146,13 @@ class Solver(ABC):
     def check_q0(self, q0: ArrayLike | None) -> NDArray[np.float64] | None:
         if q0 is None:
             return None
+        if (
+            type(q0) is np.ndarray
+            and q0.shape == (self.robot.n_joints,)
+            and q0.dtype == np.float64
+            and math.isfinite(float(q0.sum()))
+        ):
+            return self.robot.clip(q0)
         try:
             q = self.robot.check_q(q0)
         except BosunError as err:
@@ -237,10 +251,13 @@ class Solver(ABC):
     def _result(
         self, x_t: NDArray[np.float64], outcome: SearchOutcome, start: float, qdot: NDArray[np.float64] | None = None
     ) -> IKResult:
-        q = np.nan_to_num(self.robot.clip(outcome.q), nan=0.0)
+        q = np.asarray(outcome.q, dtype=float)
+        if not math.isfinite(float(q.sum())):  # NaN or inf anywhere
+            q = np.nan_to_num(q, nan=0.0, posinf=0.0, neginf=0.0)
         q = self.robot.clip(q)
         p = self.robot.position(q)
-        error = float(np.linalg.norm(p - x_t))
+        d = p - x_t
+        error = math.sqrt(float(d @ d))
         return IKResult(
             q=q,
             success=bool(outcome.converged),

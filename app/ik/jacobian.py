@@ -130,14 +130,43 @@ class JacobianSolver(Solver):
         is at most ``max_iterations`` steps of a few microseconds).  Poses and
         ``robot.use_kernels = False`` run the NumPy reference below."""
         if self._target_R is None and getattr(self.robot, "use_kernels", False):
-            r = self.robot
             best_q, best_err, iterations = kernels.descend(
-                *r.kernel_args, np.asarray(q, dtype=float), np.asarray(x_t, dtype=float), r.lower, r.upper,
-                np.asarray(self.max_step, dtype=float), float(self.lambda_max), float(self.epsilon),
-                float(self.e_ref), float(self.k_avoid), float(self.tolerance), int(self.max_iterations),
-            )  # fmt: skip
+                *self.robot.kernel_args, np.asarray(q, dtype=float), np.asarray(x_t, dtype=float), *self._tail()
+            )
             return best_q, float(best_err), int(iterations)
         return self._descend_reference(q, x_t, deadline)
+
+    def _tail(self) -> tuple:
+        """The descent kernel's arguments after (q, x_t), in its types."""
+        r = self.robot
+        return (
+            r.lower, r.upper, np.asarray(self.max_step, dtype=float), float(self.lambda_max), float(self.epsilon),
+            float(self.e_ref), float(self.k_avoid), float(self.tolerance), int(self.max_iterations),
+        )  # fmt: skip
+
+    def solve_position(
+        self, target: ArrayLike, q0: ArrayLike | None = None, *, time_budget: float | object | None = DEFAULT
+    ) -> IKResult:
+        """As :meth:`Solver.solve_position`; a warm start (q0 given, position only) that converges in
+        its first descent is answered from one compiled call (teleoperation's common case: tens of
+        microseconds); anything else takes the general path (restarts, time budget)."""
+        if q0 is not None and self._target_R is None and getattr(self.robot, "use_kernels", False):
+            start = time.perf_counter()
+            x_t = self.check_target(target)
+            q_s = self.check_q0(q0)
+            q, p, error, cost, iterations = kernels.descend_to(*self.robot.kernel_args, q_s, x_t, *self._tail())
+            if cost <= self.tolerance:
+                return IKResult(
+                    q=q,
+                    success=True,
+                    error=float(error),
+                    iterations=int(iterations),
+                    time_s=time.perf_counter() - start,
+                    reason="converged",
+                    position=p,
+                    cost=float(cost),
+                )
+        return super().solve_position(target, q0, time_budget=time_budget)
 
     def _descend_reference(self, q: NDArray[np.float64], x_t: NDArray[np.float64], deadline: float):
         best_q, best_err, iterations = q, math.inf, 0

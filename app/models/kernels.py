@@ -170,6 +170,21 @@ def descend(
     return best_q, best_err, iterations
 
 
+@_jit
+def descend_to(
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q, x_t, lo, hi, max_step, lambda_max, epsilon, e_ref,
+    k_avoid, tolerance, max_iterations,
+):  # fmt: skip
+    """:func:`descend`, then the reached tool point and its distance to x_t: (q, p, error, cost, iterations)."""
+    best_q, best_err, iterations = descend(
+        theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q, x_t, lo, hi, max_step, lambda_max, epsilon, e_ref,
+        k_avoid, tolerance, max_iterations,
+    )  # fmt: skip
+    p = position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, best_q)
+    d = p - x_t
+    return best_q, p, math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), best_err, iterations
+
+
 def warm_up(progress=None) -> float:
     """Compile (or load from the on-disk cache) every kernel now, not in a control tick; seconds taken."""
     t0 = time.perf_counter()
@@ -183,7 +198,7 @@ def warm_up(progress=None) -> float:
         lambda: frames(*args, np.zeros(n)),
         lambda: jacobian_from_frames(frames(*args, np.zeros(n)), np.eye(L, n), zLn),
         lambda: positions(*args, np.zeros((2, n))),
-        lambda: descend(
+        lambda: descend_to(
             *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
         ),
     ]

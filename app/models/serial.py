@@ -121,7 +121,7 @@ class SerialRobot:
 
     def clip(self, q: ArrayLike) -> NDArray[np.float64]:
         """q clipped into the joint limits."""
-        return np.clip(np.asarray(q, dtype=float), self.lower, self.upper)
+        return np.minimum(np.maximum(np.asarray(q, dtype=float), self.lower), self.upper)  # ufuncs: no np.clip overhead
 
     # ------------------------------------------------------------ kinematics
     def dh_variables(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
