@@ -124,3 +124,27 @@ def test_the_one_call_warm_solve_returns_what_the_reference_path_returns(name):
         np.testing.assert_allclose(qa, qb, rtol=0, atol=1e-12)
         np.testing.assert_allclose(pa, pb, rtol=0, atol=1e-12)
         assert abs(ea - eb) <= 1e-12 and ia == ib and sa == sb
+
+
+@pytest.mark.parametrize("name", ["comau_smart5_3dof", "offshore_crane"])
+@pytest.mark.parametrize("elbow", ["auto", "up", "down"])
+def test_compiled_closed_form_candidates_and_choice_equal_the_reference(name, elbow):
+    """Motion-Lab eqs. (7)–(20) and TAC eqs. (42)–(44) compiled: the same candidate chosen (q, error,
+    exact, inside) for reachable and unreachable targets, and the same answer for reachable ones.
+    (Unreachable ones go on to a time-budgeted refinement, which no two runs share.)"""
+    robot = load_robot(name)
+    solver = make_solver("analytic", robot, seed=0, elbow=elbow)
+    rng = np.random.default_rng(5)
+    X = robot.position(rng.uniform(robot.lower, robot.upper, size=(200, 3)))
+    X[-40:] *= 3.0  # out of reach
+    refs = rng.uniform(robot.lower, robot.upper, size=(200, 3))
+    for x, ref in zip(X, refs, strict=True):
+        (qa, _, ea, xa, ia), (qb, _, eb, xb, ib) = both(robot, lambda x=x, ref=ref: solver._closed_form(x, ref))
+        np.testing.assert_allclose(qa, qb, rtol=0, atol=1e-12)
+        assert abs(ea - eb) <= 1e-12 and bool(xa) == xb and bool(ia) == ib
+    for x in X[:-40]:
+        a, b = both(robot, lambda x=x: solver.solve_position(x))
+        if b.reason == "closed form":  # exact and inside the limits: one compiled pass
+            np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(a.position, b.position, rtol=0, atol=1e-12)
+            assert a.success and a.reason == b.reason and abs(a.error - b.error) <= 1e-12

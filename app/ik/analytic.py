@@ -18,13 +18,15 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from app.geometry import dh_transform, invert_transform
-from app.ik.base import DEFAULT, IKError, SearchOutcome, Solver
+from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
 from app.ik.jacobian import JacobianSolver
+from app.models import kernels
 
 ELBOWS = ("auto", "up", "down")
 
@@ -43,6 +45,13 @@ class ComauArm:
     a3: float
     L: float
     T_world_base: NDArray[np.float64]
+    #: elbow branch → sign of the square root in eq. (13): + is elbow up (eq. 15)
+    SIGNS: ClassVar[dict[str, tuple[float, ...]]] = {"auto": (1.0, -1.0), "up": (1.0,), "down": (-1.0,)}
+
+    def kernel_candidates(self, p_world, q1_hint: float, signs):
+        """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
+        return kernels.comau_candidates(self.a1, self.d1, self.a2, self.a3, self.L, self.T_world_base, p_world,
+                                        q1_hint, signs)  # fmt: skip
 
     @staticmethod
     def match(robot) -> ComauArm | None:
@@ -81,7 +90,7 @@ class ComauArm:
         q1_front = -math.atan2(y, x) if math.hypot(x, y) > 1e-9 else q1_hint  # eq. (7)
         B = math.hypot(self.a3, self.L)  # eq. (8)
         phi = math.atan2(self.a3, self.L)  # eq. (19)
-        signs = {"auto": (1.0, -1.0), "up": (1.0,), "down": (-1.0,)}[elbow]
+        signs = self.SIGNS[elbow]
         out = []
         for q1 in (q1_front, q1_front + math.pi):
             A1 = dh_transform(-q1, self.d1, self.a1, math.pi / 2)  # θ1 = −q1 (Table 3)
@@ -108,6 +117,12 @@ class ElbowCrane:
     L1: float
     L2: float
     T_world_1: NDArray[np.float64]  # pose of the frame in which eqs. (43)–(44) hold
+    #: elbow branch → sign of the root in eq. (43): the negative root is elbow up
+    SIGNS: ClassVar[dict[str, tuple[float, ...]]] = {"auto": (-1.0, 1.0), "up": (-1.0,), "down": (1.0,)}
+
+    def kernel_candidates(self, p_world, beta0_hint: float, signs):
+        """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
+        return kernels.crane_candidates(self.L0, self.L1, self.L2, self.T_world_1, p_world, beta0_hint, signs)
 
     @staticmethod
     def match(robot) -> ElbowCrane | None:
@@ -143,7 +158,7 @@ class ElbowCrane:
         exact = abs(delta) <= 1.0
         delta = min(1.0, max(-1.0, delta))
         # eq. (43): the negative root is elbow up, the positive elbow down
-        signs = {"auto": (-1.0, 1.0), "up": (-1.0,), "down": (1.0,)}[elbow]
+        signs = self.SIGNS[elbow]
         out = []
         for beta0, radial in ((beta0_front, r), (beta0_front + math.pi, -r)):
             for s in signs:
@@ -201,11 +216,17 @@ class AnalyticSolver(Solver):
         if elbow not in ELBOWS:
             raise IKError(f"elbow must be one of {', '.join(ELBOWS)}, got {elbow!r}")
         self.elbow = elbow
+        self._signs = np.array(self.arm.SIGNS[elbow])
+        self._mid = self.default_q0()
         self.tolerance = tolerance
         self._refiner: JacobianSolver | None = None
 
-    def _search(self, x_t, q0, deadline) -> SearchOutcome:
-        ref = q0 if q0 is not None else self.default_q0()
+    def _closed_form(self, x_t, ref):
+        """The best candidate: (q clipped, tool point or None, error, exact, inside)."""
+        r = self.robot
+        if getattr(r, "use_kernels", False):
+            Q, ex = self.arm.kernel_candidates(x_t, float(ref[0]), self._signs)
+            return kernels.select_candidate(*r.kernel_args, Q, ex, r.lower, r.upper, self._revolute, ref, x_t)
         best, best_key = None, None
         for q, exact in self.arm.candidates(x_t, float(ref[0]), self.elbow):
             q = self.wrap_into_limits(q)
@@ -215,8 +236,26 @@ class AnalyticSolver(Solver):
             # valid first, then the smaller error, then the nearest to the reference
             key = (not (exact and inside), round(err, 9), float(np.linalg.norm(q_c - ref)))
             if best_key is None or key < best_key:
-                best, best_key = (q_c, exact, inside, err), key
-        q, exact, inside, err = best
+                best, best_key = (q_c, None, err, exact, inside), key
+        return best
+
+    def solve_position(self, target, q0=None, *, time_budget=DEFAULT) -> IKResult:
+        """As :meth:`Solver.solve_position`; an exact solution inside the limits comes from compiled
+        candidates and selection in one pass (no refinement needed)."""
+        if getattr(self.robot, "use_kernels", False):
+            start = time.perf_counter()
+            x_t = self.check_target(target)
+            q_s = self.check_q0(q0)
+            ref = q_s if q_s is not None else self._mid
+            q, p, err, exact, inside = self._closed_form(x_t, ref)
+            if exact and inside and err <= self.tolerance:
+                return IKResult(q=q, success=True, error=float(err), iterations=1, time_s=time.perf_counter() - start,
+                                reason="closed form", position=p, cost=float(err))  # fmt: skip
+        return super().solve_position(target, q0, time_budget=time_budget)
+
+    def _search(self, x_t, q0, deadline) -> SearchOutcome:
+        ref = q0 if q0 is not None else self.default_q0()
+        q, _, err, exact, inside = self._closed_form(x_t, ref)
         if exact and inside and err <= self.tolerance:
             return SearchOutcome(q=q, iterations=1, converged=True, reason="closed form", cost=err)
         # No exact solution within limits: the closest reachable point, by damped least squares.

@@ -185,6 +185,113 @@ def descend_to(
     return best_q, p, math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), best_err, iterations
 
 
+# ----------------------------------------------------------------------------- closed-form IK
+@_jit
+def _inverse_apply(T, x, y, z):
+    """invert_transform(T) @ (x, y, z, 1) for a rigid T: Rᵀ p − Rᵀ t."""
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = T[0, i] * x + T[1, i] * y + T[2, i] * z - (T[0, i] * T[0, 3] + T[1, i] * T[1, 3] + T[2, i] * T[2, 3])
+    return out
+
+
+@_jit
+def comau_candidates(a1, d1, a2, a3, L, T_base, p, q1_hint, signs):
+    """Motion-Lab eqs. (7)–(20) for every base branch and elbow sign: (q (k, 3), exact (k,))."""
+    v = _inverse_apply(T_base, p[0], p[1], p[2])
+    x, y, z = v[0], v[1], v[2]
+    q1_front = -math.atan2(y, x) if math.hypot(x, y) > 1e-9 else q1_hint  # eq. (7)
+    B = math.hypot(a3, L)  # eq. (8)
+    phi = math.atan2(a3, L)  # eq. (19)
+    ns = signs.shape[0]
+    Q = np.empty((2 * ns, 3))
+    exact = np.empty(2 * ns, dtype=np.bool_)
+    A1 = np.zeros((4, 4))
+    A1[3, 3] = 1.0
+    ca, sa = math.cos(math.pi / 2), math.sin(math.pi / 2)
+    k = 0
+    for branch in range(2):
+        q1 = q1_front + math.pi * branch
+        ct, st = math.cos(-q1), math.sin(-q1)  # θ1 = −q1 (Table 3)
+        A1[0, 0], A1[0, 1], A1[0, 2], A1[0, 3] = ct, -st * ca, st * sa, a1 * ct
+        A1[1, 0], A1[1, 1], A1[1, 2], A1[1, 3] = st, ct * ca, -ct * sa, a1 * st
+        A1[2, 0], A1[2, 1], A1[2, 2], A1[2, 3] = 0.0, sa, ca, d1
+        w = _inverse_apply(A1, x, y, z)  # eq. (9)
+        xp, yp = w[0], w[1]
+        C = math.hypot(xp, yp)  # eq. (11)
+        D = (C**2 - a2**2 - B**2) / (2 * a2 * B)  # eq. (12)
+        ex = abs(D) <= 1.0
+        D = min(1.0, max(-1.0, D))
+        for j in range(ns):
+            alpha = math.atan2(signs[j] * math.sqrt(1.0 - D**2), D)  # eqs. (13)–(15)
+            theta_a = math.atan2(yp, xp)  # eq. (16)
+            theta_b = math.atan2(B * math.sin(alpha), a2 + B * math.cos(alpha))  # eq. (17)
+            q2 = math.pi / 2 - (theta_a - theta_b)  # eq. (18)
+            Q[k, 0], Q[k, 1], Q[k, 2] = q1, q2, alpha - phi - q2  # eq. (20)
+            exact[k] = ex
+            k += 1
+    return Q, exact
+
+
+@_jit
+def crane_candidates(L0, L1, L2, T_world_1, p, beta0_hint, signs):
+    """TAC paper eqs. (42)–(44) for both slew branches and every elbow sign: (q (k, 3), exact (k,))."""
+    v = _inverse_apply(T_world_1, p[0], p[1], p[2])  # eq. (42)
+    x, y, z = v[0], v[1], v[2]
+    r = math.hypot(x, y)
+    beta0_front = math.atan2(y, x) if r > 1e-9 else beta0_hint  # eq. (43)
+    delta = (x**2 + y**2 + (z - L0) ** 2 - L1**2 - L2**2) / (2 * L1 * L2)  # eq. (44)
+    ex = abs(delta) <= 1.0
+    delta = min(1.0, max(-1.0, delta))
+    ns = signs.shape[0]
+    Q = np.empty((2 * ns, 3))
+    exact = np.empty(2 * ns, dtype=np.bool_)
+    k = 0
+    for branch in range(2):
+        beta0 = beta0_front + math.pi * branch
+        radial = r if branch == 0 else -r
+        for j in range(ns):
+            beta2 = math.atan2(signs[j] * math.sqrt(1.0 - delta**2), delta)
+            beta1 = math.atan2(z - L0, radial) - math.atan2(L2 * math.sin(beta2), L1 + L2 * math.cos(beta2))
+            Q[k, 0], Q[k, 1], Q[k, 2] = beta0, beta1, beta2
+            exact[k] = ex
+            k += 1
+    return Q, exact
+
+
+@_jit
+def select_candidate(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q, exact, lo, hi, revolute, ref, x_t):
+    """The analytic solver's choice among candidates (``AnalyticSolver._search``): revolute joints
+    wrapped into their limits, then valid first, the smaller error (to 1e-9 m), the nearest to ref.
+    Returns (q clipped, tool point, error, exact, inside)."""
+    best_q = np.zeros(Q.shape[1])
+    best_p = np.zeros(3)
+    best = (2, np.inf, np.inf)
+    best_err, best_exact, best_inside = np.inf, False, False
+    two_pi = 2 * np.pi
+    for k in range(Q.shape[0]):
+        q = Q[k].copy()
+        for i in range(q.shape[0]):
+            if revolute[i] and not (lo[i] <= q[i] <= hi[i]):
+                cand = q[i] + two_pi * np.ceil((lo[i] - q[i]) / two_pi)
+                if cand <= hi[i]:
+                    q[i] = cand
+        inside = True
+        for i in range(q.shape[0]):
+            if q[i] < lo[i] - 1e-9 or q[i] > hi[i] + 1e-9:
+                inside = False
+        q_c = np.minimum(np.maximum(q, lo), hi)
+        p = position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q_c)
+        d = p - x_t
+        err = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        dq = q_c - ref
+        key = (0 if (exact[k] and inside) else 1, round(err, 9), math.sqrt(np.sum(dq * dq)))
+        if key < best:
+            best = key
+            best_q, best_p, best_err, best_exact, best_inside = q_c, p, err, exact[k], inside
+    return best_q, best_p, best_err, best_exact, best_inside
+
+
 def warm_up(progress=None) -> float:
     """Compile (or load from the on-disk cache) every kernel now, not in a control tick; seconds taken."""
     t0 = time.perf_counter()
@@ -200,6 +307,16 @@ def warm_up(progress=None) -> float:
         lambda: positions(*args, np.zeros((2, n))),
         lambda: descend_to(
             *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
+        ),
+        lambda: select_candidate(
+            *args,
+            comau_candidates(0.1, 0.5, 1.0, 0.2, 1.0, eye, np.ones(3), 0.0, np.ones(2))[0],
+            crane_candidates(0.5, 1.0, 1.0, eye, np.ones(3), 0.0, np.ones(2))[1],
+            -np.ones(n),
+            np.ones(n),
+            np.ones(n, dtype=np.bool_),
+            np.zeros(n),
+            np.ones(3),
         ),
     ]
     for k, step in enumerate(steps):
