@@ -56,3 +56,10 @@ def serve():
         srv.stop()
         th.join(timeout=5)
         srv.close()
+
+
+def pytest_collection_modifyitems(items):
+    """Every test in a tests/test_gui*.py file is marked ``gui`` (the fast lane: -m "not slow and not gui")."""
+    for item in items:
+        if item.path.name.startswith("test_gui"):
+            item.add_marker(pytest.mark.gui)

@@ -41,6 +41,7 @@ def test_no_command_opens_the_gui_or_says_why(capsys, monkeypatch):
     assert "no display to open the GUI on" in err and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_gui_attaches_to_a_running_engine_and_quits(capsys):
     import threading
 
@@ -142,6 +143,7 @@ def test_invalid_library_file_is_reported_not_fatal(capsys, tmp_path, monkeypatc
     assert code == 2 and "good" in out and "broken.xml:1: XML syntax error" in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("entry", [["bosun"], [sys.executable, "-m", "app"]], ids=["console-script", "python-m-app"])
 def test_entry_points_in_a_real_process(entry):
     exe = os.path.join(os.path.dirname(sys.executable), "bosun")

@@ -20,6 +20,7 @@ def run(capsys, *argv):
     return code, out, err
 
 
+@pytest.mark.slow
 def test_sim_tac_writes_csv_figures_and_summary(capsys, tmp_path):
     code, out, _ = run(
         capsys, "sim", "tac", "--hs", "2", "--tp", "8", "--duration", "20", "--out", str(tmp_path), "--json"
@@ -38,6 +39,7 @@ def test_sim_tac_writes_csv_figures_and_summary(capsys, tmp_path):
     assert rows[0][:4] == ["t", "x", "y", "z"] and "e_c" in rows[0] and len(rows) == 2001
 
 
+@pytest.mark.slow
 def test_sim_tac_off_mode_has_ratio_one(capsys, tmp_path):
     code, out, _ = run(capsys, "sim", "tac", "--mode", "off", "--duration", "10", "--out", str(tmp_path))
     assert code == 0 and "ratio 100.00%" in out
@@ -79,6 +81,7 @@ def test_parse_range_and_max_hs():
 
 
 # ----------------------------------------------------------------------------- bosun sim vvmc
+@pytest.mark.slow
 def test_sim_vvmc_writes_csv_plots_and_summary(capsys, tmp_path):
     code, out, _ = run(
         capsys,
@@ -132,6 +135,7 @@ def test_sim_vvmc_bad_input_is_one_line(capsys, tmp_path, argv, message):
 
 
 # ---------------------------------------------------------------------------- issue 13: atomic study outputs
+@pytest.mark.slow
 def test_an_interrupted_save_leaves_the_previous_complete_output_and_no_partial_files(capsys, tmp_path, monkeypatch):
     import app.analysis.tac_report as report
 
@@ -152,6 +156,7 @@ def test_an_interrupted_save_leaves_the_previous_complete_output_and_no_partial_
     assert not (tmp_path / "new").exists()
 
 
+@pytest.mark.slow
 def test_sigint_or_sigterm_at_any_moment_of_a_study_leaves_it_complete_or_absent(tmp_path):
     import signal
     import subprocess

@@ -108,6 +108,7 @@ def test_a_bug_in_a_handler_or_the_control_step_never_stops_the_loop(serve):
         op.close()
 
 
+@pytest.mark.slow
 def test_ten_thousand_rejected_messages_do_not_freeze_a_gui_started_engine():
     """Item 2: the GUI's engine logged every rejection into a pipe nobody read and froze at ~64 KB."""
     from ui.engine_process import EngineProcess
@@ -212,6 +213,7 @@ def test_sigterm_stops_the_joystick_client_which_says_bye(serve):
         viewer.close()
 
 
+@pytest.mark.slow
 def test_sigterm_closes_the_gui_and_its_engine(tmp_path):
     import os
     import signal
@@ -283,6 +285,7 @@ def test_parse_number_agrees_with_float_on_what_it_accepts():
 
 
 # ---------------------------------------------------------------------------- item 10 (part): ghosts, names
+@pytest.mark.slow
 def test_silent_clients_are_forgotten_and_names_cannot_inject_log_lines():
     srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, publish_rate=50, client_timeout=1.0)
     th = threading.Thread(target=srv.run, kwargs={"duration": 60.0}, daemon=True)

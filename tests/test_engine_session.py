@@ -154,6 +154,7 @@ def test_bad_commands_leave_state_unchanged(tmp_path):
     assert ses.robot_name == "scara" and ses.solver_name == "jacobian" and ses.mode == "velocity"
 
 
+@pytest.mark.slow
 def test_switching_robot_and_solver_while_running():
     ses = Session(robot_name="comau_smart5_3dof", solver_name="analytic")
     t = run(ses, 0.2, sample(x=0.5), t0=arm(ses))

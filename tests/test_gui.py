@@ -241,6 +241,7 @@ sys.exit(0 if 0.001 < lit < 0.9 else 1)
 """
 
 
+@pytest.mark.gl
 def test_gl_view_renders_under_xvfb(tmp_path):
     if shutil.which("Xvfb") is None:
         pytest.skip("Xvfb is not installed")

@@ -201,6 +201,7 @@ def vvmc_runs():
     return sc, simulate(sc, True), simulate(sc, False)
 
 
+@pytest.mark.slow
 def test_vvmc_reduces_relative_tool_motion_by_90_percent(vvmc_runs):
     sc, on, off = vvmc_runs
     s = summarize(sc, on, off)
@@ -209,6 +210,7 @@ def test_vvmc_reduces_relative_tool_motion_by_90_percent(vvmc_runs):
     assert s["compensated"]["time_at_limit_s"] == 0.0  # inside limits
 
 
+@pytest.mark.slow
 def test_vvmc_keeps_joints_inside_limits(vvmc_runs):
     _, on, _ = vvmc_runs
     lab = MotionLab(load_lab())

@@ -110,6 +110,7 @@ _json_like = st.recursive(
         max_size=6,
     ),
 )
+@pytest.mark.slow
 def test_fuzz_structured_messages_valid_or_rejected(mtype, fields):
     data = msgpack.packb({"v": 1, "type": mtype, **fields}, use_bin_type=True)
     try:
@@ -274,6 +275,7 @@ def test_token_and_malformed_messages(engine):
         ok.close()
 
 
+@pytest.mark.slow
 def test_separate_processes_server_joystick_viewer():
     """bosun server and bosun joystick --virtual as their own processes; this test is the viewer."""
     import re

@@ -44,6 +44,7 @@ def keys(tmp_path):
 
 
 # ---------------------------------------------------------------------------- CURVE
+@pytest.mark.slow
 def test_curve_admits_an_allowed_key_and_refuses_others_counting_the_failures(serve_session, keys):
     srv = serve_session(curve=keys["server"])
     op = Client(srv.url, role="operator", name="op", curve=keys["op"], timeout=5.0)
@@ -132,6 +133,7 @@ def test_a_gui_started_engine_takes_its_secret_from_the_environment_not_the_comm
 
 
 # ---------------------------------------------------------------------------- roles
+@pytest.mark.slow
 def test_the_role_lapses_only_after_the_timeout_with_a_warning_and_the_displaced_operator_is_told(serve_session):
     srv = serve_session(operator_timeout=1.5, lapse_warning=0.5)
     first = Client(srv.url, role="operator", name="first", timeout=3.0)
@@ -168,6 +170,7 @@ def test_the_role_lapses_only_after_the_timeout_with_a_warning_and_the_displaced
                 c.close()
 
 
+@pytest.mark.slow
 def test_keep_alives_keep_the_role_without_input(serve_session):
     srv = serve_session(operator_timeout=1.0, lapse_warning=0.4)
     op = Client(srv.url, role="operator", name="op", timeout=3.0)
@@ -183,6 +186,7 @@ def test_keep_alives_keep_the_role_without_input(serve_session):
         op.close()
 
 
+@pytest.mark.slow
 def test_bosun_joystick_without_a_joystick_exits_with_a_clear_message(serve_session):
     srv = serve_session()
     env = dict(os.environ, SDL_JOYSTICK_DISABLED="1", SDL_VIDEODRIVER="dummy")
@@ -200,6 +204,7 @@ def test_bosun_joystick_without_a_joystick_exits_with_a_clear_message(serve_sess
 
 
 # ---------------------------------------------------------------------------- Ctrl-C
+@pytest.mark.slow
 @pytest.mark.parametrize("args", [["robots"], ["server", "--bind", "tcp://127.0.0.1:0", "--duration", "30"]])
 def test_ctrl_c_at_any_moment_of_start_up_prints_no_traceback(args):
     for delay in (0.05, 0.15, 0.3, 0.6, 1.2):

@@ -81,6 +81,7 @@ def test_every_corpus_file_is_refused_with_its_name_or_loads_a_physical_robot():
     assert loaded > 0 and refused > 200
 
 
+@pytest.mark.slow
 def test_the_cli_never_prints_a_traceback_and_agrees_with_the_loader(tmp_path):
     """`bosun check` over the whole corpus in one process, and `bosun fk` on every file in-process."""
     proc = subprocess.run(
@@ -216,6 +217,7 @@ def test_bosun_check_names_each_file(tmp_path, capsys):
         parse_robot_file(tmp_path / "missing.xml")
 
 
+@pytest.mark.slow
 def test_a_live_engine_answers_every_corpus_file_and_a_ping_after_it():
     """`bosun server --robots-dir tests/data/robot_fuzz`: by path for every third file, by text for
     every seventh; each is answered (loaded or refused in one line) and the engine still answers."""

@@ -281,6 +281,7 @@ class SlowSession(Session):
         time.sleep(0.004)  # an overloaded machine: every tick takes twice its period
 
 
+@pytest.mark.slow
 def test_slow_engine_raises_an_alarm_and_ack_over_the_protocol():
     """Item 9: an engine below real time says so (alarm in the state), and the operator acknowledges."""
     srv, th = serve(SlowSession(), rate=500)
@@ -299,6 +300,7 @@ def test_slow_engine_raises_an_alarm_and_ack_over_the_protocol():
         halt(srv, th)
 
 
+@pytest.mark.slow
 def test_teleop_alarms_estop_joint_limit_and_stale():
     ses = Session(robot_name="scara")
     dt, t = 0.002, 0.0
@@ -326,6 +328,7 @@ def active_keys(ses):
     return {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
 
 
+@pytest.mark.slow
 def test_lab_alarms_winch_end_stop_leg_limit_and_payload_below_the_deck():
     ses = LabSession()
     t = run_lab(ses, 0.2)

@@ -120,6 +120,7 @@ def test_leg_rates_and_body_acceleration_against_finite_differences(platform, rn
 
 
 # ----------------------------------------------------------------------------- motion filter
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(seed=st.integers(0, 2**31 - 1), name=st.sampled_from(PLATFORMS), dt=st.sampled_from([0.002, 0.01, 0.02]))
 def test_motion_filter_never_passes_a_limit(seed, name, dt):
@@ -156,6 +157,7 @@ def _run(p: Platform, seconds: float, dt: float = 0.01):
     return np.array(eta)
 
 
+@pytest.mark.slow
 def test_modes_ramp_inside_the_limits(platform):
     p = Platform(platform, ramp_time=4.0)
     assert p.status == "settled"

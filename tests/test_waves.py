@@ -81,6 +81,7 @@ def test_wmo_sea_state_table():
     assert wmo_sea_state(20.0) == (9, "phenomenal")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spreading", [None, 2])
 def test_time_series_has_the_spectrum_variance(spreading):
     rng = np.random.default_rng(7)
