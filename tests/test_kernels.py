@@ -148,3 +148,46 @@ def test_compiled_closed_form_candidates_and_choice_equal_the_reference(name, el
             np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
             np.testing.assert_allclose(a.position, b.position, rtol=0, atol=1e-12)
             assert a.success and a.reason == b.reason and abs(a.error - b.error) <= 1e-12
+
+
+# ---------------------------------------------------------------------------- plant updates
+def lockstep(make, drive, steps):
+    """Two plants, compiled and reference, driven alike; every state compared after every step."""
+    a, b = make(), make()
+    a.use_kernels, b.use_kernels = True, False
+    for k in range(steps):
+        drive(a, k)
+        drive(b, k)
+        yield a, b
+
+
+@pytest.mark.parametrize("dt", [0.002, 0.01, 0.02])
+def test_compiled_joint_servo_steps_equal_the_reference(dt):
+    from app.sim.actuators import JointActuators
+
+    rng = np.random.default_rng(int(dt * 1e4))
+    n = 40
+    speed, acc = rng.uniform(0.2, 3.0, n), np.where(rng.random(n) < 0.2, np.inf, rng.uniform(0.5, 20.0, n))
+    q0, refs = rng.uniform(-1, 1, n), rng.uniform(-2.5, 2.5, size=(20, n))
+    make = lambda: JointActuators(-np.ones(n), np.ones(n), speed, acc, tau=0.05, q0=q0)  # noqa: E731
+    for a, b in lockstep(make, lambda p, k: p.step(refs[k // 50], dt), 1000):
+        for x, y in ((a.q, b.q), (a.qdot, b.qdot), (a.qddot, b.qddot)):
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("with_v_ref", [False, True])
+def test_compiled_platform_motion_filter_steps_equal_the_reference(with_v_ref):
+    from app.sim.stewart import MotionFilter
+
+    rng = np.random.default_rng(7 + with_v_ref)
+    lo, hi = -rng.uniform(0.2, 1.0, 6), rng.uniform(0.2, 1.0, 6)
+    speed, acc = rng.uniform(0.2, 1.0, 6), rng.uniform(0.5, 5.0, 6)
+    refs, vrefs = rng.uniform(-1.5, 1.5, size=(20, 6)), rng.uniform(-0.5, 0.5, size=(20, 6))
+    make = lambda: MotionFilter(lo, hi, speed, acc, tau=0.1)  # noqa: E731
+
+    def drive(p, k):
+        p.step(refs[k // 50], vrefs[k // 50] if with_v_ref else None, 0.01, speed_scale=0.8 if k % 300 < 150 else 1.0)
+
+    for a, b in lockstep(make, drive, 1000):
+        for x, y in ((a.x, b.x), (a.v, b.v), (a.a, b.a)):
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12)

@@ -319,6 +319,13 @@ def warm_up(progress=None) -> float:
             np.ones(3),
         ),
     ]
+    from app.sim import kernels as sim  # the plant updates (imports this module: not at the top)
+
+    ones = np.ones(6)
+    steps += [
+        lambda: sim.motion_filter_step(ones, ones, ones, ones, True, -ones, ones, ones, ones, 0.1, 0.01, 1.0),
+        lambda: sim.actuator_step(ones, ones, ones, -ones, ones, ones, ones, 0.05, 0.002),
+    ]
     for k, step in enumerate(steps):
         step()
         if progress is not None:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.sim import kernels as sim_kernels
+
 
 def braking_speed(distance: ArrayLike, accel: ArrayLike, dt: float) -> NDArray[np.float64]:
     """Largest speed from which braking at ``accel``, step by step, stops within ``distance``.
@@ -33,7 +35,8 @@ class JointActuators:
     Each step the desired speed is clipped to the intersection of the speed limit, the change
     the acceleration limit allows in one step and the exact discrete braking speed towards each
     position limit (:func:`braking_speed`, the bound :class:`~app.sim.stewart.MotionFilter` uses).
-    The position is therefore never driven past a limit, and speed and acceleration stay within theirs (up to rounding).
+    The position is therefore never driven past a limit, and speed and acceleration stay within
+    theirs (up to rounding).
     E-STOP (:meth:`stop`) zeroes the speed at once: a stop takes priority over the
     acceleration limit.
 
@@ -69,12 +72,22 @@ class JointActuators:
         self.q = np.clip(q, self.lower, self.upper)
         self.qdot = np.zeros_like(self.q)
         self.qddot = np.zeros_like(self.q)
+        self.use_kernels = sim_kernels.ENABLED
 
     def _braking_speed(self, distance: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
         return braking_speed(distance, self.accel, dt)
 
     def step(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """Advance by dt toward q_ref; returns the new position."""
+        """Advance by dt toward q_ref; returns the new position (compiled unless ``use_kernels`` is False)."""
+        if self.use_kernels:
+            self.q, self.qdot, self.qddot = sim_kernels.actuator_step(
+                self.q, self.qdot, np.asarray(q_ref, dtype=float), self.lower, self.upper, self.speed, self.accel,
+                float(self.tau), float(dt),
+            )  # fmt: skip
+            return self.q
+        return self._step_reference(q_ref, dt)
+
+    def _step_reference(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
         q_ref = np.clip(np.asarray(q_ref, dtype=float), self.lower, self.upper)
         gap = np.abs(q_ref - self.q) / dt
         v_des = np.clip((q_ref - self.q) / self.tau, -gap, gap)  # never past the reference in one step

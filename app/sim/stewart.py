@@ -32,6 +32,7 @@ from app.marine.vessel import VesselMotion, significant_response
 from app.marine.waves import spectrum as sea_spectrum
 from app.marine.waves import wave_components
 from app.models.stewart import StewartPlatform
+from app.sim import kernels as sim_kernels
 from app.sim.actuators import braking_speed
 
 MODES = ("settled", "neutral", "engaged")
@@ -71,6 +72,7 @@ class MotionFilter:
         self.x = np.zeros_like(self.lower)
         self.v = np.zeros_like(self.lower)
         self.a = np.zeros_like(self.lower)
+        self.use_kernels = sim_kernels.ENABLED
 
     def reset(self, x: ArrayLike) -> None:
         self.x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
@@ -83,7 +85,21 @@ class MotionFilter:
     def step(
         self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
     ) -> NDArray[np.float64]:
-        """Advance by ``dt`` toward ``x_ref`` (with feed-forward ``v_ref``); returns the new x."""
+        """Advance by ``dt`` toward ``x_ref`` (with feed-forward ``v_ref``); returns the new x
+        (compiled unless ``use_kernels`` is False)."""
+        if self.use_kernels:
+            use_v = v_ref is not None
+            self.x, self.v, self.a = sim_kernels.motion_filter_step(
+                self.x, self.v, np.asarray(x_ref, dtype=float),
+                np.asarray(v_ref, dtype=float) if use_v else self.x, use_v, self.lower, self.upper, self.speed,
+                self.accel, float(self.tau), float(dt), float(speed_scale),
+            )  # fmt: skip
+            return self.x
+        return self._step_reference(x_ref, v_ref, dt, speed_scale)
+
+    def _step_reference(
+        self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
+    ) -> NDArray[np.float64]:
         x_ref = np.asarray(x_ref, dtype=float)
         v_des = (x_ref - self.x) / max(self.tau, dt)
         if v_ref is not None:
