@@ -91,9 +91,9 @@ def test_reset_with_the_stick_held_moves_nothing_over_the_network():
             op.send_input([1.0, 0.0, 0.0], [True], "stick")
             time.sleep(0.01)
 
+    th_in = threading.Thread(target=hold_stick, daemon=True)
     try:
         arm(op)
-        th_in = threading.Thread(target=hold_stick, daemon=True)
         th_in.start()
         p0 = np.array(viewer.latest_state()["tool"])
         wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.02)
@@ -114,6 +114,8 @@ def test_reset_with_the_stick_held_moves_nothing_over_the_network():
         np.testing.assert_allclose(st_["tool"], srv_p, atol=1e-6)
     finally:
         stop.set()
+        if th_in.ident is not None:  # the stick thread sends on op's socket: it ends before the socket closes
+            th_in.join(5)
         op.close()
         viewer.close()
         halt(srv, th)

@@ -345,7 +345,12 @@ class MotionLab:
     def _ik(self, p_tr: NDArray[np.float64], q_near: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """Analytic IK (eqs. 7–20): the exact candidate inside the limits nearest ``q_near``."""
         best, best_d = None, np.inf
-        for q, exact in self.arm.candidates(p_tr, float(q_near[0]), "auto"):
+        if getattr(self.robot, "use_kernels", False):  # the compiled eqs. (7)–(20), tested equal
+            Q, flags = self.arm.kernel_candidates(p_tr, float(q_near[0]), np.array(self.arm.SIGNS["auto"]))
+            candidates = zip(Q, flags, strict=True)
+        else:
+            candidates = self.arm.candidates(p_tr, float(q_near[0]), "auto")
+        for q, exact in candidates:
             q = q.copy()
             q[0] = q_near[0] + math.remainder(q[0] - q_near[0], 2 * math.pi)
             if not exact or not np.all((q >= self.robot.lower - 1e-9) & (q <= self.robot.upper + 1e-9)):
