@@ -191,3 +191,55 @@ def test_compiled_platform_motion_filter_steps_equal_the_reference(with_v_ref):
     for a, b in lockstep(make, drive, 1000):
         for x, y in ((a.x, b.x), (a.v, b.v), (a.a, b.a)):
             np.testing.assert_allclose(x, y, rtol=0, atol=1e-12)
+
+
+CHECK_SIGNATURES = r"""
+import json, numpy as np
+from app.models import kernels
+from app.sim import kernels as sim
+kernels.warm_up()
+before = {n: len(f.signatures) for m in (kernels, sim) for n, f in vars(m).items() if hasattr(f, "signatures")}
+from app.engine.session import Session
+from app.engine.lab_session import LabSession
+from app.engine.tac_session import TacSession
+from app.teleop.devices import InputSample
+from app.ik import make_solver
+from app.models.registry import load_robot
+for robot, solver in [("comau_smart5_3dof", "analytic"), ("offshore_crane", "analytic"), ("kuka_youbot", "jacobian"),
+                      ("scara", "ga"), ("comau_smart5_6dof", "jacobian")]:
+    s = Session(robot_name=robot, solver_name=solver)
+    t = 0.0
+    for k in range(200):
+        t += 0.002
+        s.feed(InputSample((0.3, -0.2, 0.1), (k > 20,), "stick", t), t)
+        s.tick(t, 0.002)
+    r = load_robot(robot)
+    for name in ("jacobian", "ga") + (("analytic",) if solver == "analytic" else ()):
+        sv = make_solver(name, r, seed=0)
+        x = r.position(r.lower + 0.3 * (r.upper - r.lower))
+        sv.solve_position(x, r.lower + 0.25 * (r.upper - r.lower))
+        sv.solve_position(list(x))
+for session in (LabSession(), TacSession()):
+    t = 0.0
+    for k in range(100):
+        t += 0.02
+        session.tick(t, 0.02)
+after = {n: len(f.signatures) for m in (kernels, sim) for n, f in vars(m).items() if hasattr(f, "signatures")}
+print(json.dumps({"before": before, "after": after}))
+"""
+
+
+def test_no_kernel_compiles_after_warm_up_in_any_engine():
+    """Issue 14, item 1: compile ahead, never in a control tick.  Arrays of another layout (a strided
+    slice) made numba compile a second specialisation of the platform filter in the lab engine's
+    first tick (seconds); every call site now passes C-contiguous float64, so after ``warm_up``
+    the teleop, lab and crane-head engines and every solver run without a single new compile."""
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", CHECK_SIGNATURES], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    counts = json.loads(out.stdout.strip().splitlines()[-1])
+    assert counts["after"] == counts["before"], counts
+    assert all(n <= 1 for n in counts["after"].values()), counts

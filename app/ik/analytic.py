@@ -50,8 +50,11 @@ class ComauArm:
 
     def kernel_candidates(self, p_world, q1_hint: float, signs):
         """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
-        return kernels.comau_candidates(self.a1, self.d1, self.a2, self.a3, self.L, self.T_world_base, p_world,
-                                        q1_hint, signs)  # fmt: skip
+        return kernels.comau_candidates(
+            float(self.a1), float(self.d1), float(self.a2), float(self.a3), float(self.L),
+            np.ascontiguousarray(self.T_world_base, dtype=float), np.ascontiguousarray(p_world, dtype=float),
+            float(q1_hint), np.ascontiguousarray(signs, dtype=float),
+        )  # fmt: skip
 
     @staticmethod
     def match(robot) -> ComauArm | None:
@@ -122,7 +125,10 @@ class ElbowCrane:
 
     def kernel_candidates(self, p_world, beta0_hint: float, signs):
         """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
-        return kernels.crane_candidates(self.L0, self.L1, self.L2, self.T_world_1, p_world, beta0_hint, signs)
+        return kernels.crane_candidates(
+            float(self.L0), float(self.L1), float(self.L2), np.ascontiguousarray(self.T_world_1, dtype=float),
+            np.ascontiguousarray(p_world, dtype=float), float(beta0_hint), np.ascontiguousarray(signs, dtype=float),
+        )  # fmt: skip
 
     @staticmethod
     def match(robot) -> ElbowCrane | None:
@@ -226,7 +232,10 @@ class AnalyticSolver(Solver):
         r = self.robot
         if getattr(r, "use_kernels", False):
             Q, ex = self.arm.kernel_candidates(x_t, float(ref[0]), self._signs)
-            return kernels.select_candidate(*r.kernel_args, Q, ex, r.lower, r.upper, self._revolute, ref, x_t)
+            return kernels.select_candidate(
+                *r.kernel_args, Q, ex, r.lower, r.upper, self._revolute, np.ascontiguousarray(ref, dtype=float),
+                np.ascontiguousarray(x_t, dtype=float),
+            )  # fmt: skip
         best, best_key = None, None
         for q, exact in self.arm.candidates(x_t, float(ref[0]), self.elbow):
             q = self.wrap_into_limits(q)

@@ -131,7 +131,10 @@ class JacobianSolver(Solver):
         ``robot.use_kernels = False`` run the NumPy reference below."""
         if self._target_R is None and getattr(self.robot, "use_kernels", False):
             best_q, best_err, iterations = kernels.descend(
-                *self.robot.kernel_args, np.asarray(q, dtype=float), np.asarray(x_t, dtype=float), *self._tail()
+                *self.robot.kernel_args,
+                np.ascontiguousarray(q, dtype=float),
+                np.ascontiguousarray(x_t, dtype=float),
+                *self._tail(),
             )
             return best_q, float(best_err), int(iterations)
         return self._descend_reference(q, x_t, deadline)
@@ -154,7 +157,9 @@ class JacobianSolver(Solver):
             start = time.perf_counter()
             x_t = self.check_target(target)
             q_s = self.check_q0(q0)
-            q, p, error, cost, iterations = kernels.descend_to(*self.robot.kernel_args, q_s, x_t, *self._tail())
+            q, p, error, cost, iterations = kernels.descend_to(
+                *self.robot.kernel_args, np.ascontiguousarray(q_s), np.ascontiguousarray(x_t), *self._tail()
+            )
             if cost <= self.tolerance:
                 return IKResult(
                     q=q,

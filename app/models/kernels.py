@@ -305,6 +305,10 @@ def warm_up(progress=None) -> float:
         lambda: frames(*args, np.zeros(n)),
         lambda: jacobian_from_frames(frames(*args, np.zeros(n)), np.eye(L, n), zLn),
         lambda: positions(*args, np.zeros((2, n))),
+        lambda: position(*args, np.zeros(n)),
+        lambda: descend(
+            *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
+        ),
         lambda: descend_to(
             *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
         ),

@@ -62,8 +62,8 @@ class SerialRobot:
         self.n_joints = len(s.joints)
         self.joint_names = [j.name for j in s.joints]
         self.joint_kinds = [j.kind for j in s.joints]
-        self.lower = np.array([j.lower for j in s.joints])
-        self.upper = np.array([j.upper for j in s.joints])
+        self.lower = np.array([j.lower for j in s.joints], dtype=float)
+        self.upper = np.array([j.upper for j in s.joints], dtype=float)
         self.speed = np.array([j.speed for j in s.joints])
         self.accel = np.array([np.inf if j.accel is None else j.accel for j in s.joints])
         self.T_world_base = np.array(s.T_world_base)
@@ -143,7 +143,7 @@ class SerialRobot:
         """
         q = np.asarray(q, dtype=float)
         if self.use_kernels and q.ndim == 1 and q.shape[0] == self.n_joints:
-            return kernels.frames(*self.kernel_args, q)
+            return kernels.frames(*self.kernel_args, np.ascontiguousarray(q))
         theta, d = self.dh_variables(q)
         A = dh_transform(theta, d, self._a, self._alpha)  # (..., L, 4, 4)
         batch = A.shape[:-3]
@@ -170,7 +170,7 @@ class SerialRobot:
         q = np.asarray(q, dtype=float)
         if self.use_kernels and q.shape[-1:] == (self.n_joints,) and q.ndim <= 2:
             if q.ndim == 1:
-                return kernels.position(*self.kernel_args, q)
+                return kernels.position(*self.kernel_args, np.ascontiguousarray(q))
             return kernels.positions(*self.kernel_args, np.ascontiguousarray(q))
         if q.ndim == 1:
             return self._position_one(q)
@@ -214,7 +214,8 @@ class SerialRobot:
         """
         q = np.asarray(q, dtype=float)
         if self.use_kernels and q.ndim == 1 and q.shape[0] == self.n_joints:
-            return kernels.jacobian_from_frames(kernels.frames(*self.kernel_args, q), self._M_theta, self._M_d)
+            F = kernels.frames(*self.kernel_args, np.ascontiguousarray(q))
+            return kernels.jacobian_from_frames(F, self._M_theta, self._M_d)
         F = self.frames(q)
         z = F[..., :-2, :3, 2]  # z_{i-1} for links i = 1..L, shape (..., L, 3)
         o = F[..., :-2, :3, 3]  # o_{i-1}

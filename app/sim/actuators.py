@@ -61,10 +61,11 @@ class JointActuators:
         tau: float = 0.05,
         q0: ArrayLike | None = None,
     ) -> None:
-        self.lower = np.asarray(lower, dtype=float)
-        self.upper = np.asarray(upper, dtype=float)
-        self.speed = np.asarray(speed, dtype=float)
-        self.accel = np.asarray(accel, dtype=float)
+        # C-contiguous float64: the compiled step has one signature and never compiles in a control tick
+        self.lower = np.ascontiguousarray(lower, dtype=float)
+        self.upper = np.ascontiguousarray(upper, dtype=float)
+        self.speed = np.ascontiguousarray(speed, dtype=float)
+        self.accel = np.ascontiguousarray(accel, dtype=float)
         if not tau > 0:
             raise ValueError("tau must be positive")
         self.tau = tau
@@ -81,7 +82,8 @@ class JointActuators:
         """Advance by dt toward q_ref; returns the new position (compiled unless ``use_kernels`` is False)."""
         if self.use_kernels:
             self.q, self.qdot, self.qddot = sim_kernels.actuator_step(
-                self.q, self.qdot, np.asarray(q_ref, dtype=float), self.lower, self.upper, self.speed, self.accel,
+                self.q, self.qdot, np.ascontiguousarray(q_ref, dtype=float), self.lower, self.upper, self.speed,
+                self.accel,
                 float(self.tau), float(dt),
             )  # fmt: skip
             return self.q

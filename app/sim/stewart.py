@@ -66,8 +66,9 @@ class MotionFilter:
     """
 
     def __init__(self, lower: ArrayLike, upper: ArrayLike, speed: ArrayLike, accel: ArrayLike, tau: float = 0.1):
-        self.lower, self.upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
-        self.speed, self.accel = np.asarray(speed, dtype=float), np.asarray(accel, dtype=float)
+        # C-contiguous float64: the compiled step has one signature and never compiles in a control tick
+        self.lower, self.upper = np.ascontiguousarray(lower, dtype=float), np.ascontiguousarray(upper, dtype=float)
+        self.speed, self.accel = np.ascontiguousarray(speed, dtype=float), np.ascontiguousarray(accel, dtype=float)
         self.tau = float(tau)
         self.x = np.zeros_like(self.lower)
         self.v = np.zeros_like(self.lower)
@@ -90,9 +91,9 @@ class MotionFilter:
         if self.use_kernels:
             use_v = v_ref is not None
             self.x, self.v, self.a = sim_kernels.motion_filter_step(
-                self.x, self.v, np.asarray(x_ref, dtype=float),
-                np.asarray(v_ref, dtype=float) if use_v else self.x, use_v, self.lower, self.upper, self.speed,
-                self.accel, float(self.tau), float(dt), float(speed_scale),
+                self.x, self.v, np.ascontiguousarray(x_ref, dtype=float),
+                np.ascontiguousarray(v_ref, dtype=float) if use_v else self.x, use_v, self.lower, self.upper,
+                self.speed, self.accel, float(self.tau), float(dt), float(speed_scale),
             )  # fmt: skip
             return self.x
         return self._step_reference(x_ref, v_ref, dt, speed_scale)
