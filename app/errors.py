@@ -3,6 +3,19 @@
 from __future__ import annotations
 
 
+def one_line(text: str, limit: int) -> str:
+    """A message for one log or error line: whitespace runs (newlines too) as one space, at most
+    ``limit`` characters (cut with "…")."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def printable(text: str, limit: int) -> str:
+    """A name from outside (a client's, a file's) as it may appear in a line: every character that
+    is not printable (newline, escape, …) shown as "?", at most ``limit`` characters."""
+    return "".join(ch if ch.isprintable() else "?" for ch in str(text))[:limit]
+
+
 class BosunError(Exception):
     """Base class of user-facing errors: the CLI prints ``str(err)`` and exits 2."""
 
@@ -23,9 +36,7 @@ class RobotXmlError(BosunError):
     def __init__(self, path: str, line: int | None, message: str) -> None:
         self.path = path
         self.line = line
-        message = " ".join(str(message).split())  # one line: parser messages end in newlines
-        self.message = message if len(message) <= 300 else message[:299] + "…"
-        message = self.message
+        self.message = message = one_line(message, 300)  # one line: parser messages end in newlines
         where = f"{path}:{line}" if line else path
         super().__init__(f"{where}: {message}")
 

@@ -32,6 +32,25 @@ def arm(client, n_axes: int = 3) -> None:
             time.sleep(0.005)
 
 
+def arm_and_hold(client, axes, state_of, flag: str, sends: int = 40) -> dict:
+    """Arm, then send ``axes`` with the deadman held until ``state_of()`` shows ``flags[flag]``.
+
+    A starved test thread on a busy machine can let its own input go stale (the engine disarms);
+    then it arms again, up to five times.  Returns the last state (the caller asserts on it)."""
+    import time
+
+    state = None
+    for _attempt in range(5):
+        arm(client, len(axes))
+        for _ in range(sends):
+            client.send_input(list(axes), [True], "stick")
+            time.sleep(0.005)
+        state = state_of()
+        if state["flags"][flag]:
+            break
+    return state
+
+
 def process_running(pid: int) -> bool:
     """True while the process exists and is not a zombie (Linux /proc)."""
     try:

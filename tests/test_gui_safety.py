@@ -3,7 +3,6 @@ the protocol with real engines on 127.0.0.1, plus a property test over random GU
 
 Timing bounds are generous (a busy 2-core machine); they bound waiting, never speed."""
 
-import socket
 import subprocess
 import sys
 import threading
@@ -23,16 +22,11 @@ from PyQt5.QtWidgets import QApplication
 from app.engine.server import EngineServer
 from app.engine.session import Session
 from tests.helpers import process_running
+from ui.engine_process import free_port
 from ui.link import EngineLink
 from ui.main_window import MainWindow
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def free_port() -> int:
-    with socket.socket() as so:
-        so.bind(("127.0.0.1", 0))
-        return so.getsockname()[1]
 
 
 class Engine:

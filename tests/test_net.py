@@ -19,7 +19,7 @@ from app.net.transport import Client, TransportError, check_url, is_local
 from app.teleop.client import run_joystick_client
 from app.teleop.devices import PygameJoysticks
 from app.teleop.virtual import VirtualJoystick
-from tests.helpers import arm, wait_for
+from tests.helpers import arm, arm_and_hold, wait_for
 
 
 # ------------------------------------------------------------------ codec
@@ -139,22 +139,9 @@ def test_non_local_bind_needs_curve_keys_a_token_is_not_enough():
 
 # ------------------------------------------------------------------ engine over sockets
 @pytest.fixture
-def engine():
-    """An engine on 127.0.0.1 (free port) running in a thread; always stopped."""
-    servers = []
-
-    def start(token=None, **session_kwargs):
-        srv = EngineServer(Session(**session_kwargs), bind="tcp://127.0.0.1:0", rate=500, publish_rate=50, token=token)
-        th = threading.Thread(target=srv.run, kwargs={"duration": 30.0}, daemon=True)
-        th.start()
-        servers.append((srv, th))
-        return srv
-
-    yield start
-    for srv, th in servers:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
+def engine(serve):
+    """An engine on 127.0.0.1 (free port) running in a thread at 500 Hz; always stopped (conftest ``serve``)."""
+    return lambda token=None, **session_kwargs: serve(Session(**session_kwargs), token=token, rate=500)[0]
 
 
 def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
@@ -234,13 +221,7 @@ def test_stale_network_input_stops(engine):
     op = Client(srv.url, role="operator", name="op")
     viewer = Client(srv.url, role="viewer", name="v")
     try:
-        for _attempt in range(5):  # a starved test thread (busy machine) may itself go stale: arm again
-            arm(op)
-            for _ in range(40):
-                op.send_input([1.0, 0.0, 0.0], [True], "stick")
-                time.sleep(0.005)
-            if viewer.latest_state()["flags"]["enabled"]:
-                break
+        arm_and_hold(op, [1.0, 0.0, 0.0], viewer.latest_state, "enabled")
         assert viewer.latest_state()["flags"]["enabled"]
         time.sleep(0.3)  # silence longer than the 200 ms stale timeout
         st_ = viewer.latest_state()

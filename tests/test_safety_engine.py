@@ -15,7 +15,7 @@ from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.transport import Client, TransportError
 from app.teleop.devices import InputSample
-from tests.helpers import arm, wait_for
+from tests.helpers import arm, arm_and_hold, wait_for
 
 
 def serve(session, url="tcp://127.0.0.1:0", rate=500, token=None, duration=60.0):
@@ -125,13 +125,7 @@ def test_a_reconnected_operator_starts_disarmed():
     srv, th = serve(Session())
     op = Client(srv.url, role="operator", name="op")
     try:
-        for _attempt in range(5):  # a starved test thread (busy machine) may go stale: arm again
-            arm(op)
-            for _ in range(5):
-                op.send_input([0.0, 0.0, 0.0], [True], "stick")
-                time.sleep(0.005)
-            if op.latest_state()["flags"]["armed"]:
-                break
+        arm_and_hold(op, [0.0, 0.0, 0.0], op.latest_state, "armed", sends=5)
         assert op.latest_state()["flags"]["armed"]
         op.send("hello", role="operator", name="op")  # the same client says hello again (reconnect)
 

@@ -30,7 +30,7 @@ import numpy as np
 import zmq
 
 from app.engine.session import CommandError, Session
-from app.errors import BosunError
+from app.errors import BosunError, printable
 from app.net.codec import ProtocolError, decode, encode
 from app.net.messages import OPERATOR_ONLY, SCENE_MESSAGES
 from app.net.security import AuthThrottle, CurveAuthenticator, ServerCurve
@@ -42,7 +42,7 @@ log = logging.getLogger("bosun.engine")
 
 def _clean_name(name: str) -> str:
     """A client's name as it may appear in every log: printable, one line, at most 64 characters."""
-    return "".join(c if c.isprintable() else "?" for c in name)[:64] or "?"
+    return printable(name, 64) or "?"
 
 
 @dataclass

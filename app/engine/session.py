@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from app.engine.alarms import AlarmList
-from app.errors import BosunError
+from app.errors import BosunError, one_line, printable
 from app.ik import DEFAULT, make_solver
 from app.models.registry import allowed_dirs, load_robot, load_robot_text
 from app.models.serial import SerialRobot
@@ -53,14 +53,7 @@ class CommandError(BosunError):
 
 def _label(ref: str) -> str:
     """The file name a client gave its robot text, as shown in errors."""
-    name = ref.replace("\\", "/").rsplit("/", 1)[-1]
-    return "".join(ch if ch.isprintable() else "?" for ch in name)[:80] or "<robot text>"
-
-
-def _one_line(text: str, n: int = 300) -> str:
-    """An error for a client: one line, at most n characters."""
-    text = " ".join(text.split())
-    return text if len(text) <= n else text[: n - 1] + "…"
+    return printable(ref.replace("\\", "/").rsplit("/", 1)[-1], 80) or "<robot text>"
 
 
 @dataclass
@@ -160,7 +153,7 @@ class Session:
                 solver = DEFAULT_SOLVER
             self._load(robot_ref, solver, robot)
         except BosunError as err:
-            raise CommandError(_one_line(str(err))) from None
+            raise CommandError(one_line(str(err), 300)) from None
         self.input.disarm("robot changed")
         self.note("info", f"robot {self.robot_name} loaded ({self.robot.n_joints} joints, solver {solver})")
 

@@ -73,6 +73,7 @@ class JacobianSolver(Solver):
         self.max_step = np.where(np.array(robot.joint_kinds) == "revolute", 0.3, 0.1 * (robot.upper - robot.lower))
         self.orientation_weight = scale  # metres per radian when orientation is asked for
         self._target_R: NDArray[np.float64] | None = None
+        self._kernel_tail: tuple | None = None
 
     # ---------------------------------------------------------------- damped inverse
     def damped_step(
@@ -140,12 +141,16 @@ class JacobianSolver(Solver):
         return self._descend_reference(q, x_t, deadline)
 
     def _tail(self) -> tuple:
-        """The descent kernel's arguments after (q, x_t), in its types."""
-        r = self.robot
-        return (
-            r.lower, r.upper, np.asarray(self.max_step, dtype=float), float(self.lambda_max), float(self.epsilon),
-            float(self.e_ref), float(self.k_avoid), float(self.tolerance), int(self.max_iterations),
-        )  # fmt: skip
+        """The descent kernel's arguments after (q, x_t), in its types: built once per solver (its
+        settings are fixed after construction), not on every solve."""
+        if self._kernel_tail is None:
+            r = self.robot
+            self._kernel_tail = (
+                r.lower, r.upper, np.ascontiguousarray(self.max_step, dtype=float), float(self.lambda_max),
+                float(self.epsilon), float(self.e_ref), float(self.k_avoid), float(self.tolerance),
+                int(self.max_iterations),
+            )  # fmt: skip
+        return self._kernel_tail
 
     def solve_position(
         self, target: ArrayLike, q0: ArrayLike | None = None, *, time_budget: float | object | None = DEFAULT

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from app.errors import RobotNotFoundError, RobotTypeError
+from app.errors import RobotNotFoundError, RobotTypeError, printable
 from app.models.delta import DeltaHead
 from app.models.serial import SerialRobot
 from app.models.spec import RobotSpec
@@ -110,9 +110,8 @@ def resolve_allowed(name_or_path: str, folders: Sequence[Path]) -> Path:
     raise RobotNotFoundError(f"robot file not found in the allowed robot folders: {_quoted(text)}")
 
 
-def _quoted(text: str, n: int = 80) -> str:
-    text = "".join(ch if ch.isprintable() else "?" for ch in text)
-    return repr(text if len(text) <= n else text[: n - 1] + "…")
+def _quoted(text: str) -> str:
+    return repr(printable(text, 80))
 
 
 def load_spec(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> RobotSpec:

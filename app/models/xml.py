@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-from app.errors import RobotXmlError
+from app.errors import RobotXmlError, one_line
 from app.geometry import euler_zyx_to_matrix, homogeneous
 from app.models.spec import (
     STEWART_DOFS,
@@ -139,10 +139,9 @@ def parse_number(raw: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def _short(raw: str, n: int = 40) -> str:
-    """A file value quoted in a message: stripped, one line, at most n characters."""
-    text = " ".join(raw.split())
-    return text if len(text) <= n else text[: n - 1] + "…"
+def _short(raw: str) -> str:
+    """A file value quoted in a message: one line, at most 40 characters."""
+    return one_line(raw, 40)
 
 
 def _strip_location(msg: str) -> str:
