@@ -824,14 +824,19 @@ def cmd_joystick(args: argparse.Namespace) -> int:
 def cmd_bench_loop(args: argparse.Namespace) -> int:
     from app.analysis.loop_bench import bench_loop
 
-    result = bench_loop(rate=args.rate, seconds=args.seconds, robot=args.robot, solver=args.solver)
+    result = bench_loop(
+        rate=args.rate, seconds=args.seconds, robot=args.robot, solver=args.solver, flood=args.flood, burn=args.burn
+    )
     result["machine"] = _machine()
     if args.json:
         _print_json(result)
         return 0
+    extra = (f", {args.flood} junk messages/s from one client" if args.flood else "") + (
+        ", one core kept busy by another process" if args.burn else ""
+    )
     print(
         f"bosun bench loop: {args.robot} / {args.solver}, {args.rate:g} Hz for {args.seconds:g} s, one viewer and "
-        f"one input client at 500 Hz over tcp://127.0.0.1"
+        f"one input client at 500 Hz over tcp://127.0.0.1{extra}"
     )
     print(f"machine: {result['machine']}")
     lp = result["loop"]
@@ -844,7 +849,17 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
         f"  input -> joint command latency  p50 {lp['latency_p50_ms']:.3f} ms   p99 {lp['latency_p99_ms']:.3f} ms "
         f"({lp['latency_samples']} samples)"
     )
-    print(f"  viewer received {result['viewer_states']} state messages ({result['viewer_rate_hz']:.1f} /s)")
+    print(
+        f"  tick rate {lp['tick_rate_hz']:.1f} Hz ({100 * result['tick_rate_fraction']:.1f} % of nominal);  "
+        f"viewer received {result['viewer_states']} states ({result['viewer_rate_hz']:.1f} /s, "
+        f"{100 * result['viewer_fraction']:.1f} % of those published)"
+    )
+    if args.flood:
+        print(f"  flood: {result['flood_sent']} sent; engine dropped {lp['dropped']} unread, rejected {lp['rejected']}")
+    print(
+        f"  E-STOP: {len(result['estop_ticks'])} of {result['estops_sent']} applied, at most "
+        f"{result['estop_ticks_max']} tick(s) after receipt; joint speed after: {result['speed_after_estop']}"
+    )
     return 0
 
 
@@ -990,6 +1005,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--seconds", type=_positive_float, default=30.0, help="duration [s] (default 30)")
     b.add_argument("--robot", default="comau_smart5_3dof", help="robot (default comau_smart5_3dof)")
     b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
+    b.add_argument("--flood", type=int, default=0, metavar="N", help="one more client sending N junk messages a second")
+    b.add_argument("--burn", action="store_true", help="another process keeps one core busy")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_loop)
 

@@ -1,11 +1,17 @@
-"""Engine loop benchmark: tick timing and input-to-command latency with real sockets.
+"""Engine loop benchmark: tick timing, input latency, flood resistance and E-STOP delay, real sockets.
 
-The engine runs in its own process, as it does in use; this process hosts one viewer and
-one input client sending at 500 Hz over tcp://127.0.0.1.
+The engine runs in its own process, as it does in use; this process hosts one viewer and one
+operator input client sending a moving stick at 500 Hz over tcp://127.0.0.1 (armed first: stick
+centred and released, then the deadman pressed, so the solver works every tick).  Optionally a
+third process floods the engine with junk from one client (``flood`` messages a second) and a
+fourth burns one core.  In the last second the operator sends five E-STOPs 0.15 s apart: the
+engine counts the ticks from each one's receipt to the tick that applied it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import multiprocessing as mp
 import threading
 import time
@@ -15,74 +21,154 @@ import numpy as np
 
 from app.net.transport import Client
 
+PUBLISH_RATE = 50.0
+ESTOPS = 5
+
 
 def _engine_process(rate: float, seconds: float, robot: str, solver: str, urls: Any, results: Any) -> None:
     from app.engine.server import EngineServer
     from app.engine.session import Session
+    from app.models import kernels
 
+    kernels.warm_up()
+    logging.getLogger("bosun").setLevel(logging.ERROR)  # the flood's refusals are counted below, not printed
     session = Session(robot_name=robot, solver_name=solver, mode="velocity")
-    server = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=50.0)
+    server = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=PUBLISH_RATE)
     urls.put(server.url)
     try:
+        t0 = time.perf_counter()
         server.run(duration=seconds)
+        elapsed = time.perf_counter() - t0
     finally:
         server.close()
-        results.put(server.stats.summary())
+    summary = server.stats.summary()
+    summary["tick_rate_hz"] = server.stats.ticks / elapsed
+    summary["estop_ticks"] = list(server.estop_ticks)
+    summary["dropped"] = server.limits.total_dropped
+    summary["rejected"] = server.rejected
+    summary["coalesced"] = server.inbox.coalesced
+    summary["io_deferred"] = server.io_deferred
+    summary["latencies"] = list(server.stats.latencies)
+    results.put(summary)
+
+
+def _flood_process(url: str, per_second: int, seconds: float, sent: Any) -> None:
+    """One client sending junk (not msgpack) at ``per_second``, paced in 1 ms batches."""
+    import zmq
+
+    sock = zmq.Context.instance().socket(zmq.DEALER)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.setsockopt(zmq.SNDHWM, 100_000)
+    sock.connect(url)
+    t0 = time.perf_counter()
+    n = 0
+    while (now := time.perf_counter()) - t0 < seconds:
+        due = int((now - t0) * per_second)
+        while n < due:
+            with contextlib.suppress(zmq.Again):  # the engine's queue for us is full: dropped, as a flood's
+                sock.send(b"\xff\xfe junk %d" % n, zmq.NOBLOCK)
+            n += 1
+        time.sleep(0.001)
+    sock.close(0)
+    sent.put(n)
+
+
+def _burn_process(seconds: float) -> None:
+    """Keep one core busy (another program on the machine)."""
+    end = time.perf_counter() + seconds
+    x = 0
+    while time.perf_counter() < end:
+        x += 1
 
 
 def bench_loop(
-    rate: float = 500.0, seconds: float = 30.0, robot: str = "comau_smart5_3dof", solver: str = "jacobian"
+    rate: float = 500.0,
+    seconds: float = 30.0,
+    robot: str = "comau_smart5_3dof",
+    solver: str = "jacobian",
+    flood: int = 0,
+    burn: bool = False,
 ) -> dict[str, Any]:
     """Run the engine at ``rate`` for ``seconds`` with one viewer and one operator sending at 500 Hz.
 
-    The operator sends a slowly varying stick (deadman held) so the solver works every
-    tick; latency runs from the client's send time (the system-wide monotonic clock) to
-    the end of the engine tick that turned the sample into a joint command.
-    """
+    The operator sends a slowly varying stick (deadman held, armed) so the solver works every
+    tick; latency runs from the client's send time (the system-wide monotonic clock) to the end
+    of the engine tick that turned the sample into a joint command.  ``flood``: junk messages a
+    second from one more client; ``burn``: a process keeping one core busy."""
     ctx = mp.get_context("spawn")
-    urls, results = ctx.Queue(), ctx.Queue()
+    urls, results, flood_sent = ctx.Queue(), ctx.Queue(), ctx.Queue()
     proc = ctx.Process(target=_engine_process, args=(rate, seconds + 1.0, robot, solver, urls, results), daemon=True)
     proc.start()
+    helpers: list = []
     try:
-        url = urls.get(timeout=60)
+        url = urls.get(timeout=120)
         viewer = Client(url, role="viewer", name="bench-viewer")
         operator = Client(url, role="operator", name="bench-input")
-        states = 0
+        states, stopped = 0, []
         stop = threading.Event()
 
         def watch() -> None:
             nonlocal states
             while not stop.is_set():
-                if viewer.recv_state(0.2) is not None:
+                st = viewer.recv_state(0.2)
+                if st is not None:
                     states += 1
+                    if st["flags"]["estop"]:
+                        stopped.append(float(np.max(np.abs(st["qdot"]))))
 
         watcher = threading.Thread(target=watch, daemon=True)
         watcher.start()
+        if burn:
+            helpers.append(ctx.Process(target=_burn_process, args=(seconds + 2.0,), daemon=True))
+        if flood > 0:
+            helpers.append(ctx.Process(target=_flood_process, args=(url, flood, seconds, flood_sent), daemon=True))
+        for h in helpers:
+            h.start()
+        for pressed in (False, True):  # arm: centred and released, then the deadman pressed at centre
+            for _ in range(5):
+                operator.send_input([0.0, 0.0, 0.0], [pressed], "bench")
+                time.sleep(0.01)
         t0 = time.monotonic()
-        k = 0
+        k, estops_sent = 0, 0
         while (now := time.monotonic()) - t0 < seconds:
             phase = 2 * np.pi * 0.1 * (now - t0)
             operator.send_input([0.5 * np.sin(phase), 0.5 * np.cos(phase), 0.2 * np.sin(2 * phase)], [True], "bench")
             k += 1
+            if estops_sent < ESTOPS and now - t0 > seconds - 1.0 + 0.15 * estops_sent:
+                operator.send("estop", reason="bench")  # replies are not awaited: the loop goes on sending
+                estops_sent += 1
             time.sleep(max(0.0, t0 + k * 0.002 - time.monotonic()))
         elapsed = time.monotonic() - t0
+        time.sleep(0.3)
         stop.set()
         watcher.join(timeout=2)
         viewer.close()
         operator.close()
-        loop = results.get(timeout=30)
+        loop = results.get(timeout=60)
+        sent = flood_sent.get(timeout=10) if flood > 0 else 0
     finally:
-        proc.join(timeout=10)
-        if proc.is_alive():
-            proc.terminate()
+        for p in [proc, *helpers]:
+            p.join(timeout=10)
+            if p.is_alive():
+                p.terminate()
+    estop_ticks = loop.pop("estop_ticks")
     return {
         "benchmark": "loop",
         "rate_hz": rate,
         "seconds": seconds,
         "robot": robot,
         "solver": solver,
+        "flood_per_s": flood,
+        "flood_sent": sent,
+        "burn": burn,
         "loop": loop,
+        "tick_rate_fraction": loop["tick_rate_hz"] / rate,
         "viewer_states": states,
         "viewer_rate_hz": states / elapsed,
+        "viewer_fraction": states / (elapsed * min(PUBLISH_RATE, rate)),
         "inputs_sent": k,
+        "estops_sent": estops_sent,
+        "estop_ticks_max": max(estop_ticks) if estop_ticks else None,
+        "estop_ticks": estop_ticks,
+        "speed_after_estop": max(stopped) if stopped else None,
     }

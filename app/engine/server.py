@@ -1,17 +1,33 @@
 """The engine process: a fixed-rate loop around a :class:`Session`, served over ZeroMQ.
 
-Each tick: drain the request socket (commands, input; each message validated, bad ones
-rejected and logged), run one control tick, publish the state every ``publish_every``
-ticks, then sleep to the next deadline (sleep, then a short spin for sub-millisecond
-accuracy).  Roles: the first client asking for ``operator`` gets it (where a launch secret is
-set, only a client presenting it); others are viewers.  The role lapses only after
-``operator_timeout`` (5 s) without any message from its holder, with a warning to every client
-at ``lapse_warning`` (2 s); the displaced holder is then told so in a refusal of what it sends.
-E-STOP is accepted from every client, also one that has not said ``hello`` (an engine restarted
-under a client must still stop); where a token is set the ``estop`` must carry it.  A
-non-local bind needs CURVE keys (:mod:`app.net.security`).  Failed authentications are counted
-and throttled.  Once a second the loop checks itself: below 95 % of real time or more than 1 % of
-ticks late raises the ``engine_slow`` alarm.
+Two threads.  The **I/O thread** owns the request socket: it receives, rate-limits (per client,
+before decoding: a flooding client costs a receive and a counter), decodes and validates every
+message, keeps the client book (hello, roles, tokens, the launch secret, lapses) and answers what
+it can answer itself.  What the control step must see it hands over in a bounded inbox: E-STOPs
+in a list of their own that the loop empties first in every tick (no queue, no rate limit, no
+bound delays them), then commands and input in arrival order, consecutive inputs of a client
+with the same buttons coalesced to the newest (button edges are kept, so no press is lost).
+The **loop** runs the control tick at a fixed rate: E-STOPs, inbox, ``session.tick``, publish
+every ``publish_every`` ticks, then sleep to the next deadline (sleep, then a short spin for
+sub-millisecond accuracy).
+
+Both threads share one interpreter lock.  A thread busy in Python holds it for up to the switch
+interval (5 ms) when the other wakes, so the I/O thread works only in the loop's idle time: the
+loop opens an *I/O window* after each tick that closes ``IO_MARGIN`` before its next deadline,
+and the I/O thread finishes the message in hand and waits once the window has closed (it still
+receives nothing while waiting; ZeroMQ buffers).  An E-STOP therefore reaches the control step
+within two ticks under any traffic.  If the loop stalls (a long command) the I/O thread carries on
+after ``2 periods + 10 ms``.
+
+Roles: the first client asking for ``operator`` gets it (where a launch secret is set, only a
+client presenting it); others are viewers.  The role lapses only after ``operator_timeout`` (5 s)
+without any message from its holder, with a warning to every client at ``lapse_warning`` (2 s);
+the displaced holder is then told so in a refusal of what it sends.  E-STOP is accepted from
+every client, also one that has not said ``hello`` (an engine restarted under a client must still
+stop); where a token is set the ``estop`` must carry it.  A non-local bind needs CURVE keys
+(:mod:`app.net.security`).  Failed authentications are counted and throttled.  Once a second the
+loop checks itself: below 95 % of real time or more than 1 % of ticks late raises the
+``engine_slow`` alarm.
 """
 
 from __future__ import annotations
@@ -20,6 +36,7 @@ import contextlib
 import logging
 import math
 import secrets
+import sys
 import threading
 import time
 from collections import deque
@@ -87,6 +104,95 @@ class LoopStats:
         }
 
 
+# the loop sleeps until SPIN before its deadline and spins the rest (sleep overshoots by ~0.1 ms);
+# the I/O window shuts IO_MARGIN before the deadline, so the I/O thread waits (lock free) by then
+SPIN = 0.0002
+IO_MARGIN = 0.0003
+IO_SHARE = 0.1  # of a period the I/O thread is given when messages wait, even after a long tick
+RATE_LIMIT = 1000.0  # messages a second per client, sustained; the joystick sends 500 and pings 2
+RATE_BURST = 250  # messages a client may send at once
+INBOX_LIMIT = 1024  # commands and inputs waiting for the loop; past it, refused ("engine busy")
+
+
+class RateLimit:
+    """Token buckets per client: ``rate`` messages a second, bursts of ``burst``; the excess counted."""
+
+    def __init__(self, rate: float = RATE_LIMIT, burst: int = RATE_BURST, clients: int = 4096) -> None:
+        self.rate, self.burst, self.max_clients = rate, float(burst), clients
+        self.buckets: dict[bytes, list[float]] = {}  # ident -> [tokens, last refill time]
+        self.dropped: dict[bytes, int] = {}
+        self.total_dropped = 0
+
+    def allow(self, ident: bytes, now: float) -> bool:
+        b = self.buckets.get(ident)
+        if b is None:
+            if len(self.buckets) >= self.max_clients:  # identities are cheap to invent: forget, never grow
+                self.buckets.clear()
+                self.dropped.clear()
+            b = self.buckets[ident] = [self.burst, now]
+        b[0] = min(self.burst, b[0] + (now - b[1]) * self.rate)
+        b[1] = now
+        if b[0] >= 1.0:
+            b[0] -= 1.0
+            return True
+        self.dropped[ident] = self.dropped.get(ident, 0) + 1
+        self.total_dropped += 1
+        return False
+
+
+class Inbox:
+    """What the I/O thread hands the loop: E-STOPs apart, then commands and input in arrival order.
+
+    Bounded (``limit`` events; E-STOPs are never refused).  Consecutive inputs of one client with the
+    same buttons and device are coalesced to the newest: the loop takes the newest input per client
+    each tick, and a button edge (a press, a release, a stop button) always survives."""
+
+    def __init__(self, limit: int = INBOX_LIMIT) -> None:
+        self.limit = limit
+        self.lock = threading.Lock()
+        self.estops: list[tuple[float, int, str]] = []  # (receive time, tick at receipt, source)
+        self.events: list[tuple] = []
+        self.coalesced = 0
+        self.refused = 0
+
+    def estop(self, now: float, tick: int, source: str) -> None:
+        with self.lock:
+            self.estops.append((now, tick, source))
+
+    def put(self, event: tuple) -> bool:
+        with self.lock:
+            if len(self.events) >= self.limit:
+                self.refused += 1
+                return False
+            self.events.append(event)
+            return True
+
+    def put_input(self, ident: bytes, sample: InputSample, t_send: float | None) -> bool:
+        with self.lock:
+            last = self.events[-1] if self.events else None
+            if (
+                last is not None
+                and last[0] == "input"
+                and last[1] == ident
+                and last[2].buttons == sample.buttons
+                and last[2].device == sample.device
+            ):
+                self.events[-1] = ("input", ident, sample, t_send)
+                self.coalesced += 1
+                return True
+            if len(self.events) >= self.limit:
+                self.refused += 1
+                return False
+            self.events.append(("input", ident, sample, t_send))
+            return True
+
+    def take(self) -> tuple[list, list]:
+        with self.lock:
+            estops, self.estops = self.estops, []
+            events, self.events = self.events, []
+        return estops, events
+
+
 class EngineServer:
     """Serve a session over ZeroMQ at a fixed rate.
 
@@ -101,6 +207,9 @@ class EngineServer:
         State messages per second (default 50).
     token : str, optional
         Shared secret; required when ``bind`` is not a loopback or ipc address.
+    rate_limit, rate_burst : float, int
+        Per-client message budget (default 1000 a second, bursts of 250); the excess is dropped
+        unread and counted (``dropped`` in the state), except messages that may be an E-STOP.
     """
 
     def __init__(
@@ -116,6 +225,8 @@ class EngineServer:
         curve: ServerCurve | None = None,
         operator_secret: str | None = None,
         lapse_warning: float = 2.0,
+        rate_limit: float = RATE_LIMIT,
+        rate_burst: int = RATE_BURST,
     ) -> None:
         check_url(bind)
         if not 1.0 <= rate <= 1000.0:
@@ -136,6 +247,8 @@ class EngineServer:
         self.operator_timeout = operator_timeout
         self.lapse_warning = min(lapse_warning, operator_timeout)
         self.auth = AuthThrottle()
+        self.limits = RateLimit(rate_limit, rate_burst)
+        self.inbox = Inbox()
         self._displaced: dict[bytes, str] = {}  # former operators -> why they lost the role
         self._warned_silence = False
         self.client_timeout = client_timeout  # clients silent this long are forgotten (no ghosts pile up)
@@ -147,6 +260,15 @@ class EngineServer:
         self.pub = self.ctx.socket(zmq.PUB)
         self.pub.setsockopt(zmq.LINGER, 0)
         self.pub.setsockopt(zmq.SNDHWM, 1000)
+        # the loop's replies to commands go to the I/O thread (the only user of the request socket)
+        inproc = f"inproc://bosun-replies-{id(self):x}-{secrets.token_hex(4)}"
+        self._reply_in = self.ctx.socket(zmq.PULL)
+        self._reply_in.setsockopt(zmq.LINGER, 0)
+        self._reply_in.bind(inproc)
+        self._reply_out = self.ctx.socket(zmq.PUSH)
+        self._reply_out.setsockopt(zmq.LINGER, 0)
+        self._reply_out.setsockopt(zmq.SNDHWM, 10_000)
+        self._reply_out.connect(inproc)
         self.authenticator = None
         if curve is not None:
             self.authenticator = CurveAuthenticator(self.ctx, curve.clients_dir, self.auth)
@@ -162,12 +284,13 @@ class EngineServer:
             raise TransportError(f"cannot bind {bind}: {err}") from None
         self.url = self.router.getsockopt(zmq.LAST_ENDPOINT).decode()
         self.state_url = self.pub.getsockopt(zmq.LAST_ENDPOINT).decode()
-        self.clients: dict[bytes, ClientInfo] = {}
+        self.clients: dict[bytes, ClientInfo] = {}  # the I/O thread's book; the loop only reads it
         self.operator: bytes | None = None
         self.rejected = 0
         self.stats = LoopStats(self.dt)
+        self.estop_ticks: deque = deque(maxlen=10_000)  # ticks from an E-STOP's receipt to the tick that applied it
         self._stop = threading.Event()
-        self._pending_latency: tuple[float, int] | None = None
+        self._pending_latency: float | None = None
         self._log_sent = 0
         self._unknown_logged: dict[bytes, float] = {}
         self._limited: dict[str, float] = {}
@@ -176,13 +299,24 @@ class EngineServer:
         self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
         self.realtime_factor = 1.0
         self.late_fraction = 0.0
+        # the I/O window: the I/O thread runs Python only while the loop sleeps (see the module text)
+        self._window = threading.Condition()
+        self._window_end = math.inf  # perf_counter time the window closes; open until the loop runs
+        self._io_thread: threading.Thread | None = None
+        self._io_backlog = False  # the I/O thread's window closed on waiting messages
+        self.io_deferred = 0  # ticks started late to give the I/O thread its share
+        self._io_error: BaseException | None = None
 
-    # ------------------------------------------------------------------ protocol
+    # ------------------------------------------------------------------ I/O thread: the protocol
     def _reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
         fields: dict[str, Any] = {"re": re, "ok": ok}
         if error:
             fields["error"] = error[:1000]
         self.router.send_multipart([ident, encode("reply", **fields)], zmq.NOBLOCK)
+
+    def _note(self, level: str, text: str) -> None:
+        """A session log line from the I/O thread (the loop writes it: the session is the loop's)."""
+        self.inbox.put(("note", level, text))
 
     def _reject(self, ident: bytes, reason: str, re: str | None = None) -> None:
         self.rejected += 1
@@ -224,7 +358,7 @@ class EngineServer:
             self._lapse(f"the role lapsed after {self.operator_timeout:g} s without a message from {name}")
         elif not self._warned_silence:
             self._warned_silence = True
-            self.session.note(
+            self._note(
                 "warning",
                 f"operator {name} silent for {self.lapse_warning:g} s: the role lapses at {self.operator_timeout:g} s",
             )
@@ -241,7 +375,7 @@ class EngineServer:
         if len(self._displaced) > 1000:
             self._displaced.clear()
         self._displaced[ident] = why
-        self.session.note("warning", f"operator role free: {why}")  # its input went stale long ago: holding
+        self._note("warning", f"operator role free: {why}")  # its input went stale long ago: holding
 
     def _operator_alive(self, now: float) -> bool:
         if self.operator is None or self.operator not in self.clients:
@@ -265,10 +399,19 @@ class EngineServer:
         )
 
     def handle(self, ident: bytes, data: bytes, now: float) -> None:
-        """Validate and dispatch one message from a client; nothing a message does escapes the loop.
+        """Rate-limit, validate and dispatch one message from a client; nothing a message does escapes.
 
         Any exception a handler raises (a bug, a value the checks missed) becomes a refusal to that
-        client and one rate-limited log line; the engine keeps running and keeps its E-STOP."""
+        client and one rate-limited log line; the engine keeps running and keeps its E-STOP.  A client
+        over its budget has the message dropped unread, unless it may be an E-STOP (the word is in it)."""
+        if not self.limits.allow(ident, now) and b"estop" not in data:
+            if self.limits.dropped[ident] % 10_000 == 1:
+                self._log_limited(
+                    f"flood:{ident[:16]!r}",
+                    f"client {ident[:32]!r} over {self.limits.rate:g} messages/s: excess dropped "
+                    f"({self.limits.dropped[ident]} so far)",
+                )
+            return
         self._current_type = "invalid"
         try:
             self._handle(ident, data, now)
@@ -279,7 +422,7 @@ class EngineServer:
                 self._reply(ident, self._current_type, False, f"refused: internal error ({type(err).__name__})")
 
     def _log_limited(self, key: str, text: str, every: float = 5.0, note: bool = True) -> None:
-        """One log line per ``key`` and ``every`` seconds (the loop never floods its log)."""
+        """One log line per ``key`` and ``every`` seconds (neither thread ever floods the log)."""
         now = time.monotonic()
         if now - self._limited.get(key, -math.inf) >= every:
             if len(self._limited) > 1000:
@@ -287,8 +430,12 @@ class EngineServer:
             self._limited[key] = now
             log.warning("%s", text)
             if note:
-                with contextlib.suppress(Exception):
-                    self.session.note("warning", text[:1000])
+                self._note("warning", text[:1000])
+
+    def _estop(self, ident: bytes, source: str, now: float) -> None:
+        """Past every queue: the loop applies it first thing in its next tick, then confirms."""
+        self.inbox.estop(now, self.stats.ticks, source)
+        self._reply(ident, "estop", True)
 
     def _handle(self, ident: bytes, data: bytes, now: float) -> None:
         try:
@@ -307,12 +454,12 @@ class EngineServer:
                 if not self._token_ok(msg):
                     self._reject(ident, "estop with a wrong or missing token", re="estop")
                     return
-                self.session.estop(source=f"an unregistered client ({msg.get('reason', 'no reason')})")
-                self.estops += 1
-                self._reply(ident, "estop", True)
+                self._estop(ident, f"an unregistered client ({msg.get('reason', 'no reason')})", now)
                 return
             self.rejected += 1
             if now - self._unknown_logged.get(ident, -math.inf) > 5.0:  # a re-hello hint, not a log flood
+                if len(self._unknown_logged) > 1000:
+                    self._unknown_logged.clear()
                 self._unknown_logged[ident] = now
                 log.warning("%s from %r before hello: told to say hello", mtype, ident[:32])
             self._reply(ident, mtype, False, f"{mtype} before hello: say hello first (engine restarted?)")
@@ -322,21 +469,19 @@ class EngineServer:
             self.clients.pop(ident, None)
             if self.operator == ident:
                 self.operator = None
-                self.session.note("info", f"operator {client.name} left")
+                self._note("info", f"operator {client.name} left")
             return
         if mtype == "ping":
             self._reply(ident, "ping", True)
             return
         if mtype == "estop":
-            self.session.estop(source=client.name)
-            self.estops += 1
-            self._reply(ident, "estop", True)
+            self._estop(ident, client.name, now)
             return
         if mtype == "release_operator":
             if self.operator == ident:
                 self.operator = None
                 client.role = "viewer"
-                self.session.note("info", f"operator {client.name} released the role")
+                self._note("info", f"operator {client.name} released the role")
             self._reply(ident, mtype, True)
             return
         if mtype in OPERATOR_ONLY and ident != self.operator:
@@ -349,14 +494,161 @@ class EngineServer:
             return
         if mtype == "input":
             sample = InputSample(tuple(msg["axes"]), tuple(msg["buttons"]), msg["device"], now)
-            self.session.feed(sample, now)
-            if "t_send" in msg:
-                self._pending_latency = (msg["t_send"], msg["seq"])
+            if not self.inbox.put_input(ident, sample, msg.get("t_send")):
+                self.rejected += 1
             return
         if mtype == "device_lost":
-            self.session.feed(None, now, released=bool(msg.get("released", False)))
+            if not self.inbox.put(("lost", ident, bool(msg.get("released", False)), now)):
+                self.rejected += 1
             return
+        if not self.inbox.put(("command", ident, mtype, msg, client.name, now)):
+            self._reject(ident, f"{mtype}: engine busy ({self.inbox.limit} requests waiting); try again", re=mtype)
+
+    def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
+        if not self._token_ok(msg):
+            self._reject(ident, "hello with a wrong or missing token", re="hello")
+            return
+        role, note = "viewer", ""
+        name = _clean_name(msg["name"])
+        if msg["role"] == "operator" and not self._secret_ok(msg):
+            note = "the operator role of this engine belongs to the program that started it; joined as viewer"
+        elif msg["role"] == "operator":
+            if self.operator not in (None, ident) and not self._operator_alive(now):
+                self._lapse(f"the role lapsed after {self.operator_timeout:g} s of silence")
+            if self.operator in (None, ident):
+                self.operator = ident
+                self._displaced.pop(ident, None)
+                self._warned_silence = False
+                role = "operator"
+                # a new (or reconnected) operator starts disarmed: before any of its input reaches the loop
+                self.inbox.put(("operator", name))
+            else:
+                note = f"operator role is held by {self.clients[self.operator].name}; joined as viewer"
+        self.clients[ident] = ClientInfo(name, role, now)
+        self._note("info", f"{name} connected as {role}")
+        welcome: dict[str, Any] = {
+            "client_id": ident.decode(errors="replace")[:64],
+            "role": role,
+            "state_url": self.state_url,
+        }
+        if note:
+            welcome["note"] = note
+        self.router.send_multipart([ident, encode("welcome", **welcome)], zmq.NOBLOCK)
+
+    def _housekeeping(self, now: float) -> None:
+        """The operator's silence (warning, lapse) and clients silent for ``client_timeout`` forgotten."""
+        self._check_operator(now)
+        for ident in [i for i, c in self.clients.items() if now - c.last_seen > self.client_timeout]:
+            gone = self.clients.pop(ident)
+            if self.operator == ident:
+                self.operator = None
+            self._note("info", f"{gone.name} silent for {self.client_timeout:g} s: forgotten")
+
+    def _wait_window(self) -> None:
+        """Block (interpreter lock free) while the loop is in, or about to start, its tick.
+
+        A window shut for longer than a period and a millisecond means the loop overran or stalls in
+        a long command: the I/O thread then carries on (sharing the lock), so E-STOPs still come in."""
+        with self._window:
+            while not self._stop.is_set() and (now := time.perf_counter()) >= self._window_end:
+                if now - self._window_end > self.dt + 0.001:
+                    return
+                self._window.wait(0.001)
+
+    def _io_run(self) -> None:
+        """The I/O thread: requests in, replies out, the client book kept; Python only in I/O windows."""
+        poller = zmq.Poller()
+        poller.register(self.router, zmq.POLLIN)
+        poller.register(self._reply_in, zmq.POLLIN)
+        next_house = 0.0
         try:
+            while not self._stop.is_set():
+                ready = dict(poller.poll(5))
+                self._wait_window()
+                if self._reply_in in ready:
+                    for _ in range(1000):
+                        try:
+                            frames = self._reply_in.recv_multipart(zmq.NOBLOCK)
+                        except zmq.Again:
+                            break
+                        self.router.send_multipart(frames, zmq.NOBLOCK)
+                if self.router in ready:
+                    for _ in range(2000):
+                        if time.perf_counter() >= self._window_end:
+                            # messages still waiting: the loop leaves a share of the next period
+                            self._io_backlog = bool(self.router.getsockopt(zmq.EVENTS) & zmq.POLLIN)
+                            self._wait_window()
+                        try:
+                            frames = self.router.recv_multipart(zmq.NOBLOCK)
+                        except zmq.Again:
+                            self._io_backlog = False
+                            break
+                        now = time.monotonic()
+                        if len(frames) != 2:
+                            if self.limits.allow(frames[0] if frames else b"?", now):
+                                self._reject(frames[0] if frames else b"?", f"{len(frames)} frames; expected one")
+                            continue
+                        self.handle(frames[0], frames[1], now)
+                now = time.monotonic()
+                if now >= next_house:
+                    next_house = now + 0.02
+                    self._housekeeping(now)
+        except zmq.ZMQError as err:  # sockets closed under us at shutdown: nothing left to serve
+            if not self._stop.is_set():
+                self._io_error = err
+                log.error("engine I/O thread stopped: %s", err)
+        except Exception as err:  # a bug here must not leave a silent engine: STOP, say so, end the loop
+            self._io_error = err
+            log.exception("engine I/O thread failed")
+            self.inbox.estop(time.monotonic(), self.stats.ticks, f"the engine's I/O thread ({type(err).__name__})")
+
+    # ------------------------------------------------------------------ loop: applying what came in
+    def _send_reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
+        """A reply from the loop, through the I/O thread."""
+        fields: dict[str, Any] = {"re": re, "ok": ok}
+        if error:
+            fields["error"] = error[:1000]
+        with contextlib.suppress(zmq.ZMQError):
+            self._reply_out.send_multipart([ident, encode("reply", **fields)], zmq.NOBLOCK)
+
+    def _apply_inbox(self) -> None:
+        """E-STOPs first; then commands and input in arrival order.  An E-STOP that came after a
+        command in this batch is applied again after it (a ``reset`` sent before a STOP cannot undo it)."""
+        estops, events = self.inbox.take()
+        for _, tick, source in estops:
+            self.session.estop(source=source)
+            self.estops += 1
+            self.estop_ticks.append(self.stats.ticks - tick + 1)  # 1: the first tick after its receipt
+        for event in events:
+            kind = event[0]
+            if kind == "input":
+                _, ident, sample, t_send = event
+                if ident != self.operator:  # the role moved on after it came in
+                    continue
+                self.session.feed(sample, sample.t)
+                if t_send is not None:
+                    self._pending_latency = t_send
+            elif kind == "lost":
+                _, ident, released, t = event
+                if ident == self.operator:
+                    self.session.feed(None, t, released=released)
+            elif kind == "note":
+                self.session.note(event[1], event[2])
+            elif kind == "operator":
+                changed = getattr(self.session, "operator_changed", None)
+                if changed is not None:
+                    changed(event[1])
+            elif kind == "command":
+                _, ident, mtype, msg, name, t = event
+                self._command(ident, mtype, msg, name)
+                for t_recv, _, source in estops:
+                    if t_recv > t:
+                        self.session.estop(source=source)
+
+    def _command(self, ident: bytes, mtype: str, msg: dict[str, Any], name: str) -> None:
+        try:
+            if ident != self.operator:
+                raise CommandError(f"{mtype}: {name} is no longer the operator")
             if mtype == "set_robot":
                 self.session.set_robot(msg["robot"], msg.get("xml"))
             elif mtype == "set_solver":
@@ -370,7 +662,7 @@ class EngineServer:
             elif mtype == "ack_alarm":
                 alarms = getattr(self.session, "alarms", None)
                 n = alarms.ack(msg.get("key") or None) if alarms is not None else 0
-                self.session.note("info", f"{client.name} acknowledged {n} alarm{'s' if n != 1 else ''}")
+                self.session.note("info", f"{name} acknowledged {n} alarm{'s' if n != 1 else ''}")
             elif mtype in SCENE_MESSAGES:
                 handler = getattr(self.session, mtype, None)
                 if handler is None:
@@ -379,52 +671,13 @@ class EngineServer:
                 handler(**{k: v for k, v in msg.items() if k not in ("v", "type")})
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")
-            self._reply(ident, mtype, False, str(err))
+            self._send_reply(ident, mtype, False, str(err))
             return
-        self._reply(ident, mtype, True)
-
-    def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
-        if not self._token_ok(msg):
-            self._reject(ident, "hello with a wrong or missing token", re="hello")
+        except Exception as err:  # a bug in a handler: refused, logged, the loop goes on
+            self._log_limited("internal", f"{mtype} refused by an internal error: {type(err).__name__}: {err}")
+            self._send_reply(ident, mtype, False, f"refused: internal error ({type(err).__name__})")
             return
-        role, note = "viewer", ""
-        if msg["role"] == "operator" and not self._secret_ok(msg):
-            note = "the operator role of this engine belongs to the program that started it; joined as viewer"
-        elif msg["role"] == "operator":
-            if self.operator not in (None, ident) and not self._operator_alive(now):
-                self._lapse(f"the role lapsed after {self.operator_timeout:g} s of silence")
-            if self.operator in (None, ident):
-                self.operator = ident
-                self._displaced.pop(ident, None)
-                self._warned_silence = False
-                role = "operator"
-                changed = getattr(self.session, "operator_changed", None)
-                if changed is not None:  # a new (or reconnected) operator starts disarmed
-                    changed(_clean_name(msg["name"]))
-            else:
-                note = f"operator role is held by {self.clients[self.operator].name}; joined as viewer"
-        name = _clean_name(msg["name"])
-        self.clients[ident] = ClientInfo(name, role, now)
-        self.session.note("info", f"{name} connected as {role}")
-        welcome: dict[str, Any] = {
-            "client_id": ident.decode(errors="replace")[:64],
-            "role": role,
-            "state_url": self.state_url,
-        }
-        if note:
-            welcome["note"] = note
-        self.router.send_multipart([ident, encode("welcome", **welcome)], zmq.NOBLOCK)
-
-    def poll_requests(self, now: float, limit: int = 200) -> None:
-        for _ in range(limit):
-            try:
-                frames = self.router.recv_multipart(zmq.NOBLOCK)
-            except zmq.Again:
-                return
-            if len(frames) != 2:
-                self._reject(frames[0] if frames else b"?", f"{len(frames)} frames; expected a single message")
-                continue
-            self.handle(frames[0], frames[1], now)
+        self._send_reply(ident, mtype, True)
 
     def publish(self) -> None:
         snap = self.session.snapshot()
@@ -432,13 +685,13 @@ class EngineServer:
         snap["operator"] = op.name if op else ""
         snap["clients"] = len(self.clients)
         snap["rejected"] = self.rejected
+        snap["dropped"] = self.limits.total_dropped
         snap["rate"] = self.rate
         snap["engine_id"], snap["estops"] = self.engine_id, self.estops
         snap["realtime_factor"] = self.realtime_factor
         snap["late_fraction"] = self.late_fraction
         snap["auth_failures"] = self.auth.failures
-        holder = self.clients.get(self.operator) if self.operator else None
-        snap["operator_silent"] = round(time.monotonic() - holder.last_seen, 3) if holder else 0.0
+        snap["operator_silent"] = round(time.monotonic() - op.last_seen, 3) if op else 0.0
         self.pub.send(encode("state", state=snap), zmq.NOBLOCK)
         for e in self.session.log:
             if e.seq > self._log_sent:
@@ -455,11 +708,6 @@ class EngineServer:
         self.realtime_factor = ticks * self.dt / (now - start)
         self.late_fraction = missed / max(1, ticks)
         self._second = (now, self.stats.ticks, self.stats.missed)
-        for ident in [i for i, c in self.clients.items() if now - c.last_seen > self.client_timeout]:
-            gone = self.clients.pop(ident)
-            if self.operator == ident:
-                self.operator = None
-            self.session.note("info", f"{gone.name} silent for {self.client_timeout:g} s: forgotten")
         alarms = getattr(self.session, "alarms", None)
         if alarms is not None:
             slow = self.realtime_factor < 0.95 or self.late_fraction > 0.01
@@ -474,9 +722,8 @@ class EngineServer:
             )
 
     def step(self, now: float) -> None:
-        """One tick: requests, control, latency bookkeeping, publication."""
-        self.poll_requests(now)
-        self._check_operator(now)
+        """One tick: E-STOPs, inbox, control, latency bookkeeping, publication."""
+        self._apply_inbox()
         budget = 0.4 * self.dt
         try:
             self.session.tick(now, self.dt, solve_budget=budget)
@@ -485,47 +732,76 @@ class EngineServer:
                 self.session.estop(source=f"the engine itself ({type(err).__name__} in the control step)")
             self._log_limited("tick", f"control step failed: {type(err).__name__}: {err}; E-STOP latched")
         if self._pending_latency is not None:
-            t_send, _ = self._pending_latency
-            self.stats.latencies.append(time.monotonic() - t_send)
+            self.stats.latencies.append(time.monotonic() - self._pending_latency)
             self._pending_latency = None
         if self.stats.ticks % self.publish_every == 0:
             self.publish()
 
+    def _open_window(self, until: float) -> None:
+        with self._window:
+            self._window_end = until
+            self._window.notify()
+
     def run(self, duration: float | None = None) -> LoopStats:
-        """Run until :meth:`stop` (or for ``duration`` seconds)."""
+        """Run until :meth:`stop` (or for ``duration`` seconds); the I/O thread lives as long."""
+        self._stop.clear()
+        if sys.getswitchinterval() > 0.0005:  # a thread wanting the lock waits at most this long (5 ms default)
+            sys.setswitchinterval(0.0005)
+        self._io_thread = threading.Thread(target=self._io_run, name="bosun-engine-io", daemon=True)
+        self._io_thread.start()
         next_t = time.perf_counter()
         end = math.inf if duration is None else next_t + duration
         self._second = (time.monotonic(), self.stats.ticks, self.stats.missed)  # health counts from the loop's start
         last_start = None
-        while not self._stop.is_set() and next_t < end:
-            start = time.perf_counter()
-            if last_start is not None:
-                self.stats.periods.append(start - last_start)
-            last_start = start
-            now = time.monotonic()
-            self.step(now)
-            self.stats.ticks += 1
-            self._health(now)
-            done = time.perf_counter()
-            self.stats.work.append(done - start)
-            next_t += self.dt
-            if done > next_t:
-                self.stats.missed += 1
-                next_t = done  # do not try to catch up with a burst of ticks
-            remaining = next_t - time.perf_counter()
-            if remaining > 0.0005:
-                time.sleep(remaining - 0.0004)
-            while time.perf_counter() < next_t:
-                pass
+        try:
+            while not self._stop.is_set() and next_t < end:
+                start = time.perf_counter()
+                if last_start is not None:
+                    self.stats.periods.append(start - last_start)
+                last_start = start
+                now = time.monotonic()
+                self.step(now)
+                self.stats.ticks += 1
+                self._health(now)
+                done = time.perf_counter()
+                self.stats.work.append(done - start)
+                next_t += self.dt
+                if done > next_t:
+                    self.stats.missed += 1
+                    next_t = done  # do not try to catch up with a burst of ticks
+                shut = next_t - IO_MARGIN
+                if self._io_backlog and shut < done + IO_SHARE * self.dt:
+                    # messages wait and this period leaves them no room: the next tick starts late
+                    # (a missed deadline) rather than leave an E-STOP unread behind them
+                    shut = done + IO_SHARE * self.dt
+                    next_t = shut + IO_MARGIN
+                    self.stats.missed += 1
+                    self.io_deferred += 1
+                self._open_window(shut)
+                remaining = next_t - time.perf_counter()
+                if remaining > SPIN:
+                    time.sleep(remaining - SPIN)
+                while time.perf_counter() < next_t:
+                    pass
+        finally:
+            self._stop.set()
+            self._open_window(math.inf)
+            self._io_thread.join(timeout=5)
         return self.stats
 
     def stop(self) -> None:
         self._stop.set()
 
     def close(self) -> None:
-        for s in (getattr(self, "router", None), getattr(self, "pub", None)):
-            if s is not None:
-                s.close(0)
+        if hasattr(self, "_stop"):
+            self._stop.set()
+        io = getattr(self, "_io_thread", None)
+        if io is not None and io.is_alive():
+            io.join(timeout=5)
+        for s in ("router", "pub", "_reply_in", "_reply_out"):
+            sock = getattr(self, s, None)
+            if sock is not None:
+                sock.close(0)
         if getattr(self, "authenticator", None) is not None:
             self.authenticator.stop()
             self.authenticator = None

@@ -79,7 +79,22 @@ class JacobianSolver(Solver):
     def damped_step(
         self, J: NDArray[np.float64], e: NDArray[np.float64], q: NDArray[np.float64], avoid: bool = True
     ) -> NDArray[np.float64]:
-        """One DLS step with active-set clamping at the joint limits."""
+        """One DLS step with active-set clamping at the joint limits (compiled: the same steps in
+        :func:`app.models.kernels.damped_step`, unless ``robot.use_kernels`` is False)."""
+        if getattr(self.robot, "use_kernels", False):
+            return kernels.damped_step(
+                np.ascontiguousarray(J, dtype=float),
+                np.ascontiguousarray(e, dtype=float),
+                np.ascontiguousarray(q, dtype=float),
+                self.robot.lower,
+                self.robot.upper,
+                self.max_step,
+                float(self.lambda_max),
+                float(self.epsilon),
+                float(self.e_ref),
+                float(self.k_avoid),
+                bool(avoid),
+            )
         n = J.shape[1]
         active = np.ones(n, dtype=bool)
         lo, hi = self.robot.lower, self.robot.upper

@@ -312,6 +312,9 @@ def warm_up(progress=None) -> float:
         lambda: descend_to(
             *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
         ),
+        lambda: damped_step(
+            np.ones((3, n)), np.ones(3), np.zeros(n), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, False
+        ),
         lambda: select_candidate(
             *args,
             comau_candidates(0.1, 0.5, 1.0, 0.2, 1.0, eye, np.ones(3), 0.0, np.ones(2))[0],
