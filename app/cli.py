@@ -607,11 +607,23 @@ def _machine() -> str:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from app.analysis.ik_studies import bench_ik
+    from app.models import kernels
     from app.models.registry import list_robots, load_robot, load_spec
 
     names = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
     robots = [load_robot(n) for n in names]
+    kernels.warm_up()  # compiled (or loaded) before the clock runs, never inside a timed solve
     rows = bench_ik(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik"))
+    peers_missing: list[str] = []
+    if args.peers:
+        from app.analysis.ik_peers import available, bench_peers
+
+        peers_missing = [p for p, ok in available().items() if not ok]
+        rows += bench_peers(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik peers"))
+        ref = {(r["robot"], r["start"]): r["median_ms"] for r in rows if r["solver"] == "rtb ik_LM"}
+        for r in rows:
+            base = ref.get((r["robot"], r["start"]))
+            r["ratio_to_rtb_cpp"] = r["median_ms"] / base if base else None
     if args.json:
         _print_json(
             {
@@ -620,6 +632,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
                 "kernels": _kernels_on(),
                 "targets": args.targets,
                 "seed": args.seed,
+                "peers_missing": peers_missing,
                 "results": rows,
             }
         )
@@ -629,25 +642,31 @@ def cmd_bench(args: argparse.Namespace) -> int:
         "1 cm apart from the previous solution; success = error < 1 mm inside the limits; budget 100 ms"
     )
     print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
-    print(
-        _table(
-            ["robot", "solver", "start", "median [ms]", "p95 [ms]", "p99 [ms]", "success", "own test", "median err"],
-            [
-                [
-                    r["robot"],
-                    r["solver"],
-                    r["start"],
-                    f"{r['median_ms']:.3f}",
-                    f"{r['p95_ms']:.2f}",
-                    f"{r['p99_ms']:.2f}",
-                    f"{r['success_rate']:.1%}",
-                    f"{r['own_success_rate']:.1%}",
-                    f"{r['median_error_m']:.1e}",
-                ]
-                for r in rows
-            ],
-        )
-    )
+    if peers_missing:
+        print(f"peers not installed (pip install -e '.[bench]'): {', '.join(peers_missing)}")
+    header = ["robot", "solver", "start", "median [ms]", "p95 [ms]", "p99 [ms]", "success", "own test", "median err"]
+    if args.peers:
+        header.append("× RTB C++")
+
+    def row(r: dict) -> list[str]:
+        cells = [
+            r["robot"],
+            r["solver"],
+            r["start"],
+            f"{r['median_ms']:.3f}",
+            f"{r['p95_ms']:.2f}",
+            f"{r['p99_ms']:.2f}",
+            f"{r['success_rate']:.1%}",
+            f"{r['own_success_rate']:.1%}" if "own_success_rate" in r else "-",
+            f"{r['median_error_m']:.1e}",
+        ]
+        if args.peers:
+            ratio = r.get("ratio_to_rtb_cpp")
+            cells.append(f"{ratio:.2f}" if ratio is not None else "-")
+        return cells
+
+    rows.sort(key=lambda r: (r["robot"], r["start"]))
+    print(_table(header, [row(r) for r in rows]))
     return 0
 
 
@@ -998,6 +1017,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
     b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
     b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
+    b.add_argument(
+        "--peers",
+        action="store_true",
+        help="also robotics-toolbox-python (ik_LM, ikine_LM) and ikpy on the same targets (extra 'bench')",
+    )
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench)
     b = bench.add_parser("loop", help="engine tick period, jitter, missed deadlines and input latency")

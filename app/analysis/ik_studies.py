@@ -364,6 +364,15 @@ def warm_path(robot, n: int, rng: np.random.Generator, step: float = 0.01) -> ND
     return np.array(points[:n])
 
 
+def bench_targets(robot, mode: str, targets: int, seed: int) -> NDArray[np.float64]:
+    """The benchmark's targets: ``cold``, the FK of configurations drawn uniformly inside the joint
+    limits (reachable by construction); ``warm``, a tool path with targets 1 cm apart."""
+    rng = np.random.default_rng(seed)
+    if mode == "cold":
+        return robot.position(rng.uniform(robot.lower, robot.upper, size=(targets, robot.n_joints)))
+    return warm_path(robot, targets, rng)
+
+
 def bench_ik(
     robots: list,
     *,
@@ -385,11 +394,7 @@ def bench_ik(
     jobs = [(r, s, mode) for r in robots for s in solvers_for(r) for mode in ("cold", "warm")]
     rows = []
     for j, (robot, name, mode) in enumerate(jobs):
-        rng = np.random.default_rng(seed)
-        if mode == "cold":
-            X = robot.position(rng.uniform(robot.lower, robot.upper, size=(targets, robot.n_joints)))
-        else:
-            X = warm_path(robot, targets, rng)
+        X = bench_targets(robot, mode, targets, seed)
         solver = make_solver(name, robot, seed=seed)
         times, ok, own, err = [], [], [], []
         q_prev = None
