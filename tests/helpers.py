@@ -10,6 +10,10 @@ def random_q(robot, rng: np.random.Generator, n: int) -> np.ndarray:
     return rng.uniform(robot.lower, robot.upper, size=(n, robot.n_joints))
 
 
+# every GUI test waits this long for a condition before failing (busy 2-core CI: issue 14, item 5)
+GUI_WAIT = 30_000  # ms
+
+
 def wait_for(client, predicate, timeout: float = 8.0) -> dict:
     """The first state snapshot (from a protocol Client) that satisfies predicate, within timeout [s]."""
     import time

@@ -16,6 +16,7 @@ from PyQt5.QtCore import QSettings
 
 from app.engine.server import EngineServer
 from app.engine.session import Session
+from tests.helpers import GUI_WAIT
 from ui.csv_logger import StateCsvLogger
 from ui.glprobe import gl_available
 from ui.link import EngineLink
@@ -40,7 +41,7 @@ def window(qtbot, engine, tmp_path):
     win = MainWindow(link, settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat), dialogs=False)
     qtbot.addWidget(win)
     win.show()
-    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=5000)
+    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
     yield win
     win.close()
 
@@ -53,7 +54,7 @@ def hold_enable(qtbot, window, stick=None):
     stick.release_all()
     qtbot.wait(150)
     stick.key(Qt.Key_Shift, True)
-    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=GUI_WAIT)
 
 
 def test_fallback_2d_view_when_gl_is_unavailable(qtbot):
@@ -68,7 +69,7 @@ def test_choosing_a_robot_loads_it_in_engine_and_view(qtbot, window):
     combo = window.teleop.robot
     combo.setCurrentText("scara")
     combo.activated.emit(combo.currentIndex())
-    qtbot.waitUntil(lambda: window.teleop.state["robot"] == "scara", timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["robot"] == "scara", timeout=GUI_WAIT)
     qtbot.wait(100)
     _, _, _, links, _, _ = window.teleop.view.plots["top"]
     x, _ = links.getData()
@@ -78,20 +79,20 @@ def test_choosing_a_robot_loads_it_in_engine_and_view(qtbot, window):
 
 def test_mode_and_solver_reach_the_engine(qtbot, window):
     window.teleop.mode_pos.click()
-    qtbot.waitUntil(lambda: window.teleop.state["mode"] == "position", timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["mode"] == "position", timeout=GUI_WAIT)
     solver = window.teleop.solver
     solver.setCurrentText("ga")
     solver.activated.emit(solver.currentIndex())
-    qtbot.waitUntil(lambda: window.teleop.state["solver"] == "ga", timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["solver"] == "ga", timeout=GUI_WAIT)
 
 
 def test_virtual_stick_moves_the_plotted_tool_point(qtbot, window):
     plots = window.teleop.plots
-    qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=5000)
+    qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=GUI_WAIT)
     x0 = plots.ring.view()[-1, 7]
     hold_enable(qtbot, window)
     window.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: plots.ring.view()[-1, 7] - x0 > 0.05, timeout=5000)
+    qtbot.waitUntil(lambda: plots.ring.view()[-1, 7] - x0 > 0.05, timeout=GUI_WAIT)
     window.teleop.stick.pad.set_position(0.0, 0.0, False)
     assert plots.frames_drawn > 0
 
@@ -113,11 +114,11 @@ def test_keyboard_drives_the_stick(qtbot, window):
 
 def test_stop_latches_and_reset_clears(qtbot, window):
     window.status.stop.click()
-    qtbot.waitUntil(lambda: window.teleop.state["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["flags"]["estop"], timeout=GUI_WAIT)
     assert window.status.latched.text() == "E-STOP LATCHED" and window.status.reset.isEnabled()
     assert window.status.lights["plant"].state == "error"
     window.status.reset.click()
-    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["estop"], timeout=GUI_WAIT)
     assert window.status.latched.text() == ""
 
 
@@ -125,7 +126,7 @@ def test_invalid_xml_gives_error_and_keeps_robot(qtbot, window, tmp_path):
     bad = tmp_path / "broken_arm.xml"
     bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>')
     window.teleop.load_robot_file(str(bad))
-    qtbot.waitUntil(lambda: len(window.messages) > 0, timeout=5000)
+    qtbot.waitUntil(lambda: len(window.messages) > 0, timeout=GUI_WAIT)
     title, message = window.messages[-1]
     assert title == "Robot not loaded" and "broken_arm.xml:1: schema" in message
     qtbot.wait(200)
@@ -137,7 +138,7 @@ def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     window.teleop.log_path.setText(str(path))
     window.teleop.log_duration.setValue(0.0)  # until stopped
     window.teleop.start_logger()
-    qtbot.waitUntil(lambda: window.teleop.logger is not None and window.teleop.logger.rows >= 10, timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.logger is not None and window.teleop.logger.rows >= 10, timeout=GUI_WAIT)
     window.teleop.stop_logger()
     with open(path) as f:
         rows = list(csv.reader(f))
@@ -189,9 +190,9 @@ def test_lost_engine_connection_is_reported(qtbot, engine, tmp_path):
     link = EngineLink(engine.url, lost_after=0.5)
     win = MainWindow(link, settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat), dialogs=False)
     qtbot.addWidget(win)
-    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=5000)
+    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
     engine.stop()
-    qtbot.waitUntil(lambda: any(t == "Engine connection lost" for t, _ in win.messages), timeout=5000)
+    qtbot.waitUntil(lambda: any(t == "Engine connection lost" for t, _ in win.messages), timeout=GUI_WAIT)
     assert win.status.lights["engine"].state == "error"
     win.close()
 
@@ -201,19 +202,19 @@ def test_unplugged_joystick_is_reported(qtbot, window):
 
     vj = VirtualJoystick(n_axes=4, n_buttons=8)
     try:
-        qtbot.waitUntil(lambda: window.teleop.device.count() == 2, timeout=5000)
+        qtbot.waitUntil(lambda: window.teleop.device.count() == 2, timeout=GUI_WAIT)
         window.teleop.device.setCurrentIndex(1)
         window.teleop.device.activated.emit(1)
         vj.set_button(0, True)
         qtbot.waitUntil(
-            lambda: window.teleop.state["flags"]["device_name"] != "on-screen stick / keyboard", timeout=5000
+            lambda: window.teleop.state["flags"]["device_name"] != "on-screen stick / keyboard", timeout=GUI_WAIT
         )
     finally:
         vj.detach()
-    qtbot.waitUntil(lambda: "unplugged" in window.status.log_view.toPlainText(), timeout=5000)
+    qtbot.waitUntil(lambda: "unplugged" in window.status.log_view.toPlainText(), timeout=GUI_WAIT)
     # the GUI falls back to the on-screen stick, which nobody holds: the deadman is off and the robot holds
-    qtbot.waitUntil(lambda: window.teleop.inputs.choice == "on-screen stick / keyboard", timeout=5000)
-    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.inputs.choice == "on-screen stick / keyboard", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=GUI_WAIT)
     qtbot.wait(300)
     p = np.array(window.teleop.state["tool"])
     qtbot.wait(300)
@@ -272,13 +273,13 @@ def test_arrow_keys_drive_the_tool(qtbot, window):
     window.activateWindow()
     window.tabs.setFocus()
     plots = window.teleop.plots
-    qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=5000)
+    qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=GUI_WAIT)
     y0 = window.teleop.state["tool"][1]
     qtbot.wait(150)  # neutral and released first
     qtbot.keyPress(window.tabs, Qt.Key_Shift)
-    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=GUI_WAIT)
     qtbot.keyPress(window.tabs, Qt.Key_Up)
-    qtbot.waitUntil(lambda: window.teleop.state["tool"][1] - y0 > 0.05, timeout=5000)
+    qtbot.waitUntil(lambda: window.teleop.state["tool"][1] - y0 > 0.05, timeout=GUI_WAIT)
     qtbot.keyRelease(window.tabs, Qt.Key_Up)
     qtbot.keyRelease(window.tabs, Qt.Key_Shift)
-    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=GUI_WAIT)

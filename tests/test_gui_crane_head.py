@@ -12,6 +12,7 @@ from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.transport import Client, TransportError
+from tests.helpers import GUI_WAIT
 from ui.link import EngineLink
 from ui.main_window import MainWindow
 from ui.marine_tab import SceneView2D
@@ -68,7 +69,7 @@ def test_tab_starts_its_engine_and_plots_live(qtbot, window):
     assert tab.link is None and not tab.mode.isEnabled()
     win.tabs.setCurrentWidget(tab)  # first show connects
     assert len(made) == 1 and tab.mode.isEnabled()
-    qtbot.waitUntil(lambda: tab.hull is not None and tab.ring.i > 20, timeout=10000)
+    qtbot.waitUntil(lambda: tab.hull is not None and tab.ring.i > 20, timeout=GUI_WAIT)
     assert isinstance(tab.scene, SceneView2D)
     assert tab.hull is not None and len(tab.hull["points"]) > 50
     x, y = tab.c_ec.getData()
@@ -85,28 +86,28 @@ def test_sea_and_mode_reach_the_engine(qtbot, window):
     win, _ = window
     tab = win.crane_head
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     tab.spectrum.setCurrentText("torsethaugen")
     tab.hs.setValue(2.0)
     tab.tp.setValue(8.0)
     tab.heading.setValue(135)
     tab.apply_sea.click()
-    qtbot.waitUntil(lambda: tab.state["sea"]["spectrum"] == "torsethaugen", timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["sea"]["spectrum"] == "torsethaugen", timeout=GUI_WAIT)
     assert tab.state["sea"]["hs"] == 2.0 and tab.state["sea"]["heading"] == 135.0
     tab.mode.setCurrentText("cooperative")
     tab.mode.activated.emit(tab.mode.currentIndex())  # what the operator's pick in the list emits
-    qtbot.waitUntil(lambda: tab.state["tac_mode"] == "cooperative", timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["tac_mode"] == "cooperative", timeout=GUI_WAIT)
 
 
 def test_breaking_sea_is_refused_with_a_message(qtbot, window):
     win, _ = window
     tab = win.crane_head
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     tab.hs.setValue(12.0)
     tab.tp.setValue(5.0)
     tab.apply_sea.click()
-    qtbot.waitUntil(lambda: any("steeper than a sea" in m for _, m in win.messages), timeout=5000)
+    qtbot.waitUntil(lambda: any("steeper than a sea" in m for _, m in win.messages), timeout=GUI_WAIT)
     assert tab.state["sea"]["hs"] == 3.0  # the engine kept its sea
 
 
@@ -114,18 +115,18 @@ def test_stop_freezes_the_head_and_reset_holds_until_a_mode_is_chosen(qtbot, win
     win, _ = window
     tab = win.crane_head
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None and bool(tab.state.get("sample")), timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None and bool(tab.state.get("sample")), timeout=GUI_WAIT)
     win.status.stop.click()
-    qtbot.waitUntil(lambda: tab.state["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["estop"], timeout=GUI_WAIT)
     a1 = tab.state["sample"]["alpha"]
     qtbot.wait(300)
     assert tab.state["sample"]["alpha"] == a1 and "E-STOP latched" in tab.readout.text()
     win.status.reset.click()
-    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=GUI_WAIT)
     qtbot.wait(500)  # issue 12 item 2: a reset does not restart the compensation by itself
     assert tab.state["sample"]["alpha"] == a1 and tab.state["holding"] and "HOLDING" in tab.readout.text()
     tab.mode.activated.emit(tab.mode.findText("tac"))  # the operator chooses the mode again
-    qtbot.waitUntil(lambda: tab.state["sample"]["alpha"] != a1, timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["sample"]["alpha"] != a1, timeout=GUI_WAIT)
 
 
 def test_engine_that_does_not_start_is_reported(qtbot, engines, tmp_path):

@@ -11,6 +11,7 @@ from PyQt5.QtCore import QSettings
 from app.engine.lab_session import LabSession
 from app.engine.server import EngineServer
 from app.engine.session import Session
+from tests.helpers import GUI_WAIT
 from ui.lab_tab import LabScene2D
 from ui.link import EngineLink
 from ui.main_window import MainWindow
@@ -55,52 +56,54 @@ def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
     assert tab.link is None and not tab.tabs.isEnabled()
     win.tabs.setCurrentWidget(tab)
     assert len(made) == 1 and tab.tabs.isEnabled()
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     assert isinstance(tab.scene, LabScene2D)
     em1500 = tab.platforms["em1500"]
     assert "SETTLED" in em1500.status.text() and not em1500.buttons["engage"].isEnabled()
     em1500.buttons["neutral"].click()
-    qtbot.waitUntil(lambda: "NEUTRAL" in em1500.status.text() and em1500.buttons["engage"].isEnabled(), timeout=30000)
+    qtbot.waitUntil(
+        lambda: "NEUTRAL" in em1500.status.text() and em1500.buttons["engage"].isEnabled(), timeout=GUI_WAIT
+    )
     # sine generator: 0.1 m heave at 0.5 Hz
     em1500.source.setCurrentIndex(0)
     em1500.gen[2][0].setValue(0.1)
     em1500.gen[2][1].setValue(0.5)
     em1500.apply.click()
-    qtbot.waitUntil(lambda: tab.state["platforms"][1]["source"] == "generator", timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["platforms"][1]["source"] == "generator", timeout=GUI_WAIT)
     em1500.buttons["engage"].click()
-    qtbot.waitUntil(lambda: "ENGAGED" in em1500.status.text() and not em1500.apply.isEnabled(), timeout=10000)
-    qtbot.waitUntil(lambda: em1500.ring.i > 30, timeout=15000)
+    qtbot.waitUntil(lambda: "ENGAGED" in em1500.status.text() and not em1500.apply.isEnabled(), timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: em1500.ring.i > 30, timeout=GUI_WAIT)
     qtbot.wait(2500)
     z = em1500.ring.view()[:, 3]
     assert np.nanmax(np.abs(z)) > 0.02  # it heaves
     assert all(0 <= b.value() <= 1000 for b in em1500.leg_bars)
     # VVMC on: Comau and winch in MOTION_COMP, reported back by the engine
     tab.vvmc.click()
-    qtbot.waitUntil(lambda: tab.state["vvmc"] and tab.state["comau"]["mode"] == "motion_comp", timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["vvmc"] and tab.state["comau"]["mode"] == "motion_comp", timeout=GUI_WAIT)
     assert tab.comau_mode.currentText() == "MOTION_COMP" and tab.winch_mode.currentText() == "MOTION_COMP"
     # the robot first travels to the work point (EM8000 is still SETTLED, 0.9 m low), then holds it
-    qtbot.waitUntil(lambda: np.linalg.norm(tab.state["tool_error_b2"]) < 0.01, timeout=20000)
+    qtbot.waitUntil(lambda: np.linalg.norm(tab.state["tool_error_b2"]) < 0.01, timeout=GUI_WAIT)
     # STOP: everything brakes to rest and commands are refused until reset
     win.estop()
-    qtbot.waitUntil(lambda: tab.state["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["estop"], timeout=GUI_WAIT)
     qtbot.wait(1500)
     assert np.abs(tab.state["platforms"][1]["eta_dot"]).max() < 1e-9
     win.reset()
-    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=GUI_WAIT)
 
 
 def test_bad_time_series_is_refused_with_a_dialog(qtbot, window, tmp_path):
     win, _ = window
     tab = win.motion_lab
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     bad = tmp_path / "waves.csv"
     bad.write_text("t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,0,0,0,0,0\n0.5,0,0,0,0,0,0\n")
     p = tab.platforms["em8000"]
     p.source.setCurrentIndex(3)
     p.load_csv(str(bad))
     p.apply.click()
-    qtbot.waitUntil(lambda: any("does not increase" in m for _, m in win.messages), timeout=5000)
+    qtbot.waitUntil(lambda: any("does not increase" in m for _, m in win.messages), timeout=GUI_WAIT)
     title, msg = next((t, m) for t, m in win.messages if "does not increase" in m)
     assert title == "Motion-Lab" and "waves.csv:4" in msg
     assert tab.state["platforms"][0]["source"] == "generator"  # nothing changed

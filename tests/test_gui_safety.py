@@ -21,7 +21,7 @@ from PyQt5.QtWidgets import QApplication
 
 from app.engine.server import EngineServer
 from app.engine.session import Session
-from tests.helpers import process_running
+from tests.helpers import GUI_WAIT, process_running
 from ui.engine_process import free_port
 from ui.link import EngineLink
 from ui.main_window import MainWindow
@@ -91,7 +91,7 @@ def rig(qtbot, tmp_path):
     qtbot.addWidget(win)
     win.show()
     win.activateWindow()
-    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
     yield win, teleop
     win.close()
     teleop.kill()
@@ -114,7 +114,7 @@ def arm(qtbot, win, stick=None, flags=lambda w: w.teleop.state["flags"]):
     qtbot.wait(150)
     stick.key(Qt.Key_Shift, True)
     try:
-        qtbot.waitUntil(lambda: flags(win)["armed"], timeout=5000)
+        qtbot.waitUntil(lambda: flags(win)["armed"], timeout=GUI_WAIT)
     except Exception:
         raise AssertionError(f"not armed: engine flags {flags(win)}, GUI stick {stick.values()}") from None
 
@@ -128,18 +128,18 @@ def key(widget, k, press=True, autorep=False):
 def test_item1_10_engine_restart_lost_shown_then_reconnect_and_stop_confirmed(qtbot, rig):
     win, teleop = rig
     teleop.kill()
-    qtbot.waitUntil(lambda: win.status.lights["engine"].state == "error", timeout=5000)
+    qtbot.waitUntil(lambda: win.status.lights["engine"].state == "error", timeout=GUI_WAIT)
     assert "LOST" in win.status.lights["engine"].text()
     assert win.status.lights["input"].state == "unknown" and win.status.lights["plant"].state == "unknown"
     assert win.teleop.plots.glw.graphicsEffect() is not None  # greyed
     assert "ENGINE LOST" in win.banner.text()
     assert any(a["key"] == "lost:teleop" and a["active"] for a in win.gui_alarms.snapshot())
     teleop.start()  # the same URL, a new engine: it knows nothing of the GUI
-    qtbot.waitUntil(lambda: win.status.lights["engine"].state == "ok", timeout=10000)
+    qtbot.waitUntil(lambda: win.status.lights["engine"].state == "ok", timeout=GUI_WAIT)
     assert win.teleop.plots.glw.graphicsEffect() is None
     assert win.link.role == "operator"  # asked for again and granted
     win.status.stop.click()
-    qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=5000)
+    qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=GUI_WAIT)
     assert state(win)["flags"]["estop"] and "E-STOP LATCHED" in win.banner.text()
 
 
@@ -149,12 +149,12 @@ def test_item1_estop_not_confirmed_raises_an_alarm(qtbot, rig):
     win.estop()
     qtbot.waitUntil(
         lambda: any(a["key"] == "estop_unconfirmed:teleop" and a["active"] for a in win.gui_alarms.snapshot()),
-        timeout=3000,
+        timeout=GUI_WAIT,
     )
     assert "NOT CONFIRMED" in win.banner.text()
     assert "confirmed by" not in log_text(win)
     teleop.start()  # back: the resent estop latches it, and only then is it confirmed
-    qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=10000)
+    qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=GUI_WAIT)
     assert state(win)["flags"]["estop"]
 
 
@@ -164,21 +164,21 @@ def test_item2_error_and_file_dialog_leave_stop_live(qtbot, rig, tmp_path):
     bad = tmp_path / "broken_arm.xml"
     bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>')
     win.teleop.load_robot_file(str(bad))
-    qtbot.waitUntil(lambda: win.message_bar.isVisible(), timeout=5000)
+    qtbot.waitUntil(lambda: win.message_bar.isVisible(), timeout=GUI_WAIT)
     assert "broken_arm.xml:1" in win.message_bar.text.text()
     assert QApplication.activeModalWidget() is None  # nothing modal: no dialog can take STOP away
     win.teleop.choose_xml()  # the file chooser, open and focused
     dlg = win.teleop.file_dialog
-    qtbot.waitUntil(dlg.isVisible, timeout=5000)
+    qtbot.waitUntil(dlg.isVisible, timeout=GUI_WAIT)
     assert not dlg.isModal() and QApplication.activeModalWidget() is None
     focus = dlg.focusWidget() or dlg
     key(focus, Qt.Key_Space)  # Space in the dialog is STOP, not a button press
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
     assert dlg.isVisible()
     win.reset()
-    qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=GUI_WAIT)
     win.status.stop.click()  # the button too, with the dialog still open
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
     dlg.close()
 
 
@@ -187,12 +187,12 @@ def test_item3_reset_leaves_the_lab_where_it_stands(qtbot, rig):
     win, _ = rig
     tab = win.motion_lab
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     before = tab.state
     win.status.stop.click()
-    qtbot.waitUntil(lambda: tab.state["estop"] and win.status.reset.isEnabled(), timeout=5000)
+    qtbot.waitUntil(lambda: tab.state["estop"] and win.status.reset.isEnabled(), timeout=GUI_WAIT)
     win.status.reset.click()
-    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=GUI_WAIT)
     qtbot.wait(2000)
     after = tab.state
     for p0, p1 in zip(before["platforms"], after["platforms"], strict=True):
@@ -212,13 +212,13 @@ def test_item4_held_arrow_on_the_tab_bar_does_not_switch_tabs_or_latch(qtbot, ri
     for _ in range(10):
         key(bar, Qt.Key_Right, autorep=True)  # auto-repeat of a held key
     assert win.tabs.currentIndex() == 0  # the tab bar never saw the arrows
-    qtbot.waitUntil(lambda: state(win)["flags"]["enabled"] and abs(state(win)["signal"][0]) > 0.5, timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["flags"]["enabled"] and abs(state(win)["signal"][0]) > 0.5, timeout=GUI_WAIT)
     win.tabs.setCurrentIndex(1)  # a tab change releases every key, whatever the key release did
     assert win.teleop.stick.values() == (0.0, 0.0, 0.0, 0.0, False)
     for _ in range(5):
         key(bar, Qt.Key_Right, autorep=True)  # still held on the Analysis tab: it must not walk the tabs
     assert win.tabs.currentIndex() == 1 and win.crane_head.link is None
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
     qtbot.wait(300)
     q = np.array(state(win)["q"])
     qtbot.wait(500)
@@ -231,24 +231,24 @@ def test_item4_window_deactivation_releases_keys(qtbot, rig):
     win.teleop.stick.key(Qt.Key_Up, True)
     QApplication.sendEvent(win, QEvent(QEvent.WindowDeactivate))
     assert win.teleop.stick.values()[4] is False and not win.teleop.stick.keys
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
 
 
 # ----------------------------------------------------------------------------- item 5
 def test_item5_position_mode_returns_to_x_w_on_release_while_enabled(qtbot, rig):
     win, _ = rig
     win.teleop.set_mode("position")
-    qtbot.waitUntil(lambda: state(win)["mode"] == "position", timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["mode"] == "position", timeout=GUI_WAIT)
     x_w = np.array(state(win)["scaling"]["x_w"])
     arm(qtbot, win)
     win.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: state(win)["tool"][0] - x_w[0] > 0.3, timeout=10000)
+    qtbot.waitUntil(lambda: state(win)["tool"][0] - x_w[0] > 0.3, timeout=GUI_WAIT)
     win.teleop.stick.pad.set_position(0.0, 0.0, False)  # stick released, enable still held
-    qtbot.waitUntil(lambda: np.linalg.norm(np.array(state(win)["tool"]) - x_w) < 0.01, timeout=10000)
+    qtbot.waitUntil(lambda: np.linalg.norm(np.array(state(win)["tool"]) - x_w) < 0.01, timeout=GUI_WAIT)
     win.teleop.stick.pad.set_position(0.6, 0.0, True)
-    qtbot.waitUntil(lambda: state(win)["tool"][0] - x_w[0] > 0.2, timeout=10000)
+    qtbot.waitUntil(lambda: state(win)["tool"][0] - x_w[0] > 0.2, timeout=GUI_WAIT)
     win.teleop.stick.key(Qt.Key_Shift, False)  # enable released: holds where it is
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
     qtbot.wait(400)
     p = np.array(state(win)["tool"])
     assert p[0] - x_w[0] > 0.1
@@ -261,11 +261,11 @@ def test_item6_comau_and_winch_remote_from_the_gui_stick(qtbot, rig):
     win, _ = rig
     tab = win.motion_lab
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=10000)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     tab.comau_mode.activated.emit(1)  # REMOTE
     tab.winch_mode.activated.emit(1)  # REMOTE
     qtbot.waitUntil(
-        lambda: tab.state["comau"]["mode"] == "remote" and tab.state["winch"]["mode"] == "remote", timeout=5000
+        lambda: tab.state["comau"]["mode"] == "remote" and tab.state["winch"]["mode"] == "remote", timeout=GUI_WAIT
     )
     q0 = np.array(tab.state["comau"]["q"])
     L0 = tab.state["winch"]["length"]
@@ -275,10 +275,10 @@ def test_item6_comau_and_winch_remote_from_the_gui_stick(qtbot, rig):
     arm(qtbot, win, tab.stick, flags=lambda w: w.motion_lab.state["flags"])
     tab.stick.pad.set_position(1.0, 0.0, True)
     tab.stick.w.setValue(-100)
-    qtbot.waitUntil(lambda: np.abs(np.array(tab.state["comau"]["q"]) - q0).max() > 0.02, timeout=10000)
-    qtbot.waitUntil(lambda: abs(tab.state["winch"]["length"] - L0) > 0.02, timeout=10000)
+    qtbot.waitUntil(lambda: np.abs(np.array(tab.state["comau"]["q"]) - q0).max() > 0.02, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: abs(tab.state["winch"]["length"] - L0) > 0.02, timeout=GUI_WAIT)
     tab.stick.release_all()
-    qtbot.waitUntil(lambda: not tab.state["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: not tab.state["flags"]["enabled"], timeout=GUI_WAIT)
 
 
 # ----------------------------------------------------------------------------- item 7 (plots)
@@ -286,11 +286,11 @@ def test_item7_plots_show_command_and_reached_apart(qtbot, rig):
     win, _ = rig
     arm(qtbot, win)
     win.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: state(win).get("command") is not None, timeout=5000)
+    qtbot.waitUntil(lambda: state(win).get("command") is not None, timeout=GUI_WAIT)
     plots = win.teleop.plots
-    qtbot.waitUntil(lambda: np.isfinite(plots.ring.view()[-1, 1]), timeout=5000)
+    qtbot.waitUntil(lambda: np.isfinite(plots.ring.view()[-1, 1]), timeout=GUI_WAIT)
     command_curve, target_curve, reached_curve = plots.cur_xyz[0]
-    qtbot.waitUntil(lambda: np.isfinite(command_curve.getData()[1]).sum() > 2, timeout=5000)
+    qtbot.waitUntil(lambda: np.isfinite(command_curve.getData()[1]).sum() > 2, timeout=GUI_WAIT)
     qtbot.wait(500)
     st_ = state(win)
     # the command (eq. 7 integrated) leads the reached point; both are traced, apart from the solver target
@@ -309,7 +309,7 @@ def test_item8_escape_is_not_stop(qtbot, rig):
     qtbot.wait(400)
     assert not state(win)["flags"]["estop"]
     key(combo, Qt.Key_Space)  # Space is STOP, even with a drop-down focused
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
 
 
 # ----------------------------------------------------------------------------- item 9
@@ -317,7 +317,7 @@ def test_item9_steady_hold_is_not_stale_while_the_gui_stalls(qtbot, rig):
     win, _ = rig
     arm(qtbot, win)
     win.teleop.stick.key(Qt.Key_Up, True)
-    qtbot.waitUntil(lambda: state(win)["flags"]["enabled"], timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["flags"]["enabled"], timeout=GUI_WAIT)
     stale_before = state(win)["flags"]["stale_count"]
     for _ in range(4):
         time.sleep(0.2)  # the GUI thread blocked (a heavy paint): the link's thread keeps sending
@@ -340,11 +340,11 @@ def test_item9_slow_engine_is_an_alarm_in_the_list_and_can_be_acknowledged(qtbot
     win.show()
     try:
         panel = win.status.alarms
-        qtbot.waitUntil(lambda: any(a["key"] == "engine_slow" and a["active"] for a in panel.rows), timeout=10000)
+        qtbot.waitUntil(lambda: any(a["key"] == "engine_slow" and a["active"] for a in panel.rows), timeout=GUI_WAIT)
         row = next(r for r, a in enumerate(panel.rows) if a["key"] == "engine_slow")
         assert "real time" in panel.table.item(row, 4).text() and "ACTIVE" in panel.table.item(row, 5).text()
         panel.ack_all.click()
-        qtbot.waitUntil(lambda: all(a["acked"] for a in panel.rows if a["key"] == "engine_slow"), timeout=5000)
+        qtbot.waitUntil(lambda: all(a["acked"] for a in panel.rows if a["key"] == "engine_slow"), timeout=GUI_WAIT)
     finally:
         win.close()
         eng.kill()
@@ -435,14 +435,14 @@ def test_property_random_gui_events_never_leave_a_machine_moving_unbidden(qtbot,
             assert not st_["flags"]["stale_input"] and not st_["flags"]["estop"]
             if not (win.tabs.currentWidget() is win.teleop and stick.values()[4]):
                 # the GUI let go just now: the engine must follow (state lags by a tick and a publish)
-                qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=2000)
+                qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
     # the operator lets go of everything: within a generous bound nothing is enabled and the arm rests
     stick.release_all()
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=5000)
-    qtbot.waitUntil(lambda: np.abs(state(win)["qdot"]).max() < 1e-6, timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: np.abs(state(win)["qdot"]).max() < 1e-6, timeout=GUI_WAIT)
     win.reset()
     win.tabs.setCurrentIndex(0)
-    qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=GUI_WAIT)
 
 
 def test_item9_csv_logger_keeps_every_state_while_the_gui_stalls(qtbot, rig, tmp_path):
@@ -478,13 +478,13 @@ def test_item1_a_dead_child_engine_is_restarted_and_found_again(qtbot, tmp_path)
     qtbot.addWidget(win)
     win.show()
     try:
-        qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=10000)
+        qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
         proc.proc.kill()  # the engine process dies under the GUI
-        qtbot.waitUntil(lambda: proc.restarts == 1, timeout=10000)
+        qtbot.waitUntil(lambda: proc.restarts == 1, timeout=GUI_WAIT)
         assert "engine process exited" in log_text(win)
-        qtbot.waitUntil(lambda: win.link.connected and win.status.lights["engine"].state != "error", timeout=15000)
+        qtbot.waitUntil(lambda: win.link.connected and win.status.lights["engine"].state != "error", timeout=GUI_WAIT)
         win.estop()
-        qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=10000)
+        qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=GUI_WAIT)
     finally:
         win.close()
         proc.stop()
@@ -494,7 +494,7 @@ def test_leaving_a_tab_releases_its_engine_without_a_device_alarm(qtbot, rig):
     win, _ = rig
     arm(qtbot, win)
     win.tabs.setCurrentWidget(win.analysis)  # input now goes nowhere: the teleop engine holds, disarmed
-    qtbot.waitUntil(lambda: not state(win)["flags"]["device"] and not state(win)["flags"]["armed"], timeout=5000)
+    qtbot.waitUntil(lambda: not state(win)["flags"]["device"] and not state(win)["flags"]["armed"], timeout=GUI_WAIT)
     t_left = time.time()
     qtbot.wait(500)
     raised_since = [a for a in state(win)["alarms"] if a["t_raised"] >= t_left - 0.05]
@@ -510,7 +510,7 @@ def test_reset_then_stop_queued_together_ends_stopped(qtbot):
     try:
         for _ in range(5):
             link.send("estop", reason="first")
-            qtbot.waitUntil(lambda: bool(link.latest) and link.latest["flags"]["estop"], timeout=5000)
+            qtbot.waitUntil(lambda: bool(link.latest) and link.latest["flags"]["estop"], timeout=GUI_WAIT)
             with link._worker.lock:  # the worker waits: its next pass sees both, as after a GUI stall
                 link.send("reset")
                 link.send("estop", reason="after reset")
@@ -524,7 +524,7 @@ def test_reset_then_stop_queued_together_ends_stopped(qtbot):
 def test_a_stop_is_confirmed_only_by_a_state_that_counts_it(qtbot, rig):
     win, _ = rig
     win.estop()
-    qtbot.waitUntil(lambda: "E-STOP confirmed" in log_text(win), timeout=5000)
+    qtbot.waitUntil(lambda: "E-STOP confirmed" in log_text(win), timeout=GUI_WAIT)
     st_ = dict(win.link.latest)
     before = (st_["engine_id"], st_["estops"])
     assert not win._confirms("teleop", before)  # latched, but this state predates a new STOP
@@ -538,7 +538,7 @@ def test_stop_acts_on_press_even_if_the_pointer_slides_off(qtbot, rig):
     win, _ = rig
     stop = win.status.stop
     qtbot.mousePress(stop, Qt.LeftButton)
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=5000)
+    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
     qtbot.mouseRelease(win, Qt.LeftButton)  # released elsewhere: the stop stands
 
 
@@ -575,9 +575,9 @@ def test_a_scene_engine_started_with_its_button_is_watched(qtbot, tmp_path):
     win.show()
     try:
         assert win.motion_lab.connect_engine()  # not by showing the tab: the way a Start button does it
-        qtbot.waitUntil(lambda: win.motion_lab.state is not None, timeout=10000)
+        qtbot.waitUntil(lambda: win.motion_lab.state is not None, timeout=GUI_WAIT)
         labs[0].kill()
-        qtbot.waitUntil(lambda: "Motion-Lab" in win.lost, timeout=5000)
+        qtbot.waitUntil(lambda: "Motion-Lab" in win.lost, timeout=GUI_WAIT)
         assert "ENGINE LOST" in win.banner.text() or "NOT CONFIRMED" in win.banner.text()
     finally:
         win.close()
@@ -595,10 +595,10 @@ def test_any_joysticks_stop_button_stops_every_engine(qtbot, rig, monkeypatch):
     win, _ = rig
     vj = VirtualJoystick(n_axes=4, n_buttons=8)
     try:
-        qtbot.waitUntil(lambda: len(win.teleop.inputs.known) == 1, timeout=5000)
+        qtbot.waitUntil(lambda: len(win.teleop.inputs.known) == 1, timeout=GUI_WAIT)
         win.tabs.setCurrentWidget(win.analysis)  # not the selected input, not the teleop tab
         vj.set_button(2, True)
-        qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=5000)
+        qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
         assert "stop button of" in log_text(win)
     finally:
         vj.detach()
@@ -627,14 +627,14 @@ def test_stop_stays_live_while_a_scene_engine_starts(qtbot, tmp_path):
     qtbot.addWidget(win)
     win.show()
     try:
-        qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=10000)
+        qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
         t0 = time.monotonic()
         win.tabs.setCurrentWidget(win.motion_lab)
         assert time.monotonic() - t0 < 1.0 and win.motion_lab.link is None  # did not wait for the engine
         key(win.tabs.tabBar(), Qt.Key_Space)
-        qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=5000)
+        qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=GUI_WAIT)
         assert win.motion_lab.link is None  # the confirmation came while the lab engine was still starting
-        qtbot.waitUntil(lambda: win.motion_lab.state is not None, timeout=20000)
+        qtbot.waitUntil(lambda: win.motion_lab.state is not None, timeout=GUI_WAIT)
         assert "Motion-Lab" in win.links()
     finally:
         win.close()
