@@ -59,7 +59,9 @@ def serve():
 
 
 def pytest_collection_modifyitems(items):
-    """Every test in a tests/test_gui*.py file is marked ``gui`` (the fast lane: -m "not slow and not gui")."""
+    """Every test in a tests/test_gui*.py file is marked ``gui`` and ``slow``: each starts engine processes
+    and a window (seconds).  The fast lane, ``-m "not slow"``, runs everything else."""
     for item in items:
         if item.path.name.startswith("test_gui"):
             item.add_marker(pytest.mark.gui)
+            item.add_marker(pytest.mark.slow)

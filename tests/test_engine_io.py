@@ -9,6 +9,7 @@ import multiprocessing as mp
 import time
 
 import numpy as np
+import pytest
 
 from app.engine.server import RATE_BURST, EngineServer, Inbox, RateLimit
 from app.engine.session import Session
@@ -74,6 +75,7 @@ def _flood(url: str, per_second: int, seconds: float, sent) -> None:
     _flood_process(url, per_second, seconds, sent)
 
 
+@pytest.mark.slow
 def test_the_loop_keeps_ticking_and_estop_gets_through_a_junk_flood(serve):
     """A junk flood from another process (20,000/s for 4 s) while the operator drives: the loop keeps
     ticking, the viewer keeps receiving states, the flooder's excess is dropped unread, the operator
