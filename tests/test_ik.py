@@ -332,3 +332,21 @@ def test_ga_without_any_limit_still_ends():
     finally:
         genetic.HARD_GENERATION_CAP = old
     assert not res.success and res.iterations == 50 and res.reason == "generation limit"
+
+
+@pytest.mark.parametrize("name", ["comau_smart5_3dof", "comau_smart5_6dof"])
+def test_jacobian_restarts_from_the_nearest_seed_shorten_the_cold_tail(name):
+    """Issue 14, item 2 (p99 ≤ 2 ms cold): a failed first descent restarts from the seed table's
+    configuration whose tool is nearest the target, not from a uniform random one.  On the bench's 500
+    cold targets every solve converges and 99 % take at most 200 iterations (305 and 309 with random
+    restarts); iterations, not seconds, so the test is deterministic."""
+    from app.analysis.ik_studies import bench_targets
+
+    robot = load_robot(name)
+    solver = make_solver("jacobian", robot, seed=7)
+    iterations = []
+    for x in bench_targets(robot, "cold", 500, 7):
+        res = solver.solve_position(x)
+        assert res.success and res.error < 1e-3
+        iterations.append(res.iterations)
+    assert np.percentile(iterations, 99) <= 200

@@ -30,6 +30,10 @@ from scipy.spatial.transform import Rotation
 from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
 from app.models import kernels
 
+SEEDS = 256  # restart table size: its tool positions cover the workspace to a few centimetres
+NEAREST_SEEDS = 8  # restarts from the nearest table entries before uniform random ones
+SEED_TABLE_SEED = 14
+
 
 class JacobianSolver(Solver):
     """Damped least squares with restarts.
@@ -74,6 +78,7 @@ class JacobianSolver(Solver):
         self.orientation_weight = scale  # metres per radian when orientation is asked for
         self._target_R: NDArray[np.float64] | None = None
         self._kernel_tail: tuple | None = None
+        self._seed_table: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
     # ---------------------------------------------------------------- damped inverse
     def damped_step(
@@ -209,8 +214,28 @@ class JacobianSolver(Solver):
             q = self.robot.clip(q + self.damped_step(J, e, q))
         return best_q, best_err, iterations
 
+    def _seeds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """A fixed table of SEEDS configurations (uniform in the limits, its own seeded generator, so
+        the solver's random stream is untouched) and their tool positions, built on first use."""
+        if self._seed_table is None:
+            Q = np.random.default_rng(SEED_TABLE_SEED).uniform(
+                self.robot.lower, self.robot.upper, size=(SEEDS, self.robot.n_joints)
+            )
+            self._seed_table = (Q, self.robot.position(Q))
+        return self._seed_table
+
+    def _restart_points(self, x_t: NDArray[np.float64]):
+        """Restart configurations: the seed table's, nearest tool position to the target first (a
+        descent from there has centimetres, not metres, to go), then uniform random ones."""
+        Q, P = self._seeds()
+        for k in np.argsort(np.einsum("ij,ij->i", P - x_t, P - x_t))[:NEAREST_SEEDS]:
+            yield Q[k]
+        while True:
+            yield self.random_q()
+
     def _search(self, x_t, q0, deadline) -> SearchOutcome:
         starts = [q0 if q0 is not None else self.default_q0()]
+        restarts = self._restart_points(x_t) if self._target_R is None else None
         best_q, best_err, total_it = starts[0], math.inf, 0
         attempt = 0
         reason = "iteration limit"
@@ -229,7 +254,7 @@ class JacobianSolver(Solver):
                 reason = "not reached after restarts (target may be outside the workspace)"
                 break
             attempt += 1
-            starts.append(self.random_q())
+            starts.append(next(restarts) if restarts is not None else self.random_q())
         return SearchOutcome(
             q=best_q, iterations=total_it, converged=best_err <= self.tolerance, reason=reason, cost=best_err
         )
