@@ -46,7 +46,8 @@ class JacobianSolver(Solver):
     max_iterations : int
         Iterations per start; default 200.
     restarts : int
-        Random restarts after the first start fails; default 20 (the time budget may end them sooner).
+        Restarts after the first start fails (the 8 seed-table configurations whose tool is nearest the
+        target, then uniform random ones); default 20 (the time budget may end them sooner).
     time_budget : float or None
         Default 0.1 s.
     """
