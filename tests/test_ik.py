@@ -346,7 +346,7 @@ def test_jacobian_restarts_from_the_nearest_seed_shorten_the_cold_tail(name):
     solver = make_solver("jacobian", robot, seed=7)
     iterations = []
     for x in bench_targets(robot, "cold", 500, 7):
-        res = solver.solve_position(x)
+        res = solver.solve_position(x, time_budget=None)  # no clock: the same on any machine, compiled or not
         assert res.success and res.error < 1e-3
         iterations.append(res.iterations)
     assert np.percentile(iterations, 99) <= 200
