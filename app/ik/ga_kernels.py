@@ -1,0 +1,194 @@
+"""Compiled generation loop of the GA mapping (Sanfilippo et al., §III-B, steps 5–8).
+
+Same scheme as :mod:`app.models.kernels` (numba, cached on disk, ``BOSUN_JIT=0`` for the
+interpreted path).  The NumPy methods and operator functions of :mod:`app.ik.genetic` stay the
+reference: ``tests/test_ga_kernels.py`` runs both on the same seeded inputs and asserts equal
+results.  To make that possible the kernels draw from the solver's own ``numpy.random.Generator``
+(numba shares its bit generator, so both paths advance one stream), with the same calls, shapes and
+order as the reference operators (``uniform``, ``permutation``, ``random``, ``integers``), and
+compute every cost with the reference's formula, summed in the reference's order (the tool points
+agree with the NumPy FK to an ulp, as :mod:`app.models.kernels`' do).
+
+Nothing here reads a clock (numba cannot): a call runs at most ``generations`` generations and
+stops early at the target cost; the solver checks its time budget between calls.
+
+Chain constants as in :mod:`app.models.kernels` (``SerialRobot.kernel_args``):
+θ₀, d₀, a, cos α, sin α (L,), M_θ, M_d (L, n), T_world_base, T_flange_tool (4, 4).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from app.models.kernels import ENABLED, _jit
+
+__all__ = ["ENABLED", "evolve_position", "evolve_velocity", "position_costs", "velocity_costs"]
+
+
+@_jit
+def _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q):
+    """Tool points (m, 3) of configurations Q (m, n): :func:`app.models.kernels.position` row by row in
+    one loop (θ = θ₀ + M_θ q, d = d₀ + M_d q), with cos θ, sin θ of a link that no joint turns (a
+    prismatic joint's or a fixed link) computed once instead of once per row."""
+    L, n = M_theta.shape
+    c0, s0, turns = np.empty(L), np.empty(L), np.zeros(L, dtype=np.bool_)
+    for i in range(L):
+        for j in range(n):
+            turns[i] = turns[i] or M_theta[i, j] != 0.0
+        c0[i], s0[i] = math.cos(theta0[i] + 0.0), math.sin(theta0[i] + 0.0)
+    P = np.empty((Q.shape[0], 3))
+    for k in range(Q.shape[0]):
+        x, y, z = T_tool[0, 3], T_tool[1, 3], T_tool[2, 3]
+        for i in range(L - 1, -1, -1):
+            dd = 0.0
+            for j in range(n):
+                dd += M_d[i, j] * Q[k, j]
+            y, z = ca[i] * y - sa[i] * z, sa[i] * y + ca[i] * z + (d0[i] + dd)
+            x = x + a[i]
+            c, s = c0[i], s0[i]
+            if turns[i]:
+                th = 0.0
+                for j in range(n):
+                    th += M_theta[i, j] * Q[k, j]
+                c, s = math.cos(theta0[i] + th), math.sin(theta0[i] + th)
+            x, y = c * x - s * y, s * x + c * y
+        for r in range(3):
+            P[k, r] = T_base[r, 0] * x + T_base[r, 1] * y + T_base[r, 2] * z + T_base[r, 3]
+    return P
+
+
+@_jit
+def position_costs(
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, x_t, lower, upper, box_lower, box_extent, penalty
+):  # fmt: skip
+    """``GeneticSolver.cost``: normalised distance to x_t (eq. 5 on the workspace box), × ``penalty`` (at
+    least +1) for a chromosome with a gene outside its limits.  pop (m, n) → (m,)."""
+    m, n = pop.shape
+    P = _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop)
+    t0 = (x_t[0] - box_lower[0]) / box_extent[0]
+    t1 = (x_t[1] - box_lower[1]) / box_extent[1]
+    t2 = (x_t[2] - box_lower[2]) / box_extent[2]
+    out = np.empty(m)
+    for k in range(m):
+        e0 = (P[k, 0] - box_lower[0]) / box_extent[0] - t0
+        e1 = (P[k, 1] - box_lower[1]) / box_extent[1] - t1
+        e2 = (P[k, 2] - box_lower[2]) / box_extent[2] - t2
+        d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        outside = False
+        for j in range(n):
+            outside = outside or pop[k, j] < lower[j] or pop[k, j] > upper[j]
+        out[k] = max(d * penalty, d + 1.0) if outside else d
+    return out
+
+
+@_jit
+def velocity_costs(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, q_a, dt, x_t, u, cross_weight):
+    """``GeneticSolver.velocity_cost``: c(x(θ_a + θ̇Δt) − x_t) with c(e) = |e·u| + w|e − (e·u)u| (eqs. 5, 7).
+    pop (m, n) of joint velocities θ̇ → (m,) [m]."""
+    m, n = pop.shape
+    Q = np.empty((m, n))
+    for k in range(m):
+        for j in range(n):
+            Q[k, j] = q_a[j] + pop[k, j] * dt
+    P = _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q)
+    out = np.empty(m)
+    for k in range(m):
+        e0, e1, e2 = P[k, 0] - x_t[0], P[k, 1] - x_t[1], P[k, 2] - x_t[2]
+        along = e0 * u[0] + e1 * u[1] + e2 * u[2]
+        p0, p1, p2 = e0 - along * u[0], e1 - along * u[1], e2 - along * u[2]
+        out[k] = abs(along) + cross_weight * math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    return out
+
+
+@_jit
+def _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probability, amplitude, rng):
+    """One generation as ``GeneticSolver.evolve`` (steps 5–7): the n_elite best unaltered, then children
+    of SUS-selected parents (Baker 1987, on fitness 1/cost) paired at random, crossed single-point or
+    uniform 50/50, each gene mutated with probability 0.5 % by U(±5 %)·span."""
+    size, n = pop.shape
+    n_children = size - n_elite
+    out = np.empty((size, n))
+    order = np.argsort(cost, kind="mergesort")  # stable, as the reference's argsort(kind="stable")
+    for k in range(n_elite):
+        out[k] = pop[order[k]]
+    # stochastic_universal_sampling
+    cum = np.empty(size)
+    total = 0.0
+    for k in range(size):
+        total += 1.0 / max(cost[k], 1e-12)
+        cum[k] = total
+    if total <= 0:
+        chosen = rng.integers(0, size, size=n_children)
+    else:
+        step = total / n_children
+        offset = rng.uniform(0.0, step)
+        chosen = np.empty(n_children, dtype=np.int64)
+        i = 0
+        for k in range(n_children):
+            pointer = offset + step * k
+            while i < size and cum[i] <= pointer:  # searchsorted(cum, pointer, side="right")
+                i += 1
+            chosen[k] = min(i, size - 1)
+    perm = rng.permutation(n_children)  # SUS output is ordered; pair at random
+    parents = np.empty((n_children, n))
+    for k in range(n_children):
+        parents[k] = pop[chosen[perm[k]]]
+    # hybrid_crossover: consecutive parents pair up; an odd last one passes unchanged
+    pairs = n_children // 2
+    use_single = rng.random(pairs)
+    # single-point: children swap genes j >= cut, 1 <= cut <= n − 1 (one gene: no cut, nothing drawn)
+    cut = rng.integers(1, n, size=(pairs, 1)) if n >= 2 else np.full((pairs, 1), n)
+    swap = rng.random((pairs, n))  # uniform: gene j swapped where < ½
+    children = out[n_elite:]
+    for p in range(pairs):
+        for j in range(n):
+            exchange = j >= cut[p, 0] if use_single[p] < single_point_probability else swap[p, j] < 0.5
+            a, b = parents[2 * p, j], parents[2 * p + 1, j]
+            children[2 * p, j], children[2 * p + 1, j] = (b, a) if exchange else (a, b)
+    if n_children % 2:
+        children[n_children - 1] = parents[n_children - 1]
+    # mutate
+    hit = rng.random((n_children, n))
+    delta = rng.uniform(-amplitude, amplitude, size=(n_children, n))
+    for k in range(n_children):
+        for j in range(n):
+            if hit[k, j] < mutation_probability:
+                children[k, j] = children[k, j] + delta[k, j] * span[j]
+    return out
+
+
+@_jit
+def evolve_position(
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, cost, x_t, lower, upper, box_lower, box_extent, penalty,
+    span, n_elite, single_point_probability, mutation_probability, amplitude, target_cost, generations, rng,
+):  # fmt: skip
+    """Up to ``generations`` generations of the position mapping, stopping when the best cost is below
+    ``target_cost`` (step 8): (population, cost, generations run)."""
+    ran = 0
+    while ran < generations and cost.min() >= target_cost:
+        pop = _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probability, amplitude, rng)
+        cost = position_costs(
+            theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, x_t, lower, upper, box_lower, box_extent, penalty
+        )
+        ran += 1
+    return pop, cost, ran
+
+
+@_jit
+def evolve_velocity(
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, cost, q_a, dt, x_t, u, cross_weight, lo, hi, span,
+    n_elite, single_point_probability, mutation_probability, amplitude, tolerance, generations, rng,
+):  # fmt: skip
+    """Up to ``generations`` generations of the velocity mapping (genes θ̇, kept inside the window
+    [lo, hi]), stopping when the best cost is below ``tolerance``: (population, cost, generations run)."""
+    ran = 0
+    while ran < generations and cost.min() >= tolerance:
+        pop = _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probability, amplitude, rng)
+        for k in range(pop.shape[0]):
+            for j in range(pop.shape[1]):
+                pop[k, j] = min(max(pop[k, j], lo[j]), hi[j])
+        cost = velocity_costs(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, q_a, dt, x_t, u, cross_weight)
+        ran += 1
+    return pop, cost, ran
