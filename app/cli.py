@@ -840,6 +840,34 @@ def cmd_joystick(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench_sim(args: argparse.Namespace) -> int:
+    from app.analysis.sim_speed import engine_speed
+
+    cases = [(k, m) for k in args.kinds for m in ((False, True) if k == "lab" else (False,))]
+    rows = [engine_speed(kind, seconds=args.seconds, motion=motion) for kind, motion in cases]
+    if args.json:
+        _print_json({"benchmark": "sim", "machine": _machine(), "results": rows})
+        return 0
+    print(f"bosun bench sim: engine plants ticked back to back at their default rate, {args.seconds:g} s simulated")
+    print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
+    labels = {("lab", False): "lab (as it starts)", ("lab", True): "lab (VVMC in waves)", ("tac", False): "crane head"}
+    print(
+        _table(
+            ["engine", "ticks", "wall [s]", "× real time"],
+            [
+                [
+                    labels[(r["kind"], r["motion"])],
+                    str(r["ticks"]),
+                    f"{r['wall_s']:.2f}",
+                    f"{r['speed_x_realtime']:.0f}",
+                ]
+                for r in rows
+            ],
+        )
+    )
+    return 0
+
+
 def cmd_bench_loop(args: argparse.Namespace) -> int:
     from app.analysis.loop_bench import bench_loop
 
@@ -1011,7 +1039,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="output folder (default out/track_ROBOT_SOLVER)")
     p.set_defaults(func=cmd_track)
 
-    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik")
+    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik, bench loop, bench sim")
     bench = p.add_subparsers(dest="bench", metavar="WHAT", parser_class=_Parser, required=True)
     b = bench.add_parser("ik", help="median/p95 solve time and success per robot and solver")
     b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
@@ -1033,6 +1061,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--burn", action="store_true", help="another process keeps one core busy")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_loop)
+    b = bench.add_parser("sim", help="how fast the lab and crane-head engines run unthrottled")
+    b.add_argument("--kinds", nargs="+", choices=["lab", "tac"], default=["lab", "tac"], help="engines (default both)")
+    b.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated time [s] (default 20)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_sim)
 
     p = sub.add_parser("sim", help="simulations: sim tac, sim tac-sweep (crane head), sim vvmc (Motion-Lab)")
     sims = p.add_subparsers(dest="sim", metavar="WHAT", parser_class=_Parser, required=True)

@@ -216,8 +216,11 @@ CHECK_SIGNATURES = r"""
 import json, numpy as np
 from app.models import kernels
 from app.sim import kernels as sim
+from app.ik import ga_kernels as ga
+from app.marine import kernels as marine
+MODULES = (kernels, sim, ga, marine)
 kernels.warm_up()
-before = {n: len(f.signatures) for m in (kernels, sim) for n, f in vars(m).items() if hasattr(f, "signatures")}
+before = {n: len(f.signatures) for m in MODULES for n, f in vars(m).items() if hasattr(f, "signatures")}
 from app.engine.session import Session
 from app.engine.lab_session import LabSession
 from app.engine.tac_session import TacSession
@@ -243,11 +246,12 @@ for session in (LabSession(), TacSession()):
     for k in range(100):
         t += 0.02
         session.tick(t, 0.02)
-after = {n: len(f.signatures) for m in (kernels, sim) for n, f in vars(m).items() if hasattr(f, "signatures")}
+after = {n: len(f.signatures) for m in MODULES for n, f in vars(m).items() if hasattr(f, "signatures")}
 print(json.dumps({"before": before, "after": after}))
 """
 
 
+@pytest.mark.slow
 def test_no_kernel_compiles_after_warm_up_in_any_engine():
     """Issue 14, item 1: compile ahead, never in a control tick.  Arrays of another layout (a strided
     slice) made numba compile a second specialisation of the platform filter in the lab engine's

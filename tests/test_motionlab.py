@@ -197,11 +197,11 @@ def test_winch_stays_inside_its_limits(lab):
 # ----------------------------------------------------------------------------- VVMC
 @pytest.fixture(scope="module")
 def vvmc_runs():
+    """40 s with and without compensation: under a second each, compiled (issue 14, item 4)."""
     sc = VvmcScenario(hs=2.0, tp=8.0, duration=40.0, seed=1)
     return sc, simulate(sc, True), simulate(sc, False)
 
 
-@pytest.mark.slow
 def test_vvmc_reduces_relative_tool_motion_by_90_percent(vvmc_runs):
     sc, on, off = vvmc_runs
     s = summarize(sc, on, off)
@@ -210,7 +210,6 @@ def test_vvmc_reduces_relative_tool_motion_by_90_percent(vvmc_runs):
     assert s["compensated"]["time_at_limit_s"] == 0.0  # inside limits
 
 
-@pytest.mark.slow
 def test_vvmc_keeps_joints_inside_limits(vvmc_runs):
     _, on, _ = vvmc_runs
     lab = MotionLab(load_lab())

@@ -106,60 +106,37 @@ def simulate(
     compensate: bool,
     progress: Callable[[int], None] | None = None,
     cancel: Callable[[], bool] | None = None,
+    use_kernels: bool | None = None,
 ) -> VvmcRun:
-    """One run; ``progress(n_steps_done)`` is called every 100 steps."""
+    """One run; ``progress(n_steps_done)`` is called every 100 steps.  ``use_kernels``: compiled
+    (True) or the NumPy reference (False) lab; default the lab's own (compiled when numba is there)."""
     layout = load_lab(sc.lab)
     lab = MotionLab(layout, at_work=True)
+    if use_kernels is not None:
+        lab.use_kernels = use_kernels
     _sources(sc, lab)
     lab.set_vvmc(compensate)
     n = round(sc.duration / sc.dt)
-    out = {
-        k: np.empty(s)
-        for k, s in {
-            "t": n,
-            "eta1": (n, 6),
-            "eta2": (n, 6),
-            "q": (n, 3),
-            "qd": (n, 3),
-            "e": (n, 3),
-            "L": n,
-            "Ld": n,
-            "swing": (n, 2),
-            "h": n,
-        }.items()
-    }
+    t, L, Ld, h = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    eta1, eta2, q, qd, e, swing = (np.empty((n, k)) for k in (6, 6, 3, 3, 3, 2))
     at_limit = np.zeros((n, 4), dtype=bool)
     clamped = np.zeros((n, 2), dtype=bool)
+    p1, p2 = lab.platforms
     done = n
     for i in range(n):
         s = lab.step(sc.dt)
-        out["t"][i], out["eta1"][i], out["eta2"][i] = s.t, s.eta1, s.eta2
-        out["q"][i], out["qd"][i], out["e"][i] = s.q, s.qd, s.e_t_b2
-        out["L"][i], out["Ld"][i], out["swing"][i], out["h"][i] = s.L_w, s.L_w_dot, s.swing, s.payload_height_error
+        t[i], eta1[i], eta2[i], q[i], qd[i], e[i] = s.t, s.eta1, s.eta2, s.q, s.qd, s.e_t_b2
+        L[i], Ld[i], swing[i], h[i] = s.L_w, s.L_w_dot, s.swing, s.payload_height_error
         at_limit[i] = lab.at_limit
-        clamped[i] = [p.leg_clamped for p in lab.platforms]
+        clamped[i, 0], clamped[i, 1] = p1.leg_clamped, p2.leg_clamped
         if progress is not None and (i + 1) % 100 == 0:
             progress(i + 1)
         if cancel is not None and cancel():
             done = i + 1
             break
     sl = slice(0, done)
-    return VvmcRun(
-        compensate,
-        out["t"][sl],
-        out["eta1"][sl],
-        out["eta2"][sl],
-        out["q"][sl],
-        out["qd"][sl],
-        out["e"][sl],
-        out["L"][sl],
-        out["Ld"][sl],
-        out["swing"][sl],
-        out["h"][sl],
-        at_limit[sl],
-        clamped[sl],
-        cancelled=done < n,
-    )
+    series = (t, eta1, eta2, q, qd, e, L, Ld, swing, h, at_limit, clamped)
+    return VvmcRun(compensate, *(x[sl] for x in series), cancelled=done < n)
 
 
 def _rms(x: NDArray[np.float64]) -> float:

@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
+from app.marine import kernels
 from app.marine.waves import G, WaveComponents
 
 DOF_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
@@ -389,13 +390,28 @@ class VesselMotion:
     ν from η̇ by the kinematics of Fossen (2011) eq. 2.40: ν₁ = R_b^nᵀ ṗ, ν₂ = T(Θ)⁻¹ Θ̇, and
     ν̇ by differentiating these exactly.  The motion is linear (small-amplitude) by
     construction; the nonlinear kinematics only keep ν and η consistent with each other.
+
+    :meth:`at` gives η, η̇ at one instant (a platform's per-step source), compiled unless
+    ``use_kernels`` is False; :meth:`eta_derivatives` is its reference.
     """
 
     def __init__(self, rao, sea: WaveComponents) -> None:
         self.sea = sea
-        self.w = np.asarray(sea.omega, dtype=float)
+        self.w = np.ascontiguousarray(sea.omega, dtype=float)
         H = rao(self.w, sea.direction)  # (6, n)
         self._c = (sea.amplitude * H).T * np.exp(1j * sea.phase)[:, None]  # (n, 6) complex
+        c1 = self._c * (1j * self.w)[:, None]
+        # (6, n) C-contiguous float64: the compiled kernel has one signature
+        self._parts = tuple(np.ascontiguousarray(p.T) for p in (self._c.real, self._c.imag, c1.real, c1.imag))
+        self.use_kernels = kernels.ENABLED
+
+    def at(self, t: float, scale: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """η and η̇ at one time t [s], each (6,) and times ``scale`` per DOF when given."""
+        s = np.ones(6) if scale is None else np.ascontiguousarray(scale, dtype=float)
+        if self.use_kernels:
+            return kernels.vessel_motion(self.w, *self._parts, float(t), s)
+        eta, deta, _ = self.eta_derivatives(np.array([t]))
+        return eta[0] * s, deta[0] * s
 
     def eta_derivatives(self, t: ArrayLike, chunk: int = 2048) -> tuple[NDArray, NDArray, NDArray]:
         """η, η̇, η̈ at times ``t`` (s), each (len(t), 6)."""

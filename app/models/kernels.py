@@ -326,12 +326,27 @@ def warm_up(progress=None) -> float:
             np.ones(3),
         ),
     ]
+    from app.marine import kernels as marine  # the wave-driven platform source (imports this module)
     from app.sim import kernels as sim  # the plant updates (imports this module: not at the top)
 
     ones = np.ones(6)
     steps += [
         lambda: sim.motion_filter_step(ones, ones, ones, ones, True, -ones, ones, ones, ones, 0.1, 0.01, 1.0),
         lambda: sim.actuator_step(ones, ones, ones, -ones, ones, ones, ones, 0.05, 0.002),
+        lambda: marine.vessel_motion(np.ones(2), *(np.ones((6, 2)) for _ in range(4)), 0.5, ones),
+        *sim.warm_up_steps(),
+    ]
+    from app.ik import ga_kernels as ga  # the GA's generation loop (imports this module: not at the top)
+
+    pop, cost = np.zeros((4, n)), np.ones(4)
+    box = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
+    window = (-np.ones(n), np.ones(n), np.ones(n))  # velocity window and mutation span
+    rules = (1, 0.5, 0.005, 0.05, 0.01, 1, np.random.default_rng(0))  # elite, operators, stop, generations, rng
+    steps += [
+        lambda: ga.position_costs(*args, pop, np.zeros(3), *box),
+        lambda: ga.velocity_costs(*args, pop, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0),
+        lambda: ga.evolve_position(*args, pop, cost, np.zeros(3), *box, np.ones(n), *rules),
+        lambda: ga.evolve_velocity(*args, pop, cost, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0, *window, *rules),
     ]
     for k, step in enumerate(steps):
         step()

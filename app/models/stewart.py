@@ -129,8 +129,9 @@ class StewartPlatform:
         s = spec.stewart
         self.spec = spec
         self.name = spec.name
-        self.a_n = np.asarray(s.base_joints_n, dtype=float)
-        self.b_b = np.asarray(s.platform_joints_b, dtype=float)
+        # C-contiguous float64: the compiled leg kernels have one signature
+        self.a_n = np.ascontiguousarray(s.base_joints_n, dtype=float)
+        self.b_b = np.ascontiguousarray(s.platform_joints_b, dtype=float)
         self.pose_min, self.pose_max = np.asarray(s.pose_min), np.asarray(s.pose_max)
         self.speed_max, self.accel_max = np.asarray(s.speed_max), np.asarray(s.accel_max)
         self.leg_min, self.leg_max = s.leg_min, s.leg_max

@@ -25,7 +25,7 @@ Equations and corrections (each checked by a test in ``tests/test_motionlab.py``
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,6 +35,7 @@ from app.ik.analytic import ComauArm
 from app.models.lab import LabLayout
 from app.models.registry import load_robot
 from app.models.stewart import StewartPlatform
+from app.sim import kernels as sim_kernels
 from app.sim.stewart import MotionFilter, Platform
 
 G = 9.81
@@ -146,7 +147,8 @@ def tool_on_platform(
 class Pendulum:
     """The 2-DOF spherical pendulum of eqs. (29)–(30) (corrected z̈ sign, see module doc), RK4.
 
-    State x = (α, β, α̇, β̇) [rad, rad/s]; α about ^φβ y, β about x (Fig. 16).
+    State x = (α, β, α̇, β̇) [rad, rad/s]; α about ^φβ y, β about x (Fig. 16).  :meth:`step` is
+    compiled unless ``use_kernels`` is False (then :meth:`derivative` in NumPy, the reference).
     """
 
     damping: float = 0.0  # c [1/s]
@@ -155,6 +157,7 @@ class Pendulum:
     beta: float = 0.0
     alpha_dot: float = 0.0
     beta_dot: float = 0.0
+    use_kernels: bool = field(default=sim_kernels.ENABLED, repr=False)
 
     def derivative(self, x: NDArray[np.float64], a_t: NDArray[np.float64], L: float, Ld: float) -> NDArray[np.float64]:
         a, b, ad, bd = x
@@ -170,6 +173,13 @@ class Pendulum:
 
     def step(self, dt: float, a_t_d: NDArray[np.float64], L: float, Ld: float) -> None:
         """Advance by dt: tool acceleration a_t_d in {d} held, wire length L + Ld·s over the step."""
+        if self.use_kernels:
+            ax, ay, az = (float(v) for v in a_t_d)
+            self.alpha, self.beta, self.alpha_dot, self.beta_dot = sim_kernels.pendulum_step(
+                float(self.alpha), float(self.beta), float(self.alpha_dot), float(self.beta_dot), float(dt),
+                ax, ay, az, float(L), float(Ld), float(self.damping), float(self.g),
+            )  # fmt: skip
+            return
         x = np.array([self.alpha, self.beta, self.alpha_dot, self.beta_dot])
         k1 = self.derivative(x, a_t_d, L, Ld)
         k2 = self.derivative(x + 0.5 * dt * k1, a_t_d, L + 0.5 * dt * Ld, Ld)
@@ -258,6 +268,12 @@ class LabSample:
 class MotionLab:
     """The whole lab, stepped at a fixed dt: platforms → robot control → winch → pendulum.
 
+    With ``use_kernels`` (the default when numba is there) a step is a handful of compiled calls:
+    per platform its source (the vessel motion) and its clamped, filtered target, then
+    :func:`app.sim.kernels.lab_step` for the rest, which updates the state arrays (joints, winch,
+    tool point, rates) in place; with ``use_kernels = False`` every part runs its NumPy reference
+    method (the methods below), tested equal step by step (``tests/test_sim_kernels.py``).
+
     Parameters
     ----------
     layout : LabLayout
@@ -283,6 +299,22 @@ class MotionLab:
         self.winch = Winch(layout.winch)
         self.pendulum = Pendulum(damping=layout.payload_damping)
         self.T_n1_g = np.linalg.inv(layout.T_world_n1)
+        # constants and buffers of the compiled step (C-contiguous float64: one kernel signature)
+        self._rates_buf = np.zeros((2, 3, 3, 3))
+        self._rate_views = tuple((b[0], b[1], b[2]) for b in self._rates_buf)
+        self._comau = np.array([arm.a1, arm.d1, arm.a2, arm.a3, arm.L], dtype=float)
+        self._T_world_n = tuple(np.ascontiguousarray(T, dtype=float) for T in (layout.T_world_n1, layout.T_world_n2))
+        self._consts = (
+            *(np.ascontiguousarray(a, dtype=float) for a in (arm.T_world_base, ComauArm.SIGNS["auto"])),
+            *self._T_world_n,
+            *(
+                np.ascontiguousarray(a, dtype=float)
+                for a in (self.T_n1_g @ layout.T_world_n2, layout.T_b1_r, layout.work_point_b2, layout.park_q)
+            ),
+        )
+        self._target = np.zeros(3)
+        self._out = tuple(np.zeros(n) for n in (3, 3, 3, 6, 6))  # e_t_b2, p_w_g, p_p_g, legs1, legs2
+        self._use_kernels = False  # the set-up below runs the reference; the flag is set at the end
         self.payload_target_b2: NDArray[np.float64] | None = None
         self.t = 0.0
         self.frozen = False
@@ -294,6 +326,21 @@ class MotionLab:
         self.last: LabSample | None = None
         self._update_tool()
         self.last = self._sample()
+        self.use_kernels = sim_kernels.ENABLED
+
+    @property
+    def use_kernels(self) -> bool:
+        return self._use_kernels
+
+    @use_kernels.setter
+    def use_kernels(self, on: bool) -> None:
+        """Compiled (True) or the NumPy reference (False) for the whole lab: step, platforms, filters,
+        sources, load and the robot's IK candidates."""
+        self._use_kernels = bool(on)
+        for p in self.platforms:
+            p.use_kernels = on
+        self.joints.use_kernels = self.winch.filter.use_kernels = self.pendulum.use_kernels = bool(on)
+        self.robot.use_kernels = bool(on)
 
     # ------------------------------------------------------------------ geometry
     def _rotation_rates(self) -> tuple[tuple[NDArray, NDArray, NDArray], ...]:
@@ -304,6 +351,8 @@ class MotionLab:
         """H^g_bk: body frame of platform k (0 or 1) in the world, eq. (39)."""
         p = self.platforms[k]
         T_n = self.layout.T_world_n1 if k == 0 else self.layout.T_world_n2
+        if self._use_kernels:
+            return sim_kernels.pose_in(self._T_world_n[k], p.filter.x)
         return T_n @ StewartPlatform.pose_matrix(p.eta)
 
     def work_point(self) -> tuple[NDArray, NDArray, NDArray]:
@@ -400,6 +449,9 @@ class MotionLab:
         self.t += dt
         for p in self.platforms:
             p.step(dt)
+        if self._use_kernels:
+            self.last = self._step_compiled(dt)
+            return self.last
         self._rates = self._rotation_rates()
         self._step_robot(dt)
         self._update_tool()
@@ -408,6 +460,50 @@ class MotionLab:
         self.pendulum.step(dt, a_t_d, self.winch.length, self.winch.speed)
         self.last = self._sample()
         return self.last
+
+    def _step_compiled(self, dt: float) -> LabSample:
+        """Everything after the platforms in one :func:`app.sim.kernels.lab_step` call."""
+        (p1, p2), (m1, m2), f, w, pd = self.platforms, self.models, self.joints, self.winch, self.pendulum
+        wf = w.filter
+        if self.frozen:
+            w.speed_command = 0.0
+        mode = 3 if self.frozen else COMAU_MODES.index(self.comau_mode)  # hold and E-STOP brake alike
+        has = self.payload_target_b2 is not None
+        target = self.payload_target_b2 if has else self._target
+        e_b2, p_w_g, p_p_g, legs1, legs2 = self._out
+        has, pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, h_err = sim_kernels.lab_step(
+            p1.filter.x, p1.filter.v, p1.filter.a, p2.filter.x, p2.filter.v, p2.filter.a, self._rates_buf,
+            self._comau, *self._consts,
+            f.x, f.v, f.a, f.lower, f.upper, f.speed, f.accel, f.tau, mode,
+            np.ascontiguousarray(self.tool_velocity_cmd, dtype=float),
+            wf.x, wf.v, wf.a, wf.lower, wf.upper, wf.speed, wf.accel, wf.tau,
+            not self.frozen and w.mode == "motion_comp", float(w.speed_command),
+            target, has, float(pd.alpha), float(pd.beta), float(pd.alpha_dot), float(pd.beta_dot),
+            float(pd.damping), float(pd.g), m1.a_n, m1.b_b, m2.a_n, m2.b_b,
+            self.p_t_n1, self.p_t_g, self.v_t_g, self.a_t_g, self.at_limit, e_b2, p_w_g, p_p_g, legs1, legs2,
+            float(dt),
+        )  # fmt: skip
+        if has and self.payload_target_b2 is None:
+            self.payload_target_b2 = target.copy()
+        self._rates = self._rate_views
+        return LabSample(
+            t=self.t,
+            eta1=p1.filter.x.copy(),
+            eta2=p2.filter.x.copy(),
+            legs1=legs1.copy(),
+            legs2=legs2.copy(),
+            q=f.x.copy(),
+            qd=f.v.copy(),
+            p_t_g=self.p_t_g.copy(),
+            v_t_g=self.v_t_g.copy(),
+            p_p_g=p_p_g.copy(),
+            p_w_g=p_w_g.copy(),
+            e_t_b2=e_b2.copy(),
+            L_w=float(wf.x[0]),
+            L_w_dot=float(wf.v[0]),
+            swing=(pd.alpha, pd.beta),
+            payload_height_error=h_err,
+        )
 
     def _step_robot(self, dt: float) -> None:
         f = self.joints

@@ -86,12 +86,15 @@ class MotionFilter:
     def step(
         self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
     ) -> NDArray[np.float64]:
-        """Advance by ``dt`` toward ``x_ref`` (with feed-forward ``v_ref``); returns the new x
-        (compiled unless ``use_kernels`` is False)."""
+        """Advance by ``dt`` toward ``x_ref`` (with feed-forward ``v_ref``); returns the new x.
+
+        Compiled unless ``use_kernels`` is False; the compiled step updates ``x``, ``v`` and ``a`` in
+        place (the returned x is the filter's own array: copy what you keep).
+        """
         if self.use_kernels:
             use_v = v_ref is not None
-            self.x, self.v, self.a = sim_kernels.motion_filter_step(
-                self.x, self.v, np.ascontiguousarray(x_ref, dtype=float),
+            sim_kernels.motion_filter_update(
+                self.x, self.v, self.a, np.ascontiguousarray(x_ref, dtype=float),
                 np.ascontiguousarray(v_ref, dtype=float) if use_v else self.x, use_v, self.lower, self.upper,
                 self.speed, self.accel, float(self.tau), float(dt), float(speed_scale),
             )  # fmt: skip
@@ -272,8 +275,7 @@ class WaveSimulation:
         return np.minimum(s, 1.0)
 
     def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        eta, deta, _ = self.motion.eta_derivatives(np.array([t]))
-        return eta[0] * self.scale, deta[0] * self.scale
+        return self.motion.at(t, self.scale)
 
 
 class Remote:
@@ -327,6 +329,24 @@ class Platform:
         self.frozen = False
         self.leg_clamped = False
         self.hold_pose: NDArray[np.float64] | None = None
+        margin = 0.02 * (model.leg_max - model.leg_min)
+        #: the leg lengths a target may ask for: the stroke less a 2 % margin at each end [m]
+        self.leg_band = (float(model.leg_min + margin), float(model.leg_max - margin))
+
+    @property
+    def use_kernels(self) -> bool:
+        """Compiled filter, leg clamp and wave source (False: the NumPy reference of each)."""
+        return self.filter.use_kernels
+
+    @use_kernels.setter
+    def use_kernels(self, on: bool) -> None:
+        self.filter.use_kernels = bool(on)
+        self._share_kernels(self.source)
+
+    def _share_kernels(self, source: object) -> None:
+        """A wave source computes its vessel motion the way the platform runs (compiled or reference)."""
+        if isinstance(source, WaveSimulation):
+            source.motion.use_kernels = self.use_kernels
 
     # ------------------------------------------------------------------ commands
     @property
@@ -372,6 +392,7 @@ class Platform:
             source = self.remote
         elif source is None:
             raise PlatformError(f"source {name} needs its parameters")
+        self._share_kernels(source)
         self.source_name, self.source = name, source
 
     def estop(self) -> None:
@@ -397,8 +418,10 @@ class Platform:
     def _clamp_to_legs(self, eta: NDArray[np.float64]) -> NDArray[np.float64]:
         """Scale a target toward neutral until every leg is inside its stroke (2 % margin)."""
         m = self.model
-        margin = 0.02 * (m.leg_max - m.leg_min)
-        lo, hi = m.leg_min + margin, m.leg_max - margin
+        lo, hi = self.leg_band
+        if self.use_kernels:
+            out, self.leg_clamped = sim_kernels.clamp_to_legs(m.a_n, m.b_b, np.ascontiguousarray(eta, float), lo, hi)
+            return out
 
         def inside(e):
             L = m.leg_lengths(e)
@@ -438,6 +461,14 @@ class Platform:
                 self.gain = max(0.0, self.gain - dt / self.ramp_time) if self.ramp_time > 0 else 0.0
             eta_s, v_s = self.source(self.t_source)
             g = smoothstep(self.gain) if self.transition == "disengaging" else self.gain
+            if self.use_kernels and not (self.transition == "disengaging" and self.gain <= 0.0):
+                m = self.model  # the scaled source clamped to the legs and filtered, in one call
+                self.leg_clamped = sim_kernels.follow_clamped(
+                    m.a_n, m.b_b, *self.leg_band, float(g), np.ascontiguousarray(eta_s, dtype=float),
+                    np.ascontiguousarray(v_s, dtype=float), f.x, f.v, f.a, f.lower, f.upper, f.speed, f.accel,
+                    float(f.tau), float(dt),
+                )  # fmt: skip
+                return f.x.copy()
             target, v_ref = self._clamp_to_legs(g * eta_s), g * v_s
             if self.transition == "disengaging" and self.gain <= 0.0:
                 target, v_ref = np.zeros(6), None
@@ -446,15 +477,21 @@ class Platform:
         elif self.transition == "raising" or self.mode == "neutral":
             target, v_ref = np.zeros(6), None
             speed_scale = TRANSFER_SPEED_FRACTION
-            if self.transition == "raising" and np.allclose(f.x, 0, atol=1e-6) and np.allclose(f.v, 0, atol=1e-6):
+            if self.transition == "raising" and self._at_rest(0.0):
                 self.mode, self.transition = "neutral", ""
         if self.transition == "settling" or (self.mode == "settled" and not self.transition):
             target, v_ref = self.settled_pose, None
             speed_scale = TRANSFER_SPEED_FRACTION
-            at_rest = np.allclose(f.x, self.settled_pose, atol=1e-6) and np.allclose(f.v, 0, atol=1e-6)
-            if self.transition == "settling" and at_rest:
+            if self.transition == "settling" and self._at_rest(self.settled_pose):
                 self.mode, self.transition = "settled", ""
         return f.step(target, v_ref, dt, speed_scale).copy()
+
+    def _at_rest(self, pose: ArrayLike) -> bool:
+        """At ``pose`` and at rest: ``np.allclose(x, pose, atol=1e-6) and np.allclose(v, 0, atol=1e-6)``
+        written out (|a − b| ≤ 1e-6 + 1e-5 |b|; a twentieth of allclose's cost)."""
+        f = self.filter
+        b = np.asarray(pose, dtype=float)
+        return bool(np.all(np.abs(f.x - b) <= 1e-6 + 1e-5 * np.abs(b)) and np.all(np.abs(f.v) <= 1e-6))
 
     def _stop_step(self, dt: float) -> NDArray[np.float64]:
         """Brake every DOF at its acceleration limit until at rest (still through the limits)."""
