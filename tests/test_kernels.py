@@ -266,3 +266,29 @@ def test_no_kernel_compiles_after_warm_up_in_any_engine():
     counts = json.loads(out.stdout.strip().splitlines()[-1])
     assert counts["after"] == counts["before"], counts
     assert all(n <= 1 for n in counts["after"].values()), counts
+
+
+def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(tmp_path):
+    """Numba checks a cached kernel against its own file only; the lab step calls this package's
+    Comau candidates, so an edit of app/models/kernels.py must clear app/sim/kernels.py's cache too."""
+    from app.models.kernels import clear_stale_caches
+
+    (tmp_path / "models").mkdir()
+    (tmp_path / "sim").mkdir()
+    (tmp_path / "models/kernels.py").write_text("def f(): pass\n")
+    (tmp_path / "sim/kernels.py").write_text("from app.models import kernels as model_kernels\n")
+    files = ("models/kernels.py", "sim/kernels.py")
+    assert clear_stale_caches(tmp_path, files) == list(files)  # first look: no stamps yet
+    cached = [
+        tmp_path / "sim/__pycache__/kernels.step-10.py311.nbi",
+        tmp_path / "models/__pycache__/kernels.f-1.py311.nbi",
+    ]
+    for f in cached:
+        f.write_text("machine code")
+    assert clear_stale_caches(tmp_path, files) == []  # nothing changed: caches kept
+    assert all(f.exists() for f in cached)
+    (tmp_path / "models/kernels.py").write_text("def f(): return 1\n")
+    assert clear_stale_caches(tmp_path, files) == ["sim/kernels.py"]  # its import changed
+    assert not cached[0].exists() and cached[1].exists()  # numba itself handles models/kernels.py's own edit
+    (tmp_path / "sim/kernels.py").write_text("from app.models import kernels as model_kernels\n# edited\n")
+    assert clear_stale_caches(tmp_path, files) == []  # an edit of the file itself is numba's to notice

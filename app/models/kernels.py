@@ -14,9 +14,13 @@ The DH link is A = Rz(θ) Tz(d) Tx(a) Rx(α) (standard DH, TAC paper eq. 39).
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import math
 import os
+import re
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -26,6 +30,52 @@ except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
 ENABLED = numba is not None and os.environ.get("BOSUN_JIT", "1") != "0"
+
+# Every file holding kernels.  Numba checks a cached kernel against its own file only, yet kernels
+# call kernels of other files (the lab step calls this file's Comau candidates) and would keep the old
+# machine code after an edit there: each file's cache is cleared when a kernel file it imports changes.
+KERNEL_FILES = (
+    "models/kernels.py",
+    "sim/kernels.py",
+    "marine/kernels.py",
+    "ik/ga_kernels.py",
+    "control/tac_kernels.py",
+)
+
+
+def clear_stale_caches(root: Path, files: tuple[str, ...] = KERNEL_FILES) -> list[str]:
+    """Remove the numba caches (``__pycache__/STEM.*.nbi, *.nbc``) of each of ``files`` (under ``root``,
+    the ``app`` folder) whose imported kernel files (top-level ``from app.X import``) changed since the
+    last check, recorded in a stamp beside the cache; returns the files whose caches were cleared."""
+    sources = {name: (root / name).read_bytes() for name in files if (root / name).is_file()}
+    modules = {"app." + name[:-3].replace("/", "."): name for name in sources}
+    cleared = []
+    for name, text in sources.items():
+        deps = set()
+        for mod, names in re.findall(rb"^from (app[\w.]*) import \(?([\w, ]*)", text, re.M):
+            named = [n.split()[0] for n in names.decode().split(",") if n.strip()]  # "kernels as k": kernels
+            for m in [mod.decode()] + [f"{mod.decode()}.{n}" for n in named]:
+                if m in modules and modules[m] != name:
+                    deps.add(modules[m])
+        digest = hashlib.sha256(b"".join(d.encode() + b"\0" + sources[d] + b"\0" for d in sorted(deps))).hexdigest()
+        cache = (root / name).parent / "__pycache__"
+        stem = Path(name).stem
+        stamp = cache / f"{stem}.bosun-imports.sha256"
+        with contextlib.suppress(OSError):
+            if stamp.read_text() == digest:
+                continue
+        for f in [*cache.glob(f"{stem}.*.nbi"), *cache.glob(f"{stem}.*.nbc")]:
+            with contextlib.suppress(OSError):
+                f.unlink()
+        with contextlib.suppress(OSError):  # a read-only install: numba then does not cache either
+            cache.mkdir(exist_ok=True)
+            stamp.write_text(digest)
+        cleared.append(name)
+    return cleared
+
+
+if ENABLED:
+    clear_stale_caches(Path(__file__).resolve().parents[1])
 
 
 def _jit(fn):
