@@ -108,7 +108,7 @@ def test_the_loop_keeps_ticking_and_estop_gets_through_a_junk_flood(serve):
         assert np.max(np.abs(stopped["qdot"])) == 0.0
         assert list(srv.estop_ticks) and max(srv.estop_ticks) <= 2
         assert srv.limits.total_dropped > 1000  # the flooder's excess, unread
-        op_ident = next(i for i, c in srv.clients.items() if c.name == "op")
+        op_ident = next(i for i, c in list(srv.clients.items()) if c.name == "op")
         assert srv.limits.dropped.get(op_ident, 0) == 0
         assert sent.get(timeout=10) > 20_000
     finally:
