@@ -68,6 +68,15 @@ def test_jacobian_matches_finite_differences(head, rng):
         np.testing.assert_allclose(J, J_fd, atol=1e-6)
 
 
+def test_arm_rates_invert_the_jacobian(head, rng):
+    """eq. (32) solved for α̇ row by row equals solving J α̇ = ṗ."""
+    alpha = rng.uniform(head.lower, head.upper, size=(50, 3))
+    p_dot = rng.normal(0.0, 1.0, size=(50, 3))
+    expected = np.linalg.solve(head.jacobian(alpha), p_dot[..., None])[..., 0]
+    np.testing.assert_allclose(head.arm_rates(alpha, p_dot), expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(head.arm_rates(alpha, p_dot, head.fk(alpha)), expected, rtol=1e-9, atol=1e-12)
+
+
 def test_workspace_hull_inside_test_and_saturation(head):
     ws = head.workspace(0.25)
     assert ws.inside(ws.points).all()  # every feasible grid point is in its hull

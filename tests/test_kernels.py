@@ -218,7 +218,8 @@ from app.models import kernels
 from app.sim import kernels as sim
 from app.ik import ga_kernels as ga
 from app.marine import kernels as marine
-MODULES = (kernels, sim, ga, marine)
+from app.control import tac_kernels as tac
+MODULES = (kernels, sim, ga, marine, tac)
 kernels.warm_up()
 before = {n: len(f.signatures) for m in MODULES for n, f in vars(m).items() if hasattr(f, "signatures")}
 from app.engine.session import Session

@@ -26,16 +26,20 @@ the paper's S(ω) R o_t^b and v_b^n terms.
 
 Joint control: PID on α (eq. 57, Table 4: K_p 10, K_i 60, K_d 1) driving DC motors modelled as
 α/u = K_DC/(T_DC s + 1) (eq. 58, T_DC 0.2 s, K_DC 1), discretised exactly (zero-order hold).
+
+The batched references, the crane IK and both servos run compiled (:mod:`app.control.tac_kernels`)
+unless ``use_kernels`` is False; the NumPy code here is their reference.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.control import tac_kernels
 from app.geometry import euler_zyx_to_matrix
 from app.ik.analytic import ElbowCrane
 from app.models.delta import DeltaHead
@@ -98,6 +102,24 @@ class CraneHead:
         self.elbow_tcp = replace(elbow, L2=elbow.L2 + self.x_d)
         sol = head.ik(self.p_d_t)
         self.alpha_d = sol.alpha
+        # the compiled kernels' constants (app/control/tac_kernels.py)
+        e = self.elbow_tcp
+        self.kernel_elbow = (float(e.L0), float(e.L1), float(e.L2), tac_kernels.c_array(np.linalg.inv(e.T_world_1)))
+        ws = self.workspace
+        self.kernel_hull = (
+            tac_kernels.c_array(ws.equations),
+            tac_kernels.c_array(ws.center),
+            float(ws.depth(ws.center)),
+        )
+
+    @property
+    def use_kernels(self) -> bool:
+        """Compiled references and IK (and the head's and crane's kinematics); False: the NumPy reference."""
+        return self.head.use_kernels
+
+    @use_kernels.setter
+    def use_kernels(self, on: bool) -> None:
+        self.head.use_kernels = self.crane.use_kernels = bool(on)
 
     # ------------------------------------------------------------------ crane
     def crane_pose(self, beta: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -118,6 +140,8 @@ class CraneHead:
         """
         e = self.elbow_tcp
         p_b = np.atleast_2d(np.asarray(p_b, dtype=float))
+        if self.use_kernels:
+            return tac_kernels.crane_ik_tcp(self.kernel_elbow, tac_kernels.c_array(p_b), float(beta0_hint))
         T1 = np.linalg.inv(e.T_world_1)
         p1 = p_b @ T1[:3, :3].T + T1[:3, 3]  # eq. (42)
         x, y, z = p1[:, 0], p1[:, 1], p1[:, 2]
@@ -151,6 +175,14 @@ class CraneHead:
         n = eta.shape[0]
         p_d_n = np.broadcast_to(np.asarray(p_d_n, dtype=float), (n, 3))
         p_d_n_dot = np.zeros((n, 3)) if p_d_n_dot is None else np.broadcast_to(p_d_n_dot, (n, 3))
+        if self.use_kernels:
+            hold = self.alpha_d if alpha_hold is None else alpha_hold
+            args = (eta, nu, beta, beta_dot, p_d_n, p_d_n_dot, hold)
+            out = tac_kernels.head_reference(
+                self.crane.kernel_args, self.head.kernel_args, self.kernel_hull,
+                *(tac_kernels.c_array(x) for x in args),
+            )  # fmt: skip
+            return HeadReference(*out)
         R_b_n = euler_zyx_to_matrix(eta[:, 3:6])
         o_t_b, R_t_b = self.crane_pose(beta)
         v_t_b, w_t_b = self.crane_twist(beta, beta_dot)
@@ -177,8 +209,7 @@ class CraneHead:
             for k in np.flatnonzero(bad):
                 alpha_ref[k] = alpha_ref[k - 1] if k > 0 else hold
         # eq. (56) (no feed-forward while saturated: the reference is not moving with v_ref there)
-        J = self.head.jacobian(alpha_ref, p_cmd)
-        alpha_dot_ref = np.linalg.solve(J, v_ref_t[..., None])[..., 0]
+        alpha_dot_ref = self.head.arm_rates(alpha_ref, v_ref_t, p_cmd)
         limited = saturated | bad | clipped
         alpha_dot_ref[limited] = 0.0
         return HeadReference(o_t_n, R_t_n, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited)
@@ -202,11 +233,21 @@ class HeadServo:
     upper: NDArray[np.float64]
     alpha: NDArray[np.float64]
     u_margin: float = math.radians(10.0)
+    use_kernels: bool = field(default=tac_kernels.ENABLED, repr=False)  # False: the NumPy reference
 
     def __post_init__(self) -> None:
         self.alpha = np.array(self.alpha, dtype=float)
         self.integral = np.zeros(3)
         self.u = self.alpha / self.gains.k_dc
+
+    def kernel_args(self) -> tuple:
+        """(K_p, K_i, K_d, T_DC, K_DC, u_min, u_max, α_min, α_max): the ``pid`` of :mod:`app.control.tac_kernels`."""
+        g = self.gains
+        u_lo, u_hi = (self.lower - self.u_margin) / g.k_dc, (self.upper + self.u_margin) / g.k_dc
+        bounds = (u_lo, u_hi, self.lower, self.upper)
+        return (float(g.kp), float(g.ki), float(g.kd), float(g.t_dc), float(g.k_dc)) + tuple(
+            tac_kernels.c_array(x) for x in bounds
+        )
 
     def reset(self, alpha: ArrayLike) -> None:
         self.alpha = np.array(alpha, dtype=float)
@@ -217,6 +258,12 @@ class HeadServo:
         self, alpha_ref: NDArray[np.float64], alpha_dot_ref: NDArray[np.float64], dt: float
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Advance len(alpha_ref) steps; returns α (after each step) and u, each (n, 3)."""
+        if self.use_kernels:
+            alpha, integral, u = (np.array(x, dtype=float) for x in (self.alpha, self.integral, self.u))
+            ref, ref_dot = tac_kernels.c_array(alpha_ref), tac_kernels.c_array(alpha_dot_ref)
+            out = tac_kernels.head_servo(self.kernel_args(), float(dt), ref, ref_dot, alpha, integral, u)
+            self.alpha, self.integral, self.u = alpha, integral, u
+            return out
         g = self.gains
         a = math.exp(-dt / g.t_dc)
         b = (1.0 - a) * g.k_dc
@@ -276,14 +323,27 @@ class CraneServo:
     beta: NDArray[np.float64]
     share: float = 1.0
     k_p: float = 1.0
+    use_kernels: bool = field(default=tac_kernels.ENABLED, repr=False)  # False: the NumPy reference
 
     def __post_init__(self) -> None:
         self.beta = np.array(self.beta, dtype=float)
         self.beta_dot = np.zeros(3)
 
+    def kernel_args(self) -> tuple:
+        """(β_min, β_max, β̇_max, β̈_max, share, k_p): the ``crane`` of :mod:`app.control.tac_kernels`."""
+        limits = (self.lower, self.upper, self.speed, self.accel)
+        return tuple(tac_kernels.c_array(x) for x in limits) + (float(self.share), float(self.k_p))
+
     def run(
         self, beta_d: NDArray[np.float64], beta_c: NDArray[np.float64], beta_c_dot: NDArray[np.float64], dt: float
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Advance len(beta_c) steps; returns β and β̇ after each step, each (n, 3)."""
+        if self.use_kernels:
+            beta, beta_dot = np.array(self.beta, dtype=float), np.array(self.beta_dot, dtype=float)
+            args = (tac_kernels.c_array(x) for x in (beta_d, beta_c, beta_c_dot))
+            out = tac_kernels.crane_servo(self.kernel_args(), *args, float(dt), beta, beta_dot)
+            self.beta, self.beta_dot = beta, beta_dot
+            return out
         n = beta_c.shape[0]
         out_b = np.empty((n, 3))
         out_v = np.empty((n, 3))

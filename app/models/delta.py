@@ -17,10 +17,14 @@ and the loop closure |p_c^t − c_i^t| = l_r (eq. 6).
   c_i, by trilateration (two plane differences give a line, one quadratic gives the points);
   the solution above the base, larger x, is returned.  Equivalent to eqs. (22)–(25) but it
   needs no inverse of C (eq. 21), which is singular whenever the c_i are coplanar with o_t.
-* Jacobian (eq. 32): ṗ = A⁻¹ B α̇, rows of A = (p − c_i)ᵀ, B = diag((p − c_i)·d_i), d_i = ∂c_i/∂α_i (eq. 28).
+* Jacobian (eq. 32): ṗ = A⁻¹ B α̇, rows of A = (p − c_i)ᵀ, B = diag((p − c_i)·d_i), d_i = ∂c_i/∂α_i (eq. 28);
+  its inverse α̇ = B⁻¹ A ṗ row by row (:meth:`DeltaHead.arm_rates`).
 * Workspace (§6): a grid of step h over the box of eq. (33), IK-feasible points within the
   joint limits, their convex hull, an inside test, and saturation of a reference onto the hull
   along the ray from the workspace centre.
+
+The inverse and forward kinematics run compiled (:mod:`app.control.tac_kernels`) unless
+``use_kernels`` is False; the NumPy code here is their reference.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull
 
+from app.control import tac_kernels
 from app.errors import JointInputError
 from app.geometry import rot_x
 from app.models.spec import RobotSpec
@@ -71,6 +76,12 @@ class DeltaHead:
         self.speed = np.full(3, d.speed)
         self.accel = np.full(3, np.inf if d.accel is None else d.accel)
         self._workspace: dict[float, DeltaWorkspace] = {}
+        # the compiled kernels' constants (app/control/tac_kernels.py); use_kernels=False: the NumPy reference
+        self.kernel_args = (
+            float(self.l_a), float(self.a), float(self.l_r), tac_kernels.c_array(self.R),
+            tac_kernels.c_array(self.lower), tac_kernels.c_array(self.upper),
+        )  # fmt: skip
+        self.use_kernels = tac_kernels.ENABLED
 
     # ------------------------------------------------------------------ geometry
     def check_q(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -101,6 +112,10 @@ class DeltaHead:
     def ik(self, p_t: ArrayLike) -> DeltaIK:
         """Arm angles reaching TCP position(s) p_t (shape (..., 3)), knees out (eqs. 8–16)."""
         p = np.asarray(p_t, dtype=float)
+        if self.use_kernels and p.shape[-1:] == (3,):
+            out = tac_kernels.delta_ik(self.kernel_args, tac_kernels.c_array(p.reshape(-1, 3)))
+            alpha, reachable, within = (x.reshape(p.shape) for x in out)
+            return DeltaIK(alpha, reachable, within)
         p_i = np.einsum("ikj,...k->...ij", self.R, p)  # p in each {t_i}: R^T p, eq. (2)
         x, y, z = p_i[..., 0], p_i[..., 1], p_i[..., 2]
         E = 2.0 * self.l_a * (y - self.a)
@@ -126,6 +141,10 @@ class DeltaHead:
         ValueError
             When the three spheres do not meet (no assembly exists for these angles).
         """
+        alpha = np.asarray(alpha, dtype=float)
+        if self.use_kernels and alpha.shape[-1:] == (3,):
+            p = tac_kernels.delta_fk(self.kernel_args, tac_kernels.c_array(alpha.reshape(-1, 3)))
+            return p.reshape(alpha.shape)
         c = self.knees(alpha)
         c1, c2, c3 = c[..., 0, :], c[..., 1, :], c[..., 2, :]
         # (p − c_j)² − (p − c_1)² = 0  ⇒  2 (c_1 − c_j)·p = |c_1|² − |c_j|²,  j = 2, 3
@@ -166,6 +185,17 @@ class DeltaHead:
         s = p[..., None, :] - c  # s_i = p − c_i, eq. (5)
         B = np.sum(s * d, axis=-1)[..., None] * np.eye(3)
         return np.linalg.solve(s, B)
+
+    def arm_rates(self, alpha: ArrayLike, p_dot: ArrayLike, p_t: ArrayLike | None = None) -> NDArray[np.float64]:
+        """α̇ for a TCP velocity ṗ_c^t: eq. (32) solved for α̇ = B⁻¹ A ṗ, i.e. α̇_i = (p − c_i)·ṗ / ((p − c_i)·d_i).
+
+        The same as ``solve(jacobian(alpha, p), p_dot)`` without forming J = A⁻¹ B; shapes (..., 3).
+        """
+        alpha = np.asarray(alpha, dtype=float)
+        p = self.fk(alpha) if p_t is None else np.asarray(p_t, dtype=float)
+        s = p[..., None, :] - self.knees(alpha)
+        num = np.sum(s * np.asarray(p_dot, dtype=float)[..., None, :], axis=-1)
+        return num / np.sum(s * self.knee_rates(alpha), axis=-1)
 
     # ------------------------------------------------------------------ workspace
     def workspace(self, h: float = 0.25) -> DeltaWorkspace:

@@ -398,6 +398,9 @@ def warm_up(progress=None) -> float:
         lambda: ga.evolve_position(*args, pop, cost, np.zeros(3), *box, np.ones(n), *rules),
         lambda: ga.evolve_velocity(*args, pop, cost, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0, *window, *rules),
     ]
+    from app.control import tac_kernels as tac  # the crane-head chunk (imports this module: not at the top)
+
+    steps += tac.warm_up_steps()
     for k, step in enumerate(steps):
         step()
         if progress is not None:

@@ -5,6 +5,10 @@ joints (cooperative mode only), the head references of eqs. (49)–(56) (vectori
 and DC motors step by step, and e_c, e_s of eq. (61).  The CLI runs whole scenarios through it;
 the engine streams it to the GUI a tick at a time.
 
+With ``use_kernels`` (the default when numba is there) a chunk after the vessel motion is one
+compiled call, :func:`app.control.tac_kernels.tac_chunk`; with ``use_kernels = False`` every part
+runs its NumPy reference (tested equal in ``tests/test_tac_kernels.py``).
+
 Modes: ``off`` (head locked at p_d^t = [x_d, 0, 0]: the uncompensated TCP), ``tac`` (the paper:
 crane still in the configuration of eq. (60), head compensates), ``cooperative`` (crane joints
 take a share of the motion within their speed and acceleration limits, head the rest).
@@ -19,6 +23,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from app.control import tac_kernels
 from app.control.tac import CraneHead, CraneServo, HeadServo, PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
@@ -194,10 +199,27 @@ class TacSimulator:
         self.crane_servo = CraneServo(
             crane.lower, crane.upper, crane.speed, crane.accel, self.beta_d, sc.crane_share, sc.crane_kp
         )
+        # constants of the compiled chunk (C-contiguous float64)
+        self._pid_args, self._crane_args = self.head_servo.kernel_args(), self.crane_servo.kernel_args()
+        self._alpha_d, self._p_d_t = tac_kernels.c_array(system.alpha_d), tac_kernels.c_array(system.p_d_t)
         self._beta0_hint = float(self.beta_d[0])
         self._started = False
         self._beta_c_prev: NDArray[np.float64] | None = None
         self.continue_from_current = False  # set when the machine's state is carried over (live changes)
+        self._use_kernels = tac_kernels.ENABLED
+
+    @property
+    def use_kernels(self) -> bool:
+        """One compiled call per chunk (and compiled parts); False: every part in its NumPy reference.
+
+        Setting it sets the flag of the servos and of the (possibly shared) crane-head system too.
+        """
+        return self._use_kernels
+
+    @use_kernels.setter
+    def use_kernels(self, on: bool) -> None:
+        self._use_kernels = bool(on)
+        self.system.use_kernels = self.head_servo.use_kernels = self.crane_servo.use_kernels = bool(on)
 
     def set_mode(self, mode: str) -> None:
         """Switch the compensation mode live; the joints continue from where they are."""
@@ -244,6 +266,8 @@ class TacSimulator:
         if not self._started and n:
             first = self.vessel.state(np.array([self.k * sc.dt]))
             self._start(first)
+        if self._use_kernels:
+            return self._advance_compiled(t, true, meas, frozen)
         # crane
         crane = self.crane_servo
         if frozen:
@@ -285,6 +309,52 @@ class TacSimulator:
         self.k += n
         return TacChunk(t, true.eta, beta, p_ref_t, p_c_t, alpha_ref, alpha, u, p_c_n, p_s_n, e_c, e_s, saturated)
 
+    def _advance_compiled(self, t: NDArray[np.float64], true, meas, frozen: bool) -> TacChunk:
+        """:meth:`advance` after the vessel motion in one call of :func:`~app.control.tac_kernels.tac_chunk`."""
+        sc, sys_, tk = self.scenario, self.system, tac_kernels
+        crane, head = self.crane_servo, self.head_servo
+        beta_hold = self.beta_d
+        if frozen:
+            crane.beta_dot = np.zeros(3)
+            crane_mode, beta_hold = tk.CRANE_HOLD, crane.beta
+        elif sc.mode == "cooperative":
+            crane_mode = tk.CRANE_COOPERATIVE
+        elif np.any(crane.beta != self.beta_d) or np.any(crane.beta_dot != 0):
+            crane_mode = tk.CRANE_RETURN  # after cooperative mode: back to the configuration of eq. (60)
+        else:
+            crane_mode = tk.CRANE_HOLD
+        lock = frozen or sc.mode == "off"  # head locked (E-STOP: where it is; off: at p_d^t)
+        alpha_lock = head.alpha if frozen else sys_.alpha_d
+        beta, beta_dot = np.array(crane.beta, dtype=float), np.array(crane.beta_dot, dtype=float)  # fresh: in place
+        alpha, integral, u = (np.array(x, dtype=float) for x in (head.alpha, head.integral, head.u))
+        has_prev = self._beta_c_prev is not None
+        beta_c_prev = np.array(self._beta_c_prev, dtype=float) if has_prev else np.zeros(3)
+        f = tk.c_array
+        out = tk.tac_chunk(
+            f(true.eta), f(meas.eta), f(meas.nu), meas is not true, float(sc.dt), crane_mode,
+            tk.HEAD_LOCK if lock else tk.HEAD_SERVO, f(beta_hold), f(alpha_lock),
+            self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t, sys_.crane.kernel_args, sys_.head.kernel_args,
+            sys_.kernel_hull, sys_.kernel_elbow, self._crane_args, self._pid_args, beta, beta_dot, beta_c_prev,
+            self._beta0_hint, has_prev, alpha, integral, u,
+        )  # fmt: skip
+        n = t.size
+        crane.beta, crane.beta_dot = beta, beta_dot
+        if not lock:
+            head.alpha, head.integral, head.u = alpha, integral, u
+        if crane_mode == tk.CRANE_COOPERATIVE and n:
+            self._beta0_hint, self._beta_c_prev = float(beta_c_prev[0]), beta_c_prev
+        elif (
+            crane_mode == tk.CRANE_RETURN
+            and np.allclose(crane.beta, self.beta_d, atol=1e-6)
+            and np.allclose(crane.beta_dot, 0, atol=1e-6)
+        ):
+            crane.beta, crane.beta_dot = self.beta_d.copy(), np.zeros(3)
+        self.k += n
+        beta_out, p_ref_t, p_c_t, alpha_ref, alpha_out, u_out, p_c_n, p_s_n, e_c, e_s, saturated = out
+        return TacChunk(
+            t, true.eta, beta_out, p_ref_t, p_c_t, alpha_ref, alpha_out, u_out, p_c_n, p_s_n, e_c, e_s, saturated
+        )
+
 
 def simulate(
     scenario: TacScenario,
@@ -293,12 +363,19 @@ def simulate(
     cancel: Callable[[], bool] | None = None,
     chunk: int = 2000,
     system: CraneHead | None = None,
+    use_kernels: bool | None = None,
 ) -> TacResult:
-    """Run a whole scenario; ``progress(done_steps, total_steps)`` after each chunk."""
+    """Run a whole scenario; ``progress(done_steps, total_steps)`` after each chunk.
+
+    ``use_kernels``: False runs every part in its NumPy reference (None: the default, compiled when numba
+    is there).
+    """
     import time
 
     t0 = time.perf_counter()
     sim = TacSimulator(scenario, system)
+    if use_kernels is not None:
+        sim.use_kernels = use_kernels
     chunks: list[TacChunk] = []
     cancelled = False
     while not sim.done:
