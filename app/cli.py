@@ -699,7 +699,7 @@ def _make_session(args: argparse.Namespace):
 def cmd_server(args: argparse.Namespace) -> int:
     import signal
 
-    from app.engine.server import EngineServer
+    from app.engine.server import DEFAULT_RATE, EngineServer
     from app.net.security import ENV_OPERATOR_SECRET, ServerCurve
     from app.net.transport import check_url, is_local
 
@@ -723,7 +723,7 @@ def cmd_server(args: argparse.Namespace) -> int:
     if compile_s > 1.0:
         print(f"bosun server: kernels compiled in {compile_s:.1f} s (cached for the next start)", flush=True)
     session = _make_session(args)
-    rate = args.rate if args.rate is not None else (50.0 if args.plant in ("tac", "lab") else 500.0)
+    rate = args.rate if args.rate is not None else (50.0 if args.plant in ("tac", "lab") else DEFAULT_RATE)
     pub = (
         min(args.publish_rate, rate)
         if args.publish_rate is not None
@@ -1165,7 +1165,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="teleop (a library manipulator), tac (vessel, crane, Delta head), lab (Motion-Lab); default teleop",
     )
     p.add_argument(
-        "--rate", type=_positive_float, default=None, help="control rate [Hz], up to 1000 (default 500; tac 50)"
+        "--rate",
+        type=_positive_float,
+        default=None,
+        help="control rate [Hz], up to 1000 (default 1000; tac and lab 50)",
     )
     p.add_argument(
         "--publish-rate", type=_positive_float, default=None, help="state messages per second (default 50; tac 25)"

@@ -109,6 +109,7 @@ class LoopStats:
 SPIN = 0.0002
 IO_MARGIN = 0.0003
 IO_SHARE = 0.1  # of a period the I/O thread is given when messages wait, even after a long tick
+DEFAULT_RATE = 1000.0  # Hz, the teleop engine's control loop
 RATE_LIMIT = 1000.0  # messages a second per client, sustained; the joystick sends 500 and pings 2
 RATE_BURST = 250  # messages a client may send at once
 INBOX_LIMIT = 1024  # commands and inputs waiting for the loop; past it, refused ("engine busy")
@@ -202,7 +203,7 @@ class EngineServer:
     bind : str
         Request URL (tcp://HOST:PORT with PORT 0 for any free port, or ipc://PATH).
     rate : float
-        Control rate [Hz], 1..1000 (default 500).
+        Control rate [Hz], 1..1000 (default 1000: issue 14's targets hold, README benchmarks).
     publish_rate : float
         State messages per second (default 50).
     token : str, optional
@@ -216,7 +217,7 @@ class EngineServer:
         self,
         session: Session,
         bind: str = "tcp://127.0.0.1:5555",
-        rate: float = 500.0,
+        rate: float = DEFAULT_RATE,
         publish_rate: float = 50.0,
         token: str | None = None,
         operator_timeout: float = 5.0,
