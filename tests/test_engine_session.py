@@ -38,7 +38,7 @@ def run(session, seconds, s=None, t0=0.0, feed=True):
         t += DT
         if feed:
             session.feed(s, t)
-        session.tick(t, DT)
+        session.tick(t, DT, solve_budget=0.4 * DT)  # as the engine loop gives it
     return t
 
 
@@ -154,7 +154,6 @@ def test_bad_commands_leave_state_unchanged(tmp_path):
     assert ses.robot_name == "scara" and ses.solver_name == "jacobian" and ses.mode == "velocity"
 
 
-@pytest.mark.slow
 def test_switching_robot_and_solver_while_running():
     ses = Session(robot_name="comau_smart5_3dof", solver_name="analytic")
     t = run(ses, 0.2, sample(x=0.5), t0=arm(ses))
