@@ -246,3 +246,27 @@ def test_mru_adds_seeded_bias_and_noise(motion):
         MRU(np.random.default_rng(0), noise_eta=[-1, 0, 0, 0, 0, 0])
     with pytest.raises(VesselError, match="6 finite numbers"):
         MRU(np.random.default_rng(0), bias_nu=[0, 0])
+
+
+def test_a_uniform_time_grid_gives_the_direct_sum_to_rounding():
+    """Issue 14, item 4: on t₀ + jΔt the motion is summed from one table of e^{iωjΔt} with e^{iωt₀} moved
+    into the coefficients (a product instead of an exp per time and component); the same η, η̇, η̈ as the
+    direct sum, chunk by chunk, also on a chunk shorter than the table and on an irregular grid."""
+    from app.marine.vessel import VesselMotion, VesselParticulars, parametric_rao
+    from app.marine.waves import wave_components
+
+    sea = wave_components("jonswap", 3.0, 9.0, np.random.default_rng(4), n_freq=120, heading=np.radians(135))
+    vessel = VesselMotion(parametric_rao(VesselParticulars()), sea)
+    iw = 1j * vessel.w
+
+    def direct(t):
+        E = np.exp(1j * np.multiply.outer(t, vessel.w))
+        return [(E @ (vessel._c * (iw**k)[:, None])).real for k in range(3)]
+
+    for t in [
+        (7 + np.arange(5000)) * 0.01,
+        123.4 + 0.05 * np.arange(300),
+        np.sort(np.random.default_rng(1).uniform(0, 90, 500)),
+    ]:
+        for got, want in zip(vessel.eta_derivatives(t, chunk=2048), direct(t), strict=True):
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * np.abs(want).max())

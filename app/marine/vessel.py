@@ -419,12 +419,40 @@ class VesselMotion:
         out = np.empty((3, t.size, 6))
         iw = 1j * self.w
         c0, c1, c2 = self._c, self._c * iw[:, None], self._c * (iw**2)[:, None]
+        step = self._uniform_step(t) if min(t.size, chunk) * self.w.size <= 2_000_000 else None  # table ≤ 32 MB
         for s in range(0, t.size, chunk):
-            E = np.exp(1j * np.multiply.outer(t[s : s + chunk], self.w))
-            out[0, s : s + chunk] = (E @ c0).real
-            out[1, s : s + chunk] = (E @ c1).real
-            out[2, s : s + chunk] = (E @ c2).real
+            ts = t[s : s + chunk]
+            if step is not None:
+                # a uniform grid t₀ + j·Δt: e^{iω(t₀+jΔt)} = e^{iωt₀} e^{iωjΔt}; the first factor goes into
+                # the coefficients, the second is one table for every chunk (a product, not an exp each)
+                E = self._grid_table(step, ts.size)
+                phase = np.exp(iw * ts[0])[:, None]
+                c0s, c1s, c2s = c0 * phase, c1 * phase, c2 * phase
+            else:
+                E = np.exp(1j * np.multiply.outer(ts, self.w))
+                c0s, c1s, c2s = c0, c1, c2
+            out[0, s : s + chunk] = (E @ c0s).real
+            out[1, s : s + chunk] = (E @ c1s).real
+            out[2, s : s + chunk] = (E @ c2s).real
         return out[0], out[1], out[2]
+
+    @staticmethod
+    def _uniform_step(t: NDArray[np.float64]) -> float | None:
+        """Δt when ``t`` (more than 64 times) is t₀ + j·Δt to 1e-12 s, else None."""
+        if t.size <= 64:
+            return None
+        dt = (t[-1] - t[0]) / (t.size - 1)
+        if not dt > 0 or np.max(np.abs(t - (t[0] + dt * np.arange(t.size)))) > 1e-12 * max(1.0, abs(t[-1])):
+            return None
+        return float(dt)
+
+    def _grid_table(self, dt: float, n: int) -> NDArray[np.complex128]:
+        """e^{iω_k jΔt} for j < n (n, components), kept for the next chunk of the same grid."""
+        key = (dt, n)
+        if getattr(self, "_table_key", None) != key:
+            self._table = np.exp(1j * np.multiply.outer(dt * np.arange(n), self.w))
+            self._table_key = key
+        return self._table
 
     def state(self, t: ArrayLike) -> VesselState:
         t = np.atleast_1d(np.asarray(t, dtype=float))
