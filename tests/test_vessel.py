@@ -270,3 +270,16 @@ def test_a_uniform_time_grid_gives_the_direct_sum_to_rounding():
     ]:
         for got, want in zip(vessel.eta_derivatives(t, chunk=2048), direct(t), strict=True):
             np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * np.abs(want).max())
+
+
+def test_compiled_body_velocities_equal_the_reference():
+    """ν, ν̇ from η, η̇, η̈ (Fossen eqs. 2.18, 2.29, 2.40), compiled and NumPy, on random large motions."""
+    from app.marine import kernels
+    from app.marine.vessel import body_velocities
+
+    if not kernels.ENABLED:
+        pytest.skip("numba off")
+    rng = np.random.default_rng(9)
+    eta, deta, ddeta = (rng.normal(scale=s, size=(200, 6)) for s in (0.8, 1.5, 3.0))
+    for got, want in zip(kernels.body_velocities(eta, deta, ddeta), body_velocities(eta, deta, ddeta), strict=True):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)

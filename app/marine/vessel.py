@@ -457,7 +457,10 @@ class VesselMotion:
     def state(self, t: ArrayLike) -> VesselState:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         eta, deta, ddeta = self.eta_derivatives(t)
-        nu, nu_dot = body_velocities(eta, deta, ddeta)
+        if self.use_kernels:  # the same formulas compiled (app/marine/kernels.py), tested equal
+            nu, nu_dot = kernels.body_velocities(eta, deta, ddeta)
+        else:
+            nu, nu_dot = body_velocities(eta, deta, ddeta)
         return VesselState(t, eta, nu, nu_dot)
 
 

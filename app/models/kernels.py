@@ -384,6 +384,7 @@ def warm_up(progress=None) -> float:
         lambda: sim.motion_filter_step(ones, ones, ones, ones, True, -ones, ones, ones, ones, 0.1, 0.01, 1.0),
         lambda: sim.actuator_step(ones, ones, ones, -ones, ones, ones, ones, 0.05, 0.002),
         lambda: marine.vessel_motion(np.ones(2), *(np.ones((6, 2)) for _ in range(4)), 0.5, ones),
+        lambda: marine.body_velocities(np.ones((2, 6)), np.ones((2, 6)), np.ones((2, 6))),
         *sim.warm_up_steps(),
     ]
     from app.ik import ga_kernels as ga  # the GA's generation loop (imports this module: not at the top)
