@@ -179,7 +179,7 @@ class Peer:
 
 def bench_peers(robots: list, *, targets: int = 500, seed: int = 7, progress=None) -> list[dict[str, Any]]:
     """Median, p95, success of each installed peer on the same targets and starts as ``bench_ik``."""
-    from app.analysis.ik_studies import BENCH_TOLERANCE, bench_targets
+    from app.analysis.ik_studies import BENCH_TOLERANCE, bench_row, bench_targets
     from app.ik import make_solver
 
     names = [p for p, ok in available().items() if ok]
@@ -203,20 +203,7 @@ def bench_peers(robots: list, *, targets: int = 500, seed: int = 7, progress=Non
             ok.append(finite and e < BENCH_TOLERANCE and bool(np.all(robot.within_limits(q, tol=1e-9))))
             err.append(e)
             q_prev = robot.clip(q) if finite else q_default
-        t_ms = np.array(times) * 1e3
-        rows.append(
-            {
-                "robot": robot.name,
-                "solver": name,
-                "start": mode,
-                "targets": targets,
-                "median_ms": float(np.median(t_ms)),
-                "p95_ms": float(np.percentile(t_ms, 95)),
-                "p99_ms": float(np.percentile(t_ms, 99)),
-                "success_rate": float(np.mean(ok)),
-                "median_error_m": float(np.median(err)),
-            }
-        )
+        rows.append(bench_row(robot.name, name, mode, times, ok, err))
         if progress is not None:
             progress(j + 1, len(jobs))
     return rows

@@ -373,6 +373,25 @@ def bench_targets(robot, mode: str, targets: int, seed: int) -> NDArray[np.float
     return warm_path(robot, targets, rng)
 
 
+def bench_row(robot: str, solver: str, start: str, times, ok, err, own=None) -> dict[str, Any]:
+    """One benchmark row: median/p95/p99 time [ms], success (and the solver's own test) and median error."""
+    t_ms = np.array(times) * 1e3
+    row = {
+        "robot": robot,
+        "solver": solver,
+        "start": start,
+        "targets": len(times),
+        "median_ms": float(np.median(t_ms)),
+        "p95_ms": float(np.percentile(t_ms, 95)),
+        "p99_ms": float(np.percentile(t_ms, 99)),
+        "success_rate": float(np.mean(ok)),
+        "median_error_m": float(np.median(err)),
+    }
+    if own is not None:
+        row["own_success_rate"] = float(np.mean(own))
+    return row
+
+
 def bench_ik(
     robots: list,
     *,
@@ -407,21 +426,7 @@ def bench_ik(
             own.append(res.success)
             err.append(res.error)
             q_prev = res.q if mode == "warm" else None
-        t_ms = np.array(times) * 1e3
-        rows.append(
-            {
-                "robot": robot.name,
-                "solver": name,
-                "start": mode,
-                "targets": targets,
-                "median_ms": float(np.median(t_ms)),
-                "p95_ms": float(np.percentile(t_ms, 95)),
-                "p99_ms": float(np.percentile(t_ms, 99)),
-                "success_rate": float(np.mean(ok)),
-                "own_success_rate": float(np.mean(own)),
-                "median_error_m": float(np.median(err)),
-            }
-        )
+        rows.append(bench_row(robot.name, name, mode, times, ok, err, own))
         if progress is not None:
             progress(j + 1, len(jobs))
     return rows
