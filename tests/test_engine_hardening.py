@@ -189,6 +189,7 @@ def _bosun():
     return str(Path(sys.executable).with_name("bosun"))
 
 
+@pytest.mark.slow
 def test_sigterm_stops_the_joystick_client_which_says_bye(serve):
     """Issue 13 item 6: SIGTERM did not stop `bosun joystick` (SDL took the signal): it kept streaming."""
     import os

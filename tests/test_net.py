@@ -144,6 +144,7 @@ def engine(serve):
     return lambda token=None, **session_kwargs: serve(Session(**session_kwargs), token=token, rate=500)[0]
 
 
+@pytest.mark.slow
 def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
     srv = engine()
     viewer = Client(srv.url, role="viewer", name="viewer")
@@ -191,6 +192,7 @@ def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
         viewer.close()
 
 
+@pytest.mark.slow
 def test_estop_from_a_viewer_latches_and_reset_clears(engine):
     srv = engine(robot_name="offshore_crane")
     op = Client(srv.url, role="operator", name="op")

@@ -82,6 +82,7 @@ def test_a_non_loopback_bind_needs_curve_and_works_with_it(keys):
 
 
 # ---------------------------------------------------------------------------- token throttling
+@pytest.mark.slow
 def test_wrong_tokens_are_throttled_and_counted(serve_session):
     srv = serve_session(token="s3cret")
     for k in range(30):
@@ -112,6 +113,7 @@ def test_only_the_holder_of_the_launch_secret_operates(serve_session):
         gui.close()
 
 
+@pytest.mark.slow
 def test_a_gui_started_engine_takes_its_secret_from_the_environment_not_the_command_line():
     """Issue 13, item 6: a SIGKILLed GUI left its engine running and a stranger's hello became operator."""
     from ui.engine_process import EngineProcess

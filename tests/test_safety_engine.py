@@ -79,6 +79,7 @@ def test_estop_without_hello_needs_the_token_where_one_is_set():
 
 
 # ---------------------------------------------------------------------------- item 2 (reset with a held stick)
+@pytest.mark.slow
 def test_reset_with_the_stick_held_moves_nothing_over_the_network():
     """Item 2: the operator keeps the stick deflected and enable held through STOP and reset."""
     srv, th = serve(Session(robot_name="comau_smart5_3dof"))

@@ -246,6 +246,7 @@ def test_a_lab_step_equals_the_reference_in_every_mode(comau, winch, frozen, tar
             assert [p.leg_clamped for p in a.platforms] == [p.leg_clamped for p in b.platforms]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("compensate", [True, False])
 def test_vvmc_runs_compiled_and_reference_in_lockstep(compensate):
     """The whole VVMC simulation (ramp, settle and a few seconds of both vessels in waves), both ways."""

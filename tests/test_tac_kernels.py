@@ -181,6 +181,7 @@ def test_whole_simulation_both_ways(mode, mru_noise):
         assert a.summary["saturated_pct"] > 0  # Hs 4.5 m: the saturation branches ran too
 
 
+@pytest.mark.slow
 def test_live_changes_in_small_chunks_both_ways():
     """The engine's use: two steps a tick, modes switched live, E-STOP, the crane driving back to eq. (60)."""
     sims = []
