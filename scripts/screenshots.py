@@ -36,16 +36,16 @@ def main() -> int:
     app = QApplication(sys.argv[:1])
     settings = QSettings(str(OUT / "screenshots.ini"), QSettings.IniFormat)
     engine = EngineProcess(robot="knuckle_boom_crane", solver="jacobian", mode="velocity")
-    link = EngineLink(engine.url)
+    link = EngineLink(engine.url, secret=engine.secret)
     tac_engines = []
 
     def marine_link():
         tac_engines.append(EngineProcess(plant="tac"))
-        return EngineLink(tac_engines[-1].url, name="screenshots-tac")
+        return EngineLink(tac_engines[-1].url, name="screenshots-tac", secret=tac_engines[-1].secret)
 
     def lab_link():
         tac_engines.append(EngineProcess(plant="lab"))
-        return EngineLink(tac_engines[-1].url, name="screenshots-lab")
+        return EngineLink(tac_engines[-1].url, name="screenshots-lab", secret=tac_engines[-1].secret)
 
     win = MainWindow(
         link,
