@@ -5,14 +5,26 @@ still loading, ends the program with one line and status 130, never a traceback.
 
 from __future__ import annotations
 
+import os
 import sys
+
+INTERRUPTED = 130
 
 
 def main() -> int:
     try:
         from app.cli import main as cli_main
 
-        return cli_main()
+        code = cli_main()
     except KeyboardInterrupt:
         print("bosun: interrupted", file=sys.stderr)
-        return 130
+        code = INTERRUPTED
+    if code == INTERRUPTED:
+        # A KeyboardInterrupt raised while C code ran Python (an extension module's import runs its
+        # code through PyRun_*) marks it "unhandled" inside CPython even when caught, and the
+        # interpreter then kills itself with SIGINT at exit (status -2, seen in CI). Everything is
+        # already written or removed (studies write atomically), so leave with the documented status.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(INTERRUPTED)
+    return code
