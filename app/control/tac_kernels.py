@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from app.models.kernels import ENABLED, _jit
+from app.models.kernels import ENABLED, _jit, matmul_into
 
 __all__ = [
     "ENABLED",
@@ -68,18 +68,6 @@ def _rot_zyx(phi, theta, psi, R):
 
 
 @_jit
-def _matmul(A, B, C):
-    """C = A @ B for square matrices (3×3 or 4×4)."""
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for k in range(n):
-                s += A[i, k] * B[k, j]
-            C[i, j] = s
-
-
-@_jit
 def _to_n(R, eta, o, M, p, out):
     """out = R (o + M p) + η₁: a point p of a frame at o, M in {b}, expressed in {n} (``CraneHead.tcp_n``)."""
     q0 = o[0] + (M[0, 0] * p[0] + M[0, 1] * p[1] + M[0, 2] * p[2])
@@ -111,9 +99,9 @@ def _crane_pose(chain, beta, beta_dot, o, R, v, w):
         A[0, 0], A[0, 1], A[0, 2], A[0, 3] = ct, -st * ca[i], st * sa[i], a[i] * ct
         A[1, 0], A[1, 1], A[1, 2], A[1, 3] = st, ct * ca[i], -ct * sa[i], a[i] * st
         A[2, 0], A[2, 1], A[2, 2], A[2, 3] = 0.0, sa[i], ca[i], d
-        _matmul(T, A, C)
+        matmul_into(T, A, C)
         T, C = C, T
-    _matmul(T, T_tool, C)
+    matmul_into(T, T_tool, C)
     for r in range(3):
         o[r] = C[r, 3]
         for c in range(3):
@@ -364,7 +352,7 @@ def _reference_point(
     for r in range(3):
         o_t_n[r] = (R_b_n[r, 0] * o_t_b[0] + R_b_n[r, 1] * o_t_b[1] + R_b_n[r, 2] * o_t_b[2]) + eta[r]  # eq. (49)
         p_ref_n[r] = p_d[r] - o_t_n[r]
-    _matmul(R_b_n, R_t_b, R_t_n)
+    matmul_into(R_b_n, R_t_b, R_t_n)
     for r in range(3):
         p_ref_t[r] = R_t_n[0, r] * p_ref_n[0] + R_t_n[1, r] * p_ref_n[1] + R_t_n[2, r] * p_ref_n[2]  # eq. (50)
     # eqs. (52)–(55): ṗ_ref^n = ṗ_d^n − R_b^n (ω_b × o_t^b + v_t^b) − R_b^n ν₁

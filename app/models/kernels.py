@@ -83,6 +83,19 @@ def _jit(fn):
 
 
 @_jit
+def matmul_into(A, B, C):
+    """C = A @ B for small square matrices (3×3, 4×4) without BLAS or an allocation; shared by the
+    plant kernels (a loop of this size beats a library call from compiled code)."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            s = 0.0
+            for k in range(n):
+                s += A[i, k] * B[k, j]
+            C[i, j] = s
+
+
+@_jit
 def frames(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q):
     """World poses of frame 0, every DH frame and the tool: (L + 2, 4, 4)."""
     L = theta0.shape[0]

@@ -123,15 +123,9 @@ def actuator_step(q, qdot, q_ref, lower, upper, speed, accel, tau, dt):
 # ----------------------------------------------------------------------------- small algebra
 @_jit
 def _matmul(A, B):
-    """A @ B for square C-contiguous matrices (3×3 or 4×4)."""
-    n = A.shape[0]
-    C = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for k in range(n):
-                s += A[i, k] * B[k, j]
-            C[i, j] = s
+    """A @ B for square C-contiguous matrices (3×3 or 4×4), a new array."""
+    C = np.empty((A.shape[0], A.shape[0]))
+    model_kernels.matmul_into(A, B, C)
     return C
 
 
@@ -346,7 +340,7 @@ def stewart_rates(eta, eta_dot, eta_ddot):
     R = rotation_xyz(eta[3], eta[4], eta[5])
     Sw, Swd = _skew(w[0], w[1], w[2]), _skew(wd[0], wd[1], wd[2])
     Rd = _matmul(R, Sw)
-    Rdd = _matmul(_matmul(R, Sw), Sw) + _matmul(R, Swd)
+    Rdd = _matmul(Rd, Sw) + _matmul(R, Swd)  # Ṙ = R S(ω), R̈ = Ṙ S(ω) + R S(ω̇)
     return R, Rd, Rdd
 
 
