@@ -7,6 +7,7 @@ import subprocess
 import sys
 import threading
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from PyQt5.QtCore import QSettings
 
 from app.engine.server import EngineServer
 from app.engine.session import Session
+from app.net.snapshots import InputFlags, TeleopSnapshot
 from tests.helpers import GUI_WAIT
 from ui.csv_logger import StateCsvLogger
 from ui.glprobe import gl_available
@@ -54,7 +56,7 @@ def hold_enable(qtbot, window, stick=None):
     stick.release_all()
     qtbot.wait(150)
     stick.key(Qt.Key_Shift, True)
-    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.flags.armed, timeout=GUI_WAIT)
 
 
 def test_fallback_2d_view_when_gl_is_unavailable(qtbot):
@@ -69,7 +71,7 @@ def test_choosing_a_robot_loads_it_in_engine_and_view(qtbot, window):
     combo = window.teleop.robot
     combo.setCurrentText("scara")
     combo.activated.emit(combo.currentIndex())
-    qtbot.waitUntil(lambda: window.teleop.state["robot"] == "scara", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.robot == "scara", timeout=GUI_WAIT)
     qtbot.wait(100)
     _, _, _, links, _, _ = window.teleop.view.plots["top"]
     x, _ = links.getData()
@@ -79,11 +81,11 @@ def test_choosing_a_robot_loads_it_in_engine_and_view(qtbot, window):
 
 def test_mode_and_solver_reach_the_engine(qtbot, window):
     window.teleop.mode_pos.click()
-    qtbot.waitUntil(lambda: window.teleop.state["mode"] == "position", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.mode == "position", timeout=GUI_WAIT)
     solver = window.teleop.solver
     solver.setCurrentText("ga")
     solver.activated.emit(solver.currentIndex())
-    qtbot.waitUntil(lambda: window.teleop.state["solver"] == "ga", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.solver == "ga", timeout=GUI_WAIT)
 
 
 def test_virtual_stick_moves_the_plotted_tool_point(qtbot, window):
@@ -114,11 +116,11 @@ def test_keyboard_drives_the_stick(qtbot, window):
 
 def test_stop_latches_and_reset_clears(qtbot, window):
     window.status.stop.click()
-    qtbot.waitUntil(lambda: window.teleop.state["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.estop, timeout=GUI_WAIT)
     assert window.status.latched.text() == "E-STOP LATCHED" and window.status.reset.isEnabled()
     assert window.status.lights["plant"].state == "error"
     window.status.reset.click()
-    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not window.teleop.state.estop, timeout=GUI_WAIT)
     assert window.status.latched.text() == ""
 
 
@@ -130,7 +132,7 @@ def test_invalid_xml_gives_error_and_keeps_robot(qtbot, window, tmp_path):
     title, message = window.messages[-1]
     assert title == "Robot not loaded" and "broken_arm.xml:1: schema" in message
     qtbot.wait(200)
-    assert window.teleop.state["robot"] == "comau_smart5_3dof"
+    assert window.teleop.state.robot == "comau_smart5_3dof"
 
 
 def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
@@ -146,22 +148,21 @@ def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
 
 
 def test_csv_logger_rows_and_closed_mid_run(tmp_path):
-    state = {
-        "t": 0.0,
-        "joint_names": ["a", "b"],
-        "q": [0.1, 0.2],
-        "qdot": [0, 0],
-        "tool": [1, 2, 3],
-        "target": [1, 2, 3],
-        "signal": [0, 0, 0],
-        "solver_error": None,
-        "solver_time": 0.001,
-        "flags": {"estop": False, "stale_input": False, "enabled": True},
-    }
-    log = StateCsvLogger(tmp_path / "a.csv", ["q", "tool", "solver"], duration=0.1)
+    state = TeleopSnapshot(
+        q=[0.1, 0.2],
+        qdot=[0, 0],
+        tool=[1, 2, 3],
+        target=[1, 2, 3],
+        signal=[0, 0, 0],
+        solver_error=None,
+        solver_time=0.001,
+        flags=InputFlags(stale_input=False, enabled=True),
+    )
+    names = ["a", "b"]  # from the engine's description
+    log = StateCsvLogger(tmp_path / "a.csv", ["q", "tool", "solver"], duration=0.1, joint_names=names)
     written = 0
     for k in range(20):
-        if log.add({**state, "t": k * 0.02}):
+        if log.add(replace(state, t=k * 0.02)):
             written += 1
     assert written == 6 and log.done  # t = 0 .. 0.10 s, then the duration ended the file
     with open(tmp_path / "a.csv") as f:
@@ -177,9 +178,9 @@ def test_csv_logger_rows_and_closed_mid_run(tmp_path):
         "solver_time",
     ]
     # a logger abandoned mid-run (no close) has flushed every row written so far
-    log2 = StateCsvLogger(tmp_path / "b.csv", ["q"])
+    log2 = StateCsvLogger(tmp_path / "b.csv", ["q"], joint_names=names)
     for k in range(5):
-        log2.add({**state, "t": k * 0.02})
+        log2.add(replace(state, t=k * 0.02))
     with open(tmp_path / "b.csv") as f:
         assert len(list(csv.reader(f))) == 6
     with pytest.raises(ValueError, match="unknown or no signals"):
@@ -206,19 +207,17 @@ def test_unplugged_joystick_is_reported(qtbot, window):
         window.teleop.device.setCurrentIndex(1)
         window.teleop.device.activated.emit(1)
         vj.set_button(0, True)
-        qtbot.waitUntil(
-            lambda: window.teleop.state["flags"]["device_name"] != "on-screen stick / keyboard", timeout=GUI_WAIT
-        )
+        qtbot.waitUntil(lambda: window.teleop.state.flags.device_name != "on-screen stick / keyboard", timeout=GUI_WAIT)
     finally:
         vj.detach()
     qtbot.waitUntil(lambda: "unplugged" in window.status.log_view.toPlainText(), timeout=GUI_WAIT)
     # the GUI falls back to the on-screen stick, which nobody holds: the deadman is off and the robot holds
     qtbot.waitUntil(lambda: window.teleop.inputs.choice == "on-screen stick / keyboard", timeout=GUI_WAIT)
-    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not window.teleop.state.flags.enabled, timeout=GUI_WAIT)
     qtbot.wait(300)
-    p = np.array(window.teleop.state["tool"])
+    p = np.array(window.teleop.state.tool)
     qtbot.wait(300)
-    np.testing.assert_allclose(window.teleop.state["tool"], p, atol=1e-6)
+    np.testing.assert_allclose(window.teleop.state.tool, p, atol=1e-6)
 
 
 # ------------------------------------------------------------------ OpenGL under Xvfb
@@ -231,6 +230,7 @@ if not gl_available():
     sys.exit(77)
 from ui.widgets.view3d import RobotView3D, make_robot_view
 from app.engine.session import Session
+from app.net.snapshots import InputFlags, TeleopSnapshot
 view = make_robot_view()
 assert isinstance(view, RobotView3D), type(view)
 view.resize(400, 300); view.show(); app.processEvents()
@@ -274,12 +274,60 @@ def test_arrow_keys_drive_the_tool(qtbot, window):
     window.tabs.setFocus()
     plots = window.teleop.plots
     qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=GUI_WAIT)
-    y0 = window.teleop.state["tool"][1]
+    y0 = window.teleop.state.tool[1]
     qtbot.wait(150)  # neutral and released first
     qtbot.keyPress(window.tabs, Qt.Key_Shift)
-    qtbot.waitUntil(lambda: window.teleop.state["flags"]["armed"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.flags.armed, timeout=GUI_WAIT)
     qtbot.keyPress(window.tabs, Qt.Key_Up)
-    qtbot.waitUntil(lambda: window.teleop.state["tool"][1] - y0 > 0.05, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.state.tool[1] - y0 > 0.05, timeout=GUI_WAIT)
     qtbot.keyRelease(window.tabs, Qt.Key_Up)
     qtbot.keyRelease(window.tabs, Qt.Key_Shift)
-    qtbot.waitUntil(lambda: not window.teleop.state["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not window.teleop.state.flags.enabled, timeout=GUI_WAIT)
+
+
+def test_picker_lists_only_what_the_engine_drives(qtbot, window):
+    """The robot combo comes from the engine's description: serial arms only, each with its solvers."""
+    qtbot.waitUntil(lambda: window.teleop.robot.count() > 0, timeout=GUI_WAIT)
+    names = {window.teleop.robot.itemText(i) for i in range(window.teleop.robot.count())}
+    assert {"scara", "comau_smart5_3dof", "offshore_crane"} <= names
+    assert not names & {"em8000", "em1500", "tac_delta_head"}  # a Stewart platform and the Delta head are refused
+    solvers = {window.teleop.solver.itemText(i) for i in range(window.teleop.solver.count())}
+    assert solvers == {"ga", "jacobian", "analytic"}  # the Comau 3-DOF has a closed form
+    window.teleop.robot.setCurrentText("scara")
+    window.teleop.robot.activated.emit(window.teleop.robot.currentIndex())
+    qtbot.waitUntil(lambda: window.teleop.desc is not None and window.teleop.desc.robot == "scara", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: window.teleop.solver.findText("analytic") < 0, timeout=GUI_WAIT)  # no closed form
+
+
+def test_custom_robot_opened_by_path_works_in_analysis(qtbot, window, tmp_path):
+    """Issue 15: open a robot XML by path, then Analysis: the study runs in the engine on that robot."""
+    from app.models.registry import resolve
+
+    text = resolve("scara").read_text(encoding="utf-8").replace('name="scara"', 'name="custom_arm"', 1)
+    path = tmp_path / "custom_arm.xml"
+    path.write_text(text, encoding="utf-8")
+    window.teleop.load_robot_file(str(path))
+    qtbot.waitUntil(lambda: window.teleop.state.robot == "custom_arm", timeout=GUI_WAIT)
+    tab = window.analysis
+    window.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: "custom_arm" in tab.robot_label.text(), timeout=GUI_WAIT)
+    assert window.teleop.robot.currentText() == "custom_arm"
+    tab.grid.setValue(3)
+    tab.solver.setCurrentText("jacobian")
+    tab.start("distribution")
+    qtbot.waitUntil(lambda: tab.result is not None, timeout=120_000)
+    assert tab.result.robot == "custom_arm" and len(tab.result.error) == 27
+    assert tab.progress.value() == tab.progress.maximum() == 27
+    assert "custom_arm / jacobian: 27 targets" in tab.summary.text()
+    assert tab.colorbar is not None and tab.export_csv.isEnabled()
+    assert not any(t == "Analysis failed" for t, _ in window.messages)
+    # another robot, then the custom one chosen again in the combo: the GUI sends its text again
+    combo = window.teleop.robot
+    for name in ("scara", "custom_arm"):
+        combo.setCurrentText(name)
+        combo.activated.emit(combo.currentIndex())
+        qtbot.waitUntil(lambda n=name: window.teleop.state.robot == n, timeout=GUI_WAIT)
+    tab.start("tracking")
+    qtbot.waitUntil(lambda: hasattr(tab.result, "t"), timeout=120_000)
+    assert tab.result.robot == "custom_arm"
+    assert not any("not loaded" in t for t, _ in window.messages)

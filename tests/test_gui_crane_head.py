@@ -71,7 +71,7 @@ def test_tab_starts_its_engine_and_plots_live(qtbot, window):
     assert len(made) == 1 and tab.mode.isEnabled()
     qtbot.waitUntil(lambda: tab.hull is not None and tab.ring.i > 20, timeout=GUI_WAIT)
     assert isinstance(tab.scene, SceneView2D)
-    assert tab.hull is not None and len(tab.hull["points"]) > 50
+    assert tab.hull is not None and len(tab.hull.points) > 50
     x, y = tab.c_ec.getData()
     assert len(x) > 20 and np.all(np.isfinite(y))
     _, ys = tab.c_es.getData()
@@ -92,11 +92,11 @@ def test_sea_and_mode_reach_the_engine(qtbot, window):
     tab.tp.setValue(8.0)
     tab.heading.setValue(135)
     tab.apply_sea.click()
-    qtbot.waitUntil(lambda: tab.state["sea"]["spectrum"] == "torsethaugen", timeout=GUI_WAIT)
-    assert tab.state["sea"]["hs"] == 2.0 and tab.state["sea"]["heading"] == 135.0
+    qtbot.waitUntil(lambda: tab.state.sea.spectrum == "torsethaugen", timeout=GUI_WAIT)
+    assert tab.state.sea.hs == 2.0 and tab.state.sea.heading == 135.0
     tab.mode.setCurrentText("cooperative")
     tab.mode.activated.emit(tab.mode.currentIndex())  # what the operator's pick in the list emits
-    qtbot.waitUntil(lambda: tab.state["tac_mode"] == "cooperative", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.tac_mode == "cooperative", timeout=GUI_WAIT)
 
 
 def test_breaking_sea_is_refused_with_a_message(qtbot, window):
@@ -108,25 +108,25 @@ def test_breaking_sea_is_refused_with_a_message(qtbot, window):
     tab.tp.setValue(5.0)
     tab.apply_sea.click()
     qtbot.waitUntil(lambda: any("steeper than a sea" in m for _, m in win.messages), timeout=GUI_WAIT)
-    assert tab.state["sea"]["hs"] == 3.0  # the engine kept its sea
+    assert tab.state.sea.hs == 3.0  # the engine kept its sea
 
 
 def test_stop_freezes_the_head_and_reset_holds_until_a_mode_is_chosen(qtbot, window):
     win, _ = window
     tab = win.crane_head
     win.tabs.setCurrentWidget(tab)
-    qtbot.waitUntil(lambda: tab.state is not None and bool(tab.state.get("sample")), timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state is not None and bool(tab.state.sample), timeout=GUI_WAIT)
     win.status.stop.click()
-    qtbot.waitUntil(lambda: tab.state["estop"], timeout=GUI_WAIT)
-    a1 = tab.state["sample"]["alpha"]
+    qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
+    a1 = tab.state.sample.alpha
     qtbot.wait(300)
-    assert tab.state["sample"]["alpha"] == a1 and "E-STOP latched" in tab.readout.text()
+    assert tab.state.sample.alpha == a1 and "E-STOP latched" in tab.readout.text()
     win.status.reset.click()
-    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not tab.state.estop, timeout=GUI_WAIT)
     qtbot.wait(500)  # issue 12 item 2: a reset does not restart the compensation by itself
-    assert tab.state["sample"]["alpha"] == a1 and tab.state["holding"] and "HOLDING" in tab.readout.text()
+    assert tab.state.sample.alpha == a1 and tab.state.holding and "HOLDING" in tab.readout.text()
     tab.mode.activated.emit(tab.mode.findText("tac"))  # the operator chooses the mode again
-    qtbot.waitUntil(lambda: tab.state["sample"]["alpha"] != a1, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.sample.alpha != a1, timeout=GUI_WAIT)
 
 
 def test_engine_that_does_not_start_is_reported(qtbot, engines, tmp_path):
@@ -145,8 +145,8 @@ def test_engine_that_does_not_start_is_reported(qtbot, engines, tmp_path):
 def test_teleop_engine_refuses_crane_head_commands(engines):
     teleop, tac = engines
     for url, mtype, fields, match in (
-        (teleop.url, "set_tac_mode", {"mode": "tac"}, "teleop session"),
-        (tac.url, "set_robot", {"robot": "scara"}, "crane-head scene"),
+        (teleop.url, "set_tac_mode", {"mode": "tac"}, "runs the teleop scene, not the scene"),
+        (tac.url, "set_robot", {"robot": "scara"}, "runs the crane-head scene, not the scene"),
     ):
         c = Client(url, role="operator", name="t")
         try:

@@ -69,7 +69,7 @@ def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
     em1500.gen[2][0].setValue(0.1)
     em1500.gen[2][1].setValue(0.5)
     em1500.apply.click()
-    qtbot.waitUntil(lambda: tab.state["platforms"][1]["source"] == "generator", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.platforms[1].source == "generator", timeout=GUI_WAIT)
     em1500.buttons["engage"].click()
     qtbot.waitUntil(lambda: "ENGAGED" in em1500.status.text() and not em1500.apply.isEnabled(), timeout=GUI_WAIT)
     qtbot.waitUntil(lambda: em1500.ring.i > 30, timeout=GUI_WAIT)
@@ -79,17 +79,17 @@ def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
     assert all(0 <= b.value() <= 1000 for b in em1500.leg_bars)
     # VVMC on: Comau and winch in MOTION_COMP, reported back by the engine
     tab.vvmc.click()
-    qtbot.waitUntil(lambda: tab.state["vvmc"] and tab.state["comau"]["mode"] == "motion_comp", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.vvmc and tab.state.comau.mode == "motion_comp", timeout=GUI_WAIT)
     assert tab.comau_mode.currentText() == "MOTION_COMP" and tab.winch_mode.currentText() == "MOTION_COMP"
     # the robot first travels to the work point (EM8000 is still SETTLED, 0.9 m low), then holds it
-    qtbot.waitUntil(lambda: np.linalg.norm(tab.state["tool_error_b2"]) < 0.01, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: np.linalg.norm(tab.state.tool_error_b2) < 0.01, timeout=GUI_WAIT)
     # STOP: everything brakes to rest and commands are refused until reset
     win.estop()
-    qtbot.waitUntil(lambda: tab.state["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
     qtbot.wait(1500)
-    assert np.abs(tab.state["platforms"][1]["eta_dot"]).max() < 1e-9
+    assert np.abs(tab.state.platforms[1].eta_dot).max() < 1e-9
     win.reset()
-    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not tab.state.estop, timeout=GUI_WAIT)
 
 
 def test_bad_time_series_is_refused_with_a_dialog(qtbot, window, tmp_path):
@@ -106,4 +106,4 @@ def test_bad_time_series_is_refused_with_a_dialog(qtbot, window, tmp_path):
     qtbot.waitUntil(lambda: any("does not increase" in m for _, m in win.messages), timeout=GUI_WAIT)
     title, msg = next((t, m) for t, m in win.messages if "does not increase" in m)
     assert title == "Motion-Lab" and "waves.csv:4" in msg
-    assert tab.state["platforms"][0]["source"] == "generator"  # nothing changed
+    assert tab.state.platforms[0].source == "generator"  # nothing changed

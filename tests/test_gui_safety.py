@@ -7,6 +7,7 @@ import subprocess
 import sys
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -107,14 +108,14 @@ def log_text(win):
     return win.status.log_view.toPlainText()
 
 
-def arm(qtbot, win, stick=None, flags=lambda w: w.teleop.state["flags"]):
+def arm(qtbot, win, stick=None, flags=lambda w: w.teleop.state.flags):
     """Neutral and released, then hold Shift: the engine arms."""
     stick = stick or win.teleop.stick
     stick.release_all()
     qtbot.wait(150)
     stick.key(Qt.Key_Shift, True)
     try:
-        qtbot.waitUntil(lambda: flags(win)["armed"], timeout=GUI_WAIT)
+        qtbot.waitUntil(lambda: flags(win).armed, timeout=GUI_WAIT)
     except Exception:
         raise AssertionError(f"not armed: engine flags {flags(win)}, GUI stick {stick.values()}") from None
 
@@ -140,7 +141,7 @@ def test_item1_10_engine_restart_lost_shown_then_reconnect_and_stop_confirmed(qt
     assert win.link.role == "operator"  # asked for again and granted
     win.status.stop.click()
     qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=GUI_WAIT)
-    assert state(win)["flags"]["estop"] and "E-STOP LATCHED" in win.banner.text()
+    assert state(win).estop and "E-STOP LATCHED" in win.banner.text()
 
 
 def test_item1_estop_not_confirmed_raises_an_alarm(qtbot, rig):
@@ -155,7 +156,7 @@ def test_item1_estop_not_confirmed_raises_an_alarm(qtbot, rig):
     assert "confirmed by" not in log_text(win)
     teleop.start()  # back: the resent estop latches it, and only then is it confirmed
     qtbot.waitUntil(lambda: "E-STOP confirmed by the teleop engine" in log_text(win), timeout=GUI_WAIT)
-    assert state(win)["flags"]["estop"]
+    assert state(win).estop
 
 
 # ----------------------------------------------------------------------------- item 2
@@ -173,12 +174,12 @@ def test_item2_error_and_file_dialog_leave_stop_live(qtbot, rig, tmp_path):
     assert not dlg.isModal() and QApplication.activeModalWidget() is None
     focus = dlg.focusWidget() or dlg
     key(focus, Qt.Key_Space)  # Space in the dialog is STOP, not a button press
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
     assert dlg.isVisible()
     win.reset()
-    qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).estop, timeout=GUI_WAIT)
     win.status.stop.click()  # the button too, with the dialog still open
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
     dlg.close()
 
 
@@ -190,16 +191,16 @@ def test_item3_reset_leaves_the_lab_where_it_stands(qtbot, rig):
     qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     before = tab.state
     win.status.stop.click()
-    qtbot.waitUntil(lambda: tab.state["estop"] and win.status.reset.isEnabled(), timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.estop and win.status.reset.isEnabled(), timeout=GUI_WAIT)
     win.status.reset.click()
-    qtbot.waitUntil(lambda: not tab.state["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not tab.state.estop, timeout=GUI_WAIT)
     qtbot.wait(2000)
     after = tab.state
-    for p0, p1 in zip(before["platforms"], after["platforms"], strict=True):
-        assert p1["status"] == "settled"
-        np.testing.assert_allclose(p1["eta"], p0["eta"], atol=1e-9)
-    assert after["comau"]["mode"] == "hold" and tab.comau_mode.currentText() == "HOLD"
-    np.testing.assert_allclose(after["comau"]["q"], before["comau"]["q"], atol=1e-9)
+    for p0, p1 in zip(before.platforms, after.platforms, strict=True):
+        assert p1.status == "settled"
+        np.testing.assert_allclose(p1.eta, p0.eta, atol=1e-9)
+    assert after.comau.mode == "hold" and tab.comau_mode.currentText() == "HOLD"
+    np.testing.assert_allclose(after.comau.q, before.comau.q, atol=1e-9)
 
 
 # ----------------------------------------------------------------------------- item 4
@@ -212,17 +213,17 @@ def test_item4_held_arrow_on_the_tab_bar_does_not_switch_tabs_or_latch(qtbot, ri
     for _ in range(10):
         key(bar, Qt.Key_Right, autorep=True)  # auto-repeat of a held key
     assert win.tabs.currentIndex() == 0  # the tab bar never saw the arrows
-    qtbot.waitUntil(lambda: state(win)["flags"]["enabled"] and abs(state(win)["signal"][0]) > 0.5, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).flags.enabled and abs(state(win).signal[0]) > 0.5, timeout=GUI_WAIT)
     win.tabs.setCurrentIndex(1)  # a tab change releases every key, whatever the key release did
     assert win.teleop.stick.values() == (0.0, 0.0, 0.0, 0.0, False)
     for _ in range(5):
         key(bar, Qt.Key_Right, autorep=True)  # still held on the Analysis tab: it must not walk the tabs
     assert win.tabs.currentIndex() == 1 and win.crane_head.link is None
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).flags.enabled, timeout=GUI_WAIT)
     qtbot.wait(300)
-    q = np.array(state(win)["q"])
+    q = np.array(state(win).q)
     qtbot.wait(500)
-    np.testing.assert_allclose(state(win)["q"], q, atol=1e-9)
+    np.testing.assert_allclose(state(win).q, q, atol=1e-9)
 
 
 def test_item4_window_deactivation_releases_keys(qtbot, rig):
@@ -231,29 +232,29 @@ def test_item4_window_deactivation_releases_keys(qtbot, rig):
     win.teleop.stick.key(Qt.Key_Up, True)
     QApplication.sendEvent(win, QEvent(QEvent.WindowDeactivate))
     assert win.teleop.stick.values()[4] is False and not win.teleop.stick.keys
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).flags.enabled, timeout=GUI_WAIT)
 
 
 # ----------------------------------------------------------------------------- item 5
 def test_item5_position_mode_returns_to_x_w_on_release_while_enabled(qtbot, rig):
     win, _ = rig
     win.teleop.set_mode("position")
-    qtbot.waitUntil(lambda: state(win)["mode"] == "position", timeout=GUI_WAIT)
-    x_w = np.array(state(win)["scaling"]["x_w"])
+    qtbot.waitUntil(lambda: state(win).mode == "position", timeout=GUI_WAIT)
+    x_w = np.array(state(win).scaling.x_w)
     arm(qtbot, win)
     win.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: state(win)["tool"][0] - x_w[0] > 0.3, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).tool[0] - x_w[0] > 0.3, timeout=GUI_WAIT)
     win.teleop.stick.pad.set_position(0.0, 0.0, False)  # stick released, enable still held
-    qtbot.waitUntil(lambda: np.linalg.norm(np.array(state(win)["tool"]) - x_w) < 0.01, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: np.linalg.norm(np.array(state(win).tool) - x_w) < 0.01, timeout=GUI_WAIT)
     win.teleop.stick.pad.set_position(0.6, 0.0, True)
-    qtbot.waitUntil(lambda: state(win)["tool"][0] - x_w[0] > 0.2, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).tool[0] - x_w[0] > 0.2, timeout=GUI_WAIT)
     win.teleop.stick.key(Qt.Key_Shift, False)  # enable released: holds where it is
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).flags.enabled, timeout=GUI_WAIT)
     qtbot.wait(400)
-    p = np.array(state(win)["tool"])
+    p = np.array(state(win).tool)
     assert p[0] - x_w[0] > 0.1
     qtbot.wait(500)
-    np.testing.assert_allclose(state(win)["tool"], p, atol=1e-6)
+    np.testing.assert_allclose(state(win).tool, p, atol=1e-6)
 
 
 # ----------------------------------------------------------------------------- item 6
@@ -264,21 +265,19 @@ def test_item6_comau_and_winch_remote_from_the_gui_stick(qtbot, rig):
     qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     tab.comau_mode.activated.emit(1)  # REMOTE
     tab.winch_mode.activated.emit(1)  # REMOTE
-    qtbot.waitUntil(
-        lambda: tab.state["comau"]["mode"] == "remote" and tab.state["winch"]["mode"] == "remote", timeout=GUI_WAIT
-    )
-    q0 = np.array(tab.state["comau"]["q"])
-    L0 = tab.state["winch"]["length"]
+    qtbot.waitUntil(lambda: tab.state.comau.mode == "remote" and tab.state.winch.mode == "remote", timeout=GUI_WAIT)
+    q0 = np.array(tab.state.comau.q)
+    L0 = tab.state.winch.length
     tab.stick.pad.set_position(1.0, 0.0, True)  # deflected without enable: nothing
     qtbot.wait(600)
-    np.testing.assert_allclose(tab.state["comau"]["q"], q0, atol=1e-9)
-    arm(qtbot, win, tab.stick, flags=lambda w: w.motion_lab.state["flags"])
+    np.testing.assert_allclose(tab.state.comau.q, q0, atol=1e-9)
+    arm(qtbot, win, tab.stick, flags=lambda w: w.motion_lab.state.flags)
     tab.stick.pad.set_position(1.0, 0.0, True)
     tab.stick.w.setValue(-100)
-    qtbot.waitUntil(lambda: np.abs(np.array(tab.state["comau"]["q"]) - q0).max() > 0.02, timeout=GUI_WAIT)
-    qtbot.waitUntil(lambda: abs(tab.state["winch"]["length"] - L0) > 0.02, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: np.abs(np.array(tab.state.comau.q) - q0).max() > 0.02, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: abs(tab.state.winch.length - L0) > 0.02, timeout=GUI_WAIT)
     tab.stick.release_all()
-    qtbot.waitUntil(lambda: not tab.state["flags"]["enabled"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not tab.state.flags.enabled, timeout=GUI_WAIT)
 
 
 # ----------------------------------------------------------------------------- item 7 (plots)
@@ -286,7 +285,7 @@ def test_item7_plots_show_command_and_reached_apart(qtbot, rig):
     win, _ = rig
     arm(qtbot, win)
     win.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: state(win).get("command") is not None, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).command is not None, timeout=GUI_WAIT)
     plots = win.teleop.plots
     qtbot.waitUntil(lambda: np.isfinite(plots.ring.view()[-1, 1]), timeout=GUI_WAIT)
     command_curve, target_curve, reached_curve = plots.cur_xyz[0]
@@ -294,7 +293,7 @@ def test_item7_plots_show_command_and_reached_apart(qtbot, rig):
     qtbot.wait(500)
     st_ = state(win)
     # the command (eq. 7 integrated) leads the reached point; both are traced, apart from the solver target
-    assert st_["command"][0] > st_["tool"][0]
+    assert st_.command[0] > st_.tool[0]
     assert np.isfinite(reached_curve.getData()[1]).all() and np.isfinite(target_curve.getData()[1]).all()
     win.teleop.stick.release_all()
 
@@ -307,9 +306,9 @@ def test_item8_escape_is_not_stop(qtbot, rig):
     key(combo, Qt.Key_Escape)
     key(combo, Qt.Key_Escape, press=False)
     qtbot.wait(400)
-    assert not state(win)["flags"]["estop"]
+    assert not state(win).estop
     key(combo, Qt.Key_Space)  # Space is STOP, even with a drop-down focused
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
 
 
 # ----------------------------------------------------------------------------- item 9
@@ -317,13 +316,13 @@ def test_item9_steady_hold_is_not_stale_while_the_gui_stalls(qtbot, rig):
     win, _ = rig
     arm(qtbot, win)
     win.teleop.stick.key(Qt.Key_Up, True)
-    qtbot.waitUntil(lambda: state(win)["flags"]["enabled"], timeout=GUI_WAIT)
-    stale_before = state(win)["flags"]["stale_count"]
+    qtbot.waitUntil(lambda: state(win).flags.enabled, timeout=GUI_WAIT)
+    stale_before = state(win).flags.stale_count
     for _ in range(4):
         time.sleep(0.2)  # the GUI thread blocked (a heavy paint): the link's thread keeps sending
         qtbot.wait(100)
     st_ = state(win)
-    assert st_["flags"]["stale_count"] == stale_before and st_["flags"]["enabled"]
+    assert st_.flags.stale_count == stale_before and st_.flags.enabled
     win.teleop.stick.release_all()
 
 
@@ -428,21 +427,21 @@ def test_property_random_gui_events_never_leave_a_machine_moving_unbidden(qtbot,
         elif a == "reset":
             win.reset()
         elif a == "mode":
-            win.teleop.set_mode("position" if state(win)["mode"] == "velocity" else "velocity")
+            win.teleop.set_mode("position" if state(win).mode == "velocity" else "velocity")
         qtbot.wait(120)
         st_ = state(win)
-        if st_["flags"]["enabled"]:
-            assert not st_["flags"]["stale_input"] and not st_["flags"]["estop"]
+        if st_.flags.enabled:
+            assert not st_.flags.stale_input and not st_.estop
             if not (win.tabs.currentWidget() is win.teleop and stick.values()[4]):
                 # the GUI let go just now: the engine must follow (state lags by a tick and a publish)
-                qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
+                qtbot.waitUntil(lambda: not state(win).flags.enabled, timeout=GUI_WAIT)
     # the operator lets go of everything: within a generous bound nothing is enabled and the arm rests
     stick.release_all()
-    qtbot.waitUntil(lambda: not state(win)["flags"]["enabled"], timeout=GUI_WAIT)
-    qtbot.waitUntil(lambda: np.abs(state(win)["qdot"]).max() < 1e-6, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).flags.enabled, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: np.abs(state(win).qdot).max() < 1e-6, timeout=GUI_WAIT)
     win.reset()
     win.tabs.setCurrentIndex(0)
-    qtbot.waitUntil(lambda: not state(win)["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).estop, timeout=GUI_WAIT)
 
 
 def test_item9_csv_logger_keeps_every_state_while_the_gui_stalls(qtbot, rig, tmp_path):
@@ -494,11 +493,11 @@ def test_leaving_a_tab_releases_its_engine_without_a_device_alarm(qtbot, rig):
     win, _ = rig
     arm(qtbot, win)
     win.tabs.setCurrentWidget(win.analysis)  # input now goes nowhere: the teleop engine holds, disarmed
-    qtbot.waitUntil(lambda: not state(win)["flags"]["device"] and not state(win)["flags"]["armed"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not state(win).flags.device and not state(win).flags.armed, timeout=GUI_WAIT)
     t_left = time.time()
     qtbot.wait(500)
-    raised_since = [a for a in state(win)["alarms"] if a["t_raised"] >= t_left - 0.05]
-    assert not any(a["key"] in ("device_lost", "stale_input") for a in raised_since)
+    raised_since = [a for a in state(win).alarms if a.t_raised >= t_left - 0.05]
+    assert not any(a.key in ("device_lost", "stale_input") for a in raised_since)
 
 
 # ----------------------------------------------------------------------------- second review's findings
@@ -510,12 +509,12 @@ def test_reset_then_stop_queued_together_ends_stopped(qtbot):
     try:
         for _ in range(5):
             link.send("estop", reason="first")
-            qtbot.waitUntil(lambda: bool(link.latest) and link.latest["flags"]["estop"], timeout=GUI_WAIT)
+            qtbot.waitUntil(lambda: bool(link.latest) and link.latest.estop, timeout=GUI_WAIT)
             with link._worker.lock:  # the worker waits: its next pass sees both, as after a GUI stall
                 link.send("reset")
                 link.send("estop", reason="after reset")
             qtbot.wait(300)
-            assert link.latest["flags"]["estop"]
+            assert link.latest.estop
     finally:
         link.close()
         eng.kill()
@@ -525,12 +524,12 @@ def test_a_stop_is_confirmed_only_by_a_state_that_counts_it(qtbot, rig):
     win, _ = rig
     win.estop()
     qtbot.waitUntil(lambda: "E-STOP confirmed" in log_text(win), timeout=GUI_WAIT)
-    st_ = dict(win.link.latest)
-    before = (st_["engine_id"], st_["estops"])
+    st_ = win.link.latest
+    before = (st_.engine.engine_id, st_.engine.estops)
     assert not win._confirms("teleop", before)  # latched, but this state predates a new STOP
-    win.link.latest = {**st_, "estops": st_["estops"] + 1}
+    win.link.latest = replace(st_, engine=replace(st_.engine, estops=st_.engine.estops + 1))
     assert win._confirms("teleop", before)
-    win.link.latest = {**st_, "engine_id": "another"}  # a restarted engine that is latched: confirmed
+    win.link.latest = replace(st_, engine=replace(st_.engine, engine_id="another"))  # restarted and latched
     assert win._confirms("teleop", before)
 
 
@@ -538,7 +537,7 @@ def test_stop_acts_on_press_even_if_the_pointer_slides_off(qtbot, rig):
     win, _ = rig
     stop = win.status.stop
     qtbot.mousePress(stop, Qt.LeftButton)
-    qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
     qtbot.mouseRelease(win, Qt.LeftButton)  # released elsewhere: the stop stands
 
 
@@ -598,7 +597,7 @@ def test_any_joysticks_stop_button_stops_every_engine(qtbot, rig, monkeypatch):
         qtbot.waitUntil(lambda: len(win.teleop.inputs.known) == 1, timeout=GUI_WAIT)
         win.tabs.setCurrentWidget(win.analysis)  # not the selected input, not the teleop tab
         vj.set_button(2, True)
-        qtbot.waitUntil(lambda: state(win)["flags"]["estop"], timeout=GUI_WAIT)
+        qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
         assert "stop button of" in log_text(win)
     finally:
         vj.detach()

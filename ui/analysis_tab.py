@@ -1,4 +1,10 @@
-"""Analysis tab: error distribution (Fig. 5) and trajectory tracking (Fig. 4) off the GUI thread."""
+"""Analysis tab: error distribution (Fig. 5) and trajectory tracking (Fig. 4), run by the engine.
+
+The tab is a protocol client like the rest of the window: ``study_start`` asks the teleop engine to
+run the study of *its* robot (also one opened by path) in a worker process it owns; progress and the
+result arrive as ``study`` messages.  The robot and the solvers that apply come from the engine's
+description.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +12,7 @@ import os
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt5.QtCore import QThread, pyqtSignal
+from PyQt5.QtCore import pyqtSignal
 from PyQt5.QtWidgets import (
     QComboBox,
     QHBoxLayout,
@@ -18,59 +24,31 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from app.analysis.ik_studies import error_distribution, track
-from app.errors import BosunError
-from app.ik import solver_names
-from app.models.registry import load_robot
+from app.analysis.ik_studies import study_from_wire
 from ui.glprobe import gl_available
 from ui.widgets.files import choose_file
 
-
-class StudyWorker(QThread):
-    """Runs one study in a thread; progress and result come back as signals."""
-
-    progress = pyqtSignal(int, int)
-    finished_ok = pyqtSignal(object)
-    failed = pyqtSignal(str)
-
-    def __init__(self, kind: str, robot_ref: str, solver: str, grid: int, parent=None) -> None:
-        super().__init__(parent)
-        self.kind, self.robot_ref, self.solver, self.grid = kind, robot_ref, solver, grid
-        self._cancel = False
-
-    def cancel(self) -> None:
-        self._cancel = True
-
-    def run(self) -> None:
-        try:
-            robot = load_robot(self.robot_ref)
-            hooks = {"progress": lambda d, t: self.progress.emit(d, t), "cancelled": lambda: self._cancel}
-            if self.kind == "distribution":
-                result = error_distribution(robot, self.solver, self.grid, **hooks)
-            else:
-                result = track(robot, self.solver, **hooks)
-        except (BosunError, ValueError) as err:
-            self.failed.emit(str(err))
-            return
-        self.finished_ok.emit(result)
+UNREACHABLE_PEN = (230, 60, 60)
 
 
 class AnalysisTab(QWidget):
     error = pyqtSignal(str, str)
 
-    def __init__(self, parent=None) -> None:
+    def __init__(self, link=None, parent=None) -> None:
         super().__init__(parent)
-        self.robot_ref = "comau_smart5_3dof"
-        self.worker: StudyWorker | None = None
+        self.link = link
+        self.robot_ref = ""
+        self.running = False
+        self.study_id = 0
         self.result = None
         self.scatter3d = None
         lay = QVBoxLayout(self)
         row = QHBoxLayout()
         self.robot_label = QLabel()
+        self.robot_label.setToolTip("the teleop engine's robot: the study runs on it, in the engine")
         row.addWidget(self.robot_label)
         self.solver = QComboBox()
-        self.solver.addItems(solver_names())
-        self.solver.setToolTip("solver to study")
+        self.solver.setToolTip("solver to study (those that apply to this robot)")
         row.addWidget(QLabel("solver"))
         row.addWidget(self.solver)
         self.grid = QSpinBox()
@@ -88,11 +66,12 @@ class AnalysisTab(QWidget):
         self.cancel = QPushButton("Cancel")
         self.cancel.setEnabled(False)
         self.cancel.setToolTip("stop the running study (the targets done so far are kept)")
-        self.cancel.clicked.connect(lambda: self.worker and self.worker.cancel())
+        self.cancel.clicked.connect(lambda: self.link is not None and self.link.send("study_cancel"))
         for b in (self.run_dist, self.run_track, self.cancel):
             row.addWidget(b)
         self.progress = QProgressBar()
         self.progress.setToolTip("targets solved")
+        self.progress.setFormat("%v / %m targets")
         row.addWidget(self.progress, 1)
         self.export_csv = QPushButton("Export CSV")
         self.export_csv.setToolTip("write the study's rows to a CSV file")
@@ -108,31 +87,74 @@ class AnalysisTab(QWidget):
         lay.addWidget(self.summary)
         self.glw = pg.GraphicsLayoutWidget()
         lay.addWidget(self.glw, 1)
-        self.set_robot(self.robot_ref)
+        if link is not None:
+            link.described.connect(self.on_description)
+            link.study.connect(self.on_study)
+            link.reply.connect(self.on_reply)
+            if link.description is not None:
+                self.on_description(link.description)
+
+    def on_description(self, desc) -> None:
+        if getattr(desc, "kind", None) != "teleop":
+            return
+        self.robot_ref = desc.robot
+        self.robot_label.setText(f"robot: {desc.robot}")
+        current = self.solver.currentText()
+        if [self.solver.itemText(i) for i in range(self.solver.count())] != desc.solvers:
+            self.solver.clear()
+            self.solver.addItems(desc.solvers)
+            if current in desc.solvers:
+                self.solver.setCurrentText(current)
 
     def set_robot(self, robot_ref: str) -> None:
         self.robot_ref = robot_ref
         self.robot_label.setText(f"robot: {robot_ref}")
 
     def start(self, kind: str) -> None:
-        if self.worker is not None:
+        if self.running or self.link is None:
             return
-        self.worker = StudyWorker(kind, self.robot_ref, self.solver.currentText(), self.grid.value(), self)
-        self.worker.progress.connect(lambda d, t: (self.progress.setMaximum(t), self.progress.setValue(d)))
-        self.worker.finished_ok.connect(self.show_result)
-        self.worker.failed.connect(lambda msg: self.error.emit("Analysis failed", msg))
-        self.worker.finished.connect(self._done)
-        for b in (self.run_dist, self.run_track):
-            b.setEnabled(False)
-        self.cancel.setEnabled(True)
-        self.progress.setValue(0)
-        self.worker.start()
+        self.link.send("study_start", study=kind, solver=self.solver.currentText(), grid=self.grid.value())
+        self._set_running(True)
+        self.progress.setRange(0, 0)  # busy until the first progress message
+        self.summary.setText(f"{kind} of {self.robot_ref}: starting in the engine…")
 
-    def _done(self) -> None:
-        self.worker = None
+    def _set_running(self, on: bool) -> None:
+        self.running = on
         for b in (self.run_dist, self.run_track):
-            b.setEnabled(True)
-        self.cancel.setEnabled(False)
+            b.setEnabled(not on)
+        self.cancel.setEnabled(on)
+
+    def on_reply(self, re: str, ok: bool, error: str) -> None:
+        if re in ("study_start", "study_cancel") and not ok:
+            self.error.emit("Analysis", error)
+            if re == "study_start":
+                self._set_running(False)
+                self.progress.setRange(0, 1)
+                self.summary.setText("")
+
+    def on_study(self, msg: dict) -> None:
+        status = msg.get("status")
+        self.study_id = msg.get("id", self.study_id)
+        if msg.get("total"):
+            self.progress.setRange(0, int(msg["total"]))
+            self.progress.setValue(int(msg.get("done", 0)))
+        if status == "running":
+            self._set_running(True)
+            self.summary.setText(f"{msg.get('kind')} of {self.robot_ref}: {msg.get('done')} of {msg.get('total')}")
+            return
+        self._set_running(False)
+        if status == "failed":
+            self.progress.setRange(0, 1)
+            self.summary.setText(f"study failed: {msg.get('error', '')}")
+            self.error.emit("Analysis failed", msg.get("error", "the study failed"))
+            return
+        if "result" in msg:
+            try:
+                result = study_from_wire(msg["result"])
+            except (KeyError, TypeError, ValueError) as err:
+                self.error.emit("Analysis failed", f"the engine's result is not understood: {err}")
+                return
+            self.show_result(result)
 
     def show_result(self, result) -> None:
         self.result = result
@@ -144,34 +166,61 @@ class AnalysisTab(QWidget):
                 f"{s['success']} solved; median error {s['error_m']['median']:.3g} m"
                 + ("" if s["complete"] else "  (cancelled)")
             )
-            err = np.log10(np.maximum(result.error, 1e-9))
-            lo, hi = float(err.min()), float(max(err.max(), err.min() + 1e-9))
-            cmap = pg.colormap.get("viridis")
-            self._show_3d_scatter(result.targets, cmap.map((err - lo) / (hi - lo), mode="float"))
-            order = np.argsort(-err)  # large errors first, so the small ones are drawn on top
-            brushes = [pg.mkBrush(cmap.map((e - lo) / (hi - lo), mode="qcolor")) for e in err[order]]
-            for col, (a, b, name) in enumerate(
-                ((0, 1, "top x–y [m]"), (0, 2, "side x–z [m]"), (1, 2, "front y–z [m]"))
-            ):
-                p = self.glw.addPlot(row=0, col=col, title=f"{name}, colour log10 error")
-                p.addItem(
-                    pg.ScatterPlotItem(
-                        result.targets[order, a], result.targets[order, b], brush=brushes, size=7, pen=None
-                    )
-                )
-                p.setAspectLocked(True)
+            self._show_distribution(result)
         else:
             self.summary.setText(
                 f"{s['robot']} / {s['solver']}: rms error {s['rms_error_m']:.3g} m, "
                 f"max {s['max_error_m']:.3g} m over {s['samples']} targets"
             )
             for k, name in enumerate("XYZ"):
-                p = self.glw.addPlot(row=k, col=0, title=f"{name} [m]: target (grey) vs reached (orange)")
-                p.plot(result.t, result.target[:, k], pen=pg.mkPen((170, 170, 170), width=3))
-                p.plot(result.t, result.reached[:, k], pen=pg.mkPen((240, 150, 40), width=1.5))
+                p = self.glw.addPlot(row=k, col=0)
+                p.setLabel("left", name, "m")
                 p.setLabel("bottom", "t", "s")
+                p.addLegend(offset=(5, 5), colCount=2)
+                p.plot(result.t, result.target[:, k], pen=pg.mkPen((170, 170, 170), width=3), name="target")
+                p.plot(result.t, result.reached[:, k], pen=pg.mkPen((240, 150, 40), width=1.5), name="reached")
         for b in (self.export_csv, self.export_png):
             b.setEnabled(True)
+
+    def _show_distribution(self, result) -> None:
+        """Three projections coloured by log10 error with a colour scale; unreachable targets ringed red."""
+        if len(result.error) == 0:
+            return
+        err = np.log10(np.maximum(result.error, 1e-9))
+        lo, hi = float(err.min()), float(max(err.max(), err.min() + 1e-9))
+        cmap = pg.colormap.get("viridis")
+        self._show_3d_scatter(result.targets, cmap.map((err - lo) / (hi - lo), mode="float"))
+        order = np.argsort(-err)  # large errors first, so the small ones are drawn on top
+        brushes = [pg.mkBrush(cmap.map((e - lo) / (hi - lo), mode="qcolor")) for e in err[order]]
+        bad = ~result.reachable
+        plots = []
+        for col, (a, b, name) in enumerate(((0, 1, "top"), (0, 2, "side"), (1, 2, "front"))):
+            p = self.glw.addPlot(row=0, col=col, title=name)
+            p.setLabel("bottom", "xyz"[a], "m")
+            p.setLabel("left", "xyz"[b], "m")
+            p.showGrid(x=True, y=True, alpha=0.25)
+            p.addLegend(offset=(5, 5))
+            p.addItem(
+                pg.ScatterPlotItem(
+                    result.targets[order, a], result.targets[order, b], brush=brushes, size=7, pen=None, name="target"
+                )
+            )
+            if bad.any():
+                p.addItem(
+                    pg.ScatterPlotItem(
+                        result.targets[bad, a],
+                        result.targets[bad, b],
+                        brush=None,
+                        pen=pg.mkPen(UNREACHABLE_PEN, width=1.5),
+                        size=12,
+                        name=f"not reachable ({int(bad.sum())})",
+                    )
+                )
+            p.setAspectLocked(True)
+            plots.append(p)
+        bar = pg.ColorBarItem(values=(lo, hi), colorMap=cmap, interactive=False, label="log10 error [m]")
+        self.glw.addItem(bar, row=0, col=3)
+        self.colorbar = bar
 
     def _show_3d_scatter(self, points: np.ndarray, colors: np.ndarray) -> None:
         """The paper's 3D scatter coloured by error, where OpenGL is available (the projections always)."""

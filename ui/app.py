@@ -121,7 +121,7 @@ def run_gui(
 
 
 def register(sub, helpers) -> None:
-    """Add ``bosun gui`` to the CLI (entry point ``bosun.commands``)."""
+    """Add ``bosun gui`` and ``bosun view`` to the CLI (entry point ``bosun.commands``)."""
     import argparse
 
     p = sub.add_parser("gui", help="the operator HMI (the default command)")
@@ -168,3 +168,16 @@ def register(sub, helpers) -> None:
             connect_lab=a.connect_lab,
         )
     )
+    v = sub.add_parser("view", help="a standalone viewer of a running engine (3D view and plots; viewer role)")
+    v.add_argument("--connect", required=True, help="URL of the engine ('bosun server', its --bind)")
+    v.add_argument("--token", default=None, help="shared token of that engine (loopback testing)")
+    v.add_argument("--curve-secret", default=None, metavar="FILE", help="this viewer's CURVE secret key")
+    v.add_argument("--server-key", default=None, metavar="FILE", help="the engine's CURVE public key")
+    v.add_argument("--quit-after", type=helpers["positive_float"], default=None, help=argparse.SUPPRESS)
+
+    def view(a):
+        from ui.viewer import run_viewer
+
+        return run_viewer(a.connect, token=a.token, curve=curve_of(a), quit_after=a.quit_after)
+
+    v.set_defaults(func=view)

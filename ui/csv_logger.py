@@ -11,18 +11,24 @@ import csv
 import math
 from pathlib import Path
 
-#: signal name -> (column names for a state, extractor)
+
+def _names(s, names) -> list[str]:
+    """Joint names from the engine's description, or q1…qn when it does not match this state's robot."""
+    return list(names) if names is not None and len(names) == len(s.q) else [str(i + 1) for i in range(len(s.q))]
+
+
+#: signal name -> (column names and values of a typed teleop snapshot, given the joint names)
 SIGNALS = {
-    "q": lambda s: [(f"q_{n}", v) for n, v in zip(s["joint_names"], s["q"], strict=True)],
-    "qdot": lambda s: [(f"qdot_{n}", v) for n, v in zip(s["joint_names"], s["qdot"], strict=True)],
-    "tool": lambda s: list(zip(("tool_x", "tool_y", "tool_z"), s["tool"], strict=True)),
-    "target": lambda s: list(zip(("target_x", "target_y", "target_z"), s["target"], strict=True)),
-    "signal": lambda s: list(zip(("s_x", "s_y", "s_z"), s["signal"], strict=True)),
-    "solver": lambda s: [("solver_error", s.get("solver_error")), ("solver_time", s.get("solver_time"))],
-    "flags": lambda s: [
-        ("estop", int(s["flags"]["estop"])),
-        ("stale", int(s["flags"]["stale_input"])),
-        ("enabled", int(s["flags"]["enabled"])),
+    "q": lambda s, names: [(f"q_{n}", v) for n, v in zip(_names(s, names), s.q, strict=True)],
+    "qdot": lambda s, names: [(f"qdot_{n}", v) for n, v in zip(_names(s, names), s.qdot, strict=True)],
+    "tool": lambda s, names: list(zip(("tool_x", "tool_y", "tool_z"), s.tool, strict=True)),
+    "target": lambda s, names: list(zip(("target_x", "target_y", "target_z"), s.target, strict=True)),
+    "signal": lambda s, names: list(zip(("s_x", "s_y", "s_z"), s.signal, strict=True)),
+    "solver": lambda s, names: [("solver_error", s.solver_error), ("solver_time", s.solver_time)],
+    "flags": lambda s, names: [
+        ("estop", int(s.estop)),
+        ("stale", int(s.flags.stale_input)),
+        ("enabled", int(s.flags.enabled)),
     ],
 }
 
@@ -30,7 +36,7 @@ SIGNALS = {
 class StateCsvLogger:
     """Write chosen signals of each state to ``path`` for ``duration`` seconds of engine time."""
 
-    def __init__(self, path: str | Path, signals: list[str], duration: float | None = None) -> None:
+    def __init__(self, path: str | Path, signals: list[str], duration: float | None = None, joint_names=None) -> None:
         unknown = [s for s in signals if s not in SIGNALS]
         if unknown or not signals:
             raise ValueError(f"unknown or no signals: {unknown or signals}; choose from {', '.join(SIGNALS)}")
@@ -39,6 +45,7 @@ class StateCsvLogger:
         self.path = Path(path)
         self.signals = list(signals)
         self.duration = duration
+        self.joint_names = joint_names  # from the engine's description (column names)
         self.file = open(self.path, "w", newline="", buffering=1)  # noqa: SIM115 - kept open while logging
         self.writer = csv.writer(self.file)
         self.header: list[str] | None = None
@@ -46,17 +53,17 @@ class StateCsvLogger:
         self.rows = 0
         self.done = False
 
-    def add(self, state: dict) -> bool:
+    def add(self, state) -> bool:
         """Write one state; returns False once the duration is over (the file is then closed)."""
         if self.done:
             return False
         if self.t0 is None:
-            self.t0 = state["t"]
-        t = state["t"] - self.t0
+            self.t0 = state.t
+        t = state.t - self.t0
         if self.duration is not None and t > self.duration:
             self.close()
             return False
-        cols = [("t", t)] + [c for sig in self.signals for c in SIGNALS[sig](state)]
+        cols = [("t", t)] + [c for sig in self.signals for c in SIGNALS[sig](state, self.joint_names)]
         if self.header is None:
             self.header = [c[0] for c in cols]
             self.writer.writerow(self.header)

@@ -34,7 +34,6 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from app.marine.waves import spectrum as sea_spectrum
 from ui.glprobe import gl_available
 from ui.marine_tab import Ring
 from ui.scene_tab import SceneEngineMixin
@@ -71,6 +70,7 @@ class PlatformPanel(QWidget):
         self.name = name
         self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), 7)
         self._t_last = -math.inf
+        self.info = None  # PlatformInfo from the engine's description
         self.limits: tuple[np.ndarray, np.ndarray] | None = None
         self.csv_text: str | None = None
         self.csv_name = ""
@@ -214,16 +214,7 @@ class PlatformPanel(QWidget):
         )
         self.spec_plot.setMinimumWidth(200)
         lay.addWidget(self.spec_plot)
-        for box in (self.sim_hs, self.sim_tp):
-            box.valueChanged.connect(self.draw_spectrum)
-        self.sim_spectrum.currentIndexChanged.connect(self.draw_spectrum)
-        self.draw_spectrum()
         return w
-
-    def draw_spectrum(self) -> None:
-        w = np.linspace(0.1, 3.0, 300)
-        S = sea_spectrum(self.sim_spectrum.currentText(), w, float(self.sim_hs.value()), float(self.sim_tp.value()))
-        self.spec_curve.setData(w, S)
 
     def _remote(self) -> QWidget:
         w = QWidget()
@@ -299,30 +290,37 @@ class PlatformPanel(QWidget):
         self.command.emit("lab_remote_pose", {"platform": self.name, "eta": eta})
 
     # ------------------------------------------------------------------ state
-    def update_state(self, p: dict, t: float) -> None:
-        status = p["status"].upper()
+    def set_info(self, info) -> None:
+        """The platform's static data from the engine's description (leg range, pose box, its sea)."""
+        self.info = info
+        if info.spectrum is not None:
+            self.spec_curve.setData(info.spectrum["omega"], info.spectrum["s"])
+
+    def update_state(self, p, t: float) -> None:
+        status = p.status.upper()
         color = {"ENGAGED": "#3c9", "NEUTRAL": "#39f", "SETTLED": "#999", "HOLDING": "#e33"}.get(status, "#fa3")
-        info = p.get("source_info", {})
+        info = p.source_info
         extra = ""
-        if p["source"] == "simulation" and "hs" in info:
+        if p.source == "simulation" and "hs" in info:
             extra = f" (Hs {info['hs']:g} m, Tp {info['tp']:g} s, scale {', '.join(f'{v:.2f}' for v in info['scale'])})"
         self.status.setText(
-            f"<b style='color:{color}'>{status}</b> &nbsp; source <b>{p['source'].upper()}</b>{extra}"
-            f" &nbsp; ramp {100 * p['ramp']:.0f} %"
-            + (" &nbsp; <b style='color:#f80'>LEG LIMIT</b>" if p["leg_clamped"] else "")
+            f"<b style='color:{color}'>{status}</b> &nbsp; source <b>{p.source.upper()}</b>{extra}"
+            f" &nbsp; ramp {100 * p.ramp:.0f} %"
+            + (" &nbsp; <b style='color:#f80'>LEG LIMIT</b>" if p.leg_clamped else "")
         )
-        engaged = p["mode"] == "engaged"
-        self.buttons["neutral"].setEnabled(p["status"] in ("settled", "holding"))
-        self.buttons["settle"].setEnabled(p["status"] in ("neutral", "holding"))
-        self.buttons["engage"].setEnabled(p["status"] == "neutral")
-        self.buttons["disengage"].setEnabled(engaged and p["status"] != "disengaging")
+        engaged = p.mode == "engaged"
+        self.buttons["neutral"].setEnabled(p.status in ("settled", "holding"))
+        self.buttons["settle"].setEnabled(p.status in ("neutral", "holding"))
+        self.buttons["engage"].setEnabled(p.status == "neutral")
+        self.buttons["disengage"].setEnabled(engaged and p.status != "disengaging")
         self.apply.setEnabled(not engaged)
-        lo, hi = p["leg_range"]
-        for k, (bar, L) in enumerate(zip(self.leg_bars, p["legs"], strict=True)):
-            _set_bar(bar, (L - lo) / (hi - lo), f"leg {k + 1}: {L:.3f} m")
+        if self.info is not None:
+            lo, hi = self.info.leg_range
+            for k, (bar, L) in enumerate(zip(self.leg_bars, p.legs, strict=True)):
+                _set_bar(bar, (L - lo) / (hi - lo), f"leg {k + 1}: {L:.3f} m")
         if t - self._t_last >= 1.0 / SAMPLE_HZ - 1e-9:
             self._t_last = t
-            eta = np.asarray(p["eta"])
+            eta = np.asarray(p.eta)
             self.ring.push([t, *eta[:3], *np.degrees(eta[3:])])
 
     def draw(self) -> None:
@@ -379,22 +377,22 @@ class LabScene2D(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(self.plot)
 
-    def update_scene(self, sc: dict) -> None:
+    def update_scene(self, sc) -> None:
         legs, tops = [], []
-        for name in ("em8000", "em1500"):
-            b, t = np.asarray(sc[name]["base"]), np.asarray(sc[name]["top"])
+        for plat in sc.platforms.values():
+            b, t = np.asarray(plat["base"]), np.asarray(plat["top"])
             for k in range(6):
                 legs += [b[k], t[k], [np.nan] * 3]
             tops += [*t, t[0], [np.nan] * 3]
         legs, tops = np.array(legs), np.array(tops)
         self.legs.setData(legs[:, 0], legs[:, 2], connect="finite")
         self.tops.setData(tops[:, 0], tops[:, 2], connect="finite")
-        r = np.asarray(sc["robot"])
+        r = np.asarray(sc.robot)
         self.robot.setData(r[:, 0], r[:, 2])
-        w = np.array([sc["tool"], sc["payload"]])
+        w = np.array([sc.tool, sc.payload])
         self.wire.setData(w[:, 0], w[:, 2])
-        self.load.setData([sc["payload"][0]], [sc["payload"][2]])
-        self.goal.setData([sc["work_point"][0]], [sc["work_point"][2]])
+        self.load.setData([sc.payload[0]], [sc.payload[2]])
+        self.goal.setData([sc.work_point[0]], [sc.work_point[2]])
 
 
 class LabScene3D(QWidget):
@@ -426,19 +424,19 @@ class LabScene3D(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(self.view)
 
-    def update_scene(self, sc: dict) -> None:
+    def update_scene(self, sc) -> None:
         legs, tops = [], []
-        for name in ("em8000", "em1500"):
-            b, t = np.asarray(sc[name]["base"]), np.asarray(sc[name]["top"])
+        for plat in sc.platforms.values():
+            b, t = np.asarray(plat["base"]), np.asarray(plat["top"])
             for k in range(6):
                 legs += [b[k], t[k]]
                 tops += [t[k], t[(k + 1) % 6]]
         self.legs.setData(pos=np.array(legs))
         self.tops.setData(pos=np.array(tops))
-        self.robot.setData(pos=np.asarray(sc["robot"]))
-        self.wire.setData(pos=np.array([sc["tool"], sc["payload"]]))
-        self.load.setData(pos=np.asarray(sc["payload"])[None])
-        self.goal.setData(pos=np.asarray(sc["work_point"])[None])
+        self.robot.setData(pos=np.asarray(sc.robot))
+        self.wire.setData(pos=np.array([sc.tool, sc.payload]))
+        self.load.setData(pos=np.asarray(sc.payload)[None])
+        self.goal.setData(pos=np.asarray(sc.work_point)[None])
 
 
 def make_lab_scene(use_gl: bool | None) -> QWidget:
@@ -463,7 +461,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.link_factory = link_factory
         self.link = None
         self.use_gl = use_gl
-        self.state: dict | None = None
+        self.state = None  # the newest LabSnapshot
+        self.desc = None  # the engine's LabDescription
         self._t_last = -math.inf
         self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), 1 + 3 + 3 + 2 + 3 + 1)  # t, q, qd, α β, e_b2, L
         self.tabs = QTabWidget()
@@ -596,8 +595,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self._slider_timer.start()
         elif not self.winch_slider.isSliderDown():
             self._slider_timer.stop()
-        if self.state is not None:
-            vmax = self.state["winch"]["speed_max"]
+        if self.desc is not None and self.desc.winch is not None:
+            vmax = self.desc.winch.speed_max
             self._send("lab_winch", speed=vmax * value / 100.0)
 
     def on_reply(self, re: str, ok: bool, error: str) -> None:
@@ -607,39 +606,49 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state
-    def on_state(self, state: dict) -> None:
-        if state.get("kind") != "lab":
+    def on_description(self, desc) -> None:
+        """The lab's static data: platform leg ranges and seas, Comau limits, winch range."""
+        if getattr(desc, "kind", None) != "lab":
+            return
+        self.desc = desc
+        for info in desc.platforms:
+            if info.name in self.platforms:
+                self.platforms[info.name].set_info(info)
+
+    def on_state(self, state) -> None:
+        if getattr(state, "kind", None) != "lab":
             return
         self.state = state
-        t = state["t"]
-        for p in state["platforms"]:
-            self.platforms[p["name"]].update_state(p, t)
-        c, w = state["comau"], state["winch"]
-        for k in range(3):
-            lo, hi = c["lower"][k], c["upper"][k]
-            _set_bar(self.joint_pos_bars[k], (c["q"][k] - lo) / (hi - lo), f"{math.degrees(c['q'][k]):.1f}°")
-            use = abs(c["qd"][k]) / c["speed"][k]
-            _set_bar(self.joint_speed_bars[k], use, f"{100 * use:.0f} %")
-        _set_bar(self.wire_bar, (w["length"] - w["min"]) / (w["max"] - w["min"]), f"{w['length']:.3f} m")
-        self.comau_mode.setCurrentIndex(COMAU_MODES.index(c["mode"]))
-        self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w["mode"]))
-        self.winch_slider.setEnabled(w["mode"] == "local")
+        t = state.t
+        for p in state.platforms:
+            self.platforms[p.name].update_state(p, t)
+        c, w, d = state.comau, state.winch, self.desc
+        if d is not None:
+            for k in range(3):
+                lo, hi = d.comau_lower[k], d.comau_upper[k]
+                _set_bar(self.joint_pos_bars[k], (c.q[k] - lo) / (hi - lo), f"{math.degrees(c.q[k]):.1f}°")
+                use = abs(c.qd[k]) / d.comau_speed[k]
+                _set_bar(self.joint_speed_bars[k], use, f"{100 * use:.0f} %")
+            wi = d.winch
+            _set_bar(self.wire_bar, (w.length - wi.min) / (wi.max - wi.min), f"{w.length:.3f} m")
+        self.comau_mode.setCurrentIndex(COMAU_MODES.index(c.mode))
+        self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w.mode))
+        self.winch_slider.setEnabled(w.mode == "local")
         self.vvmc.blockSignals(True)
-        self.vvmc.setChecked(state["vvmc"])
+        self.vvmc.setChecked(state.vvmc)
         self.vvmc.blockSignals(False)
-        self.vvmc.setText("VVMC ON" if state["vvmc"] else "VVMC OFF")
-        e = 1000 * np.linalg.norm(state["tool_error_b2"])
-        pend = state["pendulum"]
+        self.vvmc.setText("VVMC ON" if state.vvmc else "VVMC OFF")
+        e = 1000 * np.linalg.norm(state.tool_error_b2)
+        pend = state.pendulum
         self.readout.setText(
-            f"{'<b style=color:#f44>E-STOP</b> &nbsp; ' if state['estop'] else ''}"
-            f"tool − work point {e:.1f} mm &nbsp; swing {math.degrees(pend['swing']):.2f}° &nbsp; t {t:.1f} s"
+            f"{'<b style=color:#f44>E-STOP</b> &nbsp; ' if state.estop else ''}"
+            f"tool − work point {e:.1f} mm &nbsp; swing {math.degrees(pend.swing):.2f}° &nbsp; t {t:.1f} s"
         )
         if t - self._t_last >= 1.0 / SAMPLE_HZ - 1e-9:
             self._t_last = t
-            self.ring.push(
-                [t, *np.degrees(c["q"]), *c["qd"], pend["alpha"], pend["beta"], *state["tool_error_b2"], w["length"]]
-            )
-            self.scene.update_scene(state["scene"])
+            self.ring.push([t, *np.degrees(c.q), *c.qd, pend.alpha, pend.beta, *state.tool_error_b2, w.length])
+            if state.scene is not None:
+                self.scene.update_scene(state.scene)
             self._draw()
 
     def _draw(self) -> None:

@@ -29,10 +29,12 @@ import zmq
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
 from app.net.codec import ProtocolError, decode_engine, encode
+from app.net.snapshots import Description, Snapshot, SnapshotError, description_from_wire, snapshot_from_wire
 from app.net.transport import Client, TransportError, client_view_of
 
 INPUT_RATE = 50.0  # Hz: input re-sent at this rate while the GUI keeps it fresh
 INPUT_HOLD = 0.25  # s: the GUI must refresh the input this often, or it is no longer sent (a frozen GUI stops)
+DESCRIBE_RETRY = 0.5  # s: a state announcing a newer description than ours asks for it at most this often
 
 
 class _Worker(threading.Thread):
@@ -49,7 +51,9 @@ class _Worker(threading.Thread):
         self.estop_reason = ""
         self.input: tuple | None = None  # (axes, buttons, device, t_set)
         self.device_lost: tuple[str, bool] | None = None  # (device, released deliberately)
-        self.latest: dict[str, Any] | None = None
+        self.latest: Snapshot | None = None
+        self.description: Description | None = client.description
+        self._last_describe = 0.0
         self.state_seq = 0
         self.history: collections.deque = collections.deque(maxlen=3000)  # every state, for loggers (60 s at 50/s)
         self.events: collections.deque = collections.deque(maxlen=2000)  # ("log"|"reply"|"conn"|"welcome", ...)
@@ -61,6 +65,7 @@ class _Worker(threading.Thread):
         self._last_input = 0.0
         self._last_hello = 0.0
         self._sent_input_key = None
+        self.hello_wanted = False  # the GUI asked for a role again (take the operator role)
 
     # ------------------------------------------------------------------ called from the GUI thread
     def queue(self, mtype: str, fields: dict[str, Any]) -> None:
@@ -126,7 +131,11 @@ class _Worker(threading.Thread):
         if lost is not None:
             self._send("device_lost", device=lost[0][:128], released=lost[1])
             self._sent_input_key = None
-        if inp is not None and now - inp[3] <= INPUT_HOLD and self.connected:  # never replayed to a new engine
+        if self.hello_wanted:
+            self.hello_wanted = False
+            self._hello(now)
+        operator = self.role == "operator"  # a viewer's input would only be refused (and counted)
+        if inp is not None and operator and now - inp[3] <= INPUT_HOLD and self.connected:  # never replayed
             key = inp[:3]
             if key != self._sent_input_key or now - self._last_input >= 1.0 / INPUT_RATE:
                 self.client.seq += 1
@@ -159,11 +168,35 @@ class _Worker(threading.Thread):
                     continue
                 t = msg["type"]
                 if t == "state":
+                    try:
+                        snap = snapshot_from_wire(msg["state"])
+                    except SnapshotError as err:
+                        self.events.append(("log", "error", f"engine state not understood: {err}"[:300]))
+                        continue
                     with self.lock:
-                        self.latest = msg["state"]
+                        self.latest = snap
                         self.state_seq += 1
-                        self.history.append(msg["state"])
+                        self.history.append(snap)
                     self._last_state = now
+                    d = self.description
+                    if (d is None or d.seq != snap.describe_seq) and now - self._last_describe > DESCRIBE_RETRY:
+                        self._last_describe = now
+                        self._send("describe")
+                elif t == "description":
+                    try:
+                        desc = description_from_wire(msg["description"])
+                    except SnapshotError as err:
+                        self.events.append(("log", "error", f"engine description not understood: {err}"[:300]))
+                        continue
+                    if (
+                        self.description is None
+                        or desc.seq != self.description.seq
+                        or desc.kind != self.description.kind
+                    ):
+                        self.description = desc
+                        self.events.append(("description", desc))
+                elif t == "study":
+                    self.events.append(("study", msg["study"]))
                 elif t == "log":
                     self.events.append(("log", msg["level"], msg["text"]))
                 elif t == "welcome":
@@ -211,16 +244,22 @@ class EngineLink(QObject):
 
     Signals
     -------
-    state(dict)            the newest state snapshot (at most once per GUI poll: displays)
+    state(Snapshot)        the newest typed state snapshot (at most once per GUI poll: displays)
     states(list)           every snapshot received since the last poll, oldest first (loggers: none is lost
                            when the GUI is slow)
+    described(Description) the scene's static data: on join and whenever the engine changes it
+    study(dict)            an IK study's progress (``status``, ``done``, ``total``; ``result`` in the last)
     log(str, str)          level, text of engine log lines
     reply(str, bool, str)  request type, ok, error text
     connection(bool, str)  engine reachable or lost, with a message
+    role_changed(str, str) the role this link holds now (operator | viewer) and the engine's note
     """
 
-    state = pyqtSignal(dict)
+    state = pyqtSignal(object)
     states = pyqtSignal(list)
+    described = pyqtSignal(object)
+    study = pyqtSignal(dict)
+    role_changed = pyqtSignal(str, str)
     log = pyqtSignal(str, str)
     reply = pyqtSignal(str, bool, str)
     connection = pyqtSignal(bool, str)
@@ -243,7 +282,8 @@ class EngineLink(QObject):
         self.role = self.client.role
         self.note = self.client.note
         self.lost_after = lost_after
-        self.latest: dict[str, Any] | None = None
+        self.latest: Snapshot | None = None
+        self.description: Description | None = self.client.description
         self._seen_seq = 0
         self._dead_reported = False
         self._worker = _Worker(self.client, role, name, token, lost_after)
@@ -267,6 +307,20 @@ class EngineLink(QObject):
     def clear_input(self, device: str = "", released: bool = True) -> None:
         self._worker.clear_input(device, released)
 
+    def release_operator(self) -> None:
+        """Give the operator role up (the engine holds and disarms); reconnecting keeps the viewer role."""
+        w = self._worker
+        with w.lock:
+            w.role_wanted = "viewer"
+        w.queue("release_operator", {})
+
+    def take_operator(self) -> None:
+        """Ask for the operator role again (granted when it is free; a new operator starts disarmed)."""
+        w = self._worker
+        with w.lock:
+            w.role_wanted = "operator"
+            w.hello_wanted = True
+
     # ------------------------------------------------------------------ receiving (GUI thread)
     def poll(self) -> None:
         w = self._worker
@@ -278,13 +332,24 @@ class EngineLink(QObject):
             if ev[0] == "log":
                 self.log.emit(ev[1], ev[2])
             elif ev[0] == "reply":
+                if ev[1] == "release_operator" and ev[2]:
+                    w.role = self.role = "viewer"
+                    self.role_changed.emit("viewer", "operator role released")
                 self.reply.emit(ev[1], ev[2], ev[3])
             elif ev[0] == "conn":
                 self.connection.emit(ev[1], ev[2])
+            elif ev[0] == "description":
+                self.description = ev[1]
+                self.described.emit(ev[1])
+            elif ev[0] == "study":
+                self.study.emit(ev[1])
             elif ev[0] == "welcome":
+                changed = ev[1] != self.role
                 self.role, self.note = ev[1], ev[2]
                 if ev[1] != "operator" and w.role_wanted == "operator":
-                    self.log.emit("warning", f"reconnected as {ev[1]}: {ev[2]}")
+                    self.log.emit("warning", f"joined as {ev[1]}: {ev[2]}")
+                if changed or ev[2]:
+                    self.role_changed.emit(self.role, self.note)
         with w.lock:
             seq, newest = w.state_seq, w.latest
             batch = list(w.history)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import asdict
 
 import pyqtgraph as pg
 from PyQt5.QtCore import QEvent, QSettings, Qt, QTimer
@@ -131,7 +132,7 @@ class MainWindow(QMainWindow):
         self.setWindowTitle("Bosun: universal teleoperation")
         self.tabs = FitTabs()
         self.teleop = TeleopTab(link)
-        self.analysis = AnalysisTab()
+        self.analysis = AnalysisTab(link)
         self.tabs.add(self.teleop, "Teleop")
         self.tabs.add(self.analysis, "Analysis")
         self.crane_head = CraneHeadTab(marine_link_factory, use_gl=use_gl)
@@ -162,6 +163,7 @@ class MainWindow(QMainWindow):
 
         self.status.stop_clicked.connect(self.estop)
         self.status.reset_clicked.connect(self.reset)
+        self.status.role_clicked.connect(self.toggle_role)
         QShortcut(QKeySequence("Ctrl+1"), self, activated=lambda: self.teleop.set_mode("position"))
         QShortcut(QKeySequence("Ctrl+2"), self, activated=lambda: self.teleop.set_mode("velocity"))
         QShortcut(QKeySequence("F1"), self, activated=self.show_keys)
@@ -345,25 +347,26 @@ class MainWindow(QMainWindow):
         for origin, link in self.links().items():
             link.send("estop", reason=why[:200])
             if origin not in self.estop_pending:
-                st = getattr(link, "latest", None) or {}
-                self.estop_pending[origin] = [now, now, (st.get("engine_id"), st.get("estops", 0))]
+                st = getattr(link, "latest", None)
+                before = (st.engine.engine_id, st.engine.estops) if st is not None else (None, 0)
+                self.estop_pending[origin] = [now, now, before]
         self.status.add_log("error", f"STOP ({why}): E-STOP sent to {', '.join(self.links())}; awaiting confirmation")
         self._update_banner()
 
     def _latched(self, origin: str) -> bool:
         link = self.links().get(origin)
         st = getattr(link, "latest", None) if link is not None else None
-        return bool(st) and bool(st.get("flags", {}).get("estop", st.get("estop", False)))
+        return st is not None and st.estop
 
     def _confirms(self, origin: str, before: tuple) -> bool:
         """The engine's newest state shows the latch and counts an estop received after ours was sent
         (or comes from a new engine instance): an older latched state never confirms a new STOP."""
         link = self.links().get(origin)
-        st = getattr(link, "latest", None) or {}
-        if not self._latched(origin) or origin in self.lost or not link.connected:
+        st = getattr(link, "latest", None)
+        if st is None or not self._latched(origin) or origin in self.lost or not link.connected:
             return False
         engine_id, estops = before
-        return st.get("engine_id") != engine_id or st.get("estops", 0) > estops
+        return st.engine.engine_id != engine_id or st.engine.estops > estops
 
     def _check_estop(self) -> None:
         now = time.monotonic()
@@ -423,13 +426,35 @@ class MainWindow(QMainWindow):
         )
 
     # ------------------------------------------------------------------ alarms
+    def toggle_role(self) -> None:
+        """Release the operator role of every engine, or take it where it is free."""
+        links = self.links()
+        if any(getattr(lk, "role", "") == "operator" for lk in links.values()):
+            for lk in links.values():
+                if lk.role == "operator":
+                    lk.release_operator()
+            self.release_keys()
+            self.status.add_log("info", f"operator role released on {', '.join(links)}: viewing only")
+        else:
+            for lk in links.values():
+                lk.take_operator()
+            self.status.add_log("info", "operator role requested (granted where free; input starts disarmed)")
+
+    def _refresh_roles(self) -> None:
+        rows = []
+        for origin, lk in self.links().items():
+            st = getattr(lk, "latest", None)
+            rows.append((origin, getattr(lk, "role", "viewer"), st.engine.operator if st is not None else ""))
+        self.status.show_roles(rows)
+
     def _refresh_alarms(self) -> None:
+        self._refresh_roles()
         rows = []
         for origin, link in self.links().items():
-            st = getattr(link, "latest", None) or {}
-            if origin in self.lost:
+            st = getattr(link, "latest", None)
+            if origin in self.lost or st is None:
                 continue  # its list is unknown while lost; the GUI's "engine lost" alarm stands for it
-            rows += [{**a, "origin": origin} for a in st.get("alarms", [])]
+            rows += [{**asdict(a), "origin": origin} for a in st.alarms]
         rows += [{**a, "origin": "gui"} for a in self.gui_alarms.snapshot()]
         self.status.alarms.set_alarms(rows)
 
@@ -455,28 +480,27 @@ class MainWindow(QMainWindow):
         self.message_bar.show_message(title, message)
 
     # ------------------------------------------------------------------ engine events
-    def on_state(self, state: dict) -> None:
-        f = state["flags"]
-        if f["estop"]:
+    def on_state(self, state) -> None:
+        f = state.flags
+        if state.estop:
             self.status.lights["plant"].set("error", "E-STOP")
-        elif f["enabled"] and not f["stale_input"]:
-            self.status.lights["plant"].set("ok", "moving" if any(abs(v) > 1e-6 for v in state["qdot"]) else "ready")
+        elif f.enabled and not f.stale_input:
+            self.status.lights["plant"].set("ok", "moving" if any(abs(v) > 1e-6 for v in state.qdot) else "ready")
         else:
             self.status.lights["plant"].set("warn", "holding")
-        if f["device"] and not f["stale_input"]:
-            detail = ("" if f.get("armed", True) else "not armed: ") + f["device_name"][:32]
-            self.status.lights["input"].set("ok" if f.get("armed", True) else "warn", detail)
+        if f.device and not f.stale_input:
+            detail = ("" if f.armed else "not armed: ") + f.device_name[:32]
+            self.status.lights["input"].set("ok" if f.armed else "warn", detail)
         else:
             self.status.lights["input"].set("warn", "no input")
-        rt, late = state.get("realtime_factor", 1.0), state.get("late_fraction", 0.0)
+        rt, late = state.engine.realtime_factor, state.engine.late_fraction
         if rt < 0.95 or late > 0.01:
             self.status.lights["engine"].set("warn", f"slow: {100 * rt:.0f} % real time, {100 * late:.0f} % late")
         elif self.link.connected:
             self.status.lights["engine"].set("ok", "connected")
-        choice = (state["robot"], state["solver"], state["mode"])
+        choice = (state.robot, state.solver, state.mode)
         if choice != getattr(self, "_choice", None):
             self._choice = choice
-            self.analysis.set_robot(state["robot"])
             for key, value in zip(("robot", "solver", "mode"), choice, strict=True):
                 self.settings.setValue(key, value)
 

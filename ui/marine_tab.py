@@ -84,12 +84,12 @@ class SceneView3D(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(self.view)
 
-    def update_scene(self, scene: dict, p_d_n) -> None:
-        ship = _up(scene["ship"])
+    def update_scene(self, scene, p_d_n) -> None:
+        ship = _up(scene.ship)
         self.ship.setData(pos=np.array([ship[i] for e in SHIP_EDGES for i in e]))
-        self.crane.setData(pos=_up(scene["crane"]))
-        head = _up(scene["head"])
-        tip = _up(scene["crane"][-1])
+        self.crane.setData(pos=_up(scene.crane))
+        head = _up(scene.head)
+        tip = _up(scene.crane[-1])
         knees, tcp = head[:3], head[3]
         self.head.setData(pos=np.array([p for k in knees for p in (tip, k, k, tcp)]))
         self.tcp.setData(pos=tcp[None])
@@ -117,14 +117,14 @@ class SceneView2D(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(self.plot)
 
-    def update_scene(self, scene: dict, p_d_n) -> None:
-        ship = _up(scene["ship"])
+    def update_scene(self, scene, p_d_n) -> None:
+        ship = _up(scene.ship)
         # the midship section: the four corners at x = +L/2 are indices 4..7 (y ±, z deck/keel)
         sec = ship[[4, 5, 7, 6, 4]]
         self.ship.setData(-sec[:, 1], sec[:, 2])
-        crane = _up(scene["crane"])
+        crane = _up(scene.crane)
         self.crane.setData(-crane[:, 1], crane[:, 2])
-        head = _up(scene["head"])
+        head = _up(scene.head)
         tip = crane[-1]
         pts = np.array([p for k in head[:3] for p in (tip, k, head[3], [np.nan] * 3)])
         self.head.setData(-pts[:, 1], pts[:, 2], connect="finite")
@@ -159,7 +159,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.link = None
         self.use_gl = use_gl
         self.hull = None
-        self.state: dict | None = None
+        self.desc = None  # the engine's TacDescription
+        self.state = None  # the newest TacSnapshot
         self._sea_seq = -1
         self._t_last = -math.inf
         n = int(HISTORY_S * SAMPLE_HZ)
@@ -271,48 +272,55 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state
-    def on_state(self, state: dict) -> None:
-        if state.get("kind") != "tac":
+    def on_description(self, desc) -> None:
+        """The scene's static data: workspace hull, arm limits, vessel, sea (on join and on change)."""
+        if getattr(desc, "kind", None) != "tac":
+            return
+        self.desc = desc
+        if desc.hull is not None:
+            self.hull = desc.hull
+            self._draw_hull()
+
+    def on_state(self, state) -> None:
+        if getattr(state, "kind", None) != "tac":
             return
         self.state = state
-        if "hull" in state and self.hull is None:
-            self.hull = state["hull"]
-            self._draw_hull()
-        sea = state["sea"]
-        if sea["seq"] != self._sea_seq:
-            self._sea_seq = sea["seq"]
-        s = state.get("sample") or {}
-        if not s:
+        sea = state.sea
+        if sea is not None and sea.seq != self._sea_seq:
+            self._sea_seq = sea.seq
+        s = state.sample
+        if s is None:
             return
-        if s["t"] < self._t_last:  # a new sea record: keep plotting on one time axis
+        if s.t < self._t_last:  # a new sea record: keep plotting on one time axis
             self.ring = Ring(len(self.ring.data), self.ring.data.shape[1])
-        self._t_last = s["t"]
-        self.ring.push([s["t"], *s["eta"], *s["p_ref_t"], *s["p_c_t"], *s["alpha"], *s["u"], s["e_c"], s["e_s"]])
-        if "scene" in state:
-            self.scene.update_scene(state["scene"], state["p_d_n"])
-        self.ref_dot.setData([s["p_ref_t"][0]], [s["p_ref_t"][2]])
-        self.pc_dot.setData([s["p_c_t"][0]], [s["p_c_t"][2]])
+        self._t_last = s.t
+        self.ring.push([s.t, *s.eta, *s.p_ref_t, *s.p_c_t, *s.alpha, *s.u, s.e_c, s.e_s])
+        if state.scene is not None:
+            self.scene.update_scene(state.scene, state.p_d_n)
+        self.ref_dot.setData([s.p_ref_t[0]], [s.p_ref_t[2]])
+        self.pc_dot.setData([s.p_c_t[0]], [s.p_c_t[2]])
         self._draw_plots()
         d = self.ring.view()
         rms_c = float(np.sqrt(np.nanmean(d[:, 19] ** 2)))
         rms_s = float(np.sqrt(np.nanmean(d[:, 20] ** 2)))
         ratio = f"{rms_c / rms_s:.1%}" if rms_s > 1e-9 else "—"
-        flag = "<span style='color:#e08020'><b>SATURATED</b></span>" if s["saturated"] else "inside workspace"
-        stop = "<span style='color:#e03030'><b>E-STOP latched</b></span><br>" if state.get("estop") else ""
-        if state.get("holding") and not state.get("estop"):
+        flag = "<span style='color:#e08020'><b>SATURATED</b></span>" if s.saturated else "inside workspace"
+        stop = "<span style='color:#e03030'><b>E-STOP latched</b></span><br>" if state.estop else ""
+        if state.holding and not state.estop:
             stop = "<span style='color:#e08020'><b>HOLDING</b>: choose a mode to resume</span><br>"
+        sea_text = f"{sea.spectrum} Hs {sea.hs:g} m, Tp {sea.tp:g} s, {sea.heading:g}°" if sea is not None else "—"
         self.readout.setText(
-            f"{stop}t = {s['t']:.1f} s — mode <b>{state['tac_mode']}</b>, {flag}<br>"
-            f"sea: {sea['spectrum']} Hs {sea['hs']:g} m, Tp {sea['tp']:g} s, {sea['heading']:g}°<br>"
-            f"e_c {s['e_c']:.3f} m, e_s {s['e_s']:.3f} m; last {HISTORY_S:g} s rms ratio {ratio}<br>"
-            f"x_d = {state['x_d']:.2f} m"
+            f"{stop}t = {s.t:.1f} s — mode <b>{state.tac_mode}</b>, {flag}<br>"
+            f"sea: {sea_text}<br>"
+            f"e_c {s.e_c:.3f} m, e_s {s.e_s:.3f} m; last {HISTORY_S:g} s rms ratio {ratio}<br>"
+            f"x_d = {state.x_d:.2f} m"
         )
 
     def _draw_hull(self) -> None:
         """Outline of the hull's x–z projection (convex hull of the projected vertices)."""
         from scipy.spatial import ConvexHull
 
-        pts = np.asarray(self.hull["points"])[:, [0, 2]]
+        pts = np.asarray(self.hull.points)[:, [0, 2]]
         h = ConvexHull(pts)
         loop = pts[np.append(h.vertices, h.vertices[0])]
         self.hull_curve.setData(loop[:, 0], loop[:, 1])

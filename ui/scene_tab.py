@@ -22,7 +22,8 @@ class _Started(QObject):
 class SceneEngineMixin:
     """Connects a tab to its scene engine through ``link_factory`` the first time it is needed.
 
-    The tab provides ``notice`` (signal: level, text), ``on_state``, ``on_reply``, ``_set_enabled``,
+    The tab provides ``notice`` (signal: level, text), ``on_state``, ``on_description``, ``on_reply``,
+    ``_set_enabled``,
     ``_engine_failed(err)`` and the class attribute ``engine_label`` used in messages.
     """
 
@@ -71,6 +72,9 @@ class SceneEngineMixin:
             self._engine_failed(err)
             return False
         self.link.state.connect(self.on_state)
+        self.link.described.connect(self.on_description)
+        if self.link.description is not None:
+            self.on_description(self.link.description)
         self.link.reply.connect(self.on_reply)
         self.link.log.connect(lambda lvl, text: self.notice.emit(lvl, f"{self.engine_label}: {text}"))
         self._set_enabled(True)

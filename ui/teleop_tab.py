@@ -26,8 +26,6 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from app.ik import solver_names
-from app.models.registry import list_robots
 from app.net.messages import MAX_ROBOT_TEXT
 from ui.csv_logger import SIGNALS, StateCsvLogger
 from ui.widgets.files import choose_file
@@ -130,7 +128,8 @@ class TeleopTab(QWidget):
         super().__init__(parent)
         self.link = link
         self.logger: StateCsvLogger | None = None
-        self.state: dict | None = None
+        self.state = None  # the newest TeleopSnapshot
+        self.desc = None  # the engine's TeleopDescription (robot library, solvers, limits, box)
         self._syncing = False
         outer = QHBoxLayout(self)
         split = QSplitter()
@@ -150,9 +149,9 @@ class TeleopTab(QWidget):
         g = QGroupBox("Manipulator")
         f = QFormLayout(g)
         self.robot = QComboBox()
-        self.robot.addItems(list_robots())
-        self.robot.setToolTip("robot from the library (robots/*.xml); loading it moves nothing")
-        self.robot.activated.connect(lambda _i: self.link.send("set_robot", robot=self.robot.currentText()))
+        self.robot.setToolTip("robots the engine can drive (its library); loading one moves nothing")
+        self.robot.activated.connect(lambda _i: self.choose_robot(self.robot.currentText()))
+        self.opened: dict[str, tuple[str, str]] = {}  # robot name -> (file name, text) of files opened by path
         row = QHBoxLayout()
         row.addWidget(self.robot, 1)
         self.open_xml = QPushButton("Open XML…")
@@ -161,10 +160,9 @@ class TeleopTab(QWidget):
         row.addWidget(self.open_xml)
         f.addRow("robot", row)
         self.solver = QComboBox()
-        self.solver.addItems(solver_names())
         self.solver.setToolTip(
-            "IK solver: ga (the paper's genetic algorithm), jacobian (damped least squares), "
-            "analytic (closed form, Comau and crane)"
+            "IK solvers that apply to this robot: ga (the paper's genetic algorithm), jacobian (damped least "
+            "squares), analytic (closed form, Comau-type arms)"
         )
         self.solver.activated.connect(lambda _i: self.link.send("set_solver", solver=self.solver.currentText()))
         f.addRow("solver", self.solver)
@@ -282,9 +280,12 @@ class TeleopTab(QWidget):
         self.device.activated.connect(lambda _i: setattr(self.inputs, "choice", self.device.currentText()))
         self._dirty = False
         link.state.connect(self.on_state)
+        link.described.connect(self.on_description)
         link.states.connect(self.log_states)
         link.reply.connect(self.on_reply)
         self.plots.frame.connect(self.refresh)
+        if link.description is not None:
+            self.on_description(link.description)
 
     @staticmethod
     def _spin(lo: float, hi: float, decimals: int, tip: str) -> QDoubleSpinBox:
@@ -312,6 +313,17 @@ class TeleopTab(QWidget):
             self.error.emit("Robot not loaded", f"{name}: {getattr(err, 'strerror', None) or err}")
             return
         self.link.send("set_robot", robot=name, xml=text)
+        self._pending_file = (name, text)
+
+    def choose_robot(self, name: str) -> None:
+        """A library robot by name; a file opened earlier by its text again (the engine has no path to it)."""
+        if self.desc is not None and name == self.desc.robot:
+            return
+        if name in self.opened:
+            file_name, text = self.opened[name]
+            self.link.send("set_robot", robot=file_name, xml=text)
+        else:
+            self.link.send("set_robot", robot=name)
 
     def set_mode(self, mode: str) -> None:
         self.link.send("set_mode", mode=mode)
@@ -341,7 +353,26 @@ class TeleopTab(QWidget):
         held = [str(i) for i, v in enumerate(buttons) if v]
         self.buttons_label.setText(f"buttons: {' '.join(held) if held else '–'}   ({device})")
 
-    def on_state(self, state: dict) -> None:
+    def on_description(self, desc) -> None:
+        """The engine's robot library, the solvers that apply to its robot, joint limits and box."""
+        if getattr(desc, "kind", None) != "teleop":
+            return
+        self.desc = desc
+        pending = getattr(self, "_pending_file", None)
+        if pending is not None and desc.robot_xml == pending[1]:
+            self.opened[desc.robot] = pending  # the file's robot as the engine named it
+            self._pending_file = None
+        names = [r.name for r in desc.robots]
+        names += [n for n in self.opened if n not in names]
+        if desc.robot not in names:
+            names.append(desc.robot)  # a robot opened by path: shown, chosen again by its name
+        _set_items(self.robot, names, desc.robot)
+        _set_items(self.solver, desc.solvers, self.state.solver if self.state is not None else None)
+        self.plots.set_description(desc)
+        self.view.set_description(desc)
+        self._dirty = True
+
+    def on_state(self, state) -> None:
         """The newest state; widgets are refreshed from it once per plot frame."""
         self.state = state
         self._dirty = True
@@ -361,24 +392,28 @@ class TeleopTab(QWidget):
         self._dirty = False
         state = self.state
         self.view.update_state(state)
-        self.bars.update_state(state)
+        self.bars.update_state(state, self.desc)
         if self.logger is not None:
             self.log_rows.setText(f"{self.logger.rows} rows")
         self._sync_controls(state)
 
-    def _sync_controls(self, state: dict) -> None:
+    def _sync_controls(self, state) -> None:
         """Controls follow the engine, touched only where they differ (each change relayouts)."""
-        if self.robot.currentText() != state["robot"]:
-            if self.robot.findText(state["robot"]) < 0:
-                self.robot.addItem(state["robot"])
-            self.robot.setCurrentText(state["robot"])
-        if self.solver.currentText() != state["solver"]:
-            self.solver.setCurrentText(state["solver"])
-        button = self.mode_pos if state["mode"] == "position" else self.mode_vel
+        if self.robot.currentText() != state.robot:
+            if self.robot.findText(state.robot) < 0:
+                self.robot.addItem(state.robot)
+            self.robot.setCurrentText(state.robot)
+        if self.solver.currentText() != state.solver:
+            if self.solver.findText(state.solver) < 0:
+                self.solver.addItem(state.solver)
+            self.solver.setCurrentText(state.solver)
+        button = self.mode_pos if state.mode == "position" else self.mode_vel
         if not button.isChecked():
             button.setChecked(True)
-        sc = state["scaling"]
-        for w, v in ((self.k_p, sc["k_p"][0]), (self.k_v, sc["k_v"][0]), *zip(self.x_w, sc["x_w"], strict=True)):
+        sc = state.scaling
+        if sc is None:
+            return
+        for w, v in ((self.k_p, sc.k_p[0]), (self.k_v, sc.k_v[0]), *zip(self.x_w, sc.x_w, strict=True)):
             if not w.hasFocus() and w.value() != round(v, w.decimals()):
                 w.setValue(v)
 
@@ -396,7 +431,8 @@ class TeleopTab(QWidget):
         signals = [n for n, cb in self.log_signals.items() if cb.isChecked()]
         duration = self.log_duration.value() or None
         try:
-            self.logger = StateCsvLogger(self.log_path.text(), signals, duration)
+            names = self.desc.joint_names if self.desc is not None else None
+            self.logger = StateCsvLogger(self.log_path.text(), signals, duration, names)
         except (OSError, ValueError) as err:
             self.error.emit("Logger not started", str(err))
             return
@@ -409,3 +445,14 @@ class TeleopTab(QWidget):
             self.log_rows.setText(f"{self.logger.rows} rows written to {os.path.basename(self.log_path.text())}")
             self.logger = None
         self.log_button.setText("Start logging")
+
+
+def _set_items(combo: QComboBox, items: list[str], current: str | None) -> None:
+    """Replace a combo box's items (only when they differ: a change relayouts), keeping ``current`` chosen."""
+    if [combo.itemText(i) for i in range(combo.count())] != list(items):
+        combo.blockSignals(True)
+        combo.clear()
+        combo.addItems(list(items))
+        combo.blockSignals(False)
+    if current is not None and combo.findText(current) >= 0 and combo.currentText() != current:
+        combo.setCurrentText(current)

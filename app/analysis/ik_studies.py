@@ -17,7 +17,7 @@ import csv
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +75,7 @@ class ReachabilityReference:
 # ----------------------------------------------------------------------------- error distribution
 @dataclass
 class ErrorDistribution:
+    STUDY = "distribution"
     """Result of :func:`error_distribution`; rows are targets."""
 
     robot: str
@@ -89,6 +90,9 @@ class ErrorDistribution:
     box_lower: NDArray[np.float64]
     box_upper: NDArray[np.float64]
     complete: bool = True
+
+    def to_wire(self) -> dict[str, Any]:
+        return _result_to_wire(self)
 
     def summary(self) -> dict[str, Any]:
         n = len(self.error)
@@ -190,6 +194,32 @@ def error_distribution(
     )
 
 
+def _result_to_wire(result) -> dict[str, Any]:
+    """A study result as plain lists for the protocol (``study`` message); inverse: :func:`study_from_wire`."""
+    out: dict[str, Any] = {"study": result.STUDY}
+    for f in fields(result):
+        v = getattr(result, f.name)
+        out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+    return out
+
+
+def study_from_wire(data: dict[str, Any]) -> ErrorDistribution | Tracking:
+    """The result of a study sent by an engine (see :func:`_result_to_wire`)."""
+    cls = {"distribution": ErrorDistribution, "tracking": Tracking}.get(data.get("study"))
+    if cls is None:
+        raise ValueError(f"unknown study {data.get('study')!r}")
+    kw = {}
+    for f in fields(cls):
+        v = data[f.name]
+        if isinstance(v, list):
+            kind = bool if f.name in ("success", "reachable") else float
+            v = np.asarray(v, dtype=kind)
+            if v.ndim == 1 and f.name in ("targets", "reached", "target", "q") and v.size == 0:
+                v = v.reshape(0, 3 if f.name != "q" else 0)
+        kw[f.name] = v
+    return cls(**kw)
+
+
 def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
     """3D scatter of the targets coloured by error (paper Fig. 5), saved as PNG."""
     import matplotlib
@@ -225,6 +255,7 @@ def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
 # ----------------------------------------------------------------------------- tracking
 @dataclass
 class Tracking:
+    STUDY = "tracking"
     robot: str
     solver: str
     t: NDArray[np.float64]
@@ -234,6 +265,9 @@ class Tracking:
     time_s: NDArray[np.float64]
     success: NDArray[np.bool_]
     q: NDArray[np.float64] = field(repr=False)
+
+    def to_wire(self) -> dict[str, Any]:
+        return _result_to_wire(self)
 
     def summary(self) -> dict[str, Any]:
         return {

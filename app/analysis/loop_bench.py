@@ -113,8 +113,8 @@ def bench_loop(
                 st = viewer.recv_state(0.2)
                 if st is not None:
                     states += 1
-                    if st["flags"]["estop"]:
-                        stopped.append(float(np.max(np.abs(st["qdot"]))))
+                    if st.estop:
+                        stopped.append(float(np.max(np.abs(st.qdot))))
 
         watcher = threading.Thread(target=watch, daemon=True)
         watcher.start()

@@ -14,18 +14,31 @@ stands until the operator commands it anew.
 from __future__ import annotations
 
 import time
-from collections import deque
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
 from app.engine.alarms import AlarmList
-from app.engine.session import CommandError, LogEntry
+from app.engine.scene import CommandError, Scene
 from app.errors import BosunError
 from app.marine.vessel import VesselParticulars, parametric_rao
-from app.models.lab import load_lab
+from app.marine.waves import SPECTRA
+from app.marine.waves import spectrum as sea_spectrum
+from app.models.lab import load_lab, resolve_lab
+from app.models.registry import resolve
 from app.models.stewart import StewartPlatform
+from app.net.snapshots import (
+    ComauState,
+    LabDescription,
+    LabScenePoints,
+    LabSnapshot,
+    PendulumState,
+    PlatformInfo,
+    PlatformState,
+    WinchInfo,
+    WinchState,
+)
 from app.sim.motionlab import REMOTE_TOOL_SPEED, MotionLab
 from app.sim.stewart import Generator, WaveSimulation, parse_timeseries_csv
 from app.teleop.pipeline import InputPipeline
@@ -34,15 +47,21 @@ STEP = 0.01
 LOCAL_SPEED_TIMEOUT = 0.3  # s: a LOCAL winch speed not refreshed this long returns to zero
 
 
+SOURCES = ("simulation", "generator", "remote", "timeseries")
+
+
 @dataclass
-class LabSession:
+class LabSession(Scene):
     lab_name: str = "motionlab"
-    log: deque = field(default_factory=lambda: deque(maxlen=200))
-    scene_name = "the Motion-Lab"
+
+    KIND: ClassVar[str] = "lab"
+    TITLE: ClassVar[str] = "the Motion-Lab"
+    COMMANDS: ClassVar[dict[str, str]] = {
+        m: m for m in ("lab_platform", "lab_source", "lab_remote_pose", "lab_comau_mode", "lab_winch", "lab_vvmc")
+    }
 
     def __post_init__(self) -> None:
-        self.log_seq = 0
-        self.estop_latched = False
+        self._init_scene()
         self.robot_name, self.solver_name, self.mode = "motionlab", "analytic", "lab"
         self.layout = load_lab(self.lab_name)
         self.lab = MotionLab(self.layout, at_work=True)
@@ -53,13 +72,9 @@ class LabSession:
         self._local_speed_time = -np.inf
         self._rao = None
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
+        self.spectra: list[tuple[str, float, float] | None] = [None for _ in self.names]  # the last simulated sea
         self.vvmc = False
         self.note("info", f"Motion-Lab: {', '.join(self.names)} SETTLED, Comau REMOTE, winch LOCAL")
-
-    # ------------------------------------------------------------------ log
-    def note(self, level: str, text: str) -> None:
-        self.log_seq += 1
-        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
 
     def _platform(self, name: str) -> int:
         if name not in self.names:
@@ -121,6 +136,9 @@ class LabSession:
         except BosunError as err:
             raise CommandError(str(err)) from None
         self.sources[k] = {"source": source, **info}
+        if source == "simulation":
+            self.spectra[k] = (p.get("spectrum", "jonswap"), float(info["hs"]), float(info["tp"]))
+        self.changed()
         self.note("info", f"{platform}: motion source {source.upper()}")
 
     def lab_remote_pose(self, platform: str, eta: list[float]) -> None:
@@ -179,17 +197,6 @@ class LabSession:
             held = ", ".join(f"{n} {p.status.upper()}" for n, p in zip(self.names, self.lab.platforms, strict=True))
             self.note("info", f"E-STOP reset: every machine holds where it stands ({held}, Comau HOLD, winch LOCAL)")
 
-    def operator_changed(self, name: str) -> None:
-        self.input.disarm(f"operator {name} connected")
-
-    def _not_here(self, *_: Any) -> None:
-        raise CommandError("this engine runs the Motion-Lab; robot, solver and scaling commands do not apply")
-
-    set_robot = set_solver = set_mode = set_scaling = _not_here
-
-    def feed(self, sample, now: float, released: bool = False) -> None:
-        self.input.feed(sample, now, released)
-
     # ------------------------------------------------------------------ loop
     def _apply_input(self, now: float) -> None:
         inp = self.input.step(now)
@@ -244,6 +251,10 @@ class LabSession:
         return bool(np.hypot(p_b2[0], p_b2[1]) <= radius and p_b2[2] > 0.0)
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
+        if self.paused:  # time stands still; the stop button still latches
+            if self.input.step(now).stop:
+                self.estop(source=f"the stop button of {self.input.profile.name}")
+            return
         self._carry += dt
         n = int(self._carry / STEP + 1e-9)
         if n <= 0:
@@ -255,78 +266,95 @@ class LabSession:
         self._check_alarms()
 
     # ------------------------------------------------------------------ state
-    def _scene(self) -> dict[str, Any]:
-        """Points in the world {g} for drawing: leg ends of both platforms, robot polyline, wire, load."""
+    def _scene(self) -> LabScenePoints:
+        """Points in the world {g} for drawing: leg ends of both platforms, robot joints, tool, load."""
         lab = self.lab
-        out: dict[str, Any] = {}
+        plats: dict[str, dict[str, list[list[float]]]] = {}
         for k, name in enumerate(self.names):
             model = lab.models[k]
             T_n = self.layout.T_world_n1 if k == 0 else self.layout.T_world_n2
             H = T_n @ StewartPlatform.pose_matrix(lab.platforms[k].eta)
             base = model.a_n @ T_n[:3, :3].T + T_n[:3, 3]
             top = model.b_b @ H[:3, :3].T + H[:3, 3]
-            out[name] = {"base": np.round(base, 4).tolist(), "top": np.round(top, 4).tolist()}
+            plats[name] = {"base": np.round(base, 4).tolist(), "top": np.round(top, 4).tolist()}
         H1 = lab.platform_pose(0) @ self.layout.T_b1_r
         F = lab.robot.frames(lab.joints.x)
         pts = np.vstack([np.zeros(3), F[:, :3, 3]])
-        out["robot"] = np.round(pts @ H1[:3, :3].T + H1[:3, 3], 4).tolist()
-        out["tool"] = np.round(lab.p_t_g, 4).tolist()
-        out["payload"] = np.round(lab.p_p_g(), 4).tolist()
-        out["work_point"] = np.round(lab.last.p_w_g, 4).tolist()
-        return out
+        return LabScenePoints(
+            platforms=plats,
+            robot=np.round(pts @ H1[:3, :3].T + H1[:3, 3], 4).tolist(),
+            tool=np.round(lab.p_t_g, 4).tolist(),
+            payload=np.round(lab.p_p_g(), 4).tolist(),
+            work_point=np.round(lab.last.p_w_g, 4).tolist(),
+        )
 
-    def snapshot(self) -> dict[str, Any]:
+    def describe(self) -> LabDescription:
+        lab, w = self.lab, self.layout.winch
+        plats = []
+        for k, (name, robot_file) in enumerate(self.layout.platforms):
+            m = lab.models[k]
+            spec = None
+            if self.spectra[k] is not None:
+                kind, hs, tp = self.spectra[k]
+                omega = np.linspace(0.1, 3.0, 300)
+                spec = {"omega": omega.tolist(), "s": sea_spectrum(kind, omega, hs, tp).tolist()}
+            plats.append(
+                PlatformInfo(
+                    name=name,
+                    robot_xml=resolve(robot_file).read_text(encoding="utf-8"),
+                    leg_range=[m.leg_min, m.leg_max],
+                    pose_min=m.pose_min.tolist(),
+                    pose_max=m.pose_max.tolist(),
+                    spectrum=spec,
+                )
+            )
+        r = lab.robot
+        return LabDescription(
+            seq=self.describe_seq,
+            title="Motion-Lab",
+            commands=sorted(self.COMMANDS),
+            lab_xml=resolve_lab(self.lab_name).read_text(encoding="utf-8"),
+            platforms=plats,
+            comau_xml=resolve(self.layout.crane_robot).read_text(encoding="utf-8"),
+            comau_lower=r.lower.tolist(),
+            comau_upper=r.upper.tolist(),
+            comau_speed=r.speed.tolist(),
+            winch=WinchInfo(min=w["min_length"], max=w["max_length"], speed_max=w["speed"]),
+            sources=list(SOURCES),
+            spectra=list(SPECTRA),
+        )
+
+    def snapshot(self) -> LabSnapshot:
         lab = self.lab
         s = lab.last
         plats = []
         for k, name in enumerate(self.names):
             p, m = lab.platforms[k], lab.models[k]
             plats.append(
-                {
-                    "name": name,
-                    "status": p.status,
-                    "mode": p.mode,
-                    "source": p.source_name,
-                    "source_info": self.sources[k],
-                    "eta": np.round(p.eta, 6).tolist(),
-                    "eta_dot": np.round(p.eta_dot, 6).tolist(),
-                    "legs": np.round(m.leg_lengths(p.eta), 5).tolist(),
-                    "leg_range": [m.leg_min, m.leg_max],
-                    "pose_min": m.pose_min.tolist(),
-                    "pose_max": m.pose_max.tolist(),
-                    "leg_clamped": p.leg_clamped,
-                    "ramp": p.gain,
-                }
+                PlatformState(
+                    name=name,
+                    status=p.status,
+                    mode=p.mode,
+                    source=p.source_name,
+                    source_info=self.sources[k],
+                    eta=np.round(p.eta, 6).tolist(),
+                    eta_dot=np.round(p.eta_dot, 6).tolist(),
+                    legs=np.round(m.leg_lengths(p.eta), 5).tolist(),
+                    leg_clamped=bool(p.leg_clamped),
+                    ramp=float(p.gain),
+                )
             )
-        r = lab.robot
-        return {
-            "kind": "lab",
-            "estop": self.estop_latched,
-            "flags": self.input.flags(self.estop_latched),
-            "alarms": self.alarms.snapshot(),
-            "t": lab.t,
-            "platforms": plats,
-            "comau": {
-                "mode": lab.comau_mode,
-                "q": s.q.tolist(),
-                "qd": s.qd.tolist(),
-                "lower": r.lower.tolist(),
-                "upper": r.upper.tolist(),
-                "speed": r.speed.tolist(),
-                "at_limit": lab.at_limit[:3].tolist(),
-            },
-            "winch": {
-                "mode": lab.winch.mode,
-                "length": s.L_w,
-                "speed": s.L_w_dot,
-                "min": self.layout.winch["min_length"],
-                "max": self.layout.winch["max_length"],
-                "speed_max": self.layout.winch["speed"],
-                "speed_command": lab.winch.speed_command,
-            },
-            "pendulum": {"alpha": s.swing[0], "beta": s.swing[1], "swing": lab.pendulum.swing},
-            "vvmc": self.vvmc,
-            "tool_error_b2": s.e_t_b2.tolist(),
-            "payload_height_error": s.payload_height_error,
-            "scene": self._scene(),
-        }
+        return LabSnapshot(
+            **self._head(),
+            t=lab.t,
+            platforms=plats,
+            comau=ComauState(mode=lab.comau_mode, q=s.q.tolist(), qd=s.qd.tolist(), at_limit=lab.at_limit[:3].tolist()),
+            winch=WinchState(
+                mode=lab.winch.mode, length=float(s.L_w), speed=float(s.L_w_dot), speed_command=lab.winch.speed_command
+            ),
+            pendulum=PendulumState(alpha=float(s.swing[0]), beta=float(s.swing[1]), swing=float(lab.pendulum.swing)),
+            vvmc=self.vvmc,
+            tool_error_b2=s.e_t_b2.tolist(),
+            payload_height_error=float(s.payload_height_error),
+            scene=self._scene(),
+        )

@@ -46,11 +46,12 @@ from typing import Any
 import numpy as np
 import zmq
 
-from app.engine.session import CommandError, Session
+from app.engine.scene import CommandError, Scene
 from app.errors import BosunError, printable
 from app.net.codec import ProtocolError, decode, encode
 from app.net.messages import OPERATOR_ONLY, SCENE_MESSAGES
 from app.net.security import AuthThrottle, CurveAuthenticator, ServerCurve
+from app.net.snapshots import EngineInfo, to_wire
 from app.net.transport import TransportError, check_url, is_local, state_url_for
 from app.teleop.devices import InputSample
 
@@ -215,7 +216,7 @@ class EngineServer:
 
     def __init__(
         self,
-        session: Session,
+        session: Scene,
         bind: str = "tcp://127.0.0.1:5555",
         rate: float = DEFAULT_RATE,
         publish_rate: float = 50.0,
@@ -307,6 +308,9 @@ class EngineServer:
         self._io_backlog = False  # the I/O thread's window closed on waiting messages
         self.io_deferred = 0  # ticks started late to give the I/O thread its share
         self._io_error: BaseException | None = None
+        self._described = -1  # describe_seq of the cached description
+        self._description = b""  # the encoded ``description`` (read by the I/O thread, written by the loop)
+        self._refresh_description()
 
     # ------------------------------------------------------------------ I/O thread: the protocol
     def _reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
@@ -475,6 +479,9 @@ class EngineServer:
         if mtype == "ping":
             self._reply(ident, "ping", True)
             return
+        if mtype == "describe":
+            self.router.send_multipart([ident, self._description], zmq.NOBLOCK)
+            return
         if mtype == "estop":
             self._estop(ident, client.name, now)
             return
@@ -535,6 +542,7 @@ class EngineServer:
         if note:
             welcome["note"] = note
         self.router.send_multipart([ident, encode("welcome", **welcome)], zmq.NOBLOCK)
+        self.router.send_multipart([ident, self._description], zmq.NOBLOCK)  # the scene's static data
 
     def _housekeeping(self, now: float) -> None:
         """The operator's silence (warning, lapse) and clients silent for ``client_timeout`` forgotten."""
@@ -650,26 +658,16 @@ class EngineServer:
         try:
             if ident != self.operator:
                 raise CommandError(f"{mtype}: {name} is no longer the operator")
-            if mtype == "set_robot":
-                self.session.set_robot(msg["robot"], msg.get("xml"))
-            elif mtype == "set_solver":
-                self.session.set_solver(msg["solver"])
-            elif mtype == "set_mode":
-                self.session.set_mode(msg["mode"])
-            elif mtype == "set_scaling":
-                self.session.set_scaling(msg.get("k_p"), msg.get("x_w"), msg.get("k_v"))
-            elif mtype == "reset":
+            if mtype == "reset":
                 self.session.reset()
             elif mtype == "ack_alarm":
                 alarms = getattr(self.session, "alarms", None)
                 n = alarms.ack(msg.get("key") or None) if alarms is not None else 0
                 self.session.note("info", f"{name} acknowledged {n} alarm{'s' if n != 1 else ''}")
+            elif mtype == "pause":
+                self.session.pause(bool(msg["on"]))
             elif mtype in SCENE_MESSAGES:
-                handler = getattr(self.session, mtype, None)
-                if handler is None:
-                    scene = getattr(self.session, "scene_name", "the teleop session")
-                    raise CommandError(f"{mtype}: this engine runs {scene}, not the scene of that command")
-                handler(**{k: v for k, v in msg.items() if k not in ("v", "type")})
+                self.session.command(mtype, **{k: v for k, v in msg.items() if k not in ("v", "type")})
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")
             self._send_reply(ident, mtype, False, str(err))
@@ -680,20 +678,40 @@ class EngineServer:
             return
         self._send_reply(ident, mtype, True)
 
+    def _refresh_description(self) -> None:
+        """Encode the scene's description when it changed (the I/O thread answers ``describe`` with it)."""
+        seq = self.session.describe_seq
+        if seq != self._described:
+            self._description = encode("description", description=to_wire(self.session.describe()))
+            self._described = seq
+            if self._io_thread is not None:  # announced to every subscriber; late joiners ask for it
+                with contextlib.suppress(zmq.ZMQError):
+                    self.pub.send(self._description, zmq.NOBLOCK)
+
     def publish(self) -> None:
+        self._refresh_description()
         snap = self.session.snapshot()
         op = self.clients.get(self.operator) if self.operator else None
-        snap["operator"] = op.name if op else ""
-        snap["clients"] = len(self.clients)
-        snap["rejected"] = self.rejected
-        snap["dropped"] = self.limits.total_dropped
-        snap["rate"] = self.rate
-        snap["engine_id"], snap["estops"] = self.engine_id, self.estops
-        snap["realtime_factor"] = self.realtime_factor
-        snap["late_fraction"] = self.late_fraction
-        snap["auth_failures"] = self.auth.failures
-        snap["operator_silent"] = round(time.monotonic() - op.last_seen, 3) if op else 0.0
-        self.pub.send(encode("state", state=snap), zmq.NOBLOCK)
+        snap.engine = EngineInfo(
+            engine_id=self.engine_id,
+            estops=self.estops,
+            operator=op.name if op else "",
+            operator_silent=round(time.monotonic() - op.last_seen, 3) if op else 0.0,
+            clients=len(self.clients),
+            viewers=[c.name for i, c in list(self.clients.items()) if i != self.operator][:32],
+            rejected=self.rejected,
+            dropped=self.limits.total_dropped,
+            auth_failures=self.auth.failures,
+            rate=self.rate,
+            realtime_factor=self.realtime_factor,
+            late_fraction=self.late_fraction,
+            paused=self.session.paused,
+        )
+        self.pub.send(encode("state", state=to_wire(snap)), zmq.NOBLOCK)
+        while self.session.events:
+            mtype, fields = self.session.events.popleft()
+            with contextlib.suppress(zmq.ZMQError):
+                self.pub.send(encode(mtype, **{mtype: fields}), zmq.NOBLOCK)
         for e in self.session.log:
             if e.seq > self._log_sent:
                 self.pub.send(encode("log", level=e.level, text=e.text[:1000], t=e.t), zmq.NOBLOCK)
@@ -796,6 +814,9 @@ class EngineServer:
     def close(self) -> None:
         if hasattr(self, "_stop"):
             self._stop.set()
+        closer = getattr(getattr(self, "session", None), "close", None)
+        if closer is not None:
+            closer()  # the scene's worker processes
         io = getattr(self, "_io_thread", None)
         if io is not None and io.is_alive():
             io.join(timeout=5)

@@ -16,20 +16,36 @@ Qt-free and clock-free: the caller passes ``now``, so tests run deterministicall
 
 from __future__ import annotations
 
+import functools
 import math
-import time
-from collections import deque
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from app.engine.alarms import AlarmList
+from app.engine.scene import CommandError, LogEntry, Scene
+from app.engine.studies import STUDIES, StudyError, StudyRunner
 from app.errors import BosunError, one_line, printable
-from app.ik import DEFAULT, make_solver
-from app.models.registry import allowed_dirs, load_robot, load_robot_text
+from app.ik import DEFAULT, make_solver, solvers_for
+from app.models.registry import (
+    allowed_dirs,
+    list_robots,
+    load_robot,
+    load_robot_text,
+    resolve,
+    resolve_allowed,
+    robots_dir,
+)
 from app.models.serial import SerialRobot
 from app.models.workspace import workspace_box
+from app.net.snapshots import (
+    RobotEntry,
+    ScalingState,
+    StudyState,
+    TeleopDescription,
+    TeleopSnapshot,
+)
 from app.sim.actuators import JointActuators
 from app.teleop.devices import InputSample
 from app.teleop.mapping import (
@@ -47,8 +63,7 @@ DEFAULT_SOLVER = "jacobian"
 SINGULARITY_RATIO = 0.01  # σ_min/σ_max of the speed-scaled position Jacobian below this: alarm
 
 
-class CommandError(BosunError):
-    """A command the engine refuses; nothing has changed."""
+__all__ = ["CommandError", "LogEntry", "Session", "library_entries"]
 
 
 def _label(ref: str) -> str:
@@ -56,17 +71,35 @@ def _label(ref: str) -> str:
     return printable(ref.replace("\\", "/").rsplit("/", 1)[-1], 80) or "<robot text>"
 
 
-@dataclass
-class LogEntry:
-    seq: int
-    t: float
-    level: str
-    text: str
+@functools.cache
+def library_entries(folder: str) -> tuple[RobotEntry, ...]:
+    """The library's serial arms with the solvers that apply to each (what this engine can drive);
+    ``folder``, the library folder now (``$BOSUN_ROBOTS_DIR``), is the cache key."""
+    out = []
+    for name in list_robots():
+        try:
+            robot = load_robot(name)
+        except BosunError:
+            continue  # a broken library file is reported when it is chosen, not here
+        if isinstance(robot, SerialRobot):
+            out.append(RobotEntry(name=name, joints=robot.n_joints, solvers=solvers_for(robot)))
+    return tuple(out)
 
 
 @dataclass
-class Session:
+class Session(Scene):
     """The engine's model of one manipulator under teleoperation."""
+
+    KIND: ClassVar[str] = "teleop"
+    TITLE: ClassVar[str] = "the teleop scene"
+    COMMANDS: ClassVar[dict[str, str]] = {
+        "set_robot": "set_robot",
+        "set_solver": "set_solver",
+        "set_mode": "set_mode",
+        "set_scaling": "set_scaling",
+        "study_start": "study_start",
+        "study_cancel": "study_cancel",
+    }
 
     robot_name: str = DEFAULT_ROBOT
     solver_name: str = DEFAULT_SOLVER
@@ -75,13 +108,12 @@ class Session:
     actuator_tau: float = 0.05
     seed: int = 0
     robots_dirs: tuple = ()  # folders set_robot may read besides the library (``--robots-dir``)
-    log: deque = field(default_factory=lambda: deque(maxlen=200))
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {self.mode!r}")
-        self.estop_latched = False
-        self.log_seq = 0
+        self._init_scene()
+        self.studies = StudyRunner()
         self.input = InputPipeline(self.stale_timeout, note=self.note)
         self.alarms = AlarmList("teleop", note=self.note)
         self.enabled = False
@@ -96,14 +128,12 @@ class Session:
         self._armed_prev = False
         self._load(self.robot_name, self.solver_name)
 
-    # ------------------------------------------------------------------ logging
-    def note(self, level: str, text: str) -> None:
-        self.log_seq += 1
-        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
-
     # ------------------------------------------------------------------ commands
-    def _load(self, robot_ref: str, solver_name: str, robot=None) -> None:
-        robot = load_robot(robot_ref) if robot is None else robot
+    def _load(self, robot_ref: str, solver_name: str, robot=None, xml: str | None = None) -> None:
+        if robot is None:
+            robot = load_robot(robot_ref)
+        if xml is None:
+            xml = resolve(robot_ref).read_text(encoding="utf-8")
         if not isinstance(robot, SerialRobot):
             raise CommandError(f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms")
         solver = make_solver(solver_name, robot, seed=self.seed)
@@ -119,17 +149,19 @@ class Session:
         self.q_ref = act.q.copy()
         self.target = robot.position(self.q_ref)
         self.scaling = default_scaling(box, self.target)
+        self.robot_xml = xml
+        self.changed()
 
     def moving(self) -> bool:
         """Whether any joint moves faster than 0.1 % of its speed limit."""
         return bool(np.any(np.abs(self.actuators.qdot) > 1e-3 * self.robot.speed))
 
-    def set_robot(self, robot_ref: str, xml: str | None = None) -> None:
+    def set_robot(self, robot: str, xml: str | None = None) -> None:
         """Load a robot; on any error the previous robot stays.
 
-        ``robot_ref`` is a library name or a path inside the allowed robot folders (the
+        ``robot`` is a library name or a path inside the allowed robot folders (the
         library, ``$BOSUN_ROBOTS_DIR``, :attr:`robots_dirs`); with ``xml`` the client sent the
-        file's text and ``robot_ref`` only names it.  Refused while the arm moves.
+        file's text and ``robot`` only names it.  Refused while the arm moves.
         """
         if self.estop_latched:
             raise CommandError("E-STOP is latched; reset before changing the robot")
@@ -138,31 +170,36 @@ class Session:
         solver = self.solver_name
         try:
             if xml is not None:
-                robot = load_robot_text(xml, _label(robot_ref))
+                model = load_robot_text(xml, _label(robot))
             else:
-                robot = load_robot(robot_ref, allowed=allowed_dirs(self.robots_dirs))
-            if not isinstance(robot, SerialRobot):
+                model = load_robot(robot, allowed=self._allowed())
+                xml = resolve_allowed(robot, self._allowed()).read_text(encoding="utf-8")
+            if not isinstance(model, SerialRobot):
                 raise CommandError(
-                    f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms"
+                    f"{model.name} is a {model.kind} mechanism; the teleoperation engine drives serial arms"
                 )
             try:
-                make_solver(solver, robot)
+                make_solver(solver, model)
             except BosunError as err:
                 if "no closed-form solution" not in str(err):
                     raise
                 solver = DEFAULT_SOLVER
-            self._load(robot_ref, solver, robot)
+            self._load(robot, solver, model, xml)
+        except OSError as err:
+            raise CommandError(f"{_label(robot)}: cannot read: {one_line(str(err), 200)}") from None
         except BosunError as err:
             raise CommandError(one_line(str(err), 300)) from None
         self.input.disarm("robot changed")
         self.note("info", f"robot {self.robot_name} loaded ({self.robot.n_joints} joints, solver {solver})")
 
-    def set_solver(self, name: str) -> None:
+    def set_solver(self, solver: str) -> None:
+        name = solver
         try:
             solver = make_solver(name, self.robot, seed=self.seed)
         except BosunError as err:
             raise CommandError(str(err)) from None
         self.solver, self.solver_name = solver, name
+        self.changed()
         self.input.disarm("solver changed")
         self.note("info", f"solver {name}")
 
@@ -198,9 +235,31 @@ class Session:
     def profile(self) -> DeviceProfile:
         return self.input.profile
 
-    def operator_changed(self, name: str) -> None:
-        """A new operator (or the same one reconnected): its first command must be a fresh one."""
-        self.input.disarm(f"operator {name} connected")
+    def _allowed(self):
+        return allowed_dirs(self.robots_dirs)
+
+    def study_start(self, study: str, solver: str | None = None, grid: int = 8) -> None:
+        """Run an IK study of the loaded robot in a worker process (progress in ``study`` messages)."""
+        name = solver or self.solver_name
+        if name not in solvers_for(self.robot):
+            raise CommandError(
+                f"{name} does not apply to {self.robot_name} (solvers: {', '.join(solvers_for(self.robot))})"
+            )
+        try:
+            n = self.studies.start(study, self.robot_xml, self.robot_name, name, grid)
+        except StudyError as err:
+            raise CommandError(str(err)) from None
+        what = f"{grid}³ targets" if study == "distribution" else "a 20 s path"
+        self.note("info", f"study {n}: {study} of {self.robot_name} with {name} ({what}) started")
+
+    def study_cancel(self) -> None:
+        if not self.studies.running:
+            raise CommandError("no study is running")
+        self.studies.cancel()
+        self.note("info", "study cancel requested: the targets done so far are kept")
+
+    def close(self) -> None:
+        self.studies.close()
 
     def estop(self, source: str = "operator") -> None:
         """Stop all motion in this tick and latch."""
@@ -336,30 +395,58 @@ class Session:
         return float(sv[min(2, sv.size - 1)] / sv[0]) if sv[0] > 0 else 0.0
 
     # ------------------------------------------------------------------ state
-    def snapshot(self) -> dict[str, Any]:
+    def describe(self) -> TeleopDescription:
+        r = self.robot
+        return TeleopDescription(
+            seq=self.describe_seq,
+            title="Teleoperation",
+            commands=sorted(self.COMMANDS),
+            robots=list(library_entries(str(robots_dir()))),
+            robot=self.robot_name,
+            robot_xml=self.robot_xml,
+            solvers=solvers_for(r),
+            modes=list(MODES),
+            joint_names=list(r.joint_names),
+            lower=r.lower.tolist(),
+            upper=r.upper.tolist(),
+            speed=r.speed.tolist(),
+            box=[self.box.lower.tolist(), self.box.upper.tolist()],
+            studies=list(STUDIES),
+        )
+
+    def snapshot(self) -> TeleopSnapshot:
         q = self.actuators.q
-        return {
-            "t": self.sim_time,
-            "tick": self.ticks,
-            "robot": self.robot_name,
-            "solver": self.solver_name,
-            "mode": self.mode,
-            "joint_names": list(self.robot.joint_names),
-            "q": q.tolist(),
-            "qdot": self.actuators.qdot.tolist(),
-            "q_ref": self.q_ref.tolist(),
-            "lower": self.robot.lower.tolist(),
-            "upper": self.robot.upper.tolist(),
-            "tool": self.robot.position(q).tolist(),
-            "frames": self.robot.frames(q)[:, :3, 3].tolist(),
-            "target": np.asarray(self.target, dtype=float).tolist(),
-            "signal": self.signal.tolist(),
-            "solver_error": None if not math.isfinite(self.solver_cost) else float(self.solver_cost),
-            "solver_time": float(self.solver_time),
-            "solver_ok": bool(self.solver_ok),
-            "scaling": {"k_p": list(self.scaling.k_p), "x_w": list(self.scaling.x_w), "k_v": list(self.scaling.k_v)},
-            "box": [self.box.lower.tolist(), self.box.upper.tolist()],
-            "command": None if self.command_point is None else np.asarray(self.command_point, float).tolist(),
-            "flags": {**self.input.flags(self.estop_latched), "enabled": self.enabled},
-            "alarms": self.alarms.snapshot(),
-        }
+        for msg in self.studies.poll():
+            self.events.append(("study", msg))
+            if msg["status"] != "running":
+                self.note("info" if msg["status"] != "failed" else "warning", _study_line(msg))
+        st = self.studies.state
+        head = self._head()
+        head["flags"].enabled = self.enabled
+        return TeleopSnapshot(
+            **head,
+            t=self.sim_time,
+            tick=self.ticks,
+            robot=self.robot_name,
+            solver=self.solver_name,
+            mode=self.mode,
+            q=q.tolist(),
+            qdot=self.actuators.qdot.tolist(),
+            q_ref=self.q_ref.tolist(),
+            tool=self.robot.position(q).tolist(),
+            frames=self.robot.frames(q)[:, :3, 3].tolist(),
+            target=np.asarray(self.target, dtype=float).tolist(),
+            signal=self.signal.tolist(),
+            solver_error=None if not math.isfinite(self.solver_cost) else float(self.solver_cost),
+            solver_time=float(self.solver_time),
+            solver_ok=bool(self.solver_ok),
+            scaling=ScalingState(k_p=list(self.scaling.k_p), x_w=list(self.scaling.x_w), k_v=list(self.scaling.k_v)),
+            command=None if self.command_point is None else np.asarray(self.command_point, float).tolist(),
+            study=StudyState(**{k: st[k] for k in ("id", "kind", "status", "done", "total", "error")}),
+        )
+
+
+def _study_line(msg: dict) -> str:
+    if msg["status"] == "failed":
+        return f"study {msg['id']} failed: {msg['error']}"
+    return f"study {msg['id']} ({msg['kind']}) {msg['status']}: {msg['done']} of {msg['total']} targets"

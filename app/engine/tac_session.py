@@ -11,17 +11,28 @@ profile's stop button latches the E-STOP here too).  Teleop commands are refused
 
 from __future__ import annotations
 
-import time
 from collections import deque
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from app.engine.alarms import AlarmList
-from app.engine.session import CommandError, LogEntry
+from app.engine.scene import CommandError, Scene
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
+from app.marine.waves import SPECTRA
+from app.models.registry import resolve
+from app.net.snapshots import (
+    Hull,
+    SeaState,
+    ShipBox,
+    TacDescription,
+    TacSample,
+    TacScenePoints,
+    TacSnapshot,
+    WaveField,
+)
 from app.sim.tac import MODES, TacScenario, TacSimulator
 from app.teleop.pipeline import InputPipeline
 
@@ -32,14 +43,15 @@ SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
 
 
 @dataclass
-class TacSession:
+class TacSession(Scene):
     scenario: TacScenario = field(default_factory=lambda: TacScenario(duration=1e5))
-    log: deque = field(default_factory=lambda: deque(maxlen=200))
-    scene_name = "the crane-head scene"
+
+    KIND: ClassVar[str] = "tac"
+    TITLE: ClassVar[str] = "the crane-head scene"
+    COMMANDS: ClassVar[dict[str, str]] = {"set_sea": "set_sea", "set_tac_mode": "set_tac_mode"}
 
     def __post_init__(self) -> None:
-        self.log_seq = 0
-        self.estop_latched = False
+        self._init_scene()
         self.robot_name, self.solver_name, self.mode = "tac", "-", self.scenario.mode
         self.sim = TacSimulator(self.scenario)
         self.system = self.sim.system
@@ -60,11 +72,6 @@ class TacSession:
         del self._hull["index"]
         self.note("info", f"crane-head scene: Hs {self.scenario.hs:g} m, Tp {self.scenario.tp:g} s, mode {self.mode}")
 
-    # ------------------------------------------------------------------ log
-    def note(self, level: str, text: str) -> None:
-        self.log_seq += 1
-        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
-
     # ------------------------------------------------------------------ commands
     def set_sea(self, spectrum: str, hs: float, tp: float, heading: float) -> None:
         try:
@@ -77,6 +84,7 @@ class TacSession:
         self.sim.crane_servo.beta, self.sim.head_servo.alpha = beta, alpha  # the machine stays where it is
         self.sim.continue_from_current = True
         self.sea_seq += 1
+        self.changed()
         self.note("info", f"sea: {spectrum} Hs {hs:g} m, Tp {tp:g} s, heading {heading:g}°")
 
     def set_tac_mode(self, mode: str) -> None:
@@ -103,19 +111,12 @@ class TacSession:
             self.input.disarm("E-STOP reset")
             self.note("info", "E-STOP reset: head and crane hold; select a compensation mode to resume")
 
-    def operator_changed(self, name: str) -> None:
-        self.input.disarm(f"operator {name} connected")
-
-    def _teleop_only(self, *_: Any) -> None:
-        raise CommandError("this engine runs the crane-head scene; robot, solver and stick commands do not apply")
-
-    set_robot = set_solver = set_mode = set_scaling = _teleop_only
-
-    def feed(self, sample, now: float, released: bool = False) -> None:
-        self.input.feed(sample, now, released)
-
     # ------------------------------------------------------------------ loop
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
+        if self.paused:  # time stands still; the stop button still latches
+            if self.input.step(now).stop:
+                self.estop(source=f"the stop button of {self.input.profile.name}")
+            return
         self._carry += dt
         n = int(self._carry / self.scenario.dt + 1e-9)
         if n <= 0:
@@ -155,7 +156,7 @@ class TacSession:
                 "p_s_n": c.p_s_n[-1].tolist(),
             }
 
-    def _scene(self) -> dict[str, Any]:
+    def _scene(self) -> TacScenePoints:
         """Points in {n} for drawing: ship box corners, crane polyline, head knees, TCP, desired point."""
         eta = np.asarray(self.last["eta"])
         R = euler_zyx_to_matrix(eta[3:6])
@@ -163,37 +164,57 @@ class TacSession:
         beta = np.asarray(self.last["beta"])
         F = self.system.crane.frames(beta)
         crane_b = F[:, :3, 3]
-        o_t_b, R_t_b = F[-1, :3, 3], F[-1, :3, :3]
+        o_t_b, R_b_t = F[-1, :3, 3], F[-1, :3, :3]
         alpha = np.asarray(self.last["alpha"])
         knees_t = self.system.head.knees(alpha)
         p_c_t = np.asarray(self.last["p_c_t"])
-        head_b = o_t_b + (np.vstack([knees_t, p_c_t]) @ R_t_b.T)
+        head_b = o_t_b + (np.vstack([knees_t, p_c_t]) @ R_b_t.T)
         hl, hb = SHIP_LENGTH / 2, SHIP_BEAM / 2
         ship_b = np.array([[x, y, z] for x in (-hl, hl) for y in (-hb, hb) for z in (SHIP_DECK_Z, SHIP_KEEL_Z)])
 
         def to_n(p):
             return np.round(p @ R.T + o, 4).tolist()
 
-        return {"ship": to_n(ship_b), "crane": to_n(crane_b), "head": to_n(head_b)}
+        return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b))
 
-    def snapshot(self) -> dict[str, Any]:
-        self._publish_count += 1
+    def describe(self) -> TacDescription:
         sc = self.scenario
-        snap: dict[str, Any] = {
-            "kind": "tac",
-            "estop": self.estop_latched,
-            "holding": self.holding,
-            "flags": self.input.flags(self.estop_latched),
-            "alarms": self.alarms.snapshot(),
-            "sea": {"spectrum": sc.spectrum, "hs": sc.hs, "tp": sc.tp, "heading": sc.heading, "seq": self.sea_seq},
-            "tac_mode": sc.mode,
-            "x_d": self.system.x_d,
-            "p_d_n": self.sim.p_d_n.tolist(),
-            "alpha_limits": [float(self.system.head.lower[0]), float(self.system.head.upper[0])],
-            "sample": self.last,
-        }
-        if self.last:
-            snap["scene"] = self._scene()
-        if self._publish_count % 25 == 1:  # the hull now and then: late joiners get it within a second or so
-            snap["hull"] = self._hull
-        return snap
+        sea = self.sim.vessel.sea
+        return TacDescription(
+            seq=self.describe_seq,
+            title="Crane head",
+            commands=sorted(self.COMMANDS),
+            crane_xml=resolve(sc.crane).read_text(encoding="utf-8"),
+            head_xml=resolve(sc.head).read_text(encoding="utf-8"),
+            vessel=f"RAO file {sc.rao}" if sc.rao else "built-in parametric supply vessel",
+            ship=ShipBox(length=SHIP_LENGTH, beam=SHIP_BEAM, deck_z=SHIP_DECK_Z, keel_z=SHIP_KEEL_Z),
+            alpha_limits=[float(self.system.head.lower[0]), float(self.system.head.upper[0])],
+            hull=Hull(points=self._hull["points"], faces=self._hull["faces"]),
+            sea=self._sea(),
+            waves=WaveField(
+                amplitude=sea.amplitude.tolist(),
+                omega=sea.omega.tolist(),
+                k=sea.wavenumber.tolist(),
+                heading=sea.direction.tolist(),
+                phase=sea.phase.tolist(),
+            ),
+            modes=list(MODES),
+            spectra=list(SPECTRA),
+        )
+
+    def _sea(self) -> SeaState:
+        sc = self.scenario
+        return SeaState(spectrum=sc.spectrum, hs=sc.hs, tp=sc.tp, heading=sc.heading, seq=self.sea_seq)
+
+    def snapshot(self) -> TacSnapshot:
+        return TacSnapshot(
+            **self._head(),
+            t=float(self.last["t"]) if self.last else 0.0,
+            holding=self.holding,
+            sea=self._sea(),
+            tac_mode=self.scenario.mode,
+            x_d=self.system.x_d,
+            p_d_n=self.sim.p_d_n.tolist(),
+            sample=TacSample(**self.last) if self.last else None,
+            scene=self._scene() if self.last else None,
+        )

@@ -12,7 +12,13 @@ from typing import Any
 import msgpack
 
 from app.errors import BosunError
-from app.net.messages import CLIENT_MESSAGES, ENGINE_MESSAGES, MAX_MESSAGE_BYTES, PROTOCOL_VERSION
+from app.net.messages import (
+    CLIENT_MESSAGES,
+    ENGINE_MESSAGES,
+    MAX_ENGINE_MESSAGE_BYTES,
+    MAX_MESSAGE_BYTES,
+    PROTOCOL_VERSION,
+)
 
 
 class ProtocolError(BosunError):
@@ -106,12 +112,14 @@ def encode(mtype: str, **fields: Any) -> bytes:
     return msgpack.packb({"v": PROTOCOL_VERSION, "type": mtype, **fields}, use_bin_type=True)
 
 
-def decode(data: bytes, schema: dict[str, dict[str, tuple]] = CLIENT_MESSAGES) -> dict[str, Any]:
+def decode(
+    data: bytes, schema: dict[str, dict[str, tuple]] = CLIENT_MESSAGES, limit: int = MAX_MESSAGE_BYTES
+) -> dict[str, Any]:
     """Decode and validate; any failure is a :class:`ProtocolError`."""
     if not isinstance(data, bytes | bytearray | memoryview):
         raise ProtocolError("message is not bytes")
-    if len(data) > MAX_MESSAGE_BYTES:
-        raise ProtocolError(f"message of {len(data)} bytes exceeds the limit of {MAX_MESSAGE_BYTES}")
+    if len(data) > limit:
+        raise ProtocolError(f"message of {len(data)} bytes exceeds the limit of {limit}")
     try:
         msg = msgpack.unpackb(bytes(data), raw=False, strict_map_key=True)
     except Exception as err:  # msgpack raises many types on garbage; all mean "not msgpack"
@@ -121,4 +129,4 @@ def decode(data: bytes, schema: dict[str, dict[str, tuple]] = CLIENT_MESSAGES) -
 
 def decode_engine(data: bytes) -> dict[str, Any]:
     """Decode a message sent by the engine (client side)."""
-    return decode(data, ENGINE_MESSAGES)
+    return decode(data, ENGINE_MESSAGES, MAX_ENGINE_MESSAGE_BYTES)

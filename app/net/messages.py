@@ -1,4 +1,10 @@
-"""The Bosun protocol, version 1: message types and their fields (see docs/protocol.md).
+"""The Bosun protocol, version 2: message types and their fields (see docs/protocol.md).
+
+Version 2 (typed state): every snapshot has ``kind`` and the E-STOP latch at ``estop`` (version 1
+nested it under ``flags`` for the teleop scene); static data (robot file, limits, joint names,
+the workspace box, the lab's geometry) moved from the state into the ``description`` a client asks
+for with ``describe``; server fields moved under ``engine``.  The classes are in
+:mod:`app.net.snapshots`.
 
 Every message is a msgpack map with ``v`` (protocol version), ``type`` and the fields
 below.  A field spec is (kind, required, limit):
@@ -16,8 +22,9 @@ below.  A field spec is (kind, required, limit):
 
 from __future__ import annotations
 
-PROTOCOL_VERSION = 1
-MAX_MESSAGE_BYTES = 65_536
+PROTOCOL_VERSION = 2
+MAX_MESSAGE_BYTES = 65_536  # a client's message
+MAX_ENGINE_MESSAGE_BYTES = 16 * 2**20  # an engine's (a study's result, a description with robot files)
 MAX_ROBOT_TEXT = 60_000  # robot XML sent by a client in set_robot (larger files go in a robot folder)
 
 ROLES = ("operator", "viewer")
@@ -49,6 +56,15 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "ack_alarm": {"key": ("str", False, 64)},
     "reset": {},
     "release_operator": {},
+    "describe": {},  # answered by ``description`` on the request socket
+    "pause": {"on": ("bool", True, None)},  # no client shows the scene: time stands still (operator)
+    # teleop scene: IK studies in a worker process the engine owns
+    "study_start": {
+        "study": ("enum", True, ("distribution", "tracking")),
+        "solver": ("str", False, 64),
+        "grid": ("int", False, 40),
+    },
+    "study_cancel": {},
     # crane-head scene (``bosun server --plant tac``)
     "set_sea": {
         "spectrum": ("enum", True, ("jonswap", "pm", "torsethaugen")),
@@ -83,9 +99,15 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "lab_vvmc": {"on": ("bool", True, None)},
 }
 
-#: scene commands the server hands to the session's method of the same name (fields as keywords)
+#: scene commands the server hands to the scene's command table (fields as keywords)
 SCENE_MESSAGES = frozenset(
     {
+        "set_robot",
+        "set_solver",
+        "set_mode",
+        "set_scaling",
+        "study_start",
+        "study_cancel",
         "set_sea",
         "set_tac_mode",
         "lab_platform",
@@ -106,7 +128,9 @@ ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
         "note": ("str", False, 256),
     },
     "reply": {"re": ("str", True, 32), "ok": ("bool", True, None), "error": ("str", False, 1024)},
-    "state": {"state": ("map", True, None)},
+    "state": {"state": ("map", True, None)},  # a snapshot (app.net.snapshots)
+    "description": {"description": ("map", True, None)},  # the scene's static data, on join and on request
+    "study": {"study": ("map", True, None)},  # an IK study's progress; its result in the last one
     "log": {
         "level": ("enum", True, ("info", "warning", "error")),
         "text": ("str", True, 1024),
@@ -115,7 +139,4 @@ ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
 }
 
 #: messages only the operator may send (a viewer gets an error reply); E-STOP is anyone's
-OPERATOR_ONLY = frozenset(
-    {"input", "device_lost", "set_robot", "set_solver", "set_mode", "set_scaling", "reset", "ack_alarm"}
-    | SCENE_MESSAGES
-)
+OPERATOR_ONLY = frozenset({"input", "device_lost", "reset", "ack_alarm", "pause"} | SCENE_MESSAGES)

@@ -20,7 +20,9 @@ import zmq
 
 from app.errors import BosunError
 from app.net.codec import ProtocolError, decode_engine, encode
+from app.net.messages import PROTOCOL_VERSION
 from app.net.security import ClientCurve
+from app.net.snapshots import Description, Snapshot, SnapshotError, description_from_wire, snapshot_from_wire
 
 DEFAULT_URL = "tcp://127.0.0.1:5555"
 
@@ -128,6 +130,7 @@ class Client:
             hello["secret"] = secret
         self.hello_fields = hello  # what a reconnecting link says again
         self.send("hello", **hello)
+        self.description: Description | None = None
         try:
             welcome = self._wait_for(("welcome", "reply"))
         except TransportError as err:
@@ -176,6 +179,15 @@ class Client:
             raise TransportError(reply.get("error", f"{mtype} refused"))
         return reply
 
+    def describe(self) -> Description:
+        """Ask for the scene's description and wait for it."""
+        self.send("describe")
+        msg = self._wait_for(("description",))
+        try:
+            return description_from_wire(msg["description"])
+        except SnapshotError as err:
+            raise TransportError(f"the engine's description does not fit protocol {PROTOCOL_VERSION}: {err}") from None
+
     # ------------------------------------------------------------------ receiving
     def _wait_for(self, types: tuple[str, ...], re: str | None = None) -> dict[str, Any]:
         deadline = time.monotonic() + self.timeout
@@ -186,12 +198,15 @@ class Client:
                 msg = decode_engine(self.dealer.recv())
             except ProtocolError:
                 continue
+            if msg["type"] == "description":  # sent after welcome and on request: keep the newest
+                with contextlib.suppress(SnapshotError):
+                    self.description = description_from_wire(msg["description"])
             if msg["type"] in types and (re is None or msg.get("re") == re):
                 return msg
         raise TransportError(f"no answer from the engine at {self.url} within {self.timeout:g} s")
 
-    def recv_state(self, timeout: float = 1.0) -> dict[str, Any] | None:
-        """The next state message's snapshot (None on timeout); log messages are skipped."""
+    def recv_state(self, timeout: float = 1.0) -> Snapshot | None:
+        """The next state message's typed snapshot (None on timeout); other messages are skipped."""
         deadline = time.monotonic() + timeout
         while (left := deadline - time.monotonic()) > 0:
             if not self.sub.poll(int(left * 1000) + 1):
@@ -201,10 +216,13 @@ class Client:
             except ProtocolError:
                 continue
             if msg["type"] == "state":
-                return msg["state"]
+                try:
+                    return snapshot_from_wire(msg["state"])
+                except SnapshotError:
+                    continue
         return None
 
-    def latest_state(self, timeout: float = 1.0) -> dict[str, Any] | None:
+    def latest_state(self, timeout: float = 1.0) -> Snapshot | None:
         """Drain the stream and return the newest snapshot (waits up to timeout for one)."""
         newest = self.recv_state(timeout)
         while newest is not None and self.sub.poll(0):

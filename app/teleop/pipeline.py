@@ -221,10 +221,10 @@ class InputPipeline:
         return not self.connected and self.sample_time > -math.inf and not self.released
 
     def flags(self, estop: bool = False) -> dict:
-        """Input flags for a snapshot; ``estop``: the scene's latch (nothing is enabled while latched)."""
+        """Input flags for a snapshot (the fields of ``app.net.snapshots.InputFlags``); ``estop``: the
+        scene's latch (nothing is enabled while latched; the latch itself is the snapshot's ``estop``)."""
         s = self.last
         return {
-            "estop": estop,
             "stale_input": s.stale,
             "enabled": s.enabled and self.armed and not estop,
             "armed": self.armed,

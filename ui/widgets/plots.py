@@ -81,6 +81,7 @@ class LivePlots(QWidget):
         self.cur_time = self.p_s.plot(pen=pg.mkPen((80, 140, 230), width=1.5))
         self.ring = None
         self.robot = None
+        self.desc = None
         self.timer = QTimer(self)
         self.timer.setInterval(int(1000 / fps))
         self.timer.timeout.connect(self.redraw)
@@ -95,10 +96,16 @@ class LivePlots(QWidget):
             pad = 0.08 * max(hi - lo, 1e-6)
             plot.setYRange(lo - pad, hi + pad, padding=0.0)
 
-    def _reset(self, state: dict) -> None:
-        n = len(state["q"])
+    def set_description(self, desc) -> None:
+        """Joint names and limits of the engine's robot (its ``description``)."""
+        self.desc = desc
+        if self.ring is not None:
+            self._reset(self.ring.data.shape[1] - 12, self.robot)
+
+    def _reset(self, n: int, robot: str) -> None:
         self.ring = Ring(self.size, 1 + 9 + n + 2)
-        self.robot = state["robot"]
+        self.robot = robot
+        desc = self.desc if self.desc is not None and len(self.desc.joint_names) == n else None
         for c in self.cur_q:
             self.p_q.removeItem(c)
         for b in self.bands:
@@ -106,28 +113,30 @@ class LivePlots(QWidget):
         self.cur_q, self.bands = [], []
         for j in range(n):
             c = COLORS[j % len(COLORS)]
-            lo, hi = state["lower"][j], state["upper"][j]
-            band = pg.LinearRegionItem(
-                (lo, hi), orientation="horizontal", movable=False, brush=pg.mkBrush(*c, 18), pen=pg.mkPen(*c, 60)
-            )
-            self.p_q.addItem(band)
-            self.bands.append(band)
-            self.cur_q.append(self.p_q.plot(pen=pg.mkPen(c, width=2), name=state["joint_names"][j]))
+            if desc is not None:
+                lo, hi = desc.lower[j], desc.upper[j]
+                band = pg.LinearRegionItem(
+                    (lo, hi), orientation="horizontal", movable=False, brush=pg.mkBrush(*c, 18), pen=pg.mkPen(*c, 60)
+                )
+                self.p_q.addItem(band)
+                self.bands.append(band)
+            name = desc.joint_names[j] if desc is not None else f"q{j + 1}"
+            self.cur_q.append(self.p_q.plot(pen=pg.mkPen(c, width=2), name=name))
 
-    def add_state(self, state: dict) -> None:
-        if self.ring is None or state["robot"] != self.robot or len(state["q"]) != self.ring.data.shape[1] - 12:
-            self._reset(state)
-        err = state.get("solver_error")
-        command = state.get("command") or (np.nan, np.nan, np.nan)
+    def add_state(self, state) -> None:
+        if self.ring is None or state.robot != self.robot or len(state.q) != self.ring.data.shape[1] - 12:
+            self._reset(len(state.q), state.robot)
+        err = state.solver_error
+        command = state.command or (np.nan, np.nan, np.nan)
         self.ring.push(
             [
-                state["t"],
+                state.t,
                 *command,
-                *state["target"],
-                *state["tool"],
-                *state["q"],
+                *state.target,
+                *state.tool,
+                *state.q,
                 np.nan if err is None else err,
-                1e3 * state.get("solver_time", 0.0),
+                1e3 * state.solver_time,
             ]
         )
 
@@ -162,8 +171,11 @@ class UtilisationBars(QWidget):
         self.bars: list[QProgressBar] = []
         self.names: tuple = ()
 
-    def update_state(self, state: dict) -> None:
-        names = tuple(state["joint_names"])
+    def update_state(self, state, desc) -> None:
+        """Joint positions of a teleop snapshot against the limits of the engine's description."""
+        if desc is None or len(desc.joint_names) != len(state.q):
+            return
+        names = tuple(desc.joint_names)
         if names != self.names:
             while self.grid.count():
                 w = self.grid.takeAt(0).widget()
@@ -181,7 +193,7 @@ class UtilisationBars(QWidget):
             self.names = names
             self.near = [None] * len(names)
         for j, bar in enumerate(self.bars):
-            lo, hi, q = state["lower"][j], state["upper"][j], state["q"][j]
+            lo, hi, q = desc.lower[j], desc.upper[j], state.q[j]
             u = (q - lo) / (hi - lo) if hi > lo else 0.0
             value = round(1000 * min(max(u, 0.0), 1.0))
             if value != bar.value():

@@ -44,6 +44,7 @@ class StatusLight(QLabel):
 class StatusPanel(QWidget):
     stop_clicked = pyqtSignal()
     reset_clicked = pyqtSignal()
+    role_clicked = pyqtSignal()  # release the operator role, or take it when free
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
@@ -102,6 +103,19 @@ class StatusPanel(QWidget):
         self.reset.setEnabled(False)
         self.reset.clicked.connect(self.reset_clicked)
         right.addWidget(self.reset)
+        self.role = QLabel("role: –")
+        self.role.setWordWrap(True)
+        self.role.setMaximumWidth(190)
+        self.role.setToolTip("who holds the operator role of each engine; viewers see everything and may STOP")
+        right.addWidget(self.role)
+        self.role_button = QPushButton("Release operator role")
+        self.role_button.setFocusPolicy(Qt.NoFocus)
+        self.role_button.setToolTip(
+            "release: the engines hold and another console may take over; take: become the operator where the "
+            "role is free (you start disarmed)"
+        )
+        self.role_button.clicked.connect(self.role_clicked)
+        right.addWidget(self.role_button)
         right.addStretch(1)
         lay.addLayout(right)
 
@@ -117,6 +131,22 @@ class StatusPanel(QWidget):
         self._latched_shown = latched
         self.latched.setText("E-STOP LATCHED" if latched else "")
         self.reset.setEnabled(latched)
+
+    def show_roles(self, rows: list[tuple[str, str, str]]) -> None:
+        """``rows``: (engine, this console's role, operator name) per engine."""
+        text = "<br>".join(
+            f"{origin}: <b>{'you operate' if role == 'operator' else 'viewer'}</b>"
+            + ("" if role == "operator" else f" (operator: {op or 'free'})")
+            for origin, role, op in rows
+        )
+        if text != self.role.text():
+            self.role.setText(text or "role: –")
+        mine = any(role == "operator" for _, role, _ in rows)
+        label = "Release operator role" if mine else "Take operator role"
+        if self.role_button.text() != label:
+            self.role_button.setText(label)
+        free = any(role != "operator" and not op for _, role, op in rows)
+        self.role_button.setEnabled(mine or free)
 
     def set_lost(self) -> None:
         """The engine is out of reach: nothing is known about input or plant."""

@@ -53,16 +53,23 @@ class RobotView3D(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(self.view)
         self._box_key = None
+        self.desc = None
 
-    def update_state(self, state: dict) -> None:
-        frames = np.asarray(state["frames"], dtype=float)
+    def set_description(self, desc) -> None:
+        """The engine's robot and workspace box (its ``description``)."""
+        self.desc = desc
+
+    def update_state(self, state) -> None:
+        frames = np.asarray(state.frames, dtype=float)
         self.links.setData(pos=frames)
         self.joints.setData(pos=frames[:-1])
-        self.target.setData(pos=np.asarray([state["target"]], dtype=float))
-        self.tool.setData(pos=np.asarray([state["tool"]], dtype=float))
-        key = (state["robot"], tuple(map(tuple, state["box"])))
+        self.target.setData(pos=np.asarray([state.target], dtype=float))
+        self.tool.setData(pos=np.asarray([state.tool], dtype=float))
+        if self.desc is None or not self.desc.box:
+            return
+        key = (self.desc.robot, tuple(map(tuple, self.desc.box)))
         if key != self._box_key:
-            lo, hi = np.asarray(state["box"][0]), np.asarray(state["box"][1])
+            lo, hi = np.asarray(self.desc.box[0]), np.asarray(self.desc.box[1])
             self.box.setData(pos=_box_edges(lo, hi))
             size = float(np.max(hi - lo))
             self.grid.setSize(size * 1.5, size * 1.5)
@@ -105,16 +112,22 @@ class RobotView2D(QWidget):
             self.plots[key] = (pw, (a, b), box, links, target, tool)
             row.addWidget(pw)
         self._box_key = None
+        self.desc = None
 
-    def update_state(self, state: dict) -> None:
-        frames = np.asarray(state["frames"], dtype=float)
-        lo, hi = np.asarray(state["box"][0]), np.asarray(state["box"][1])
-        new_box = (state["robot"], tuple(lo), tuple(hi))
+    def set_description(self, desc) -> None:
+        """The engine's robot and workspace box (its ``description``)."""
+        self.desc = desc
+
+    def update_state(self, state) -> None:
+        frames = np.asarray(state.frames, dtype=float)
+        box_ = self.desc.box if self.desc is not None and self.desc.box else [state.tool, state.tool]
+        lo, hi = np.asarray(box_[0]), np.asarray(box_[1])
+        new_box = (state.robot, tuple(lo), tuple(hi))
         for pw, (a, b), box, links, target, tool in self.plots.values():
             links.setData(frames[:, a], frames[:, b])
-            target.setData([state["target"][a]], [state["target"][b]])
-            tool.setData([state["tool"][a]], [state["tool"][b]])
-            if new_box != self._box_key:
+            target.setData([state.target[a]], [state.target[b]])
+            tool.setData([state.tool[a]], [state.tool[b]])
+            if new_box != self._box_key and self.desc is not None:
                 box.setData([lo[a], hi[a], hi[a], lo[a], lo[a]], [lo[b], lo[b], hi[b], hi[b], lo[b]])
                 pw.setRange(xRange=(lo[a], hi[a]), yRange=(lo[b], hi[b]), padding=0.05)
         self._box_key = new_box

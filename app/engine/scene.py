@@ -1,0 +1,114 @@
+"""The interface every engine scene (teleop arm, crane head, Motion-Lab) offers the server.
+
+The server owns sockets and time; a scene owns its machines.  A scene has
+
+* ``describe()``: its static data (a :class:`~app.net.snapshots.Description`), sent on join and
+  whenever it changes (``describe_seq`` increments, :meth:`changed`);
+* a **command table** ``COMMANDS``: protocol message type → method name, called with the message's
+  fields as keywords; a command of another scene is refused by name, not by string matching;
+* ``tick(now, dt, solve_budget)``, ``snapshot()`` (a typed :class:`~app.net.snapshots.Snapshot`),
+  ``estop(source)``, ``reset()``, ``pause(on)``;
+* one log (``note``), one input pipeline (``input``) and one alarm list (``alarms``);
+* ``events``: messages the scene wants published besides its state (study progress and results).
+"""
+
+from __future__ import annotations
+
+import abc
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from app.errors import BosunError
+from app.net.snapshots import Alarm, Description, InputFlags, Snapshot
+
+
+class CommandError(BosunError):
+    """A command the engine refuses; nothing has changed."""
+
+
+@dataclass
+class LogEntry:
+    seq: int
+    t: float
+    level: str
+    text: str
+
+
+class Scene(abc.ABC):
+    """Base of the engine's scenes; subclasses are dataclasses that call :meth:`_init_scene`."""
+
+    KIND: ClassVar[str] = ""
+    TITLE: ClassVar[str] = ""
+    #: protocol message type -> method name (fields as keywords)
+    COMMANDS: ClassVar[dict[str, str]] = {}
+
+    def _init_scene(self) -> None:
+        self.log: deque = deque(maxlen=200)
+        self.log_seq = 0
+        self.estop_latched = False
+        self.describe_seq = 1
+        self.paused = False
+        self.events: deque = deque(maxlen=256)  # (message type, fields) to publish
+
+    # ------------------------------------------------------------------ log
+    def note(self, level: str, text: str) -> None:
+        self.log_seq += 1
+        self.log.append(LogEntry(self.log_seq, time.time(), level, text))
+
+    def changed(self) -> None:
+        """The description changed: clients are told by ``describe_seq`` and ask for it again."""
+        self.describe_seq += 1
+
+    # ------------------------------------------------------------------ commands
+    def command(self, mtype: str, **fields: Any) -> None:
+        """Run a scene command from the table; :class:`CommandError` for one of another scene."""
+        name = self.COMMANDS.get(mtype)
+        if name is None:
+            raise CommandError(f"{mtype}: this engine runs {self.TITLE}, not the scene of that command")
+        getattr(self, name)(**fields)
+
+    def pause(self, on: bool) -> None:
+        """Stand time still (no client shows this scene) or let it run again.  Pausing and resuming
+        disarm the input: nothing moves on return until the operator commands anew."""
+        if on != self.paused:
+            self.paused = on
+            self.input.disarm("scene paused" if on else "scene resumed")
+            self.note("info", "paused: no client shows this scene" if on else "resumed")
+
+    def operator_changed(self, name: str) -> None:
+        """A new operator (or the same one reconnected): its first command must be a fresh one."""
+        self.input.disarm(f"operator {name} connected")
+
+    def feed(self, sample, now: float, released: bool = False) -> None:
+        """The latest reading of the input device (None: no device connected), at engine receive time."""
+        self.input.feed(sample, now, released)
+
+    def _head(self) -> dict[str, Any]:
+        """The fields every snapshot shares (``engine`` is filled in by the server)."""
+        return {
+            "estop": self.estop_latched,
+            "describe_seq": self.describe_seq,
+            "flags": InputFlags(**self.input.flags(self.estop_latched)),
+            "alarms": [Alarm(**a) for a in self.alarms.snapshot()],
+        }
+
+    # ------------------------------------------------------------------ the scene's own
+    @abc.abstractmethod
+    def describe(self) -> Description: ...
+
+    @abc.abstractmethod
+    def snapshot(self) -> Snapshot: ...
+
+    @abc.abstractmethod
+    def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None: ...
+
+    @abc.abstractmethod
+    def estop(self, source: str = "operator") -> None: ...
+
+    @abc.abstractmethod
+    def reset(self) -> None: ...
+
+    def close(self) -> None:  # noqa: B027 - optional: most scenes own nothing to release
+        """Release what the scene owns (worker processes)."""

@@ -1,0 +1,473 @@
+"""Typed engine state of protocol version 2: one snapshot class and one description class per scene.
+
+An engine publishes a :class:`Snapshot` subclass 25–50 times a second (what changes) and answers a
+``describe`` request with a :class:`Description` subclass (what is static: the robot file, joint
+limits, the workspace box, the lab's geometry …; sent on join and whenever it changes, announced by
+``describe_seq`` in every snapshot).  Every snapshot has the same head: ``kind`` names the scene
+(``teleop``, ``tac``, ``lab``), ``estop`` is the scene's E-STOP latch, ``flags`` the input pipeline,
+``alarms`` the alarm list and ``engine`` the server's bookkeeping (roles, counters, health).
+
+On the wire a snapshot is a msgpack map made by :func:`to_wire`; :func:`snapshot_from_wire` and
+:func:`description_from_wire` turn it back into these classes, checking ``kind`` and every field's
+type, so a client reads ``state.engine.operator`` instead of ``state["operator"]``.  Fields a newer
+engine adds are ignored (adding an optional field keeps the protocol version, docs/protocol.md).
+
+Units: SI, radians; frames as in each field's comment.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import types
+import typing
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from app.errors import BosunError
+
+
+class SnapshotError(BosunError):
+    """A state or description map that does not fit its class (wrong kind, missing or mistyped field)."""
+
+
+# ---------------------------------------------------------------------------------------------- shared parts
+@dataclass(kw_only=True, slots=True)
+class InputFlags:
+    """The input pipeline as the engine sees it (app/teleop/pipeline.py)."""
+
+    stale_input: bool = True  # no input for 200 ms: holding
+    enabled: bool = False  # armed, deadman held, fresh: the input may move the machine
+    armed: bool = False
+    deadman: bool = False
+    device: bool = False  # an input device is connected
+    device_name: str = ""
+    profile: str = ""
+    input_reason: str = ""  # why the input does not move the machine, one line
+    stale_count: int = 0
+
+
+@dataclass(kw_only=True, slots=True)
+class Alarm:
+    key: str
+    severity: str  # info | warning | critical
+    source: str
+    text: str
+    active: bool
+    acked: bool
+    t_raised: float
+    t_cleared: float | None
+    first_out: bool
+    count: int = 1
+
+
+@dataclass(kw_only=True, slots=True)
+class EngineInfo:
+    """The server's part of every snapshot: who is connected, counters, loop health."""
+
+    engine_id: str = ""  # a new value each engine start
+    estops: int = 0  # estop messages received (a client confirms its STOP by a state counting it)
+    operator: str = ""  # name of the operator, "" when the role is free
+    operator_silent: float = 0.0  # s since the operator's last message
+    clients: int = 0
+    viewers: list[str] = field(default_factory=list)  # names of the clients without the operator role
+    rejected: int = 0
+    dropped: int = 0
+    auth_failures: int = 0
+    rate: float = 0.0  # loop rate [Hz]
+    realtime_factor: float = 1.0
+    late_fraction: float = 0.0
+    paused: bool = False  # the scene's time stands still (no client shows it); STOP still works
+
+
+@dataclass(kw_only=True, slots=True)
+class Snapshot:
+    """What every scene's state has, in the same place."""
+
+    kind: str = ""
+    t: float = 0.0  # engine (simulated) time [s]
+    estop: bool = False  # the scene's E-STOP latch
+    describe_seq: int = 0  # the description this state belongs to; a client holding an older one asks again
+    flags: InputFlags = field(default_factory=InputFlags)
+    alarms: list[Alarm] = field(default_factory=list)
+    engine: EngineInfo = field(default_factory=EngineInfo)
+
+    KIND: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        if not self.kind:
+            self.kind = self.KIND
+
+
+@dataclass(kw_only=True, slots=True)
+class Description:
+    """What every scene's static description has."""
+
+    kind: str = ""
+    seq: int = 0  # increments whenever the description changes
+    title: str = ""  # the scene as shown to a person
+    commands: list[str] = field(default_factory=list)  # the scene's command table (protocol message types)
+
+    KIND: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        if not self.kind:
+            self.kind = self.KIND
+
+
+# ---------------------------------------------------------------------------------------------- teleop
+@dataclass(kw_only=True, slots=True)
+class ScalingState:
+    k_p: list[float]  # position gains [m] (eq. 1)
+    x_w: list[float]  # workspace offset [m] (eq. 1)
+    k_v: list[float]  # velocity gains [m/s] (eq. 7)
+
+
+@dataclass(kw_only=True, slots=True)
+class StudyState:
+    """The engine's IK study (``study_start``): results come once, in a ``study`` message."""
+
+    id: int = 0
+    kind: str = ""  # distribution | tracking
+    status: str = "idle"  # idle, running, done, cancelled, failed
+    done: int = 0
+    total: int = 0
+    error: str = ""
+
+
+@dataclass(kw_only=True, slots=True)
+class TeleopSnapshot(Snapshot):
+    """One teleoperated serial arm (``bosun server``); points in the robot's world frame [m]."""
+
+    KIND: ClassVar[str] = "teleop"
+    tick: int = 0
+    robot: str = ""
+    solver: str = ""
+    mode: str = "position"
+    q: list[float] = field(default_factory=list)  # joint positions [rad | m]
+    qdot: list[float] = field(default_factory=list)
+    q_ref: list[float] = field(default_factory=list)
+    tool: list[float] = field(default_factory=list)  # tool point
+    target: list[float] = field(default_factory=list)  # the solver's target this tick
+    command: list[float] | None = None  # the operator's command point; None while nothing is commanded
+    frames: list[list[float]] = field(default_factory=list)  # origins of base, every DH frame and the tool
+    signal: list[float] = field(default_factory=list)  # shaped input s in [-1, 1]^3
+    solver_error: float | None = None  # [m]
+    solver_time: float = 0.0  # [s]
+    solver_ok: bool = True
+    scaling: ScalingState | None = None
+    study: StudyState = field(default_factory=StudyState)
+
+
+@dataclass(kw_only=True, slots=True)
+class RobotEntry:
+    """A robot the engine can drive, with the solvers that apply to it."""
+
+    name: str
+    joints: int
+    solvers: list[str]
+    description: str = ""
+
+
+@dataclass(kw_only=True, slots=True)
+class TeleopDescription(Description):
+    KIND: ClassVar[str] = "teleop"
+    robots: list[RobotEntry] = field(default_factory=list)  # the library, only what this engine drives
+    robot: str = ""  # the loaded robot's name
+    robot_xml: str = ""  # its robot file's text (the client draws and labels from it)
+    solvers: list[str] = field(default_factory=list)  # solvers that apply to the loaded robot
+    modes: list[str] = field(default_factory=list)
+    joint_names: list[str] = field(default_factory=list)
+    lower: list[float] = field(default_factory=list)  # joint limits [rad | m]
+    upper: list[float] = field(default_factory=list)
+    speed: list[float] = field(default_factory=list)  # joint speed limits [rad/s | m/s]
+    box: list[list[float]] = field(default_factory=list)  # workspace box [lower, upper] [m]
+    studies: list[str] = field(default_factory=list)  # studies the engine runs (``study_start`` kinds)
+
+
+# ---------------------------------------------------------------------------------------------- crane head
+@dataclass(kw_only=True, slots=True)
+class SeaState:
+    spectrum: str
+    hs: float  # [m]
+    tp: float  # [s]
+    heading: float  # [deg]
+    seq: int = 0  # increments on every new sea
+
+
+@dataclass(kw_only=True, slots=True)
+class TacSample:
+    """The crane-head simulation's latest step (TAC paper symbols)."""
+
+    t: float
+    eta: list[float]  # vessel pose in {n}: x, y, z [m], φ, θ, ψ [rad]
+    beta: list[float]  # crane joints [rad]
+    p_ref_t: list[float]  # compensating reference in {t} [m] (eqs. 49-56)
+    p_c_t: list[float]  # head TCP in {t} [m]
+    alpha_ref: list[float]  # Delta arm references [rad]
+    alpha: list[float]  # Delta arm angles [rad]
+    u: list[float]  # servo commands
+    e_c: float  # compensation error [m] (eq. 61)
+    e_s: float  # uncompensated error [m]
+    saturated: bool
+    p_c_n: list[float]  # TCP in {n} [m]
+    p_s_n: list[float]  # the crane tip without compensation in {n} [m]
+
+
+@dataclass(kw_only=True, slots=True)
+class TacScenePoints:
+    """Points in {n} for a drawing without the models (2D views, simple viewers) [m]."""
+
+    ship: list[list[float]]  # the ship box's 8 corners
+    crane: list[list[float]]  # crane joint origins, base to the head's base
+    head: list[list[float]]  # the head's three knees and its TCP
+
+
+@dataclass(kw_only=True, slots=True)
+class TacSnapshot(Snapshot):
+    """Vessel, offshore crane and Delta crane head (``bosun server --plant tac``)."""
+
+    KIND: ClassVar[str] = "tac"
+    holding: bool = False  # after a reset: frozen until a compensation mode is chosen
+    sea: SeaState | None = None
+    tac_mode: str = "off"
+    x_d: float = 0.0  # desired head centre on the head's x axis [m]
+    p_d_n: list[float] = field(default_factory=list)  # desired TCP in {n} [m]
+    sample: TacSample | None = None
+    scene: TacScenePoints | None = None
+
+
+@dataclass(kw_only=True, slots=True)
+class ShipBox:
+    """The vessel drawn as a box in its body frame {b} (x forward, y starboard, z down) [m]."""
+
+    length: float
+    beam: float
+    deck_z: float
+    keel_z: float
+
+
+@dataclass(kw_only=True, slots=True)
+class WaveField:
+    """The sea's components: ζ(x, y, t) = Σ a cos(ω t − k (x cos μ + y sin μ) + φ) in {n} (app/marine/waves.py)."""
+
+    amplitude: list[float]  # [m]
+    omega: list[float]  # [rad/s]
+    k: list[float]  # wave numbers [rad/m]
+    heading: list[float]  # μ [rad]
+    phase: list[float]  # φ [rad]
+
+
+@dataclass(kw_only=True, slots=True)
+class Hull:
+    points: list[list[float]]  # workspace hull vertices in the head frame {t} [m]
+    faces: list[list[int]]
+
+
+@dataclass(kw_only=True, slots=True)
+class TacDescription(Description):
+    KIND: ClassVar[str] = "tac"
+    crane_xml: str = ""  # the offshore crane's robot file
+    head_xml: str = ""  # the Delta head's robot file
+    vessel: str = ""  # the vessel model (name)
+    ship: ShipBox | None = None
+    alpha_limits: list[float] = field(default_factory=list)  # Delta arm limits [rad]
+    hull: Hull | None = None
+    sea: SeaState | None = None
+    waves: WaveField | None = None
+    modes: list[str] = field(default_factory=list)
+    spectra: list[str] = field(default_factory=list)
+
+
+# ---------------------------------------------------------------------------------------------- Motion-Lab
+@dataclass(kw_only=True, slots=True)
+class PlatformState:
+    name: str
+    status: str  # settled, neutral, engaged, holding, or a transition
+    mode: str
+    source: str
+    source_info: dict[str, Any]
+    eta: list[float]  # pose [m, rad]
+    eta_dot: list[float]
+    legs: list[float]  # six leg lengths [m]
+    leg_clamped: bool
+    ramp: float  # 0..1
+
+
+@dataclass(kw_only=True, slots=True)
+class ComauState:
+    mode: str  # settled, remote, motion_comp, hold
+    q: list[float]  # [rad]
+    qd: list[float]  # [rad/s]
+    at_limit: list[bool]
+
+
+@dataclass(kw_only=True, slots=True)
+class WinchState:
+    mode: str
+    length: float  # wire length [m]
+    speed: float  # [m/s]
+    speed_command: float  # [m/s]
+
+
+@dataclass(kw_only=True, slots=True)
+class PendulumState:
+    alpha: float  # swing angles of eqs. (29)-(30) [rad]
+    beta: float
+    swing: float  # total swing [rad]
+
+
+@dataclass(kw_only=True, slots=True)
+class LabScenePoints:
+    """World-frame {g} points of the lab for drawing [m]."""
+
+    platforms: dict[str, dict[str, list[list[float]]]]  # per platform: ``base`` and ``top`` leg ends (6 × 3)
+    robot: list[list[float]]  # the Comau's joint origins, base to tool
+    tool: list[float]
+    payload: list[float]
+    work_point: list[float]
+
+
+@dataclass(kw_only=True, slots=True)
+class LabSnapshot(Snapshot):
+    """The Norwegian Motion-Laboratory (``bosun server --plant lab``)."""
+
+    KIND: ClassVar[str] = "lab"
+    platforms: list[PlatformState] = field(default_factory=list)
+    comau: ComauState | None = None
+    winch: WinchState | None = None
+    pendulum: PendulumState | None = None
+    vvmc: bool = False
+    tool_error_b2: list[float] = field(default_factory=list)  # tool − work point in EM1500's body frame [m]
+    payload_height_error: float = 0.0  # [m]
+    scene: LabScenePoints | None = None
+
+
+@dataclass(kw_only=True, slots=True)
+class PlatformInfo:
+    name: str
+    robot_xml: str  # the platform's robot file
+    leg_range: list[float]  # [min, max] leg length [m]
+    pose_min: list[float]  # pose box [m, rad]
+    pose_max: list[float]
+    spectrum: dict[str, list[float]] | None = None  # the simulated sea's S(ω): ``omega`` [rad/s], ``s`` [m²s]
+
+
+@dataclass(kw_only=True, slots=True)
+class WinchInfo:
+    min: float  # wire length limits [m]
+    max: float
+    speed_max: float  # [m/s]
+
+
+@dataclass(kw_only=True, slots=True)
+class LabDescription(Description):
+    KIND: ClassVar[str] = "lab"
+    lab_xml: str = ""  # the lab layout file
+    platforms: list[PlatformInfo] = field(default_factory=list)
+    comau_xml: str = ""
+    comau_lower: list[float] = field(default_factory=list)  # [rad]
+    comau_upper: list[float] = field(default_factory=list)
+    comau_speed: list[float] = field(default_factory=list)  # [rad/s]
+    winch: WinchInfo | None = None
+    sources: list[str] = field(default_factory=list)
+    spectra: list[str] = field(default_factory=list)
+
+
+SNAPSHOTS: dict[str, type[Snapshot]] = {c.KIND: c for c in (TeleopSnapshot, TacSnapshot, LabSnapshot)}
+DESCRIPTIONS: dict[str, type[Description]] = {c.KIND: c for c in (TeleopDescription, TacDescription, LabDescription)}
+
+
+# ---------------------------------------------------------------------------------------------- wire
+def to_wire(obj: Any) -> Any:
+    """A dataclass (nested) as plain maps and lists for msgpack; numbers stay numbers."""
+    if dataclasses.is_dataclass(obj):
+        return {f.name: to_wire(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, list | tuple):
+        return [to_wire(v) for v in obj]
+    if isinstance(obj, dict):
+        return {k: to_wire(v) for k, v in obj.items()}
+    return obj
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def _convert(tp: Any, value: Any, where: str) -> Any:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = typing.get_args(tp)
+        if value is None:
+            if type(None) in args:
+                return None
+            raise SnapshotError(f"{where}: missing value")
+        for a in args:
+            if a is type(None):
+                continue
+            try:
+                return _convert(a, value, where)
+            except SnapshotError:
+                continue
+        raise SnapshotError(f"{where}: {type(value).__name__} does not fit {tp}")
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, dict):
+            raise SnapshotError(f"{where}: expected a map, got {type(value).__name__}")
+        return _build(tp, value, where)
+    if origin is list:
+        if not isinstance(value, list | tuple):
+            raise SnapshotError(f"{where}: expected a list, got {type(value).__name__}")
+        (item,) = typing.get_args(tp) or (Any,)
+        return [_convert(item, v, f"{where}[{i}]") for i, v in enumerate(value)]
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise SnapshotError(f"{where}: expected a map, got {type(value).__name__}")
+        _, item = typing.get_args(tp) or (str, Any)
+        return {k: _convert(item, v, f"{where}.{k}") for k, v in value.items()}
+    if tp is Any:
+        return value
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise SnapshotError(f"{where}: expected a number, got {type(value).__name__}")
+        return float(value)
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise SnapshotError(f"{where}: expected an integer, got {type(value).__name__}")
+        return value
+    if tp is bool or tp is str:
+        if not isinstance(value, tp):
+            raise SnapshotError(f"{where}: expected {tp.__name__}, got {type(value).__name__}")
+        return value
+    raise SnapshotError(f"{where}: unsupported type {tp}")  # a bug in this module's classes
+
+
+def _build(cls: type, data: dict[str, Any], where: str) -> Any:
+    hints = _hints(cls)
+    kwargs = {}
+    for f in dataclasses.fields(cls):
+        if f.name in data:
+            kwargs[f.name] = _convert(hints[f.name], data[f.name], f"{where}.{f.name}")
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise SnapshotError(f"{where}: missing field {f.name!r}")
+    return cls(**kwargs)
+
+
+def _from_wire(table: dict[str, type], data: Any, what: str) -> Any:
+    if not isinstance(data, dict):
+        raise SnapshotError(f"{what} is not a map")
+    kind = data.get("kind")
+    cls = table.get(kind) if isinstance(kind, str) else None
+    if cls is None:
+        raise SnapshotError(f"{what} of unknown kind {kind!r} (known: {', '.join(table)})")
+    return _build(cls, data, kind)
+
+
+def snapshot_from_wire(data: Any) -> Snapshot:
+    """The typed snapshot of a ``state`` message's map; :class:`SnapshotError` if it does not fit."""
+    return _from_wire(SNAPSHOTS, data, "state")
+
+
+def description_from_wire(data: Any) -> Description:
+    """The typed description of a ``describe`` message's map; :class:`SnapshotError` if it does not fit."""
+    return _from_wire(DESCRIPTIONS, data, "description")
