@@ -73,9 +73,10 @@ def test_choosing_a_robot_loads_it_in_engine_and_view(qtbot, window):
     combo.activated.emit(combo.currentIndex())
     qtbot.waitUntil(lambda: window.teleop.state.robot == "scara", timeout=GUI_WAIT)
     qtbot.wait(100)
-    _, _, _, links, _, _ = window.teleop.view.plots["top"]
-    x, _ = links.getData()
-    assert len(x) == 4 + 2  # scara: base, 4 DH frames, tool
+    view = window.teleop.view
+    qtbot.waitUntil(lambda: view.draw.model is not None and view.draw.model.name == "scara", timeout=GUI_WAIT)
+    shown = [p for p in view.plots["top"]["paths"] if p.isVisible() and not p.path().isEmpty()]
+    assert len(shown) >= 4 + 2  # scara drawn from its file: base plate, 4 links, joint housings, tool
     assert len(window.teleop.bars.bars) == 4
 
 

@@ -38,6 +38,7 @@ from ui.glprobe import gl_available
 from ui.marine_tab import Ring
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.files import choose_file
+from ui.widgets.machines3d import LazyDraw
 from ui.widgets.stick import VirtualStick
 
 HISTORY_S = 60.0
@@ -357,86 +358,124 @@ class SpringSlider(QSlider):
         ev.ignore()
 
 
-class LabScene2D(QWidget):
-    """Without OpenGL: the lab seen from the side (world x – z)."""
+class LabDrawing:
+    """The lab's solids from the engine's description (robot file, leg ranges) and scene points."""
+
+    def __init__(self) -> None:
+        self.links = None  # the Comau's DH table
+        self.leg_min: dict[str, float] = {}
+
+    def set_description(self, desc) -> None:
+        from app.models.xml import parse_robot_xml
+
+        self.leg_min = {p.name: float(p.leg_range[0]) for p in desc.platforms if p.leg_range}
+        try:
+            spec = parse_robot_xml(desc.comau_xml, "comau") if desc.comau_xml else None
+        except Exception:  # drawn from the joint origins instead
+            spec = None
+        self.links = spec.serial.links if spec is not None and spec.serial is not None else None
+
+    def meshes(self, sc) -> list:
+        from app.models.drawing import lab_meshes
+
+        plats = []
+        for name, p in sc.platforms.items():
+            base, top = np.asarray(p["base"], dtype=float), np.asarray(p["top"], dtype=float)
+            leg_min = self.leg_min.get(name, 0.8 * float(np.min(np.linalg.norm(top - base, axis=1))))
+            plats.append((name, base, top, leg_min))
+        frames = np.asarray(sc.robot_frames, dtype=float)
+        if self.links is not None and frames.shape == (len(self.links) + 2, 4, 4):
+            return lab_meshes(plats, self.links, frames, sc.payload)
+        return lab_meshes(plats, None, np.asarray(sc.robot, dtype=float), sc.payload)
+
+
+LAB_TIP = (
+    "EM8000 and EM1500 (blue decks, grey legs), Comau (orange) on its pedestal, wire and load (red), "
+    "work point (green) [m]"
+)
+
+
+class LabScene2D(LazyDraw, QWidget):
+    """Without OpenGL: the lab's solids seen from the side (world x – z) and from above (x – y)."""
 
     kind = "2d"
 
     def __init__(self) -> None:
         super().__init__()
-        self.plot = pg.PlotWidget(title="Motion-Lab, side view: world x [m] – z [m] (no OpenGL here)")
-        self.plot.setAspectLocked(True)
-        self.plot.showGrid(x=True, y=True, alpha=0.3)
-        self.legs = self.plot.plot(pen=pg.mkPen((170, 170, 190), width=1.5))
-        self.tops = self.plot.plot(pen=pg.mkPen((90, 150, 240), width=3))
-        self.robot = self.plot.plot(pen=pg.mkPen((230, 140, 40), width=4), symbol="o", symbolSize=5)
-        self.wire = self.plot.plot(pen=pg.mkPen((220, 220, 220), width=1))
-        self.load = self.plot.plot(pen=None, symbol="s", symbolBrush=(240, 60, 50), symbolSize=12)
-        self.goal = self.plot.plot(pen=None, symbol="+", symbolPen=(50, 220, 80), symbolSize=14)
+        from ui.widgets.machines3d import MachineView2D
+
+        views = [
+            ("side", "side: world x – z [m]", ((1, 0, 0), (0, 0, 1))),
+            ("top", "top: world x – y [m]", ((1, 0, 0), (0, 1, 0))),
+        ]
+        self.machines = MachineView2D(self, views=views, note="Motion-Lab, 2D views (no OpenGL here)")
+        self.machines.setToolTip(LAB_TIP)
+        self.plot = self.machines.plots["side"]["plot"]
+        self.draw = LabDrawing()
+        self._fitted = False
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.plot)
+        lay.addWidget(self.machines)
+
+    def set_description(self, desc) -> None:
+        self.draw.set_description(desc)
 
     def update_scene(self, sc) -> None:
-        legs, tops = [], []
-        for plat in sc.platforms.values():
-            b, t = np.asarray(plat["base"]), np.asarray(plat["top"])
-            for k in range(6):
-                legs += [b[k], t[k], [np.nan] * 3]
-            tops += [*t, t[0], [np.nan] * 3]
-        legs, tops = np.array(legs), np.array(tops)
-        self.legs.setData(legs[:, 0], legs[:, 2], connect="finite")
-        self.tops.setData(tops[:, 0], tops[:, 2], connect="finite")
-        r = np.asarray(sc.robot)
-        self.robot.setData(r[:, 0], r[:, 2])
-        w = np.array([sc.tool, sc.payload])
-        self.wire.setData(w[:, 0], w[:, 2])
-        self.load.setData([sc.payload[0]], [sc.payload[2]])
-        self.goal.setData([sc.work_point[0]], [sc.work_point[2]])
+        """Draw the engine's scene points (now if shown, else when next shown)."""
+        self.submit(sc)
+
+    def draw_now(self, sc) -> None:
+        meshes = self.draw.meshes(sc)
+        m = self.machines
+        m.set_meshes(meshes)
+        m.set_line("wire", [sc.tool, sc.payload], (235, 235, 235), 1.5)
+        m.set_points("goal", [sc.work_point], (50, 220, 80), "+", 14)
+        if not self._fitted:
+            m.fit_meshes(meshes)
+            self._fitted = True
+
+    def grab_image(self):
+        return self.machines.grab_image()
 
 
-class LabScene3D(QWidget):
+class LabScene3D(LazyDraw, QWidget):
+    """The lab in OpenGL: platforms as decks on six legs, the Comau on its pedestal, wire and load."""
+
     kind = "3d"
 
     def __init__(self) -> None:
         super().__init__()
-        import pyqtgraph.opengl as gl
+        from ui.widgets.machines3d import MachineView3D
 
-        self.view = gl.GLViewWidget()
-        self.view.setBackgroundColor((18, 26, 38))
-        self.view.setCameraPosition(distance=12, elevation=22, azimuth=-70)
-        self.view.setToolTip(
-            "EM8000 and EM1500 (blue decks, grey legs), Comau (orange), wire and load (red), work point (green)"
-        )
-        floor = gl.GLGridItem()
-        floor.setSize(16, 16)
-        floor.setSpacing(1, 1)
-        self.view.addItem(floor)
-        self.legs = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.7, 0.7, 0.75, 1), width=2, mode="lines")
-        self.tops = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.35, 0.6, 0.95, 1), width=4, mode="lines")
-        self.robot = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.9, 0.55, 0.15, 1), width=6)
-        self.wire = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.9, 0.9, 0.9, 1), width=1)
-        self.load = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.95, 0.25, 0.2, 1), size=14)
-        self.goal = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.2, 0.85, 0.3, 1), size=10)
-        for it in (self.legs, self.tops, self.robot, self.wire, self.load, self.goal):
-            self.view.addItem(it)
+        self.machines = MachineView3D(self, tooltip=LAB_TIP)
+        self.view = self.machines.view
+        self.draw = LabDrawing()
+        self._fitted = False
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.view)
+        lay.addWidget(self.machines)
+
+    def set_description(self, desc) -> None:
+        self.draw.set_description(desc)
 
     def update_scene(self, sc) -> None:
-        legs, tops = [], []
-        for plat in sc.platforms.values():
-            b, t = np.asarray(plat["base"]), np.asarray(plat["top"])
-            for k in range(6):
-                legs += [b[k], t[k]]
-                tops += [t[k], t[(k + 1) % 6]]
-        self.legs.setData(pos=np.array(legs))
-        self.tops.setData(pos=np.array(tops))
-        self.robot.setData(pos=np.asarray(sc.robot))
-        self.wire.setData(pos=np.array([sc.tool, sc.payload]))
-        self.load.setData(pos=np.asarray(sc.payload)[None])
-        self.goal.setData(pos=np.asarray(sc.work_point)[None])
+        """Draw the engine's scene points (now if shown, else when next shown)."""
+        self.submit(sc)
+
+    def draw_now(self, sc) -> None:
+        from app.models.drawing import merge
+
+        meshes = self.draw.meshes(sc)
+        m = self.machines
+        m.set_mesh("lab", merge(meshes))
+        m.set_line("wire", [sc.tool, sc.payload], (0.92, 0.92, 0.92, 1), 1.5)
+        m.set_points("goal", [sc.work_point], (0.2, 0.85, 0.3, 1), 10)
+        if not self._fitted:
+            m.fit_meshes(meshes)
+            self._fitted = True
+
+    def grab_image(self):
+        return self.machines.grab_image()
 
 
 def make_lab_scene(use_gl: bool | None) -> QWidget:
@@ -614,6 +653,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         for info in desc.platforms:
             if info.name in self.platforms:
                 self.platforms[info.name].set_info(info)
+        self.scene.set_description(desc)
 
     def on_state(self, state) -> None:
         if getattr(state, "kind", None) != "lab":

@@ -27,11 +27,10 @@ from PyQt5.QtWidgets import (
 
 from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
+from ui.widgets.machines3d import LazyDraw
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
-
-SHIP_EDGES = [(0, 1), (0, 2), (0, 4), (1, 3), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 6), (5, 7), (6, 7)]
 
 
 def _up(p) -> np.ndarray:
@@ -57,80 +56,148 @@ class Ring:
         return np.roll(self.data, -self.i, axis=0) if self.full else self.data[: self.i]
 
 
-class SceneView3D(QWidget):
+SCENE_TIP = (
+    "Vessel (red hull, grey deck) on the sea (blue), offshore crane (orange), Delta crane head (cyan, "
+    "TCP red), desired point (green) [m]; x north, y west, z up"
+)
+
+
+class TacDrawing:
+    """The crane-head scene's solids from the engine's description (robot files, ship, waves) and a sample."""
+
+    def __init__(self) -> None:
+        self.crane = None  # SerialRobot of the offshore crane (frames in the vessel's {b})
+        self.head = None  # DeltaSpec of the crane head
+        self.ship = None
+        self.waves = None
+
+    def set_description(self, desc) -> None:
+        from app.models.serial import SerialRobot
+        from app.models.xml import parse_robot_xml
+
+        self.ship, self.waves = desc.ship, desc.waves
+        try:
+            self.crane = SerialRobot(parse_robot_xml(desc.crane_xml, "crane"))
+            self.head = parse_robot_xml(desc.head_xml, "head").delta
+        except Exception:  # drawn from the scene points instead
+            self.crane = self.head = None
+
+    def meshes(self, scene, sample) -> list:
+        from app.models.drawing import box, serial_links, tac_meshes
+
+        if self.crane is not None and self.head is not None and sample is not None:
+            F = self.crane.frames(np.asarray(sample.beta, dtype=float))
+            return tac_meshes(self.crane.links, F, self.head, sample.alpha, sample.p_c_t, sample.eta, self.ship)
+        ship = _up(scene.ship)  # 8 corners: x, y, z each over (low, high)
+        lo, hi = ship.min(axis=0), ship.max(axis=0)
+        out = [box(0.5 * (lo + hi), np.eye(3), np.maximum(hi - lo, 1e-3), (0.6, 0.6, 0.6, 1.0), "ship")]
+        return out + serial_links(_up(scene.crane), 0.8)  # no robot files: straight links between the joints
+
+    def sea(self, sample, size: float):
+        from app.models.drawing import sea_surface
+
+        if self.waves is None or sample is None:
+            return None
+        return sea_surface(self.waves, sample.t, center=sample.eta[:2], size=size, n=41)
+
+
+class SceneView3D(LazyDraw, QWidget):
+    """The vessel on a moving sea, the offshore crane on its deck and the Delta head, as solids."""
+
     kind = "3d"
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
-        import pyqtgraph.opengl as gl
+        from ui.widgets.machines3d import MachineView3D
 
-        self.view = gl.GLViewWidget()
-        self.view.setBackgroundColor((18, 26, 38))
-        self.view.setCameraPosition(distance=140, elevation=18, azimuth=-60)
-        self.view.setToolTip("Vessel (grey), crane (orange), Delta head (cyan), TCP (red), desired point (green)")
-        sea = gl.GLGridItem()
-        sea.setSize(200, 200)
-        sea.setSpacing(10, 10)
-        sea.setColor((60, 110, 160, 120))
-        self.view.addItem(sea)
-        self.ship = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.75, 0.75, 0.75, 1), width=2, mode="lines")
-        self.crane = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.9, 0.55, 0.15, 1), width=5)
-        self.head = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.3, 0.85, 0.9, 1), width=2, mode="lines")
-        self.tcp = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.95, 0.25, 0.2, 1), size=12)
-        self.goal = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.2, 0.85, 0.3, 1), size=12)
-        for it in (self.ship, self.crane, self.head, self.tcp, self.goal):
-            self.view.addItem(it)
+        self.machines = MachineView3D(self, tooltip=SCENE_TIP)
+        self.view = self.machines.view
+        self.draw = TacDrawing()
+        self._fitted = False
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.view)
+        lay.addWidget(self.machines)
 
-    def update_scene(self, scene, p_d_n) -> None:
-        ship = _up(scene.ship)
-        self.ship.setData(pos=np.array([ship[i] for e in SHIP_EDGES for i in e]))
-        self.crane.setData(pos=_up(scene.crane))
-        head = _up(scene.head)
-        tip = _up(scene.crane[-1])
-        knees, tcp = head[:3], head[3]
-        self.head.setData(pos=np.array([p for k in knees for p in (tip, k, k, tcp)]))
-        self.tcp.setData(pos=tcp[None])
-        self.goal.setData(pos=_up(p_d_n)[None])
+    def set_description(self, desc) -> None:
+        self.draw.set_description(desc)
+        self._fitted = False
+
+    def update_scene(self, scene, p_d_n, sample=None) -> None:
+        """Draw the scene points and the sample (now if shown, else when next shown)."""
+        self.submit(scene, p_d_n, sample)
+
+    def draw_now(self, scene, p_d_n, sample=None) -> None:
+        from app.models.drawing import merge
+
+        meshes = self.draw.meshes(scene, sample)
+        m = self.machines
+        m.set_mesh("machines", merge(meshes))
+        size = 3.0 * (self.draw.ship.length if self.draw.ship is not None else 80.0)
+        m.set_mesh("sea", self.draw.sea(sample, size), translucent=True)
+        m.set_points("goal", _up(p_d_n)[None], (0.2, 0.85, 0.3, 1), 12)
+        if not self._fitted:
+            lo = np.min([x.vertices.min(axis=0) for x in meshes], axis=0)
+            hi = np.max([x.vertices.max(axis=0) for x in meshes], axis=0)
+            m.set_extent(lo, hi, floor=float(lo[2]))
+            self._fitted = True
+
+    def grab_image(self):
+        return self.machines.grab_image()
 
 
-class SceneView2D(QWidget):
-    """Without OpenGL: the scene seen from astern (east–up), the athwartship plane of a beam sea."""
+class SceneView2D(LazyDraw, QWidget):
+    """Without OpenGL: the scene's solids seen from astern (east–up, the plane a beam sea rolls the vessel
+    in) and from starboard (north–up), with the sea's profile through the vessel."""
 
     kind = "2d"
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
-        self.plot = pg.PlotWidget(title="seen from astern: east [m] – up [m] (no OpenGL here)")
-        self.plot.setAspectLocked(True)
-        self.plot.showGrid(x=True, y=True, alpha=0.3)
-        self.ship = self.plot.plot(pen=pg.mkPen((190, 190, 190), width=2))
-        self.crane = self.plot.plot(pen=pg.mkPen((230, 140, 40), width=4), symbol="o", symbolSize=5)
-        self.head = self.plot.plot(pen=pg.mkPen((80, 210, 230), width=1.5))
-        self.tcp = self.plot.plot(pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=10)
-        self.goal = self.plot.plot(
-            pen=None, symbol="+", symbolBrush=(50, 220, 80), symbolPen=(50, 220, 80), symbolSize=14
-        )
+        from ui.widgets.machines3d import MachineView2D
+
+        views = [
+            ("astern", "seen from astern: east [m] – up [m]", ((0, -1, 0), (0, 0, 1))),
+            ("side", "seen from starboard: north [m] – up [m]", ((1, 0, 0), (0, 0, 1))),
+        ]
+        self.machines = MachineView2D(self, views=views, note="crane head, 2D views (no OpenGL here)")
+        self.machines.setToolTip(SCENE_TIP)
+        self.plot = self.machines.plots["astern"]["plot"]
+        self.draw = TacDrawing()
+        self._fitted = False
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.plot)
+        lay.addWidget(self.machines)
 
-    def update_scene(self, scene, p_d_n) -> None:
-        ship = _up(scene.ship)
-        # the midship section: the four corners at x = +L/2 are indices 4..7 (y ±, z deck/keel)
-        sec = ship[[4, 5, 7, 6, 4]]
-        self.ship.setData(-sec[:, 1], sec[:, 2])
-        crane = _up(scene.crane)
-        self.crane.setData(-crane[:, 1], crane[:, 2])
-        head = _up(scene.head)
-        tip = crane[-1]
-        pts = np.array([p for k in head[:3] for p in (tip, k, head[3], [np.nan] * 3)])
-        self.head.setData(-pts[:, 1], pts[:, 2], connect="finite")
-        self.tcp.setData([-head[3, 1]], [head[3, 2]])
-        g = _up(p_d_n)
-        self.goal.setData([-g[1]], [g[2]])
+    def set_description(self, desc) -> None:
+        self.draw.set_description(desc)
+        self._fitted = False
+
+    def update_scene(self, scene, p_d_n, sample=None) -> None:
+        """Draw the scene points and the sample (now if shown, else when next shown)."""
+        self.submit(scene, p_d_n, sample)
+
+    def draw_now(self, scene, p_d_n, sample=None) -> None:
+        from app.models.drawing import sea_profile
+
+        meshes = self.draw.meshes(scene, sample)
+        m = self.machines
+        m.set_meshes(meshes)
+        m.set_points("goal", _up(p_d_n)[None], (50, 220, 80), "+", 14)
+        if self.draw.waves is not None and sample is not None:
+            n0, e0 = sample.eta[0], sample.eta[1]
+            half = 1.5 * (self.draw.ship.length if self.draw.ship is not None else 80.0)
+            sea, water = (90, 150, 230), (40, 100, 170, 110)
+            for key, p0, p1 in (
+                ("astern", (n0, e0 - half), (n0, e0 + half)),
+                ("side", (n0 - half, e0), (n0 + half, e0)),
+            ):
+                m.set_line("sea", sea_profile(self.draw.waves, sample.t, p0, p1), sea, 2, only=key, fill=water)
+        if not self._fitted:
+            m.fit_meshes(meshes)
+            self._fitted = True
+
+    def grab_image(self):
+        return self.machines.grab_image()
 
 
 def make_scene_view(use_gl: bool | None = None) -> QWidget:
@@ -277,6 +344,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         if getattr(desc, "kind", None) != "tac":
             return
         self.desc = desc
+        self.scene.set_description(desc)
         if desc.hull is not None:
             self.hull = desc.hull
             self._draw_hull()
@@ -296,7 +364,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self._t_last = s.t
         self.ring.push([s.t, *s.eta, *s.p_ref_t, *s.p_c_t, *s.alpha, *s.u, s.e_c, s.e_s])
         if state.scene is not None:
-            self.scene.update_scene(state.scene, state.p_d_n)
+            self.scene.update_scene(state.scene, state.p_d_n, s)
         self.ref_dot.setData([s.p_ref_t[0]], [s.p_ref_t[2]])
         self.pc_dot.setData([s.p_c_t[0]], [s.p_c_t[2]])
         self._draw_plots()

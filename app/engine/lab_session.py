@@ -278,14 +278,16 @@ class LabSession(Scene):
             top = model.b_b @ H[:3, :3].T + H[:3, 3]
             plats[name] = {"base": np.round(base, 4).tolist(), "top": np.round(top, 4).tolist()}
         H1 = lab.platform_pose(0) @ self.layout.T_b1_r
-        F = lab.robot.frames(lab.joints.x)
-        pts = np.vstack([np.zeros(3), F[:, :3, 3]])
+        F = H1 @ lab.robot.frames(lab.joints.x)  # {g}; frame 0 is the robot base {r}
+        pts = F[:, :3, 3]
+        pts = pts[np.r_[True, np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-9]]  # a repeat drew a stray bar
         return LabScenePoints(
             platforms=plats,
-            robot=np.round(pts @ H1[:3, :3].T + H1[:3, 3], 4).tolist(),
+            robot=np.round(pts, 4).tolist(),
             tool=np.round(lab.p_t_g, 4).tolist(),
             payload=np.round(lab.p_p_g(), 4).tolist(),
             work_point=np.round(lab.last.p_w_g, 4).tolist(),
+            robot_frames=np.round(F, 6).tolist(),
         )
 
     def describe(self) -> LabDescription:

@@ -80,12 +80,17 @@ class LinkSpec:
 
 @dataclass(frozen=True, eq=False)
 class SerialSpec:
-    """An open kinematic chain: DH links, joints, fixed base and tool transforms."""
+    """An open kinematic chain: DH links, joints, fixed base and tool transforms.
+
+    ``up`` names the world axis that points up ("+z" by default, "-z" for a z-down world such as a
+    vessel's body frame {b}); only drawings use it, to show the machine the right way up.
+    """
 
     links: tuple[LinkSpec, ...]
     joints: tuple[JointSpec, ...]
     T_world_base: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
     T_flange_tool: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
+    up: str = "+z"
 
 
 @dataclass(frozen=True, eq=False)

@@ -381,6 +381,7 @@ class _Reader:
             joints=tuple(joint_specs),
             T_world_base=self.frame(el.find("base")),
             T_flange_tool=self.frame(el.find("tool")),
+            up=el.get("up", "+z"),
         )
 
     def joint(self, el: etree._Element, kind: str, link_index: int) -> dict:

@@ -322,10 +322,11 @@ class LabScenePoints:
     """World-frame {g} points of the lab for drawing [m]."""
 
     platforms: dict[str, dict[str, list[list[float]]]]  # per platform: ``base`` and ``top`` leg ends (6 × 3)
-    robot: list[list[float]]  # the Comau's joint origins, base to tool
+    robot: list[list[float]]  # the Comau's joint origins, base to tool, no point repeated
     tool: list[float]
     payload: list[float]
     work_point: list[float]
+    robot_frames: list[list[list[float]]] = field(default_factory=list)  # its frames (SerialRobot.frames), 4 × 4 each
 
 
 @dataclass(kw_only=True, slots=True)

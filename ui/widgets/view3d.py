@@ -1,20 +1,36 @@
-"""The manipulator seen in 3D (pyqtgraph.opengl) or, without OpenGL, in top and side views.
+"""The teleoperated manipulator drawn as it is built: in 3D (pyqtgraph.opengl) or, without OpenGL, in
+top and side projections.
 
-Both views take the engine's state snapshot: ``frames`` (joint origins), ``target``,
-``tool`` and the workspace ``box``.
+``set_description`` takes the engine's :class:`~app.net.snapshots.TeleopDescription`: its robot file
+(``robot_xml``) is parsed with the app's parser, so the links are drawn from the DH table (an L where a
+link has both d and a, a radius scaled from the reach, joint housings, base plate) and the right way up
+(``<serial up="-z">`` for a chain in a z-down frame such as the offshore crane's vessel frame).
+``update_state`` takes a :class:`~app.net.snapshots.TeleopSnapshot`: joint positions ``q`` (the frames
+are computed from the same model the engine uses), ``target``, ``tool`` and the workspace ``box``.
+Without a usable description the links are drawn between the snapshot's frame origins.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pyqtgraph as pg
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QVBoxLayout, QWidget
 
+from app.models.drawing import (
+    LOAD_COLOR,
+    Mesh,
+    link_radius,
+    merge,
+    serial_links,
+    serial_robot_meshes,
+    up_rotation,
+)
 from ui.glprobe import gl_available
+from ui.widgets.machines3d import LazyDraw, MachineView2D, MachineView3D
 
 LINK_COLOR = (0.85, 0.55, 0.15, 1.0)
 TARGET_COLOR = (0.2, 0.8, 0.2, 1.0)
-TOOL_COLOR = (0.9, 0.2, 0.2, 1.0)
+TOOL_COLOR = LOAD_COLOR
+TOOLTIP = "Links (orange), joints (dark grey), base (grey), target (green), tool (red), workspace box (blue) [m]"
 
 
 def _box_edges(lo, hi) -> np.ndarray:
@@ -25,112 +41,152 @@ def _box_edges(lo, hi) -> np.ndarray:
     return np.array([c[i] for p in pairs for i in p])
 
 
-class RobotView3D(QWidget):
-    """OpenGL view: links as a thick polyline, joints as dots, target, tool point, workspace box."""
+class RobotDrawing:
+    """What both views draw, from a description and a state: meshes, points and the box in a z-up frame."""
+
+    def __init__(self) -> None:
+        self.desc = None
+        self.model = None  # SerialRobot of the described robot, or None
+        self.R_up = np.eye(3)  # R_display_world
+
+    def set_description(self, desc) -> None:
+        self.desc = desc
+        self.model, self.R_up = None, np.eye(3)
+        xml = getattr(desc, "robot_xml", "") if desc is not None else ""
+        if not xml:
+            return
+        from app.models.serial import SerialRobot
+        from app.models.xml import parse_robot_xml
+
+        try:
+            spec = parse_robot_xml(xml, desc.robot or "robot")
+        except Exception:  # the engine checked the file; a client that cannot read it still draws the origins
+            return
+        if spec.serial is not None:
+            self.model = SerialRobot(spec)
+            self.R_up = up_rotation(spec.serial.up)
+
+    def meshes(self, state) -> list[Mesh]:
+        """The arm in the display frame (z up)."""
+        m = self.model
+        if m is not None and state.robot == m.name and len(state.q) == m.n_joints:
+            T = np.eye(4)
+            T[:3, :3] = self.R_up
+            F = np.einsum("ij,kjl->kil", T, m.frames(np.asarray(state.q, dtype=float)))
+            return serial_robot_meshes(m.links, F)
+        origins = self.up(state.frames)
+        if len(origins) < 2:
+            return []
+        reach = float(np.sum(np.linalg.norm(np.diff(origins, axis=0), axis=1)))
+        return serial_links(origins, max(1e-3, 0.03 * reach))
+
+    def up(self, pts) -> np.ndarray:
+        return np.asarray(pts, dtype=float).reshape(-1, 3) @ self.R_up.T
+
+    def box(self, state):
+        """The workspace box (lo, hi) in the display frame, or None."""
+        d = self.desc
+        if d is None or not d.box or getattr(d, "robot", state.robot) != state.robot:
+            return None
+        corners = self.up(_box_edges(d.box[0], d.box[1]))
+        return corners.min(axis=0), corners.max(axis=0)
+
+    def radius(self) -> float:
+        return link_radius(self.model.links) if self.model is not None else 0.05
+
+
+class RobotView3D(LazyDraw, QWidget):
+    """OpenGL view: the arm as solids (one mesh), target, tool point, workspace box, scaled grid."""
 
     kind = "3d"
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        import pyqtgraph.opengl as gl
-
-        self.gl = gl
-        self.view = gl.GLViewWidget()
-        self.view.setBackgroundColor((20, 24, 30))
-        self.view.setToolTip("3D view: drag to orbit, wheel to zoom. Links (orange), target (green), tool (red) [m]")
-        grid = gl.GLGridItem()
-        grid.setColor((90, 90, 90, 120))
-        self.view.addItem(grid)
-        self.grid = grid
-        self.links = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=LINK_COLOR, width=5, antialias=True)
-        self.joints = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=(0.9, 0.9, 0.9, 1), size=9)
-        self.target = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=TARGET_COLOR, size=14)
-        self.tool = gl.GLScatterPlotItem(pos=np.zeros((1, 3)), color=TOOL_COLOR, size=11)
-        self.box = gl.GLLinePlotItem(pos=np.zeros((2, 3)), color=(0.5, 0.6, 0.9, 0.5), width=1, mode="lines")
-        for it in (self.box, self.links, self.joints, self.target, self.tool):
-            self.view.addItem(it)
+        self.machines = MachineView3D(self, background=(20, 24, 30), tooltip=TOOLTIP)
+        self.view = self.machines.view
+        self.draw = RobotDrawing()
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.view)
-        self._box_key = None
+        lay.addWidget(self.machines)
+        self._fit_key = None
         self.desc = None
 
     def set_description(self, desc) -> None:
-        """The engine's robot and workspace box (its ``description``)."""
+        """The engine's robot file and workspace box (its ``description``)."""
         self.desc = desc
+        self.draw.set_description(desc)
+        self._fit_key = None
 
     def update_state(self, state) -> None:
-        frames = np.asarray(state.frames, dtype=float)
-        self.links.setData(pos=frames)
-        self.joints.setData(pos=frames[:-1])
-        self.target.setData(pos=np.asarray([state.target], dtype=float))
-        self.tool.setData(pos=np.asarray([state.tool], dtype=float))
-        if self.desc is None or not self.desc.box:
-            return
-        key = (self.desc.robot, tuple(map(tuple, self.desc.box)))
-        if key != self._box_key:
-            lo, hi = np.asarray(self.desc.box[0]), np.asarray(self.desc.box[1])
-            self.box.setData(pos=_box_edges(lo, hi))
-            size = float(np.max(hi - lo))
-            self.grid.setSize(size * 1.5, size * 1.5)
-            self.grid.setSpacing(size / 10, size / 10)
-            c = 0.5 * (lo + hi)
-            self.view.setCameraPosition(pos=pg.Vector(*c), distance=1.8 * size, elevation=25, azimuth=-60)
-            self._box_key = key
+        """Draw a TeleopSnapshot (now if shown, else when next shown)."""
+        self.submit(state)
+
+    def draw_now(self, state) -> None:
+        d = self.draw
+        meshes = d.meshes(state)
+        self.machines.set_mesh("robot", merge(meshes))
+        self.machines.set_points("target", d.up([state.target]) if state.target else np.zeros((0, 3)),
+                                 TARGET_COLOR, 14)  # fmt: skip
+        self.machines.set_points("tool", d.up([state.tool]) if state.tool else np.zeros((0, 3)), TOOL_COLOR, 11)
+        box = d.box(state)
+        if box is not None:
+            self.machines.set_line("box", _box_edges(*box), (0.5, 0.6, 0.9, 0.5), 1, mode="lines")
+        key = (state.robot, None if box is None else tuple(np.round(np.r_[box[0], box[1]], 6)))
+        if key != self._fit_key and meshes:  # the camera on the arm (its workspace box may be far larger)
+            pts = np.concatenate([m.vertices for m in meshes])
+            base_z = float(np.min(np.concatenate([m.vertices[:, 2] for m in meshes if m.name == "base"] or [[0.0]])))
+            self.machines.set_extent(pts.min(axis=0), pts.max(axis=0), floor=base_z)
+            self._fit_key = key
 
     def grab_image(self):
-        return self.view.grabFramebuffer()
+        return self.machines.grab_image()
 
 
-class RobotView2D(QWidget):
-    """Fallback without OpenGL: top (x–y) and side (x–z) projections."""
+class RobotView2D(LazyDraw, MachineView2D):
+    """Fallback without OpenGL: the arm's solids in top (x–y) and side (x–z) projections."""
 
     kind = "2d"
 
     def __init__(self, parent: QWidget | None = None) -> None:
-        super().__init__(parent)
-        self.setToolTip("No OpenGL here: top (x–y) and side (x–z) views [m]. Links orange, target green, tool red")
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(0, 0, 0, 0)
-        note = QLabel("2D views (no OpenGL context available)")
-        note.setStyleSheet("color: #888")
-        lay.addWidget(note)
-        row = QHBoxLayout()
-        lay.addLayout(row)
-        self.plots = {}
-        for key, (a, b), title in (("top", (0, 1), "top: x–y [m]"), ("side", (0, 2), "side: x–z [m]")):
-            pw = pg.PlotWidget(title=title)
-            pw.setAspectLocked(True)
-            pw.showGrid(x=True, y=True, alpha=0.3)
-            box = pw.plot(pen=pg.mkPen((120, 140, 220), width=1, style=pg.QtCore.Qt.DashLine))
-            links = pw.plot(
-                pen=pg.mkPen((220, 140, 40), width=4), symbol="o", symbolSize=6, symbolBrush=(230, 230, 230)
-            )
-            target = pw.plot(pen=None, symbol="o", symbolSize=12, symbolBrush=(50, 200, 50))
-            tool = pw.plot(pen=None, symbol="x", symbolSize=12, symbolPen=pg.mkPen((230, 50, 50), width=2))
-            pw.disableAutoRange()  # fitted to the workspace box once per robot: axes stay cached
-            self.plots[key] = (pw, (a, b), box, links, target, tool)
-            row.addWidget(pw)
-        self._box_key = None
+        super().__init__(
+            parent,
+            views=[("top", "top: x–y [m]", ((1, 0, 0), (0, 1, 0))), ("side", "side: x–z [m]", ((1, 0, 0), (0, 0, 1)))],
+            note="2D views (no OpenGL context available)",
+        )
+        self.setToolTip("No OpenGL here: top (x–y) and side (x–z) views [m]. " + TOOLTIP)
+        self.draw = RobotDrawing()
+        self._fit_key = None
         self.desc = None
 
     def set_description(self, desc) -> None:
-        """The engine's robot and workspace box (its ``description``)."""
+        """The engine's robot file and workspace box (its ``description``)."""
         self.desc = desc
+        self.draw.set_description(desc)
+        self._fit_key = None
 
     def update_state(self, state) -> None:
-        frames = np.asarray(state.frames, dtype=float)
-        box_ = self.desc.box if self.desc is not None and self.desc.box else [state.tool, state.tool]
-        lo, hi = np.asarray(box_[0]), np.asarray(box_[1])
-        new_box = (state.robot, tuple(lo), tuple(hi))
-        for pw, (a, b), box, links, target, tool in self.plots.values():
-            links.setData(frames[:, a], frames[:, b])
-            target.setData([state.target[a]], [state.target[b]])
-            tool.setData([state.tool[a]], [state.tool[b]])
-            if new_box != self._box_key and self.desc is not None:
-                box.setData([lo[a], hi[a], hi[a], lo[a], lo[a]], [lo[b], lo[b], hi[b], hi[b], lo[b]])
-                pw.setRange(xRange=(lo[a], hi[a]), yRange=(lo[b], hi[b]), padding=0.05)
-        self._box_key = new_box
+        """Draw a TeleopSnapshot (now if shown, else when next shown)."""
+        self.submit(state)
+
+    def draw_now(self, state) -> None:
+        d = self.draw
+        meshes = d.meshes(state)
+        self.set_meshes(meshes)
+        box = d.box(state)
+        if box is not None:
+            lo, hi = box
+            edges = _box_edges(lo, hi).reshape(-1, 2, 3)
+            segs = np.concatenate([np.vstack([e, [[np.nan] * 3]]) for e in edges])
+            self.set_line("box", segs, (120, 140, 220), 1)
+        if state.target:
+            self.set_points("target", d.up([state.target]), (50, 200, 50), "o", 12)
+        if state.tool:
+            self.set_points("tool", d.up([state.tool]), (230, 50, 50), "x", 12)
+        key = (state.robot, None if box is None else tuple(np.round(np.r_[box[0], box[1]], 6)))
+        if key != self._fit_key and meshes:
+            pts = np.concatenate([m.vertices for m in meshes] + ([np.array(box)] if box is not None else []))
+            self.set_extent(pts.min(axis=0), pts.max(axis=0))
+            self._fit_key = key
 
     def grab_image(self):
         return self.grab().toImage()
