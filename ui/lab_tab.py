@@ -35,10 +35,10 @@ from PyQt5.QtWidgets import (
 )
 
 from ui.glprobe import gl_available
-from ui.marine_tab import Ring
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.files import choose_file
 from ui.widgets.machines3d import LazyDraw
+from ui.widgets.plots import Ring, axis_label, legend, refit, refit_on_show
 from ui.widgets.stick import VirtualStick
 
 HISTORY_S = 60.0
@@ -46,6 +46,9 @@ SAMPLE_HZ = 25
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 SOURCES = ("generator", "simulation", "remote", "timeseries")
 COMAU_MODES = ("settled", "remote", "motion_comp", "hold")
+PLATFORM_COLUMNS = ("t", *DOFS)  # position [m], attitude [deg]
+# engine time, Comau q [deg] and q̇ [rad/s], swing α β [rad], tool − work point in {b2} [m], wire length [m]
+LAB_COLUMNS = ("t", "q1", "q2", "q3", "qd1", "qd2", "qd3", "alpha", "beta", "err_x", "err_y", "err_z", "wire")
 
 
 def _bar(fmt: str = "%p %") -> QProgressBar:
@@ -69,7 +72,7 @@ class PlatformPanel(QWidget):
     def __init__(self, name: str, title: str) -> None:
         super().__init__()
         self.name = name
-        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), 7)
+        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), PLATFORM_COLUMNS)
         self._t_last = -math.inf
         self.info = None  # PlatformInfo from the engine's description
         self.limits: tuple[np.ndarray, np.ndarray] | None = None
@@ -116,14 +119,17 @@ class PlatformPanel(QWidget):
         for b in self.leg_bars:
             ll.addWidget(b)
 
-        self.pos_plot = pg.PlotWidget(title="position [m] (platform frame, z down)")
-        self.att_plot = pg.PlotWidget(title="attitude [deg]")
+        self.pos_plot = pg.PlotWidget(title="position (platform frame, z down)")
+        self.att_plot = pg.PlotWidget(title="attitude")
+        axis_label(self.pos_plot.getPlotItem(), "left", "position", "m")
+        axis_label(self.att_plot.getPlotItem(), "left", "angle", "deg")
         colors = ((230, 90, 80), (90, 200, 90), (90, 140, 240))
         for p in (self.pos_plot, self.att_plot):
-            p.addLegend(offset=(5, 5))
+            legend(p.getPlotItem(), cols=3)
             p.showGrid(x=True, y=True, alpha=0.3)
             p.setDownsampling(auto=True)
             p.setClipToView(True)
+            axis_label(p.getPlotItem(), "bottom", "t", "s")
         self.pos_curves = [
             self.pos_plot.plot(pen=pg.mkPen(c, width=1.5), name=n) for c, n in zip(colors, DOFS[:3], strict=True)
         ]
@@ -145,6 +151,13 @@ class PlatformPanel(QWidget):
         lw.setMaximumWidth(520)
         lay.addWidget(lw)
         lay.addLayout(right, 1)
+        refit_on_show(self, self._shown)
+
+    def _shown(self) -> None:
+        self.draw()
+        for p in (self.pos_plot, self.att_plot):
+            refit(p.getPlotItem())
+        refit(self.spec_plot.getPlotItem())
 
     # ------------------------------------------------------------------ source editors
     def _generator(self) -> QWidget:
@@ -170,6 +183,7 @@ class PlatformPanel(QWidget):
             for j, box in enumerate((amp, f, ph)):
                 g.addWidget(box, i + 1, j + 1)
             self.gen.append((amp, f, ph))
+        g.setRowStretch(len(DOFS) + 1, 1)  # the rows stay under their header; spare height goes below
         return w
 
     def _simulator(self) -> QWidget:
@@ -208,10 +222,12 @@ class PlatformPanel(QWidget):
             self.scales.append(s)
         self.auto_scale.toggled.connect(lambda on: [s.setEnabled(not on) for s in self.scales])
         lay.addLayout(form)
-        self.spec_plot = pg.PlotWidget(title="S(ω) [m²s]")
-        self.spec_plot.setLabel("bottom", "ω [rad/s]")
+        self.spec_plot = pg.PlotWidget(title="wave spectrum")
+        axis_label(self.spec_plot.getPlotItem(), "bottom", "ω", "rad/s")
+        axis_label(self.spec_plot.getPlotItem(), "left", "S(ω)", "m²s")
+        legend(self.spec_plot.getPlotItem())
         self.spec_curve = self.spec_plot.plot(
-            pen=pg.mkPen((80, 160, 240), width=2), fillLevel=0, brush=(80, 160, 240, 60)
+            pen=pg.mkPen((80, 160, 240), width=2), fillLevel=0, brush=(80, 160, 240, 60), name="S(ω) of the sea"
         )
         self.spec_plot.setMinimumWidth(200)
         lay.addWidget(self.spec_plot)
@@ -325,13 +341,14 @@ class PlatformPanel(QWidget):
             self.ring.push([t, *eta[:3], *np.degrees(eta[3:])])
 
     def draw(self) -> None:
-        d = self.ring.view()
-        if len(d) < 2:
+        r = self.ring
+        if r.n < 2 or not self.isVisible():  # a hidden panel draws when shown again (_shown)
             return
-        for i, c in enumerate(self.pos_curves):
-            c.setData(d[:, 0], d[:, 1 + i])
-        for i, c in enumerate(self.att_curves):
-            c.setData(d[:, 0], d[:, 4 + i])
+        t = r["t"]
+        for dof, c in zip(DOFS[:3], self.pos_curves, strict=True):
+            c.setData(t, r[dof])
+        for dof, c in zip(DOFS[3:], self.att_curves, strict=True):
+            c.setData(t, r[dof])
 
 
 class SpringSlider(QSlider):
@@ -503,7 +520,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.state = None  # the newest LabSnapshot
         self.desc = None  # the engine's LabDescription
         self._t_last = -math.inf
-        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), 1 + 3 + 3 + 2 + 3 + 1)  # t, q, qd, α β, e_b2, L
+        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), LAB_COLUMNS)
         self.tabs = QTabWidget()
         self.platforms = {n: PlatformPanel(n, t) for n, t in (("em8000", "E-Motion 8000"), ("em1500", "E-Motion 1500"))}
         for n, p in self.platforms.items():
@@ -571,16 +588,21 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         lw = QWidget()
         lw.setLayout(left)
         lw.setMaximumWidth(480)
-        self.joint_plot = pg.PlotWidget(title="Comau joints [deg]")
-        self.joint_plot.addLegend(offset=(5, 5))
+        self.joint_plot = pg.PlotWidget(title="Comau joints")
+        axis_label(self.joint_plot.getPlotItem(), "left", "joint angle", "deg")
+        legend(self.joint_plot.getPlotItem(), cols=3)
         self.joint_curves = [
             self.joint_plot.plot(pen=pg.mkPen(c, width=1.5), name=f"q{k + 1}")
             for k, c in enumerate(((230, 90, 80), (90, 200, 90), (90, 140, 240)))
         ]
-        self.wire_plot = pg.PlotWidget(title="wire length L_w [m]")
-        self.wire_curve = self.wire_plot.plot(pen=pg.mkPen((200, 200, 90), width=1.5))
+        self.wire_plot = pg.PlotWidget(title="winch wire")
+        axis_label(self.wire_plot.getPlotItem(), "left", "length", "m")
+        legend(self.wire_plot.getPlotItem())
+        self.wire_curve = self.wire_plot.plot(pen=pg.mkPen((200, 200, 90), width=1.5), name="L_w")
         for p in (self.joint_plot, self.wire_plot):
             p.showGrid(x=True, y=True, alpha=0.3)
+            axis_label(p.getPlotItem(), "bottom", "t", "s")
+        refit_on_show(w, lambda: self._shown(self.joint_plot, self.wire_plot))
         right = QVBoxLayout()
         rbox.setMaximumHeight(200)
         right.addWidget(rbox)
@@ -597,22 +619,26 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.scene = make_lab_scene(self.use_gl)
         lay.addWidget(self.scene, 3)
         plots = QVBoxLayout()
-        self.swing_plot = pg.PlotWidget(title="load swing φα, φβ [deg] (eqs. 29–30)")
-        self.swing_plot.addLegend(offset=(5, 5))
+        self.swing_plot = pg.PlotWidget(title="load swing (eqs. 29–30)")
+        axis_label(self.swing_plot.getPlotItem(), "left", "swing angle", "deg")
+        legend(self.swing_plot.getPlotItem(), cols=2)
         self.swing_curves = [
             self.swing_plot.plot(pen=pg.mkPen(c, width=1.5), name=n)
             for c, n in (((230, 90, 80), "φα"), ((90, 140, 240), "φβ"))
         ]
-        self.err_plot = pg.PlotWidget(title="tool point − work point in EM1500's frame [mm]")
-        self.err_plot.addLegend(offset=(5, 5))
+        self.err_plot = pg.PlotWidget(title="tool point − work point in EM1500's frame")
+        axis_label(self.err_plot.getPlotItem(), "left", "offset", "mm")
+        legend(self.err_plot.getPlotItem(), cols=3)
         self.err_curves = [
             self.err_plot.plot(pen=pg.mkPen(c, width=1.5), name=n)
             for c, n in (((230, 90, 80), "x"), ((90, 200, 90), "y"), ((90, 140, 240), "z"))
         ]
         for p in (self.swing_plot, self.err_plot):
             p.showGrid(x=True, y=True, alpha=0.3)
+            axis_label(p.getPlotItem(), "bottom", "t", "s")
             plots.addWidget(p)
         lay.addLayout(plots, 2)
+        refit_on_show(w, lambda: self._shown(self.swing_plot, self.err_plot))
         return w
 
     def _set_enabled(self, on: bool) -> None:
@@ -691,17 +717,23 @@ class MotionLabTab(SceneEngineMixin, QWidget):
                 self.scene.update_scene(state.scene)
             self._draw()
 
+    def _shown(self, *plots) -> None:
+        """A page of the tab on screen again: its plots drawn from the newest data and refitted."""
+        self._draw()
+        for p in plots:
+            refit(p.getPlotItem())
+
     def _draw(self) -> None:
         for p in self.platforms.values():
             p.draw()
-        d = self.ring.view()
-        if len(d) < 2:
+        r = self.ring
+        if r.n < 2 or not self.isVisible():
             return
-        t = d[:, 0]
+        t = r["t"]
         for k, c in enumerate(self.joint_curves):
-            c.setData(t, d[:, 1 + k])
-        for k, c in enumerate(self.swing_curves):
-            c.setData(t, np.degrees(d[:, 7 + k]))
-        for k, c in enumerate(self.err_curves):
-            c.setData(t, 1000 * d[:, 9 + k])
-        self.wire_curve.setData(t, d[:, 12])
+            c.setData(t, r[f"q{k + 1}"])
+        for c, col in zip(self.swing_curves, ("alpha", "beta"), strict=True):
+            c.setData(t, np.degrees(r[col]))
+        for c, col in zip(self.err_curves, ("err_x", "err_y", "err_z"), strict=True):
+            c.setData(t, 1000 * r[col])
+        self.wire_curve.setData(t, r["wire"])

@@ -314,6 +314,8 @@ class MainWindow(QMainWindow):
         self.release_keys()
         w = self.tabs.widget(i)
         for tab in (self.crane_head, self.motion_lab):
+            # a scene no tab shows is paused (its time stands still, STOP still latches); shown, it resumes
+            tab.set_shown(w is tab)
             if w is tab:
                 tab.connect_engine()
         self._route_input()

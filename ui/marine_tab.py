@@ -28,32 +28,29 @@ from PyQt5.QtWidgets import (
 from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.machines3d import LazyDraw
+from ui.widgets.fields import EngineFields
+from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
+
+# the live plots' ring: engine time, vessel pose η, p_ref^t, p_c^t, α, u_α, e_c, e_s
+COLUMNS = (
+    "t",
+    *("north", "east", "heave", "roll", "pitch", "yaw"),
+    *(f"p_ref_{a}" for a in "xyz"),
+    *(f"p_c_{a}" for a in "xyz"),
+    *(f"alpha{k}" for k in (1, 2, 3)),
+    *(f"u{k}" for k in (1, 2, 3)),
+    "e_c",
+    "e_s",
+)
 
 
 def _up(p) -> np.ndarray:
     """{n} (NED, z down) → display coordinates (x north, y west, z up): a right-handed z-up frame."""
     p = np.asarray(p, dtype=float)
     return np.stack([p[..., 0], -p[..., 1], -p[..., 2]], axis=-1)
-
-
-class Ring:
-    """Fixed-size ring buffer of rows for the live plots."""
-
-    def __init__(self, n: int, width: int) -> None:
-        self.data = np.full((n, width), np.nan)
-        self.i = 0
-        self.full = False
-
-    def push(self, row) -> None:
-        self.data[self.i] = row
-        self.i = (self.i + 1) % len(self.data)
-        self.full = self.full or self.i == 0
-
-    def view(self) -> np.ndarray:
-        return np.roll(self.data, -self.i, axis=0) if self.full else self.data[: self.i]
 
 
 SCENE_TIP = (
@@ -230,9 +227,9 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.state = None  # the newest TacSnapshot
         self._sea_seq = -1
         self._t_last = -math.inf
-        n = int(HISTORY_S * SAMPLE_HZ)
-        self.ring = Ring(n, 1 + 6 + 3 + 3 + 3 + 3 + 2)  # t, η, p_ref, p_c, α, u, e_c, e_s
+        self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), COLUMNS)
         self._build()
+        refit_on_show(self, self._shown)
 
     # ------------------------------------------------------------------ layout
     def _build(self) -> None:
@@ -266,50 +263,105 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         form.addRow("mode", self.mode)
         self.readout = QLabel("not connected")
         self.readout.setTextFormat(Qt.RichText)
-        self.readout.setMinimumWidth(260)
+        self.readout.setWordWrap(True)  # long lines wrap, never cut at the column's edge
+        self.readout.setMinimumWidth(220)
         form.addRow(self.readout)
+        # the sea fields show the engine's sea; an edit stays (highlighted) until Apply takes it or Esc
+        self.sea_fields = EngineFields(self)
+        for w in (self.spectrum, self.hs, self.tp, self.heading):
+            self.sea_fields.add(w)
 
         self.scene = make_scene_view(self.use_gl)
-        self.hull_plot = pg.PlotWidget(title="head workspace (x–z): p_ref grey, p_c red")
+        self.hull_plot = pg.PlotWidget(title="head workspace (x–z plane of {t})")
         self.hull_plot.setAspectLocked(True)
-        self.hull_plot.setMinimumWidth(300)
-        self.hull_plot.setLabel("bottom", "x^t [m]")
-        self.hull_plot.setLabel("left", "z^t [m]")
+        self.hull_plot.setMinimumWidth(260)
+        axis_label(self.hull_plot.getPlotItem(), "bottom", "x^t", "m")
+        axis_label(self.hull_plot.getPlotItem(), "left", "z^t", "m")
         self.hull_plot.showGrid(x=True, y=True, alpha=0.3)
-        self.hull_curve = self.hull_plot.plot(pen=pg.mkPen((120, 140, 220), width=1.5))
-        self.ref_dot = self.hull_plot.plot(pen=None, symbol="o", symbolBrush=(160, 160, 160), symbolSize=10)
-        self.pc_dot = self.hull_plot.plot(pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=7)
+        legend(self.hull_plot.getPlotItem(), cols=3)
+        self.hull_plot.setToolTip("the head's workspace hull in its x–z plane, the reference p_ref and the TCP p_c")
+        self.hull_curve = self.hull_plot.plot(pen=pg.mkPen((120, 140, 220), width=1.5), name="hull")
+        self.ref_dot = self.hull_plot.plot(
+            pen=None, symbol="o", symbolBrush=(160, 160, 160), symbolSize=10, name="p_ref"
+        )
+        self.pc_dot = self.hull_plot.plot(
+            pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=7, name="p_c"
+        )
 
         plots = pg.GraphicsLayoutWidget()
-        self.p_eta = plots.addPlot(row=0, col=0, title="Fig. 8 vessel: heave [m], roll/pitch [deg]")
-        self.p_tcp = plots.addPlot(row=0, col=1, title="Fig. 9 p_c^t (line) vs p_ref^t (grey) [m]")
-        self.p_err = plots.addPlot(row=1, col=0, title="Fig. 11 e_s (red) vs e_c (blue) [m]")
-        self.p_ang = plots.addPlot(row=1, col=1, title="Fig. 12 α (line) and u_α (grey) [deg]")
+        plots.ci.layout.setHorizontalSpacing(18)  # one column's right axis label apart from the next one's left
+        self.p_eta = plots.addPlot(row=0, col=0, title="Fig. 8 vessel motion")
+        self.p_tcp = plots.addPlot(row=0, col=1, title="Fig. 9 head TCP in {t}")
+        self.p_err = plots.addPlot(row=1, col=0, title="Fig. 11 compensation error")
+        self.p_ang = plots.addPlot(row=1, col=1, title="Fig. 12 Delta arm angles")
         colors = [(230, 90, 70), (90, 170, 230), (120, 210, 120)]
         for p in (self.p_eta, self.p_tcp, self.p_err, self.p_ang):
             p.showGrid(x=True, y=True, alpha=0.3)
             p.setDownsampling(auto=True, mode="peak")
             p.setClipToView(True)
-            p.setLabel("bottom", "t [s]")
-        self.c_eta = [self.p_eta.plot(pen=pg.mkPen(c, width=1.2)) for c in colors]
-        self.c_ref = [self.p_tcp.plot(pen=pg.mkPen((150, 150, 150), width=3)) for _ in range(2)]
-        self.c_pc = [self.p_tcp.plot(pen=pg.mkPen(c, width=1.2)) for c in colors[:2]]
-        self.c_es = self.p_err.plot(pen=pg.mkPen((230, 80, 70), width=1.2))
-        self.c_ec = self.p_err.plot(pen=pg.mkPen((90, 170, 230), width=1.5))
+            axis_label(p, "bottom", "t", "s")
+        # one time axis a column: values and label under the lower plot only, the room goes to the curves
+        for upper, lower in ((self.p_eta, self.p_err), (self.p_tcp, self.p_ang)):
+            upper.setXLink(lower)
+            upper.getAxis("bottom").setStyle(showValues=False)
+            upper.getAxis("bottom").showLabel(False)
+            for p in (upper, lower):
+                p.getAxis("left").setWidth(54)
+        # one unit per axis: heave [m] on the left, roll and pitch [deg] on a right axis of their own
+        axis_label(self.p_eta, "left", "heave", "m")
+        axis_label(self.p_tcp, "left", "position", "m")
+        axis_label(self.p_err, "left", "error", "m")
+        axis_label(self.p_ang, "left", "angle", "deg")
+        legend(self.p_eta, cols=3)
+        legend(self.p_tcp, cols=4)
+        legend(self.p_err, cols=2)
+        legend(self.p_ang, cols=4)
+        self.eta_twin = TwinAxis(self.p_eta, "roll, pitch", "deg")
+        self.eta_twin.axis.setWidth(50)
+        blank_axis(self.p_err, "right", 50)  # the same width under the twin axis: the time axes line up
+        self.c_eta = [
+            self.p_eta.plot(pen=pg.mkPen(colors[0], width=1.2), name="heave [m]"),
+            self.eta_twin.plot(pen=pg.mkPen(colors[1], width=1.2), name="roll [deg]"),
+            self.eta_twin.plot(pen=pg.mkPen(colors[2], width=1.2), name="pitch [deg]"),
+        ]
+        self.c_pc = [self.p_tcp.plot(pen=pg.mkPen(colors[k], width=1.2), name=f"p_c {a}") for k, a in enumerate("xz")]
+        self.c_ref = [
+            self.p_tcp.plot(pen=pg.mkPen((*colors[k], 110), width=4), name=f"p_ref {a}") for k, a in enumerate("xz")
+        ]
+        for c in self.c_ref:
+            c.setZValue(-1)  # the wide reference under the TCP's line
+        self.c_es = self.p_err.plot(pen=pg.mkPen((230, 80, 70), width=1.2), name="e_s uncompensated")
+        self.c_ec = self.p_err.plot(pen=pg.mkPen((90, 170, 230), width=1.5), name="e_c compensated")
         self.c_u = [self.p_ang.plot(pen=pg.mkPen((150, 150, 150), width=1)) for _ in range(3)]
-        self.c_al = [self.p_ang.plot(pen=pg.mkPen(c, width=1.2)) for c in colors]
+        self.p_ang.legend.addItem(self.c_u[0], "u_α commands")
+        self.c_al = [self.p_ang.plot(pen=pg.mkPen(c, width=1.2), name=f"α{k + 1}") for k, c in enumerate(colors)]
+        self.p_tcp.setToolTip("head TCP p_c^t (thin) and its compensating reference p_ref^t (wide), x and z [m]")
+        self.p_err.setToolTip("e_s: the crane tip's motion without compensation; e_c: the head TCP's error (eq. 61)")
+        self.p_ang.setToolTip("Delta arm angles α and the servo commands u_α [deg]")
 
-        controls.setMaximumWidth(360)
-        top = QSplitter(Qt.Horizontal)
-        top.addWidget(controls)
-        top.addWidget(self.hull_plot)
-        top.addWidget(self.scene)
-        top.setStretchFactor(2, 1)
-        top.setSizes([340, 340, 900])
-        main = QSplitter(Qt.Vertical)
-        main.addWidget(top)
-        main.addWidget(plots)
-        main.setSizes([430, 470])
+        # the controls take the left column's full height; the plots get the room below the views
+        controls.setMaximumWidth(340)
+        views = QSplitter(Qt.Horizontal)
+        views.addWidget(self.hull_plot)
+        views.addWidget(self.scene)
+        views.setStretchFactor(1, 1)
+        views.setSizes([320, 600])
+        right = QSplitter(Qt.Vertical)
+        right.addWidget(views)
+        right.addWidget(plots)
+        right.setStretchFactor(0, 1)  # a shorter page shrinks both, the plots keeping the larger share
+        right.setStretchFactor(1, 2)
+        right.setSizes([240, 480])
+        left = QWidget()
+        ll = QVBoxLayout(left)
+        ll.setContentsMargins(0, 0, 0, 0)
+        ll.addWidget(controls)
+        ll.addStretch(1)
+        main = QSplitter(Qt.Horizontal)
+        main.addWidget(left)
+        main.addWidget(right)
+        main.setStretchFactor(1, 1)
+        main.setSizes([320, 960])
         lay = QGridLayout(self)
         lay.addWidget(main, 0, 0)
         self._set_enabled(False)
@@ -354,35 +406,50 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             return
         self.state = state
         sea = state.sea
-        if sea is not None and sea.seq != self._sea_seq:
-            self._sea_seq = sea.seq
+        if sea is not None:
+            if sea.seq != self._sea_seq:
+                self._sea_seq = sea.seq
+            fields = (self.spectrum, self.hs, self.tp, self.heading)
+            for w, v in zip(fields, (sea.spectrum, sea.hs, sea.tp, sea.heading), strict=True):
+                self.sea_fields.engine_value(w, v)
+        if self.mode.currentText() != state.tac_mode and not self.mode.view().isVisible():
+            self.mode.setCurrentText(state.tac_mode)  # the engine's mode (another console may change it)
         s = state.sample
         if s is None:
             return
         if s.t < self._t_last:  # a new sea record: keep plotting on one time axis
-            self.ring = Ring(len(self.ring.data), self.ring.data.shape[1])
+            self.ring = Ring(self.ring.size, COLUMNS)
+        if s.t != self._t_last:  # a paused engine repeats its last sample: one row, not a flat history
+            self.ring.push([s.t, *s.eta, *s.p_ref_t, *s.p_c_t, *s.alpha, *s.u, s.e_c, s.e_s])
         self._t_last = s.t
-        self.ring.push([s.t, *s.eta, *s.p_ref_t, *s.p_c_t, *s.alpha, *s.u, s.e_c, s.e_s])
         if state.scene is not None:
             self.scene.update_scene(state.scene, state.p_d_n, s)
         self.ref_dot.setData([s.p_ref_t[0]], [s.p_ref_t[2]])
         self.pc_dot.setData([s.p_c_t[0]], [s.p_c_t[2]])
-        self._draw_plots()
-        d = self.ring.view()
-        rms_c = float(np.sqrt(np.nanmean(d[:, 19] ** 2)))
-        rms_s = float(np.sqrt(np.nanmean(d[:, 20] ** 2)))
+        if self.isVisible():  # a hidden tab draws when shown again (_shown)
+            self._draw_plots()
+        r = self.ring
+        rms_c = float(np.sqrt(np.nanmean(r["e_c"] ** 2)))
+        rms_s = float(np.sqrt(np.nanmean(r["e_s"] ** 2)))
         ratio = f"{rms_c / rms_s:.1%}" if rms_s > 1e-9 else "—"
         flag = "<span style='color:#e08020'><b>SATURATED</b></span>" if s.saturated else "inside workspace"
         stop = "<span style='color:#e03030'><b>E-STOP latched</b></span><br>" if state.estop else ""
         if state.holding and not state.estop:
             stop = "<span style='color:#e08020'><b>HOLDING</b>: choose a mode to resume</span><br>"
+        paused = "<span style='color:#8a8aa0'><b>paused</b> (tab hidden)</span><br>" if state.engine.paused else ""
         sea_text = f"{sea.spectrum} Hs {sea.hs:g} m, Tp {sea.tp:g} s, {sea.heading:g}°" if sea is not None else "—"
         self.readout.setText(
-            f"{stop}t = {s.t:.1f} s — mode <b>{state.tac_mode}</b>, {flag}<br>"
+            f"{stop}{paused}t = {s.t:.1f} s — mode <b>{state.tac_mode}</b>, {flag}<br>"
             f"sea: {sea_text}<br>"
             f"e_c {s.e_c:.3f} m, e_s {s.e_s:.3f} m; last {HISTORY_S:g} s rms ratio {ratio}<br>"
             f"x_d = {state.x_d:.2f} m"
         )
+
+    def _shown(self) -> None:
+        """The tab is on screen again: plots drawn from the newest data and refitted to it."""
+        self._draw_plots()
+        for p in (self.p_eta, self.p_tcp, self.p_err, self.p_ang):
+            refit(p)
 
     def _draw_hull(self) -> None:
         """Outline of the hull's x–z projection (convex hull of the projected vertices)."""
@@ -396,16 +463,18 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.hull_plot.setRange(xRange=(lo[0], hi[0]), yRange=(lo[1], hi[1]), padding=0.08)
 
     def _draw_plots(self) -> None:
-        d = self.ring.view()
-        t = d[:, 0]
-        self.c_eta[0].setData(t, d[:, 3])
-        self.c_eta[1].setData(t, np.degrees(d[:, 4]))
-        self.c_eta[2].setData(t, np.degrees(d[:, 5]))
-        for k, col in enumerate((0, 2)):
-            self.c_ref[k].setData(t, d[:, 7 + col])
-            self.c_pc[k].setData(t, d[:, 10 + col])
-        self.c_es.setData(t, d[:, 20])
-        self.c_ec.setData(t, d[:, 19])
+        r = self.ring
+        if r.n == 0:
+            return
+        t = r["t"]
+        self.c_eta[0].setData(t, r["heave"])
+        self.c_eta[1].setData(t, np.degrees(r["roll"]))
+        self.c_eta[2].setData(t, np.degrees(r["pitch"]))
+        for k, a in enumerate("xz"):
+            self.c_ref[k].setData(t, r[f"p_ref_{a}"])
+            self.c_pc[k].setData(t, r[f"p_c_{a}"])
+        self.c_es.setData(t, r["e_s"])
+        self.c_ec.setData(t, r["e_c"])
         for i in range(3):
-            self.c_u[i].setData(t, np.degrees(d[:, 16 + i]))
-            self.c_al[i].setData(t, np.degrees(d[:, 13 + i]))
+            self.c_u[i].setData(t, np.degrees(r[f"u{i + 1}"]))
+            self.c_al[i].setData(t, np.degrees(r[f"alpha{i + 1}"]))

@@ -1,5 +1,10 @@
 """What the scene tabs (Crane head, Motion-Lab) share: their own engine link, made on first view.
 
+While no tab shows a scene its engine is paused (``pause`` on: its time stands still, STOP still
+latches); shown again, it resumes.  The main window says which tabs are on screen
+(:meth:`SceneEngineMixin.set_shown`); the tab keeps its engine in that state, also across a
+reconnect or an engine restart (each state tells whether the engine is paused).
+
 A factory that can start its engine apart from linking to it (``start_process()`` → URL, then
 ``link(url)``) has the slow part — a new engine process, about a second — run in a thread, so the
 window (and Space = STOP) stays live while the engine starts; a plain callable factory is called
@@ -9,8 +14,11 @@ directly.
 from __future__ import annotations
 
 import threading
+import time
 
 from PyQt5.QtCore import QObject, pyqtSignal
+
+PAUSE_RESEND_S = 1.0  # an engine whose state disagrees with the wanted pause is told again this often
 
 
 class _Started(QObject):
@@ -33,6 +41,8 @@ class SceneEngineMixin:
     on_link = None  # called with each new link (the main window watches it: lost engine, STOP)
 
     _starting = None
+    shown = True  # the tab is on screen (set by the main window); hidden, its engine is paused
+    _pause_sent = -1e9
 
     def connect_engine(self) -> bool:
         """Link the tab to its engine; False while it is starting in the background or when it failed."""
@@ -72,6 +82,7 @@ class SceneEngineMixin:
             self._engine_failed(err)
             return False
         self.link.state.connect(self.on_state)
+        self.link.state.connect(self._keep_pause)
         self.link.described.connect(self.on_description)
         if self.link.description is not None:
             self.on_description(self.link.description)
@@ -81,7 +92,31 @@ class SceneEngineMixin:
         self.notice.emit("info", f"{self.engine_label} engine connected")
         if self.on_link is not None:
             self.on_link(self.link)
+        if not self.shown:
+            self._send_pause()
         return True
+
+    # ------------------------------------------------------------------ pause while hidden
+    def set_shown(self, shown: bool) -> None:
+        """The tab came on screen (the engine resumes) or left it (the engine pauses)."""
+        if shown != self.shown:
+            self.shown = shown
+            self._send_pause()
+
+    def _send_pause(self) -> None:
+        # only the operator may pause (a viewer's pause would be refused); STOP is never held back by it:
+        # an ``estop`` goes out ahead of any queued message and a paused engine still latches it
+        if self.link is not None and getattr(self.link, "role", "operator") == "operator":
+            self.link.send("pause", on=not self.shown)
+            self._pause_sent = time.monotonic()
+
+    def _keep_pause(self, state) -> None:
+        """The engine's state disagrees with the wanted pause (a restarted engine, a lost message): again."""
+        engine = getattr(state, "engine", None)
+        if engine is None or engine.paused == (not self.shown):
+            return
+        if time.monotonic() - self._pause_sent > PAUSE_RESEND_S:
+            self._send_pause()
 
     def _send(self, mtype: str, **fields) -> None:
         if self.link is not None:

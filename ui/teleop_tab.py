@@ -28,7 +28,9 @@ from PyQt5.QtWidgets import (
 
 from app.net.messages import MAX_ROBOT_TEXT
 from ui.csv_logger import SIGNALS, StateCsvLogger
+from ui.widgets.fields import EngineFields
 from ui.widgets.files import choose_file
+from ui.widgets.labels import ElidedLabel
 from ui.widgets.plots import LivePlots, UtilisationBars
 from ui.widgets.stick import VirtualStick
 from ui.widgets.view3d import make_robot_view
@@ -201,7 +203,7 @@ class TeleopTab(QWidget):
             self.axes_bars.append(b)
             axes_row.addWidget(b)
         il.addLayout(axes_row)
-        self.buttons_label = QLabel("buttons: –")
+        self.buttons_label = ElidedLabel("buttons: –")  # a long device name ends in "…", whole in the tool tip
         self.buttons_label.setToolTip("buttons held on the input device")
         il.addWidget(self.buttons_label)
         self.stick = VirtualStick()
@@ -213,17 +215,42 @@ class TeleopTab(QWidget):
         self.k_p = self._spin(0.0, 1e4, 3, "k_p: tool displacement per full stick deflection [m]")
         self.k_v = self._spin(0.0, 1e3, 3, "k_v: tool speed per full stick deflection [m/s]")
         self.x_w = [self._spin(-1e5, 1e5, 3, f"x_w {a}: origin of the virtual workspace [m]") for a in "xyz"]
-        grid.addWidget(QLabel("k_p [m]"), 0, 0)
-        grid.addWidget(self.k_p, 0, 1)
-        grid.addWidget(QLabel("k_v [m/s]"), 0, 2)
-        grid.addWidget(self.k_v, 0, 3)
-        grid.addWidget(QLabel("x_w [m]"), 1, 0)
-        for k, s in enumerate(self.x_w):
-            grid.addWidget(s, 1, 1 + k)
+        # a label column on the left, the x, y, z columns headed; k_p and k_v take the x column
+        for k, a in enumerate("xyz"):
+            head = QLabel(a)
+            head.setAlignment(Qt.AlignCenter)
+            grid.addWidget(head, 0, 1 + k)
+        for row, (text, tip, widgets) in enumerate(
+            (
+                ("x_w [m]", "origin of the virtual workspace (eq. 1)", self.x_w),
+                ("k_p [m]", "position gain: displacement per full deflection (eq. 1)", [self.k_p]),
+                ("k_v [m/s]", "velocity gain: speed per full deflection (eq. 2)", [self.k_v]),
+            ),
+            start=1,
+        ):
+            label = QLabel(text)
+            label.setToolTip(tip)
+            label.setAlignment(Qt.AlignRight | Qt.AlignVCenter)
+            grid.addWidget(label, row, 0)
+            for k, w in enumerate(widgets):
+                grid.addWidget(w, row, 1 + k)
+        self.scaling_fields = EngineFields(self)
+        for w in (*self.x_w, self.k_p, self.k_v):
+            w.setMinimumWidth(70)
+            self.scaling_fields.add(w)
+        for k in range(3):
+            grid.setColumnStretch(1 + k, 1)
         self.apply_scaling = QPushButton("Apply")
-        self.apply_scaling.setToolTip("send k_p, x_w and k_v to the engine")
+        self.apply_scaling.setToolTip("send k_p, x_w and k_v to the engine (Esc in a field reverts it)")
         self.apply_scaling.clicked.connect(self.send_scaling)
-        grid.addWidget(self.apply_scaling, 2, 3)
+        grid.addWidget(self.apply_scaling, 3, 2, 1, 2)
+        self.scaling_note = QLabel("")
+        self.scaling_note.setWordWrap(True)
+        self.scaling_note.setStyleSheet("color: #b08000;")
+        grid.addWidget(self.scaling_note, 4, 0, 1, 4)
+        self.scaling_fields.dirty_changed.connect(
+            lambda on: self.scaling_note.setText("edited (yellow): Apply sends, Esc reverts" if on else "")
+        )
         cl.addWidget(g)
 
         g = QGroupBox("CSV logger")
@@ -247,7 +274,7 @@ class TeleopTab(QWidget):
             cb.setChecked(name in ("q", "tool", "target"))
             cb.setToolTip(f"log '{name}' columns")
             self.log_signals[name] = cb
-            sig_row.addWidget(cb, k // 4, k % 4)
+            sig_row.addWidget(cb, k // 3, k % 3)  # three a row: the column stays narrow enough to show whole
         lg.addRow("signals", sig_row)
         self.log_button = QPushButton("Start logging")
         self.log_button.setToolTip("start or stop writing engine states to the CSV file")
@@ -270,7 +297,9 @@ class TeleopTab(QWidget):
         for combo in (self.robot, self.solver, self.device):  # long names must not widen the column
             combo.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)
             combo.setMinimumContentsLength(14)
-        area.setMinimumWidth(min(460, controls.minimumSizeHint().width() + 18))
+        # the column is as wide as its widest control needs (nothing cut at its right edge) plus the scroll bar
+        bar = area.verticalScrollBar().sizeHint().width()
+        area.setMinimumWidth(controls.minimumSizeHint().width() + bar + 4)
         split.setSizes([area.minimumWidth(), 400, 460])
 
         self.inputs = InputManager(link, self)
@@ -413,9 +442,9 @@ class TeleopTab(QWidget):
         sc = state.scaling
         if sc is None:
             return
+        # an edit the operator has not applied stays (highlighted) until Apply or Esc
         for w, v in ((self.k_p, sc.k_p[0]), (self.k_v, sc.k_v[0]), *zip(self.x_w, sc.x_w, strict=True)):
-            if not w.hasFocus() and w.value() != round(v, w.decimals()):
-                w.setValue(v)
+            self.scaling_fields.engine_value(w, v)
 
     # ------------------------------------------------------------------ logger
     def _browse_log(self) -> None:

@@ -15,7 +15,6 @@ from PyQt5.QtWidgets import (
     QAbstractItemView,
     QHBoxLayout,
     QHeaderView,
-    QLabel,
     QPushButton,
     QSizePolicy,
     QTableWidget,
@@ -23,6 +22,8 @@ from PyQt5.QtWidgets import (
     QVBoxLayout,
     QWidget,
 )
+
+from ui.widgets.labels import ElidedLabel
 
 COLUMNS = ("", "time", "severity", "source", "alarm", "state")
 SEVERITY_RANK = {"critical": 0, "warning": 1, "info": 2}
@@ -39,7 +40,7 @@ class AlarmPanel(QWidget):
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         head = QHBoxLayout()
-        self.title = QLabel("Alarms: none")
+        self.title = ElidedLabel("Alarms: none")  # "…" and the whole text in its tool tip when narrow
         self.title.setStyleSheet("font-weight: bold;")
         head.addWidget(self.title, 1)
         self.ack_one = QPushButton("Acknowledge")

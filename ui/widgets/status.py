@@ -11,23 +11,25 @@ from PyQt5.QtWidgets import (
     QLabel,
     QPlainTextEdit,
     QPushButton,
-    QSizePolicy,
     QSplitter,
     QVBoxLayout,
     QWidget,
 )
 
 from ui.widgets.alarms import AlarmPanel
+from ui.widgets.labels import ElidedLabel
 
 LIGHT = {"ok": "#3c9d3c", "warn": "#e0a020", "error": "#d9534f", "off": "#666666", "unknown": "#8a8aa0"}
 
 
-class StatusLight(QLabel):
+class StatusLight(ElidedLabel):
+    """A light: "● name: detail"; a detail too long for its room ends in "…" (whole in the tool tip),
+    it never widens the window."""
+
     def __init__(self, name: str, tooltip: str, parent=None) -> None:
-        super().__init__(parent)
+        super().__init__("", parent)
         self.name = name
         self.setToolTip(tooltip)
-        self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)  # a long detail is cut, not widening
         self.setMinimumWidth(120)
         self.state = "off"
         self.set("off")
