@@ -27,8 +27,8 @@ from PyQt5.QtWidgets import (
 
 from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
-from ui.widgets.machines3d import LazyDraw
 from ui.widgets.fields import EngineFields
+from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
 
 HISTORY_S = 60.0
@@ -284,9 +284,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.ref_dot = self.hull_plot.plot(
             pen=None, symbol="o", symbolBrush=(160, 160, 160), symbolSize=10, name="p_ref"
         )
-        self.pc_dot = self.hull_plot.plot(
-            pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=7, name="p_c"
-        )
+        self.pc_dot = self.hull_plot.plot(pen=None, symbol="o", symbolBrush=(240, 60, 50), symbolSize=7, name="p_c")
 
         plots = pg.GraphicsLayoutWidget()
         plots.ci.layout.setHorizontalSpacing(18)  # one column's right axis label apart from the next one's left
