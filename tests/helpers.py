@@ -50,7 +50,7 @@ def arm_and_hold(client, axes, state_of, flag: str, sends: int = 40) -> dict:
             client.send_input(list(axes), [True], "stick")
             time.sleep(0.005)
         state = state_of()
-        if state["flags"][flag]:
+        if getattr(state.flags, flag):
             break
     return state
 

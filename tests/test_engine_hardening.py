@@ -64,7 +64,7 @@ def test_schema_valid_scene_commands_that_divided_by_zero_are_refused(serve, ses
         op.request("ping")
         assert th.is_alive()
         op.request("estop")
-        assert wait_for(op, lambda s: s.get("estop") or s.get("flags", {}).get("estop"))
+        assert wait_for(op, lambda s: s.estop)
     finally:
         op.close()
 
@@ -102,8 +102,8 @@ def test_a_bug_in_a_handler_or_the_control_step_never_stops_the_loop(serve):
         time.sleep(0.3)
         assert th.is_alive()
         ses.fail_tick = False
-        st_ = wait_for(op, lambda s: s["flags"]["estop"])  # a failing step latched the E-STOP
-        assert st_["flags"]["estop"]
+        st_ = wait_for(op, lambda s: s.estop)  # a failing step latched the E-STOP
+        assert st_.estop
     finally:
         op.close()
 
@@ -124,8 +124,8 @@ def test_ten_thousand_rejected_messages_do_not_freeze_a_gui_started_engine():
             raw.send(b"\xff\xfe junk %d" % k)
         op = Client(proc.url, role="operator", name="op", timeout=10.0)
         op.request("estop", reason="after the flood")
-        st_ = wait_for(op, lambda s: s["flags"]["estop"] and s["rejected"] + s["dropped"] >= 10_000, timeout=30.0)
-        assert st_["rejected"] >= RATE_BURST  # the first burst read and refused, the rest dropped unread
+        st_ = wait_for(op, lambda s: s.estop and s.engine.rejected + s.engine.dropped >= 10_000, timeout=30.0)
+        assert st_.engine.rejected >= RATE_BURST  # the first burst read and refused, the rest dropped unread
     finally:
         raw.close(0)
         if op is not None:
@@ -206,12 +206,12 @@ def test_sigterm_stops_the_joystick_client_which_says_bye(serve):
         env={**os.environ, "SDL_VIDEODRIVER": "dummy"},
     )
     try:
-        wait_for(viewer, lambda s: s["operator"] == "joystick", timeout=20.0)
+        wait_for(viewer, lambda s: s.engine.operator == "joystick", timeout=20.0)
         js.send_signal(signal.SIGTERM)
         out, err = js.communicate(timeout=15)
         assert js.returncode == 0, err
         assert "sent" in out and "Traceback" not in err
-        wait_for(viewer, lambda s: s["operator"] == "", timeout=5.0)  # it said bye: the role is free
+        wait_for(viewer, lambda s: s.engine.operator == "", timeout=5.0)  # it said bye: the role is free
     finally:
         if js.poll() is None:
             js.kill()
@@ -302,14 +302,14 @@ def test_silent_clients_are_forgotten_and_names_cannot_inject_log_lines():
             sock.send(encode("hello", role="viewer", name=f"ghost{k}\nERROR E-STOP reset by admin"))
             ghosts.append(sock)
         live = Client(srv.url, role="viewer", name="live")
-        assert wait_for(live, lambda s: s["clients"] >= 21)["clients"] >= 21
+        assert wait_for(live, lambda s: s.engine.clients >= 21).engine.clients >= 21
         deadline = time.monotonic() + 10
         while time.monotonic() < deadline:
             live.send("ping")  # the live client keeps talking
             st_ = live.latest_state(0.5)
-            if st_ is not None and st_["clients"] == 1:
+            if st_ is not None and st_.engine.clients == 1:
                 break
-        assert st_["clients"] == 1
+        assert st_.engine.clients == 1
         texts = [e.text for e in srv.session.log]
         assert any("ghost0?ERROR" in t for t in texts) and not any("\n" in t for t in texts)
         live.close()

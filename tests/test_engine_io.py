@@ -90,7 +90,7 @@ def test_the_loop_keeps_ticking_and_estop_gets_through_a_junk_flood(serve):
     flooder = ctx.Process(target=_flood, args=(srv.url, 20_000, 4.0, sent), daemon=True)
     try:
         st = arm_and_hold(op, [0.6, 0.0, 0.0], op.latest_state, "enabled")
-        assert st["flags"]["enabled"]
+        assert st.flags.enabled
         flooder.start()
         time.sleep(1.0)  # the flood under way (the spawned process needs a moment to start)
         ticks0, states, t0 = srv.stats.ticks, 0, time.monotonic()
@@ -101,11 +101,11 @@ def test_the_loop_keeps_ticking_and_estop_gets_through_a_junk_flood(serve):
         elapsed = time.monotonic() - t0
         rate = (srv.stats.ticks - ticks0) / elapsed
         op.send("estop", reason="mid-flood")
-        stopped = wait_for(viewer, lambda s: s["flags"]["estop"], timeout=20.0)
+        stopped = wait_for(viewer, lambda s: s.estop, timeout=20.0)
         flooder.join(timeout=30)
         assert rate > 0.5 * 200, rate  # nominal 200 Hz
         assert states > 0.5 * 50 * elapsed, states  # 50 states/s published
-        assert np.max(np.abs(stopped["qdot"])) == 0.0
+        assert np.max(np.abs(stopped.qdot)) == 0.0
         assert list(srv.estop_ticks) and max(srv.estop_ticks) <= 2
         assert srv.limits.total_dropped > 1000  # the flooder's excess, unread
         op_ident = next(i for i, c in list(srv.clients.items()) if c.name == "op")

@@ -28,7 +28,7 @@ def arm(session, t0=0.0):
         t += DT
         session.feed(sample(enable=en), t)
         session.tick(t, DT)
-    assert session.snapshot()["flags"]["enabled"]
+    assert session.snapshot().flags.enabled
     return t
 
 
@@ -44,9 +44,9 @@ def run(session, seconds, s=None, t0=0.0, feed=True):
 
 def test_velocity_mode_moves_tool_along_the_stick():
     ses = Session(robot_name="comau_smart5_3dof", solver_name="jacobian", mode="velocity")
-    p0 = np.array(ses.snapshot()["tool"])
+    p0 = np.array(ses.snapshot().tool)
     run(ses, 1.0, sample(x=1.0), t0=arm(ses))
-    p1 = np.array(ses.snapshot()["tool"])
+    p1 = np.array(ses.snapshot().tool)
     d = p1 - p0
     assert d[0] > 0.2 and abs(d[1]) < 0.02 * d[0] and abs(d[2]) < 0.02 * d[0]  # straight along +x
 
@@ -54,15 +54,15 @@ def test_velocity_mode_moves_tool_along_the_stick():
 def test_velocity_release_stops_and_holds():
     ses = Session(mode="velocity")
     t = run(ses, 0.5, sample(x=1.0), t0=arm(ses))
-    q_ref = np.array(ses.snapshot()["q_ref"])
+    q_ref = np.array(ses.snapshot().q_ref)
     t = run(ses, 0.5, sample(), t0=t)  # stick released: the reference no longer moves
-    np.testing.assert_array_equal(ses.snapshot()["q_ref"], q_ref)
-    p_a = np.array(ses.snapshot()["tool"])
+    np.testing.assert_array_equal(ses.snapshot().q_ref, q_ref)
+    p_a = np.array(ses.snapshot().tool)
     run(ses, 0.5, sample(), t0=t)
     # the first-order servo (tau 50 ms) has settled onto the held reference
-    np.testing.assert_allclose(ses.snapshot()["tool"], p_a, atol=1e-5)
-    np.testing.assert_allclose(ses.snapshot()["q"], q_ref, atol=1e-6)
-    assert np.abs(ses.snapshot()["qdot"]).max() < 1e-4
+    np.testing.assert_allclose(ses.snapshot().tool, p_a, atol=1e-5)
+    np.testing.assert_allclose(ses.snapshot().q, q_ref, atol=1e-6)
+    assert np.abs(ses.snapshot().qdot).max() < 1e-4
 
 
 def test_position_mode_follows_and_returns_to_start():
@@ -70,21 +70,21 @@ def test_position_mode_follows_and_returns_to_start():
     ses.set_mode("position")
     start = np.array(ses.scaling.x_w)
     t = run(ses, 2.0, sample(z=0.5), t0=arm(ses))
-    s = ses.snapshot()["signal"][2]
+    s = ses.snapshot().signal[2]
     assert s == pytest.approx((0.5 - 0.1) / 0.9)  # default profile: deadzone 0.1, rescaled
-    np.testing.assert_allclose(ses.snapshot()["tool"], start + np.array([0, 0, s * ses.scaling.k_p[2]]), atol=1e-3)
+    np.testing.assert_allclose(ses.snapshot().tool, start + np.array([0, 0, s * ses.scaling.k_p[2]]), atol=1e-3)
     run(ses, 3.0, sample(), t0=t)  # released: back to the starting point
-    np.testing.assert_allclose(ses.snapshot()["tool"], start, atol=1e-3)
+    np.testing.assert_allclose(ses.snapshot().tool, start, atol=1e-3)
 
 
 def test_deadman_released_holds():
     ses = Session()
     t = run(ses, 0.3, sample(x=1.0), t0=arm(ses))
     t = run(ses, 0.5, sample(x=1.0, enable=False), t0=t)
-    p = np.array(ses.snapshot()["tool"])
+    p = np.array(ses.snapshot().tool)
     run(ses, 0.5, sample(x=1.0, enable=False), t0=t)
-    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-9)
-    assert not ses.snapshot()["flags"]["enabled"]
+    np.testing.assert_allclose(ses.snapshot().tool, p, atol=1e-9)
+    assert not ses.snapshot().flags.enabled
 
 
 def test_stale_input_stops_within_bound():
@@ -95,11 +95,11 @@ def test_stale_input_stops_within_bound():
     # the device goes silent: no new samples are fed
     t_silent = t
     t = run(ses, 0.2, feed=False, t0=t)
-    assert ses.snapshot()["flags"]["stale_input"]
-    p = np.array(ses.snapshot()["tool"])
+    assert ses.snapshot().flags.stale_input
+    p = np.array(ses.snapshot().tool)
     run(ses, 0.5, feed=False, t0=t)
     # the stop started at 200 ms; braking at the acceleration limit (Comau has none: immediate)
-    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-6)
+    np.testing.assert_allclose(ses.snapshot().tool, p, atol=1e-6)
     assert t - t_silent >= ses.stale_timeout
 
 
@@ -108,10 +108,10 @@ def test_unplugged_device_holds_and_warns():
     t = run(ses, 0.3, sample(x=1.0), t0=arm(ses))
     ses.feed(None, t)
     t = run(ses, 0.3, feed=False, t0=t)
-    p = np.array(ses.snapshot()["tool"])
+    p = np.array(ses.snapshot().tool)
     run(ses, 0.3, feed=False, t0=t)
-    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-9)
-    assert any("disconnected" in e.text for e in ses.log) and not ses.snapshot()["flags"]["device"]
+    np.testing.assert_allclose(ses.snapshot().tool, p, atol=1e-9)
+    assert any("disconnected" in e.text for e in ses.log) and not ses.snapshot().flags.device
 
 
 def test_estop_stops_in_one_tick_and_latches():
@@ -123,18 +123,18 @@ def test_estop_stops_in_one_tick_and_latches():
     ses.feed(sample(x=1.0), t)
     ses.tick(t, DT)
     assert np.all(ses.actuators.qdot == 0)
-    p = np.array(ses.snapshot()["tool"])
+    p = np.array(ses.snapshot().tool)
     t = run(ses, 0.5, sample(x=1.0), t0=t)  # input keeps pushing: nothing moves while latched
-    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=0)
-    assert ses.snapshot()["flags"]["estop"]
+    np.testing.assert_allclose(ses.snapshot().tool, p, atol=0)
+    assert ses.snapshot().estop
     with pytest.raises(CommandError, match="E-STOP is latched"):
         ses.set_robot("scara")
     ses.reset()
     t = run(ses, 0.5, sample(x=1.0), t0=t)  # the stick still deflected at the reset does not count
-    assert not ses.snapshot()["flags"]["estop"]
-    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-9)
+    assert not ses.snapshot().estop
+    np.testing.assert_allclose(ses.snapshot().tool, p, atol=1e-9)
     run(ses, 0.5, sample(x=1.0), t0=arm(ses, t))
-    assert np.linalg.norm(np.array(ses.snapshot()["tool"]) - p) > 1e-3
+    assert np.linalg.norm(np.array(ses.snapshot().tool) - p) > 1e-3
 
 
 def test_bad_commands_leave_state_unchanged(tmp_path):
@@ -165,10 +165,10 @@ def test_switching_robot_and_solver_while_running():
     assert not ses.moving() and np.linalg.norm(ses.actuators.q - q_moving) < 0.1
     ses.set_robot("kuka_youbot")  # no closed form: falls back to the Jacobian solver
     assert ses.robot_name == "kuka_youbot" and ses.solver_name == "jacobian"
-    assert not ses.snapshot()["flags"]["armed"]  # a robot change needs a fresh command
+    assert not ses.snapshot().flags.armed  # a robot change needs a fresh command
     ses.set_solver("ga")
     run(ses, 0.2, sample(z=0.5), t0=arm(ses, t))
-    assert len(ses.snapshot()["q"]) == 5
+    assert len(ses.snapshot().q) == 5
 
 
 def test_reloading_the_same_robot_at_rest_keeps_the_arm_where_it_stands():

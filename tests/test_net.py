@@ -52,6 +52,10 @@ def test_round_trip_every_client_message():
         "lab_comau_mode": {"mode": "motion_comp"},
         "lab_winch": {"mode": "local", "speed": -0.2},
         "lab_vvmc": {"on": True},
+        "describe": {},
+        "pause": {"on": True},
+        "study_start": {"study": "distribution", "solver": "jacobian", "grid": 12},
+        "study_cancel": {},
     }
     assert set(samples) == set(CLIENT_MESSAGES)
     for mtype, fields in samples.items():
@@ -63,9 +67,9 @@ def test_round_trip_every_client_message():
     [
         (b"\xc1garbage", "not a msgpack message"),
         (msgpack.packb([1, 2, 3]), "message is not a map"),
-        (msgpack.packb({"v": 2, "type": "ping"}), "protocol version 2 is not supported"),
-        (msgpack.packb({"v": 1, "type": "launch_missiles"}), "unknown message type"),
-        (msgpack.packb({"v": 1, "type": "ping", "extra": 1}), "unknown field"),
+        (msgpack.packb({"v": 1, "type": "ping"}), "protocol version 1 is not supported"),
+        (msgpack.packb({"v": 2, "type": "launch_missiles"}), "unknown message type"),
+        (msgpack.packb({"v": 2, "type": "ping", "extra": 1}), "unknown field"),
         (encode("input", seq=1, axes=[2.0], buttons=[], device="x"), r"values must lie in \[-1, 1\]"),
         (encode("input", seq=1, axes=[float("nan")], buttons=[], device="x"), "finite numbers only"),
         (encode("input", seq=1, axes=[0.0] * 17, buttons=[], device="x"), "at most 16"),
@@ -149,7 +153,7 @@ def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
     srv = engine()
     viewer = Client(srv.url, role="viewer", name="viewer")
     try:
-        p0 = np.array(viewer.recv_state(2.0)["tool"])
+        p0 = np.array(viewer.recv_state(2.0).tool)
         PygameJoysticks()  # SDL joystick subsystem up before attaching
         vj = VirtualJoystick(n_axes=4, n_buttons=8)
         stop = threading.Event()
@@ -160,17 +164,17 @@ def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
             vj.set_button(0, True)  # deadman held and stick deflected before the client connects
             vj.set_axis(0, 0.8)  # +x
             th.start()
-            st_ = wait_for(viewer, lambda s: s["flags"]["device"])
+            st_ = wait_for(viewer, lambda s: s.flags.device)
             time.sleep(0.5)
-            assert abs(viewer.latest_state()["tool"][0] - p0[0]) < 1e-6  # not armed: nothing moves
+            assert abs(viewer.latest_state().tool[0] - p0[0]) < 1e-6  # not armed: nothing moves
             vj.set_axis(0, 0.0)  # the arming gesture: centred and released, then pressed
             vj.set_button(0, False)
             time.sleep(0.1)
             vj.set_button(0, True)
             time.sleep(0.1)
             vj.set_axis(0, 0.8)
-            st_ = wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.05)
-            assert st_["flags"]["device"] and st_["operator"] == "joystick"
+            st_ = wait_for(viewer, lambda s: s.tool[0] - p0[0] > 0.05)
+            assert st_.flags.device and st_.engine.operator == "joystick"
             # a second client cannot take the operator role while the first holds it
             second = Client(srv.url, role="operator", name="intruder")
             assert second.role == "viewer" and "held by joystick" in second.note
@@ -179,10 +183,10 @@ def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
             second.close()
             # unplug: the engine holds the robot
             vj.detach()
-            st_ = wait_for(viewer, lambda s: not s["flags"]["device"])
-            p_hold = np.array(st_["tool"])
+            st_ = wait_for(viewer, lambda s: not s.flags.device)
+            p_hold = np.array(st_.tool)
             time.sleep(0.3)
-            np.testing.assert_allclose(viewer.latest_state()["tool"], p_hold, atol=2e-3)
+            np.testing.assert_allclose(viewer.latest_state().tool, p_hold, atol=2e-3)
         finally:
             stop.set()
             th.join(timeout=5)
@@ -203,16 +207,16 @@ def test_estop_from_a_viewer_latches_and_reset_clears(engine):
             op.send_input([1.0, 0.0, 0.0], [True], "stick")
             time.sleep(0.005)
         viewer.request("estop", reason="test")
-        st_ = wait_for(viewer, lambda s: s["flags"]["estop"])
-        p = np.array(st_["tool"])
+        st_ = wait_for(viewer, lambda s: s.estop)
+        p = np.array(st_.tool)
         for _ in range(60):  # input keeps coming: nothing moves
             op.send_input([1.0, 0.0, 0.0], [True], "stick")
             time.sleep(0.005)
-        np.testing.assert_allclose(viewer.latest_state()["tool"], p, atol=1e-9)
+        np.testing.assert_allclose(viewer.latest_state().tool, p, atol=1e-9)
         with pytest.raises(TransportError, match="only the operator"):
             viewer.request("reset")
         op.request("reset")
-        assert not wait_for(viewer, lambda s: not s["flags"]["estop"])["flags"]["estop"]
+        assert not wait_for(viewer, lambda s: not s.estop).estop
     finally:
         op.close()
         viewer.close()
@@ -224,12 +228,12 @@ def test_stale_network_input_stops(engine):
     viewer = Client(srv.url, role="viewer", name="v")
     try:
         arm_and_hold(op, [1.0, 0.0, 0.0], viewer.latest_state, "enabled")
-        assert viewer.latest_state()["flags"]["enabled"]
+        assert viewer.latest_state().flags.enabled
         time.sleep(0.3)  # silence longer than the 200 ms stale timeout
         st_ = viewer.latest_state()
-        assert st_["flags"]["stale_input"]
+        assert st_.flags.stale_input
         time.sleep(0.2)
-        np.testing.assert_allclose(viewer.latest_state()["tool"], st_["tool"], atol=1e-5)
+        np.testing.assert_allclose(viewer.latest_state().tool, st_.tool, atol=1e-5)
     finally:
         op.close()
         viewer.close()
@@ -248,11 +252,11 @@ def test_token_and_malformed_messages(engine):
             raw.send(junk)
         raw.send_multipart([b"two", b"frames"])
         ok.request("set_robot", robot="scara")  # the engine kept running and still answers
-        st_ = wait_for(ok, lambda s: s["robot"] == "scara")
-        assert st_["rejected"] >= 5
+        st_ = wait_for(ok, lambda s: s.robot == "scara")
+        assert st_.engine.rejected >= 5
         with pytest.raises(TransportError, match="unknown robot 'nope'"):
             ok.request("set_robot", robot="nope")
-        assert ok.latest_state()["robot"] == "scara"
+        assert ok.latest_state().robot == "scara"
     finally:
         raw.close(0)
         ok.close()
@@ -285,19 +289,19 @@ def test_separate_processes_server_joystick_viewer():
         assert url, "server did not report its address"
         viewer = Client(url, role="viewer", name="test-viewer", timeout=10)
         try:
-            p0 = np.array(viewer.recv_state(5.0)["tool"])
+            p0 = np.array(viewer.recv_state(5.0).tool)
             js = subprocess.Popen(
                 [exe, "joystick", "--connect", url, "--virtual", "--duration", "4"],
                 stdout=subprocess.PIPE,
                 stderr=subprocess.PIPE,
                 text=True,
             )
-            st_ = wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.05, timeout=15)
-            assert st_["operator"] == "joystick" and st_["flags"]["device_name"]
+            st_ = wait_for(viewer, lambda s: s.tool[0] - p0[0] > 0.05, timeout=15)
+            assert st_.engine.operator == "joystick" and st_.flags.device_name
             out, err = js.communicate(timeout=30)
             assert js.returncode == 0, err
             assert "sent" in out
-            wait_for(viewer, lambda s: s["flags"]["stale_input"] or not s["flags"]["device"], timeout=5)
+            wait_for(viewer, lambda s: s.flags.stale_input or not s.flags.device, timeout=5)
         finally:
             viewer.close()
     finally:

@@ -55,8 +55,8 @@ def test_curve_admits_an_allowed_key_and_refuses_others_counting_the_failures(se
             Client(srv.url, role="operator", name="stranger", curve=keys["stranger"], timeout=1.5)
         with pytest.raises(TransportError):  # a plain (NULL mechanism) client is not even answered
             Client(srv.url, role="viewer", name="plain", timeout=1.5)
-        state = wait_for(op, lambda s: s["auth_failures"] >= 1, timeout=10.0)
-        assert state["auth_failures"] >= 1 and state["operator"] == "op"
+        state = wait_for(op, lambda s: s.engine.auth_failures >= 1, timeout=10.0)
+        assert state.engine.auth_failures >= 1 and state.engine.operator == "op"
     finally:
         op.close()
 
@@ -95,7 +95,7 @@ def test_wrong_tokens_are_throttled_and_counted(serve_session):
     time.sleep(1.2)
     ok = Client(srv.url, role="viewer", name="ok", token="s3cret", timeout=2.0)
     try:
-        assert wait_for(ok, lambda s: s["auth_failures"] >= 10, timeout=5.0)
+        assert wait_for(ok, lambda s: s.engine.auth_failures >= 10, timeout=5.0)
     finally:
         ok.close()
 

@@ -125,7 +125,7 @@ def test_the_engine_refuses_or_loads_each_file_and_keeps_running():
         t += 0.005
         session.tick(t, 0.005)
         snap = session.snapshot()
-        assert all(math.isfinite(x) for x in snap["q"])
+        assert all(math.isfinite(x) for x in snap.q)
 
 
 # ---------------------------------------------------------------------------- physical bounds

@@ -42,7 +42,7 @@ def test_estop_reaches_a_restarted_engine_without_a_new_hello():
     viewer = Client(url, role="viewer", name="viewer")
     try:
         gui.send("estop", reason="STOP button")  # the old identity: never said hello to this engine
-        assert wait_for(viewer, lambda s: s["flags"]["estop"])["flags"]["estop"]
+        assert wait_for(viewer, lambda s: s.estop).estop
         # anything else before hello is answered with a hint to say hello again (no silent drop)
         gui.send("reset")
         reply = gui._wait_for(("reply",), re="reset")
@@ -67,11 +67,11 @@ def test_estop_without_hello_needs_the_token_where_one_is_set():
         raw.send(encode("estop", reason="no token"))
         assert raw.poll(3000)
         assert not decode_engine(raw.recv())["ok"]
-        assert not viewer.latest_state()["flags"]["estop"]
+        assert not viewer.latest_state().estop
         raw.send(encode("estop", reason="with token", token="s3cret"))
         assert raw.poll(3000)
         assert decode_engine(raw.recv())["ok"]
-        assert wait_for(viewer, lambda s: s["flags"]["estop"])
+        assert wait_for(viewer, lambda s: s.estop)
     finally:
         raw.close(0)
         viewer.close()
@@ -96,23 +96,23 @@ def test_reset_with_the_stick_held_moves_nothing_over_the_network():
     try:
         arm(op)
         th_in.start()
-        p0 = np.array(viewer.latest_state()["tool"])
-        wait_for(viewer, lambda s: s["tool"][0] - p0[0] > 0.02)
+        p0 = np.array(viewer.latest_state().tool)
+        wait_for(viewer, lambda s: s.tool[0] - p0[0] > 0.02)
         viewer.request("estop", reason="test")
-        wait_for(viewer, lambda s: s["flags"]["estop"])
+        wait_for(viewer, lambda s: s.estop)
         time.sleep(0.2)
-        srv_p = np.array(viewer.latest_state()["tool"])
+        srv_p = np.array(viewer.latest_state().tool)
         stop.set()
         th_in.join(2)
         op.request("reset")
         stop.clear()
         th_in = threading.Thread(target=hold_stick, daemon=True)
         th_in.start()
-        st_ = wait_for(viewer, lambda s: not s["flags"]["estop"])
+        st_ = wait_for(viewer, lambda s: not s.estop)
         time.sleep(0.6)
         st_ = viewer.latest_state()
-        assert not st_["flags"]["enabled"] and "centre the stick" in st_["flags"]["input_reason"]
-        np.testing.assert_allclose(st_["tool"], srv_p, atol=1e-6)
+        assert not st_.flags.enabled and "centre the stick" in st_.flags.input_reason
+        np.testing.assert_allclose(st_.tool, srv_p, atol=1e-6)
     finally:
         stop.set()
         if th_in.ident is not None:  # the stick thread sends on op's socket: it ends before the socket closes
@@ -127,12 +127,12 @@ def test_a_reconnected_operator_starts_disarmed():
     op = Client(srv.url, role="operator", name="op")
     try:
         arm_and_hold(op, [0.0, 0.0, 0.0], op.latest_state, "armed", sends=5)
-        assert op.latest_state()["flags"]["armed"]
+        assert op.latest_state().flags.armed
         op.send("hello", role="operator", name="op")  # the same client says hello again (reconnect)
 
         def disarmed_by_the_new_hello(st_):
             op.send_input([0.0, 0.0, 0.0], [True], "stick")  # enable still held, input fresh
-            return not st_["flags"]["armed"] and "operator op connected" in st_["flags"]["input_reason"]
+            return not st_.flags.armed and "operator op connected" in st_.flags.input_reason
 
         assert wait_for(op, disarmed_by_the_new_hello)
     finally:
@@ -161,12 +161,12 @@ def test_lab_reset_leaves_every_machine_where_it_stands():
     ses.reset()
     t = run_lab(ses, 8.0, t0=t)
     after = ses.snapshot()
-    for p0, p1 in zip(before["platforms"], after["platforms"], strict=True):
-        assert p1["status"] == "settled"
-        np.testing.assert_allclose(p1["eta"], p0["eta"], atol=1e-9)
-    assert after["comau"]["mode"] == "hold"
-    np.testing.assert_allclose(after["comau"]["q"], before["comau"]["q"], atol=1e-9)
-    assert after["winch"]["length"] == pytest.approx(before["winch"]["length"], abs=1e-9)
+    for p0, p1 in zip(before.platforms, after.platforms, strict=True):
+        assert p1.status == "settled"
+        np.testing.assert_allclose(p1.eta, p0.eta, atol=1e-9)
+    assert after.comau.mode == "hold"
+    np.testing.assert_allclose(after.comau.q, before.comau.q, atol=1e-9)
+    assert after.winch.length == pytest.approx(before.winch.length, abs=1e-9)
 
 
 def test_lab_reset_of_a_moving_platform_holds_it():
@@ -177,11 +177,11 @@ def test_lab_reset_of_a_moving_platform_holds_it():
     t = run_lab(ses, 0.1, t0=t)
     ses.reset()
     t = run_lab(ses, 2.0, t0=t)
-    eta = np.array(ses.snapshot()["platforms"][0]["eta"])
+    eta = np.array(ses.snapshot().platforms[0].eta)
     run_lab(ses, 6.0, t0=t)
-    st_ = ses.snapshot()["platforms"][0]
-    assert st_["status"] == "holding"
-    np.testing.assert_allclose(st_["eta"], eta, atol=1e-9)
+    st_ = ses.snapshot().platforms[0]
+    assert st_.status == "holding"
+    np.testing.assert_allclose(st_.eta, eta, atol=1e-9)
 
 
 def test_tac_reset_holds_until_a_mode_is_chosen():
@@ -202,7 +202,7 @@ def test_tac_reset_holds_until_a_mode_is_chosen():
         ses.tick(t, 0.02)
     np.testing.assert_allclose(ses.last["alpha"], a0, atol=0)
     np.testing.assert_allclose(ses.last["beta"], b0, atol=0)
-    assert ses.snapshot()["holding"]
+    assert ses.snapshot().holding
     ses.set_tac_mode("tac")
     for _ in range(100):
         t += 0.02
@@ -220,24 +220,24 @@ def test_lab_comau_and_winch_remote_use_the_input_pipeline():
     ses = LabSession()
     ses.lab_comau_mode("remote")
     ses.lab_winch(mode="remote")
-    q0 = np.array(ses.snapshot()["comau"]["q"])
-    L0 = ses.snapshot()["winch"]["length"]
+    q0 = np.array(ses.snapshot().comau.q)
+    L0 = ses.snapshot().winch.length
     t = run_lab(ses, 1.0, lab_sample(x=1.0, w=-1.0))  # deflected and enabled from the start: not armed
-    np.testing.assert_allclose(ses.snapshot()["comau"]["q"], q0, atol=1e-9)
-    assert ses.snapshot()["winch"]["length"] == pytest.approx(L0, abs=1e-9)
+    np.testing.assert_allclose(ses.snapshot().comau.q, q0, atol=1e-9)
+    assert ses.snapshot().winch.length == pytest.approx(L0, abs=1e-9)
     t = run_lab(ses, 0.1, lab_sample(enable=False), t0=t)
     t = run_lab(ses, 0.1, lab_sample(enable=True), t0=t)
-    p0 = np.array(ses.snapshot()["scene"]["tool"])
+    p0 = np.array(ses.snapshot().scene.tool)
     t = run_lab(ses, 1.0, lab_sample(x=1.0, w=-1.0), t0=t)
-    assert np.linalg.norm(np.array(ses.snapshot()["scene"]["tool"]) - p0) > 0.1
-    assert ses.snapshot()["winch"]["length"] < L0 - 0.1
+    assert np.linalg.norm(np.array(ses.snapshot().scene.tool) - p0) > 0.1
+    assert ses.snapshot().winch.length < L0 - 0.1
     # the device goes silent: stale after 0.2 s, the Comau and the winch brake and hold
     t = run_lab(ses, 0.5, t0=t)
-    q1, L1 = np.array(ses.snapshot()["comau"]["q"]), ses.snapshot()["winch"]["length"]
+    q1, L1 = np.array(ses.snapshot().comau.q), ses.snapshot().winch.length
     run_lab(ses, 1.0, t0=t)
-    np.testing.assert_allclose(ses.snapshot()["comau"]["q"], q1, atol=1e-9)
-    assert ses.snapshot()["winch"]["length"] == pytest.approx(L1, abs=1e-3)  # the servo's settling tail only
-    assert abs(ses.snapshot()["winch"]["speed"]) < 1e-3 and ses.snapshot()["flags"]["stale_input"]
+    np.testing.assert_allclose(ses.snapshot().comau.q, q1, atol=1e-9)
+    assert ses.snapshot().winch.length == pytest.approx(L1, abs=1e-3)  # the servo's settling tail only
+    assert abs(ses.snapshot().winch.speed) < 1e-3 and ses.snapshot().flags.stale_input
 
 
 def test_stop_button_latches_every_engine():
@@ -284,10 +284,10 @@ def test_slow_engine_raises_an_alarm_and_ack_over_the_protocol():
     srv, th = serve(SlowSession(), rate=500)
     op = Client(srv.url, role="operator", name="op")
     try:
-        st_ = wait_for(op, lambda s: any(a["key"] == "engine_slow" and a["active"] for a in s["alarms"]))
-        assert st_["realtime_factor"] < 0.95
+        st_ = wait_for(op, lambda s: any(a.key == "engine_slow" and a.active for a in s.alarms))
+        assert st_.engine.realtime_factor < 0.95
         op.request("ack_alarm", key="engine_slow")
-        wait_for(op, lambda s: all(a["acked"] for a in s["alarms"] if a["key"] == "engine_slow"))
+        wait_for(op, lambda s: all(a.acked for a in s.alarms if a.key == "engine_slow"))
         viewer = Client(srv.url, role="viewer", name="v")
         with pytest.raises(TransportError, match="only the operator"):
             viewer.request("ack_alarm")
@@ -309,20 +309,20 @@ def test_teleop_alarms_estop_joint_limit_and_stale():
         t += dt
         ses.feed(InputSample((0.0, 0.0, 1.0), (True,), "stick"), t)
         ses.tick(t, dt)
-    keys = {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
-    assert "joint_limit" in keys, ses.snapshot()["alarms"]
+    keys = {a.key for a in ses.snapshot().alarms if a.active}
+    assert "joint_limit" in keys, ses.snapshot().alarms
     for _ in range(200):
         t += dt
         ses.tick(t, dt)
-    keys = {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
+    keys = {a.key for a in ses.snapshot().alarms if a.active}
     assert "stale_input" in keys
     ses.estop()
     ses.tick(t + dt, dt)
-    assert any(a["key"] == "estop" and a["severity"] == "critical" for a in ses.snapshot()["alarms"])
+    assert any(a.key == "estop" and a.severity == "critical" for a in ses.snapshot().alarms)
 
 
 def active_keys(ses):
-    return {a["key"] for a in ses.snapshot()["alarms"] if a["active"]}
+    return {a.key for a in ses.snapshot().alarms if a.active}
 
 
 @pytest.mark.slow
@@ -336,7 +336,7 @@ def test_lab_alarms_winch_end_stop_leg_limit_and_payload_below_the_deck():
         ses.lab_winch(speed=1.0)
         if "winch_end_stop" in active_keys(ses):
             break
-    assert "winch_end_stop" in active_keys(ses), ses.snapshot()["winch"]
+    assert "winch_end_stop" in active_keys(ses), ses.snapshot().winch
     # the tool is on the work point 1.4 m above EM1500's deck: 2.5 m of wire puts the load through it
     H = ses.lab.platform_pose(1)
     below = (H[:3, :3].T @ (ses.lab.p_p_g() - H[:3, 3]))[2]  # z-down body frame: positive is below the plate
@@ -346,7 +346,7 @@ def test_lab_alarms_winch_end_stop_leg_limit_and_payload_below_the_deck():
         t = run_lab(ses, 0.25, t0=t)
         ses.lab_winch(speed=-1.0)
     assert "payload_below_deck" not in active_keys(ses)
-    assert any(a["key"] == "payload_below_deck" and not a["acked"] for a in ses.snapshot()["alarms"])
+    assert any(a.key == "payload_below_deck" and not a.acked for a in ses.snapshot().alarms)
     ses.lab.platforms[0].leg_clamped = True
     ses._check_alarms()
     assert "leg_limit_em8000" in active_keys(ses)
@@ -362,8 +362,8 @@ def test_tac_saturation_alarm_names_the_share_of_time():
         ses.tick(t, 0.02)
         if "saturation" in active_keys(ses):
             break
-    alarm = next(a for a in ses.snapshot()["alarms"] if a["key"] == "saturation")
-    assert "% of the last 10 s" in alarm["text"]
+    alarm = next(a for a in ses.snapshot().alarms if a.key == "saturation")
+    assert "% of the last 10 s" in alarm.text
 
 
 def test_speed_limited_and_singularity_alarms():
@@ -398,7 +398,7 @@ def teleop_arm(ses, t, dt=0.002):
         t += dt
         ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "stick"), t)
         ses.tick(t, dt)
-    assert ses.snapshot()["flags"]["enabled"]
+    assert ses.snapshot().flags.enabled
     return t
 
 
@@ -416,24 +416,24 @@ def test_position_mode_arming_at_neutral_never_moves_the_tool():
     t = teleop_arm(ses, 0.0)
     t = teleop_run(ses, t, 2.0, x=0.8)
     t = teleop_run(ses, t, 0.5, x=0.8, enable=False)  # enable released while deflected: holds there
-    held = np.array(ses.snapshot()["tool"])
+    held = np.array(ses.snapshot().tool)
     t = teleop_run(ses, t, 0.1, x=0.0, enable=False)
     t = teleop_arm(ses, t)
     teleop_run(ses, t, 1.0, x=0.0)
-    np.testing.assert_allclose(ses.snapshot()["tool"], held, atol=1e-6)
+    np.testing.assert_allclose(ses.snapshot().tool, held, atol=1e-6)
 
 
 def test_scaling_and_solver_changes_disarm():
     ses = Session(robot_name="comau_smart5_3dof", mode="position")
     t = teleop_arm(ses, 0.0)
-    p = np.array(ses.snapshot()["tool"])
+    p = np.array(ses.snapshot().tool)
     ses.set_scaling(x_w=list(p + [0.3, 0.0, 0.0]))
     teleop_run(ses, t, 1.0, x=0.0)
-    np.testing.assert_allclose(ses.snapshot()["tool"], p, atol=1e-6)
-    assert not ses.snapshot()["flags"]["armed"]
+    np.testing.assert_allclose(ses.snapshot().tool, p, atol=1e-6)
+    assert not ses.snapshot().flags.armed
     t = teleop_arm(ses, t + 1.0)
     ses.set_solver("ga")
-    assert not ses.snapshot()["flags"]["armed"]
+    assert not ses.snapshot().flags.armed
 
 
 def test_vvmc_off_puts_the_comau_in_remote_disarmed():
@@ -445,18 +445,18 @@ def test_vvmc_off_puts_the_comau_in_remote_disarmed():
     t = run_lab(ses, 0.5, lab_sample(x=1.0), t0=t)
     ses.lab_vvmc(False)  # REMOTE now, with the stick still deflected and enable held
     t = run_lab(ses, 2.0, lab_sample(x=1.0), t0=t)  # the robot brakes from its MOTION_COMP travel
-    q = np.array(ses.snapshot()["comau"]["q"])
+    q = np.array(ses.snapshot().comau.q)
     run_lab(ses, 1.0, lab_sample(x=1.0), t0=t)
-    assert ses.snapshot()["comau"]["mode"] == "remote" and not ses.snapshot()["flags"]["armed"]
-    np.testing.assert_allclose(ses.snapshot()["comau"]["q"], q, atol=1e-6)
+    assert ses.snapshot().comau.mode == "remote" and not ses.snapshot().flags.armed
+    np.testing.assert_allclose(ses.snapshot().comau.q, q, atol=1e-6)
 
 
 def test_local_winch_speed_returns_to_zero_when_not_refreshed():
     ses = LabSession()
     t = run_lab(ses, 0.2)
-    L0 = ses.snapshot()["winch"]["length"]
+    L0 = ses.snapshot().winch.length
     ses.lab_winch(speed=0.2)  # one slider message, then nothing (a lost GUI, a slider moved by the wheel)
     t = run_lab(ses, 0.1, t0=t)
     time.sleep(0.35)
     run_lab(ses, 5.0, t0=t)
-    assert abs(ses.snapshot()["winch"]["length"] - L0) < 0.05 and ses.lab.winch.speed_command == 0.0
+    assert abs(ses.snapshot().winch.length - L0) < 0.05 and ses.lab.winch.speed_command == 0.0
