@@ -676,6 +676,7 @@ class EngineServer:
             self._log_limited("internal", f"{mtype} refused by an internal error: {type(err).__name__}: {err}")
             self._send_reply(ident, mtype, False, f"refused: internal error ({type(err).__name__})")
             return
+        self._refresh_description()  # a client that asks ``describe`` after this reply sees the change
         self._send_reply(ident, mtype, True)
 
     def _refresh_description(self) -> None:

@@ -404,9 +404,10 @@ def _convert(tp: Any, value: Any, where: str) -> Any:
             if type(None) in args:
                 return None
             raise SnapshotError(f"{where}: missing value")
-        for a in args:
-            if a is type(None):
-                continue
+        options = [a for a in args if a is not type(None)]
+        if len(options) == 1:  # X | None: X's own message says what is wrong
+            return _convert(options[0], value, where)
+        for a in options:
             try:
                 return _convert(a, value, where)
             except SnapshotError:
