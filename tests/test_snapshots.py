@@ -108,7 +108,7 @@ def test_wrong_kind_missing_and_mistyped_fields_are_refused(scenes):
         snapshot_from_wire(bad)
     bad = copy.deepcopy(wire)
     bad["engine"] = [1, 2]
-    with pytest.raises(SnapshotError, match="teleop.engine: expected a map"):
+    with pytest.raises(SnapshotError, match=r"teleop\.engine: expected a map"):
         snapshot_from_wire(bad)
     with pytest.raises(SnapshotError, match="not a map"):
         snapshot_from_wire([wire])
