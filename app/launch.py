@@ -12,6 +12,11 @@ INTERRUPTED = 130
 
 
 def main() -> int:
+    import faulthandler
+    import signal
+
+    if hasattr(signal, "SIGUSR1"):  # ``kill -USR1 PID`` prints every thread's stack (a hung process explains itself)
+        faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:
         from app.cli import main as cli_main
 

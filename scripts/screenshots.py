@@ -21,6 +21,7 @@ sys.path.insert(0, str(ROOT))
 from ui.engine_process import EngineProcess  # noqa: E402
 from ui.link import EngineLink  # noqa: E402
 from ui.main_window import MainWindow  # noqa: E402
+from ui.widgets.glwindow import grab_window  # noqa: E402
 
 OUT = ROOT / "docs" / "screenshots"
 
@@ -33,6 +34,9 @@ def pump(app: QApplication, seconds: float) -> None:
 
 
 def main() -> int:
+    from ui.glprobe import share_gl_contexts
+
+    share_gl_contexts()  # before the QApplication: every GL view shares shaders
     app = QApplication(sys.argv[:1])
     settings = QSettings(str(OUT / "screenshots.ini"), QSettings.IniFormat)
     engine = EngineProcess(robot="knuckle_boom_crane", solver="jacobian", mode="velocity")
@@ -94,13 +98,13 @@ def motion_lab(app: QApplication, win: MainWindow) -> None:
     pump(app, 30.0)
     lab.tabs.setCurrentIndex(0)
     pump(app, 0.5)
-    win.grab().save(str(OUT / "lab_platform.png"))
+    grab_window(win).save(str(OUT / "lab_platform.png"))
     lab.tabs.setCurrentIndex(2)
     pump(app, 0.5)
-    win.grab().save(str(OUT / "lab_control.png"))
+    grab_window(win).save(str(OUT / "lab_control.png"))
     lab.tabs.setCurrentIndex(3)
     pump(app, 1.0)
-    win.grab().save(str(OUT / "lab_scene.png"))
+    grab_window(win).save(str(OUT / "lab_scene.png"))
     print(f"Motion-Lab scene view: {lab.scene.kind}")
 
 
@@ -120,22 +124,23 @@ def other_tabs(app: QApplication, win: MainWindow) -> None:
     stick.z.setValue(0)
     stick.key(Qt.Key_Shift, False)
     pump(app, 0.8)
-    win.grab().save(str(OUT / "teleop.png"))
+    grab_window(win).save(str(OUT / "teleop.png"))
     win.status.stop.click()
     pump(app, 0.6)
-    win.grab().save(str(OUT / "estop.png"))
+    grab_window(win).save(str(OUT / "estop.png"))
     win.status.reset.click()
     win.tabs.setCurrentWidget(win.analysis)
     win.analysis.grid.setValue(6)
     win.analysis.solver.setCurrentText("jacobian")
     win.analysis.start("distribution")
-    while win.analysis.worker is not None:
+    deadline = time.monotonic() + 300
+    while win.analysis.running and time.monotonic() < deadline:  # the study runs in the engine
         pump(app, 0.2)
     pump(app, 0.5)
-    win.grab().save(str(OUT / "analysis.png"))
+    grab_window(win).save(str(OUT / "analysis.png"))
     win.tabs.setCurrentWidget(win.crane_head)
     pump(app, 25.0)  # the crane-head scene: Hs 3 m beam sea, head compensating
-    win.grab().save(str(OUT / "crane_head.png"))
+    grab_window(win).save(str(OUT / "crane_head.png"))
     print(f"view: {win.teleop.view.kind}; plots redrawn {win.teleop.plots.frames_drawn} times")
     print(f"crane-head scene view: {win.crane_head.scene.kind}")
 

@@ -16,6 +16,13 @@ os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="bosun-test-config-")
 import numpy as np
 import pytest
 
+try:  # before pytest-qt makes the QApplication: the GL views share shaders (ui/glprobe.py)
+    from ui.glprobe import share_gl_contexts
+
+    share_gl_contexts()
+except ImportError:  # the core without the GUI extra
+    pass
+
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = ROOT.parent / "shared" / "data"
 

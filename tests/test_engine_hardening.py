@@ -236,7 +236,14 @@ def test_sigterm_closes_the_gui_and_its_engine(tmp_path):
         assert engines, "the GUI did not start its engine"
         time.sleep(2.0)
         gui.send_signal(signal.SIGTERM)
-        _, err = gui.communicate(timeout=20)
+        try:
+            _, err = gui.communicate(timeout=40)
+        except subprocess.TimeoutExpired:
+            gui.send_signal(signal.SIGUSR1)  # app/launch.py: every thread's stack to stderr
+            time.sleep(2.0)
+            gui.kill()
+            _, err = gui.communicate(timeout=10)
+            pytest.fail(f"SIGTERM did not close the GUI within 40 s; its stacks:\n{err[-6000:]}")
         assert "Traceback" not in err
 
         deadline = time.monotonic() + 10

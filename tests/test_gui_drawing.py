@@ -104,12 +104,12 @@ print("RESULT " + json.dumps(out))
 """
 
 
-def _run_under_xvfb(script: str, tmp_path) -> dict:
+def _run_under_xvfb(script: str, tmp_path, screen: str = "1280x1024") -> dict:
     if shutil.which("Xvfb") is None:
         pytest.skip("Xvfb is not installed")
     r_fd, w_fd = os.pipe()
     xvfb = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(w_fd), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+        ["Xvfb", "-displayfd", str(w_fd), "-screen", "0", f"{screen}x24", "-nolisten", "tcp"],
         pass_fds=(w_fd,),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

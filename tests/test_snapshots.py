@@ -33,6 +33,7 @@ from app.net.snapshots import (
     to_wire,
 )
 from app.net.transport import Client, TransportError
+from tests.helpers import wait_for
 
 
 @pytest.fixture(scope="module")
@@ -206,6 +207,42 @@ def test_a_viewer_cannot_start_a_study(serve):
     try:
         with pytest.raises(TransportError, match="operator"):
             viewer.request("study_start", study="distribution", grid=4)
+    finally:
+        viewer.close()
+        op.close()
+
+
+# ------------------------------------------------------------------ pause (H49)
+@pytest.mark.parametrize("make", [TacSession, LabSession], ids=["tac", "lab"])
+def test_a_paused_scene_stands_still_but_stop_latches_and_is_confirmed(serve, make):
+    srv, _ = serve(make(), rate=100)
+    op = Client(srv.url, role="operator", name="op", timeout=20.0)
+    try:
+        op.request("pause", on=True)
+        st_ = wait_for(op, lambda s: s.engine.paused)
+        t0 = st_.t
+        time.sleep(0.5)
+        assert op.latest_state(2.0).t == t0  # the scene's time stands still
+        op.send("estop", reason="paused STOP")
+        st_ = wait_for(op, lambda s: s.estop)  # latched while paused
+        assert st_.engine.paused and st_.engine.estops >= 1 and st_.t == t0
+        op.request("reset")
+        op.request("pause", on=False)
+        st_ = wait_for(op, lambda s: not s.engine.paused and s.t > t0 + 0.2)
+        assert not st_.estop
+        assert not st_.flags.enabled and not st_.flags.armed  # resumed disarmed: nothing moves unbidden
+    finally:
+        op.close()
+
+
+def test_only_the_operator_pauses(serve):
+    srv, _ = serve(TacSession(), rate=100)
+    op = Client(srv.url, role="operator", name="op")
+    viewer = Client(srv.url, role="viewer", name="v")
+    try:
+        with pytest.raises(TransportError, match="operator"):
+            viewer.request("pause", on=True)
+        assert not op.latest_state(2.0).engine.paused
     finally:
         viewer.close()
         op.close()

@@ -86,6 +86,7 @@ class AnalysisTab(QWidget):
         self.summary = QLabel("")
         lay.addWidget(self.summary)
         self.glw = pg.GraphicsLayoutWidget()
+        self.glw.setMinimumHeight(250)  # three projections with axes, legends and the colour scale
         lay.addWidget(self.glw, 1)
         if link is not None:
             link.described.connect(self.on_description)
@@ -211,8 +212,8 @@ class AnalysisTab(QWidget):
                         result.targets[bad, a],
                         result.targets[bad, b],
                         brush=None,
-                        pen=pg.mkPen(UNREACHABLE_PEN, width=1.5),
-                        size=12,
+                        pen=pg.mkPen(UNREACHABLE_PEN, width=1.2),
+                        size=10,
                         name=f"not reachable ({int(bad.sum())})",
                     )
                 )
@@ -229,10 +230,11 @@ class AnalysisTab(QWidget):
         import pyqtgraph.opengl as gl
 
         if self.scatter3d is None:
-            self.scatter3d = gl.GLViewWidget()
-            self.scatter3d.setToolTip("targets coloured by log10 error (viridis: dark small, yellow large) [m]")
-            self.scatter3d.setMinimumHeight(280)
-            self.layout().insertWidget(2, self.scatter3d, 1)
+            from ui.widgets.glwindow import gl_view
+
+            tip = "targets coloured by log10 error (viridis: dark small, yellow large) [m]"
+            self.scatter3d, box = gl_view(self, tip, min_height=180)  # a native GL window (ui/widgets/glwindow.py)
+            self.layout().insertWidget(2, box, 1)
         from ui.widgets.view3d import _box_edges
 
         self.scatter3d.clear()

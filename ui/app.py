@@ -38,9 +38,11 @@ def run_gui(
 
     from app.net.transport import TransportError
     from ui.engine_process import EngineProcess
+    from ui.glprobe import share_gl_contexts
     from ui.link import EngineLink
     from ui.main_window import MainWindow
 
+    share_gl_contexts()  # before the QApplication: every GL view shares shaders
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("Bosun")
     settings = QSettings("Bosun", "Bosun HMI")

@@ -34,3 +34,15 @@ def gl_available() -> bool:
     except (OSError, subprocess.TimeoutExpired):
         return False
     return res.returncode == 0
+
+
+def share_gl_contexts() -> None:
+    """Let every OpenGL view's context share objects (shaders, buffers) with the others.
+
+    pyqtgraph compiles a shader once and reuses its program id in every view; without sharing, the
+    second 3D view (crane head, lab, analysis, each a native GL window) fails with GL_INVALID_OPERATION
+    on ``glUseProgram``.  Qt needs this before the application object exists."""
+    from PyQt5.QtCore import QCoreApplication, Qt
+
+    if QCoreApplication.instance() is None:
+        QCoreApplication.setAttribute(Qt.AA_ShareOpenGLContexts)

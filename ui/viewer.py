@@ -186,6 +186,9 @@ def run_viewer(connect: str, token: str | None = None, curve=None, quit_after: f
         raise BosunError(
             "no display to open the viewer on (DISPLAY is not set); start it on a desktop or under xvfb-run"
         )
+    from ui.glprobe import share_gl_contexts
+
+    share_gl_contexts()  # before the QApplication: every GL view shares shaders
     app = QApplication.instance() or QApplication(sys.argv[:1])
     try:
         link = EngineLink(connect, role="viewer", name="bosun-viewer", token=token, curve=curve)

@@ -1,8 +1,9 @@
 """Views that draw machines from :mod:`app.models.drawing` meshes: a 3D OpenGL view and its 2D fallback.
 
-:class:`MachineView3D` wraps a ``pyqtgraph.opengl.GLViewWidget`` holding named mesh, line and point
-items, updated in place every frame (``setMeshData``: one upload per named mesh), with camera presets
-(iso, top, side, front, reset) and a floor grid and axes whose scale is printed ("grid 1 m").
+:class:`MachineView3D` wraps a pyqtgraph 3D view (a native OpenGL window in a container,
+:mod:`ui.widgets.glwindow`) holding named mesh, line and point items, updated in place every frame
+(``setMeshData``: one upload per named mesh), with camera presets (iso, top, side, front, reset) and a
+floor grid and axes whose scale is printed ("grid 1 m").
 
 :class:`MachineView2D` draws the same meshes without OpenGL: each solid's silhouette (the convex outline
 of its projected vertices, :func:`app.models.drawing.support_polygon`) as a filled polygon in side (x–z)
@@ -136,11 +137,12 @@ class MachineView3D(QWidget):
         super().__init__(parent)
         import pyqtgraph.opengl as gl
 
+        from ui.widgets.glwindow import gl_view
+
         self.gl = gl
-        self.view = gl.GLViewWidget()
+        # a native GL window in a container: the rest of the window stays off OpenGL (ui/widgets/glwindow.py)
+        self.view, self.box = gl_view(self, tooltip + ". Drag to orbit, wheel to zoom" if tooltip else "")
         self.view.setBackgroundColor(background)
-        if tooltip:
-            self.view.setToolTip(tooltip + ". Drag to orbit, wheel to zoom")
         self.grid = gl.GLGridItem()
         self.grid.setColor((110, 110, 120, 110))
         self.axes = gl.GLAxisItem()
@@ -177,7 +179,7 @@ class MachineView3D(QWidget):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(0)
         lay.addLayout(bar)
-        lay.addWidget(self.view, 1)
+        lay.addWidget(self.box, 1)
         self._extent: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------------ items
@@ -286,7 +288,7 @@ class MachineView3D(QWidget):
         return np.column_stack([(ndc[:, 0] + 1) * 0.5 * w, (1 - ndc[:, 1]) * 0.5 * h])
 
     def grab_image(self):
-        return self.view.grabFramebuffer()
+        return self.view.render_image()
 
 
 class MachineView2D(QWidget):
