@@ -351,3 +351,25 @@ def test_plots_are_pyqtgraph_plot_items(qtbot):
     w.addPlot(row=1, col=0)
     pw = pg.PlotWidget(parent=w)
     assert len(plot_items(w)) == 3 and pw.getPlotItem() in plot_items(w)
+
+
+def test_legends_reflow_so_a_narrow_panel_shows_whole_plots(qtbot):
+    """A legend row is a plot's minimum width: five entries in one row pushed the teleop plots out of a
+    280 px panel and cut their right side ("solver ta", "time be").  The legends reflow to the width."""
+    plots = LivePlots()
+    qtbot.addWidget(plots)
+    plots.set_description(Session(robot_name="knuckle_boom_crane").describe())
+    plots.resize(280, 600)
+    plots.show()
+    qtbot.waitExposed(plots)
+    qtbot.wait(100)
+    view_w = plots.glw.viewport().width()
+
+    def right_edges():
+        return [p.mapRectToScene(p.boundingRect()).right() for p in (plots.p_xyz, plots.p_q, plots.p_s)]
+
+    assert max(right_edges()) <= view_w + 1, (right_edges(), view_w)
+    assert plots.p_xyz.legend.columnCount < 5
+    plots.resize(1100, 600)
+    qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount == 5, timeout=GUI_WAIT)
+    assert max(right_edges()) <= plots.glw.viewport().width() + 1

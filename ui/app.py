@@ -16,6 +16,31 @@ def has_display() -> bool:
     )
 
 
+def stop_requests() -> list[str]:
+    """SIGTERM and SIGINT from now on only record that a stop was asked for (the returned list).
+
+    Once Qt runs, it calls Python for resize and paint events; an exception a signal handler raises
+    inside such a call is printed and lost, so a handler that raised KeyboardInterrupt could leave the
+    GUI running after SIGTERM (seen while the window was being built; H53)."""
+    import signal
+
+    asked: list[str] = []
+    signal.signal(signal.SIGTERM, lambda *_: asked.append("SIGTERM"))
+    signal.signal(signal.SIGINT, lambda *_: asked.append("SIGINT"))
+    return asked
+
+
+def close_when_asked(win, asked: list[str]) -> None:
+    """Close ``win`` (engines stopped, links said bye) as soon as :func:`stop_requests` recorded a stop,
+    also one asked for while the window was being built."""
+    from PyQt5.QtCore import QTimer
+
+    timer = QTimer(win)
+    timer.setInterval(100)  # also lets Python run its signal handlers while Qt's loop runs in C
+    timer.timeout.connect(lambda: win.close() if asked else None)
+    timer.start()
+
+
 def run_gui(
     connect: str | None = None,
     token: str | None = None,
@@ -66,6 +91,10 @@ def run_gui(
         if engine is not None:
             engine.stop()
         raise BosunError(str(err)) from None
+    except BaseException:  # Ctrl-C or SIGTERM while the engine starts: leave no engine behind
+        if engine is not None:
+            engine.stop()
+        raise
     marine_engines: list = []
 
     class SceneStarter:
@@ -103,6 +132,7 @@ def run_gui(
         def __call__(self):
             return self.link(self.start_process())
 
+    asked = stop_requests()  # from here on Qt calls Python: a stop is asked for, never raised
     win = MainWindow(
         link,
         engine=engine,
@@ -112,10 +142,7 @@ def run_gui(
     )
     app.aboutToQuit.connect(lambda: [p.stop() for p in marine_engines])
     win.child_engines = marine_engines  # restarted by the window's watchdog if they die
-    import signal
-
-    signal.signal(signal.SIGTERM, lambda *_: win.close())  # closes cleanly: engines stopped, links said bye
-    signal.signal(signal.SIGINT, lambda *_: win.close())
+    close_when_asked(win, asked)
     win.show()  # sized by MainWindow.fit_to_screen: at most 1280×800, never past the screen
     if quit_after is not None:
         QTimer.singleShot(int(quit_after * 1000), win.close)

@@ -179,7 +179,7 @@ def run_viewer(connect: str, token: str | None = None, curve=None, quit_after: f
 
     from app.errors import BosunError
     from app.net.transport import TransportError
-    from ui.app import has_display
+    from ui.app import close_when_asked, has_display, stop_requests
     from ui.link import EngineLink
 
     if not has_display():
@@ -194,7 +194,9 @@ def run_viewer(connect: str, token: str | None = None, curve=None, quit_after: f
         link = EngineLink(connect, role="viewer", name="bosun-viewer", token=token, curve=curve)
     except TransportError as err:
         raise BosunError(str(err)) from None
+    asked = stop_requests()  # Qt calls Python from here on: a stop is asked for, never raised
     win = ViewerWindow(link)
+    close_when_asked(win, asked)
     win.show()
     if quit_after is not None:
         QTimer.singleShot(int(quit_after * 1000), win.close)

@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 import pyqtgraph as pg
+from PyQt5 import sip
 from PyQt5.QtCore import QEvent, QObject, Qt, QTimer, pyqtSignal
 from PyQt5.QtWidgets import QGridLayout, QLabel, QProgressBar, QSizePolicy, QVBoxLayout, QWidget
 
@@ -120,7 +121,7 @@ def legend(plot: pg.PlotItem, cols: int = 4, title: str | None = None) -> pg.Leg
     header = pg.GraphicsLayout()
     header.layout.setContentsMargins(2, 0, 2, 0)
     header.layout.setVerticalSpacing(0)
-    leg = pg.LegendItem(
+    leg = _HeaderLegend(
         offset=None, colCount=cols, frame=False, labelTextSize="8pt", labelTextColor=LEGEND_TEXT, verSpacing=-8
     )
     leg.layout.setContentsMargins(0, 0, 0, 0)
@@ -134,7 +135,72 @@ def legend(plot: pg.PlotItem, cols: int = 4, title: str | None = None) -> pg.Leg
     plot.layout.addItem(header, 0, 1)
     plot.legend = leg
     plot.header_title = head
+    leg.max_cols = cols
+    scene = plot.scene()
+    for view in scene.views() if scene is not None else ():
+        _LegendFitter.watch(view)
     return leg
+
+
+class _HeaderLegend(pg.LegendItem):
+    """A legend that reflows to its view's width also when curves join it later (:func:`fit_legends`)."""
+
+    def addItem(self, item, name) -> None:
+        super().addItem(item, name)
+        scene = self.scene()
+        for view in scene.views() if scene is not None else ():
+            QTimer.singleShot(0, lambda v=view: fit_legends(v))
+
+
+class _LegendFitter(QObject):
+    """Reflows the legends of a plot view to the view's width: as many entries a row as fit (at most the
+    ``cols`` asked for).  A legend's row is the plot's minimum width, so a fixed count wider than the
+    panel pushed the plot out of its view and clipped its right side and labels."""
+
+    AXES = 110  # px a plot spends on its y axes and margins
+
+    @classmethod
+    def watch(cls, view) -> None:
+        if view.property("bosun_legend_fitter"):
+            return
+        view.setProperty("bosun_legend_fitter", True)
+        view._bosun_legend_fitter = fitter = cls(view)  # a reference: PyQt would collect the wrapper
+        view.installEventFilter(fitter)
+
+    def eventFilter(self, obj, ev) -> bool:
+        if ev.type() in (QEvent.Resize, QEvent.Show):  # after the view has laid out its new viewport
+            QTimer.singleShot(0, lambda v=obj: fit_legends(v))
+        return False
+
+
+def fit_legends(view) -> None:
+    """Give every header legend in ``view`` (a pyqtgraph GraphicsView) the columns that fit its plot's width."""
+    if sip.isdeleted(view):  # a deferred call for a view closed meanwhile
+        return
+    scene = view.scene()
+    if scene is None:
+        return
+    width = view.viewport().width()
+    legends = [i for i in scene.items() if isinstance(i, pg.LegendItem) and hasattr(i, "max_cols")]
+    central = getattr(view, "centralWidget", None)  # the layout the plots share
+    total = (central.geometry().width() if central is not None else 0.0) or float(width) or 1.0
+    changed = False
+    for leg in legends:
+        if not leg.items:
+            continue
+        plot = leg.parentItem()
+        while plot is not None and not isinstance(plot, pg.PlotItem):
+            plot = plot.parentItem()
+        share = plot.geometry().width() / total if plot is not None else 1.0
+        avail = max(60.0, width * min(1.0, share) - _LegendFitter.AXES)
+        # the text's own width: a label item stretches to its cell, so its rect grows with fewer columns
+        entry = max(s.boundingRect().width() + l.item.boundingRect().width() + 12 for s, l in leg.items)
+        cols = int(max(1, min(leg.max_cols, len(leg.items), avail // max(entry, 1.0))))
+        if cols != leg.columnCount:
+            leg.setColumnCount(cols)
+            changed = True
+    if changed and isinstance(view, pg.GraphicsView):  # lay the plots out again in the view's own width
+        QTimer.singleShot(0, lambda: pg.GraphicsView.setRange(view, view.range, padding=0, disableAutoPixel=False))
 
 
 def plot_title(plot: pg.PlotItem) -> str:

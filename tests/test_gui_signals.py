@@ -1,0 +1,82 @@
+"""SIGTERM/SIGINT close the GUI also when they arrive while Qt is calling Python (H53).
+
+Qt calls Python for resize and paint events; an exception raised there by a signal handler is printed
+and lost.  The GUI therefore only records a stop in its handlers (:func:`ui.app.stop_requests`) and a
+timer closes the window (:func:`ui.app.close_when_asked`)."""
+
+import os
+import signal
+import sys
+
+import pytest
+
+pytest.importorskip("PyQt5")
+from PyQt5.QtWidgets import QMainWindow, QWidget
+
+from tests.helpers import GUI_WAIT
+from ui.app import close_when_asked, stop_requests
+
+pytestmark = pytest.mark.gui
+
+
+class _SignalledWhileResized(QWidget):
+    """Sends ``sig`` to this process from inside a Qt virtual (its resize handler)."""
+
+    def __init__(self, sig=signal.SIGTERM) -> None:
+        super().__init__()
+        self.sig = sig
+
+    def resizeEvent(self, ev) -> None:
+        os.kill(os.getpid(), self.sig)
+        for _ in range(1000):  # bytecodes: Python runs the handler inside this Qt call
+            pass
+        super().resizeEvent(ev)
+
+
+@pytest.fixture
+def restore_handlers():
+    saved = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)}
+    yield
+    for s, h in saved.items():
+        signal.signal(s, h)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_signalled_inside_a_qt_call_closes_the_window(qtbot, restore_handlers, sig):
+    asked = stop_requests()
+    win = QMainWindow()
+    qtbot.addWidget(win)
+    inner = _SignalledWhileResized(sig)
+    win.setCentralWidget(inner)
+    close_when_asked(win, asked)
+    win.show()
+    win.resize(640, 480)  # the signal arrives inside Qt's resize handling
+    qtbot.waitUntil(lambda: bool(asked), timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: not win.isVisible(), timeout=GUI_WAIT)
+    assert asked[0] == {signal.SIGTERM: "SIGTERM", signal.SIGINT: "SIGINT"}[sig]
+
+
+def test_the_old_way_loses_the_stop(qtbot, restore_handlers):
+    """Why the handler must not raise: the KeyboardInterrupt it raises inside a Qt call never reaches
+    the code around the event loop (this is what left the GUI running after SIGTERM)."""
+    caught = []
+
+    def raising(*_):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, raising)
+    hooked = []
+    old_hook = sys.excepthook
+    sys.excepthook = lambda *a: hooked.append(a[0])
+    try:
+        win = _SignalledWhileResized()
+        qtbot.addWidget(win)
+        try:
+            win.show()
+            win.resize(300, 200)
+            qtbot.wait(200)
+        except KeyboardInterrupt:
+            caught.append(True)
+    finally:
+        sys.excepthook = old_hook
+    assert not caught and KeyboardInterrupt in hooked and win.isVisible()
