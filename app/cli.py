@@ -455,7 +455,7 @@ def cmd_track(args: argparse.Namespace) -> int:
 
 
 def _scenario(args: argparse.Namespace, **over):
-    from app.sim.tac import ScenarioError, TacScenario
+    from app.scenarios.tac import ScenarioError, TacScenario
 
     try:
         return TacScenario(
@@ -482,7 +482,7 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     import time
 
     from app.analysis.vvmc_report import save_runs
-    from app.control.vvmc import VvmcError, VvmcScenario, simulate
+    from app.scenarios.vvmc import VvmcError, VvmcScenario, simulate
 
     try:
         sc = VvmcScenario(
@@ -537,7 +537,7 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
 
 def cmd_sim_tac(args: argparse.Namespace) -> int:
     from app.analysis.tac_report import save_run
-    from app.sim.tac import simulate
+    from app.scenarios.tac import simulate
 
     sc = _scenario(args)
     out = _make_out(args, f"tac_{sc.mode}_hs{sc.hs:g}")
@@ -607,12 +607,12 @@ def _machine() -> str:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from app.analysis.ik_studies import bench_ik
-    from app.models import kernels
     from app.models.registry import list_robots, load_robot, load_spec
+    from app.warmup import warm_up
 
     names = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
     robots = [load_robot(n) for n in names]
-    kernels.warm_up()  # compiled (or loaded) before the clock runs, never inside a timed solve
+    warm_up()  # compiled (or loaded) before the clock runs, never inside a timed solve
     rows = bench_ik(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik"))
     peers_missing: list[str] = []
     if args.peers:
@@ -714,10 +714,10 @@ def cmd_server(args: argparse.Namespace) -> int:
         )
     # the launch secret of a GUI's own engine comes in the environment, never on the command line
     operator_secret = os.environ.pop(ENV_OPERATOR_SECRET, None) or None
-    from app.models import kernels
+    from app.warmup import warm_up
 
     # compile (or load from the on-disk cache) before the first tick: never in the control loop
-    compile_s = kernels.warm_up(
+    compile_s = warm_up(
         progress=lambda k, n: print(f"bosun server: compiled kernels {k}/{n}", flush=True) if k == n else None
     )
     if compile_s > 1.0:
@@ -841,7 +841,7 @@ def cmd_joystick(args: argparse.Namespace) -> int:
 
 
 def cmd_bench_sim(args: argparse.Namespace) -> int:
-    from app.analysis.sim_speed import engine_speed
+    from app.bench.sim_speed import engine_speed
 
     cases = [(k, m) for k in args.kinds for m in ((False, True) if k == "lab" else (False,))]
     rows = [engine_speed(kind, seconds=args.seconds, motion=motion) for kind, motion in cases]
@@ -869,7 +869,7 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
 
 
 def cmd_bench_loop(args: argparse.Namespace) -> int:
-    from app.analysis.loop_bench import bench_loop
+    from app.bench.loop import bench_loop
 
     result = bench_loop(
         rate=args.rate, seconds=args.seconds, robot=args.robot, solver=args.solver, flood=args.flood, burn=args.burn

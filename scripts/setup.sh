@@ -48,6 +48,6 @@ fi
 PYGAME_HIDE_SUPPORT_PROMPT=1 .venv/bin/python -c "import app, numpy, scipy, lxml, PyQt5, pyqtgraph, pygame" \
   || { echo "setup: installed packages do not import" >&2; exit 1; }
 # compile ahead: numba caches the kernels' machine code on disk, so no engine compiles in its first tick
-.venv/bin/python -c "from app.models import kernels; t = kernels.warm_up(); print(f'setup: kernels compiled ({t:.1f} s)')" \
+.venv/bin/python -c "from app.warmup import warm_up; t = warm_up(); print(f'setup: kernels compiled ({t:.1f} s)')" \
   || { echo "setup: compiling the kernels failed" >&2; exit 1; }
 echo "setup: ready (.venv)"

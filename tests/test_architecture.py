@@ -56,6 +56,33 @@ def test_import_linter_contracts_hold():
     assert "0 broken" in res.stdout
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("where", "line", "contract"),
+    [
+        ("sim/_bad.py", "from app.control import tac", "never import each other"),
+        ("models/_bad.py", "from app.sim import motionlab", "floors"),
+        ("analysis/_bad.py", "from app.engine import server", "floors"),
+    ],
+    ids=["plant-imports-controller", "models-import-plants", "studies-import-engine"],
+)
+def test_the_layer_contracts_catch_an_import_across_floors(tmp_path, where, line, contract):
+    """The floors of ARCHITECTURE.md are enforced, not only written down: a copy of the core with one
+    import against them breaks its contract (issue 15, item 7)."""
+    shutil.copytree(ROOT / "app", tmp_path / "app", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path)
+    (tmp_path / "ui").mkdir()
+    (tmp_path / "ui" / "__init__.py").write_text("")
+    (tmp_path / "app" / where).write_text(line + "\n")
+    res = subprocess.run(
+        [_tool("lint-imports"), "--no-cache"], cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
+    assert res.returncode != 0
+    broken = [ln for ln in res.stdout.splitlines() if ln.endswith("BROKEN")]
+    text = " ".join(res.stdout.split())  # contract names may wrap
+    assert broken and contract in text and f"app.{where[:-3].replace('/', '.')}" in text, res.stdout
+
+
 def test_ruff_is_clean():
     res = subprocess.run(
         [_tool("ruff"), "check", "--no-cache", "."], cwd=ROOT, capture_output=True, text=True, timeout=120

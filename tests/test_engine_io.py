@@ -70,7 +70,7 @@ def test_an_estop_passes_a_full_inbox_and_a_reset_sent_before_it_cannot_undo_it(
 
 
 def _flood(url: str, per_second: int, seconds: float, sent) -> None:
-    from app.analysis.loop_bench import _flood_process
+    from app.bench.loop import _flood_process
 
     _flood_process(url, per_second, seconds, sent)
 

@@ -15,6 +15,7 @@ from app.ik.genetic import CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_AMPLITUD
 from app.models import kernels
 from app.models.registry import list_robots, load_robot, load_spec
 from app.models.workspace import workspace_box
+from app.warmup import warm_up
 from tests.test_kernels import random_chain
 
 SERIAL = [n for n in list_robots() if load_spec(n).type == "serial"]
@@ -127,7 +128,7 @@ def test_compiled_costs_equal_the_reference_on_random_chains(seed, n):
 
 def test_compiled_solve_keeps_the_time_budget():
     """The loop reads the clock only between runs of generations; it still stops near 100 ms."""
-    kernels.warm_up()  # compiled (or loaded) before the clock starts
+    warm_up()  # compiled (or loaded) before the clock starts
     robot = load_robot("kuka_youbot")
     ga = make_solver("ga", robot, seed=0)
     box = workspace_box(robot)

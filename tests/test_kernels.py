@@ -13,6 +13,7 @@ from app.models import kernels
 from app.models.registry import list_robots, load_robot, load_spec
 from app.models.serial import SerialRobot
 from app.models.xml import parse_robot_xml
+from app.warmup import warm_up
 
 SERIAL = [n for n in list_robots() if load_spec(n).type == "serial"]
 pytestmark = pytest.mark.skipif(not kernels.ENABLED, reason="numba not installed or BOSUN_JIT=0")
@@ -116,7 +117,7 @@ def workspace_scale(robot) -> float:
 
 def test_warm_up_compiles_every_kernel_and_says_how_long():
     seen = []
-    seconds = kernels.warm_up(progress=lambda k, n: seen.append((k, n)))
+    seconds = warm_up(progress=lambda k, n: seen.append((k, n)))
     assert seconds >= 0 and seen[-1][0] == seen[-1][1] == len(seen)
 
 
@@ -219,8 +220,10 @@ from app.sim import kernels as sim
 from app.ik import ga_kernels as ga
 from app.marine import kernels as marine
 from app.control import tac_kernels as tac
-MODULES = (kernels, sim, ga, marine, tac)
-kernels.warm_up()
+from app.models import crane_head_kernels as head
+from app.warmup import warm_up
+MODULES = (kernels, sim, ga, marine, head, tac)
+warm_up()
 before = {n: len(f.signatures) for m in MODULES for n, f in vars(m).items() if hasattr(f, "signatures")}
 from app.engine.session import Session
 from app.engine.lab_session import LabSession

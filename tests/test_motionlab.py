@@ -10,10 +10,10 @@ import math
 import numpy as np
 import pytest
 
-from app.control.vvmc import VvmcError, VvmcScenario, simulate, summarize
 from app.errors import RobotXmlError
 from app.models.lab import load_lab, parse_lab_xml, quat_to_matrix
 from app.models.stewart import StewartPlatform
+from app.scenarios.vvmc import VvmcError, VvmcScenario, simulate, summarize
 from app.sim.motionlab import ComauKinematics, G, MotionLab, Pendulum, tool_on_platform
 
 

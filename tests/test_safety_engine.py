@@ -353,7 +353,7 @@ def test_lab_alarms_winch_end_stop_leg_limit_and_payload_below_the_deck():
 
 
 def test_tac_saturation_alarm_names_the_share_of_time():
-    from app.sim.tac import TacScenario
+    from app.scenarios.tac import TacScenario
 
     ses = TacSession(TacScenario(duration=1e5, hs=4.5, tp=9.0, mode="tac"))
     t = 0.0

@@ -12,14 +12,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from app.analysis.sim_speed import SimSpeedError, engine_speed
-from app.control.vvmc import VvmcScenario, simulate
+from app.bench.sim_speed import SimSpeedError, engine_speed
 from app.marine.vessel import VesselMotion, VesselParticulars, parametric_rao
 from app.marine.waves import wave_components
 from app.models import kernels
 from app.models.lab import load_lab
 from app.models.registry import load_robot
 from app.models.stewart import StewartPlatform, rotation_xyz
+from app.scenarios.vvmc import VvmcScenario, simulate
 from app.sim import kernels as sim
 from app.sim.motionlab import COMAU_MODES, WINCH_MODES, MotionLab, Pendulum, tool_on_platform
 from app.sim.stewart import Generator, MotionFilter, Platform
@@ -263,9 +263,10 @@ import json
 from app.models import kernels
 from app.sim import kernels as sim
 from app.marine import kernels as marine
-from app.analysis.sim_speed import engine_speed
-from app.control.vvmc import VvmcScenario, simulate
-kernels.warm_up()
+from app.bench.sim_speed import engine_speed
+from app.scenarios.vvmc import VvmcScenario, simulate
+from app.warmup import warm_up
+warm_up()
 count = lambda: {n: len(f.signatures) for m in (sim, marine) for n, f in vars(m).items() if hasattr(f, "signatures")}
 before = count()
 for on in (True, False):

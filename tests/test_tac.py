@@ -7,10 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from app.control.tac import CraneHead, HeadServo, PidGains
+from app.control.tac import HeadServo, PidGains
 from app.geometry import euler_zyx_to_matrix
+from app.models.crane_head import CraneHead
 from app.models.registry import load_robot
-from app.sim.tac import BETA_EQ60, ScenarioError, TacScenario, TacSimulator, simulate
+from app.scenarios.tac import BETA_EQ60, ScenarioError, TacScenario, TacSimulator, simulate
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,6 @@
-"""Issue 14, item 4: the compiled crane head (app/control/tac_kernels.py) against the NumPy reference
-methods on the same seeded random inputs and states (equal to 1e-12), and whole simulations both ways
+"""Issue 14, item 4: the compiled crane head (app/models/crane_head_kernels.py: kinematics and references;
+app/control/tac_kernels.py: servos and the simulation step) against the NumPy reference methods on the
+same seeded random inputs and states (equal to 1e-12), and whole simulations both ways
 (equal to 1e-9): every mode, MRU noise, and live mode changes, E-STOP and the crane's return in the
 engine's small chunks."""
 
@@ -10,11 +11,12 @@ import numpy as np
 import pytest
 
 from app.control import tac_kernels
-from app.control.tac import CraneHead, CraneServo, HeadServo, PidGains
+from app.control.tac import CraneServo, HeadServo, PidGains
+from app.models.crane_head import CraneHead
 from app.models.delta import DeltaHead
 from app.models.registry import load_robot, load_spec
 from app.models.xml import parse_robot_xml
-from app.sim.tac import BETA_EQ60, MODES, TacChunk, TacScenario, TacSimulator, simulate
+from app.scenarios.tac import BETA_EQ60, MODES, TacChunk, TacScenario, TacSimulator, simulate
 
 pytestmark = pytest.mark.skipif(not tac_kernels.ENABLED, reason="numba not installed or BOSUN_JIT=0")
 ATOL = 1e-12

@@ -1,1 +1,1 @@
-"""Studies and benchmarks: error distribution, trajectory tracking, speed."""
+"""Studies: error distribution, trajectory tracking, IK speed against peers, crane-head and VVMC reports."""

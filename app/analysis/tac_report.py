@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from app.analysis.ik_studies import write_json
-from app.sim.tac import MODES, TacResult, TacScenario, simulate
+from app.scenarios.tac import MODES, TacResult, TacScenario, simulate
 
 FIGURES = ("fig08_vessel.png", "fig09_tcp_head.png", "fig10_tcp_ned.png", "fig11_error.png", "fig12_angles.png")
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from app.analysis.ik_studies import write_json
 from app.analysis.tac_report import _plt, figure_saver
-from app.control.vvmc import VvmcRun, VvmcScenario, summarize
+from app.scenarios.vvmc import VvmcRun, VvmcScenario, summarize
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 

@@ -1,1 +1,1 @@
-"""Controllers: crane-head (TAC) motion compensation."""
+"""Controllers: the crane-head (TAC) joint servos and the cooperative crane."""

@@ -33,7 +33,7 @@ from app.net.snapshots import (
     TacSnapshot,
     WaveField,
 )
-from app.sim.tac import MODES, TacScenario, TacSimulator
+from app.scenarios.tac import MODES, TacScenario, TacSimulator
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted

@@ -192,3 +192,21 @@ def evolve_velocity(
         cost = velocity_costs(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, q_a, dt, x_t, u, cross_weight)
         ran += 1
     return pop, cost, ran
+
+
+def warm_up_steps() -> list:
+    """Zero-argument calls that compile (or load) every kernel of this file with the argument types the
+    GA passes (for :func:`app.warmup.warm_up`)."""
+    L, n = 3, 3
+    z3, zLn, eye = np.zeros(L), np.zeros((L, n)), np.eye(4)
+    args = (z3, z3, np.ones(L), np.ones(L), z3, np.eye(L, n), zLn, eye, eye)  # a serial chain's kernel_args
+    pop, cost = np.zeros((4, n)), np.ones(4)
+    box = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
+    window = (-np.ones(n), np.ones(n), np.ones(n))  # velocity window and mutation span
+    rules = (1, 0.5, 0.005, 0.05, 0.01, 1, np.random.default_rng(0))  # elite, operators, stop, generations, rng
+    return [
+        lambda: position_costs(*args, pop, np.zeros(3), *box),
+        lambda: velocity_costs(*args, pop, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0),
+        lambda: evolve_position(*args, pop, cost, np.zeros(3), *box, np.ones(n), *rules),
+        lambda: evolve_velocity(*args, pop, cost, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0, *window, *rules),
+    ]

@@ -80,3 +80,13 @@ def body_velocities(eta, deta, ddeta):
         nu_dot[i, 4] = cf * ddth - sf * dphi * dth + ct * sf * ddpsi + (-st * dth * sf + ct * cf * dphi) * dpsi
         nu_dot[i, 5] = -sf * ddth - cf * dphi * dth + ct * cf * ddpsi + (-st * dth * cf - ct * sf * dphi) * dpsi
     return nu, nu_dot
+
+
+def warm_up_steps() -> list:
+    """Zero-argument calls that compile (or load) every kernel of this file with the argument types its
+    callers pass (for :func:`app.warmup.warm_up`)."""
+    ones = np.ones(6)
+    return [
+        lambda: vessel_motion(np.ones(2), *(np.ones((6, 2)) for _ in range(4)), 0.5, ones),
+        lambda: body_velocities(np.ones((2, 6)), np.ones((2, 6)), np.ones((2, 6))),
+    ]

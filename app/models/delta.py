@@ -35,9 +35,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull
 
-from app.control import tac_kernels
 from app.errors import JointInputError
 from app.geometry import rot_x
+from app.models import crane_head_kernels as kern
 from app.models.spec import RobotSpec
 
 
@@ -76,12 +76,12 @@ class DeltaHead:
         self.speed = np.full(3, d.speed)
         self.accel = np.full(3, np.inf if d.accel is None else d.accel)
         self._workspace: dict[float, DeltaWorkspace] = {}
-        # the compiled kernels' constants (app/control/tac_kernels.py); use_kernels=False: the NumPy reference
+        # the compiled kernels' constants (app/control/kern.py); use_kernels=False: the NumPy reference
         self.kernel_args = (
-            float(self.l_a), float(self.a), float(self.l_r), tac_kernels.c_array(self.R),
-            tac_kernels.c_array(self.lower), tac_kernels.c_array(self.upper),
+            float(self.l_a), float(self.a), float(self.l_r), kern.c_array(self.R),
+            kern.c_array(self.lower), kern.c_array(self.upper),
         )  # fmt: skip
-        self.use_kernels = tac_kernels.ENABLED
+        self.use_kernels = kern.ENABLED
 
     # ------------------------------------------------------------------ geometry
     def check_q(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -113,7 +113,7 @@ class DeltaHead:
         """Arm angles reaching TCP position(s) p_t (shape (..., 3)), knees out (eqs. 8–16)."""
         p = np.asarray(p_t, dtype=float)
         if self.use_kernels and p.shape[-1:] == (3,):
-            out = tac_kernels.delta_ik(self.kernel_args, tac_kernels.c_array(p.reshape(-1, 3)))
+            out = kern.delta_ik(self.kernel_args, kern.c_array(p.reshape(-1, 3)))
             alpha, reachable, within = (x.reshape(p.shape) for x in out)
             return DeltaIK(alpha, reachable, within)
         p_i = np.einsum("ikj,...k->...ij", self.R, p)  # p in each {t_i}: R^T p, eq. (2)
@@ -143,7 +143,7 @@ class DeltaHead:
         """
         alpha = np.asarray(alpha, dtype=float)
         if self.use_kernels and alpha.shape[-1:] == (3,):
-            p = tac_kernels.delta_fk(self.kernel_args, tac_kernels.c_array(alpha.reshape(-1, 3)))
+            p = kern.delta_fk(self.kernel_args, kern.c_array(alpha.reshape(-1, 3)))
             return p.reshape(alpha.shape)
         c = self.knees(alpha)
         c1, c2, c3 = c[..., 0, :], c[..., 1, :], c[..., 2, :]

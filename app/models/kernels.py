@@ -19,7 +19,6 @@ import hashlib
 import math
 import os
 import re
-import time
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +38,7 @@ KERNEL_FILES = (
     "sim/kernels.py",
     "marine/kernels.py",
     "ik/ga_kernels.py",
+    "models/crane_head_kernels.py",
     "control/tac_kernels.py",
 )
 
@@ -355,11 +355,9 @@ def select_candidate(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q, exa
     return best_q, best_p, best_err, best_exact, best_inside
 
 
-def warm_up(progress=None) -> float:
-    """Compile (or load from the on-disk cache) every kernel now, not in a control tick; seconds taken."""
-    t0 = time.perf_counter()
-    if not ENABLED:
-        return 0.0
+def warm_up_steps() -> list:
+    """Zero-argument calls that compile (or load) every kernel of this file with the argument types its
+    callers pass (for :func:`app.warmup.warm_up`)."""
     L, n = 3, 3
     z3, zLn = np.zeros(L), np.zeros((L, n))
     eye = np.eye(4)
@@ -389,34 +387,4 @@ def warm_up(progress=None) -> float:
             np.ones(3),
         ),
     ]
-    from app.marine import kernels as marine  # the wave-driven platform source (imports this module)
-    from app.sim import kernels as sim  # the plant updates (imports this module: not at the top)
-
-    ones = np.ones(6)
-    steps += [
-        lambda: sim.motion_filter_step(ones, ones, ones, ones, True, -ones, ones, ones, ones, 0.1, 0.01, 1.0),
-        lambda: sim.actuator_step(ones, ones, ones, -ones, ones, ones, ones, 0.05, 0.002),
-        lambda: marine.vessel_motion(np.ones(2), *(np.ones((6, 2)) for _ in range(4)), 0.5, ones),
-        lambda: marine.body_velocities(np.ones((2, 6)), np.ones((2, 6)), np.ones((2, 6))),
-        *sim.warm_up_steps(),
-    ]
-    from app.ik import ga_kernels as ga  # the GA's generation loop (imports this module: not at the top)
-
-    pop, cost = np.zeros((4, n)), np.ones(4)
-    box = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
-    window = (-np.ones(n), np.ones(n), np.ones(n))  # velocity window and mutation span
-    rules = (1, 0.5, 0.005, 0.05, 0.01, 1, np.random.default_rng(0))  # elite, operators, stop, generations, rng
-    steps += [
-        lambda: ga.position_costs(*args, pop, np.zeros(3), *box),
-        lambda: ga.velocity_costs(*args, pop, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0),
-        lambda: ga.evolve_position(*args, pop, cost, np.zeros(3), *box, np.ones(n), *rules),
-        lambda: ga.evolve_velocity(*args, pop, cost, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0, *window, *rules),
-    ]
-    from app.control import tac_kernels as tac  # the crane-head chunk (imports this module: not at the top)
-
-    steps += tac.warm_up_steps()
-    for k, step in enumerate(steps):
-        step()
-        if progress is not None:
-            progress(k + 1, len(steps))
-    return time.perf_counter() - t0
+    return steps

@@ -605,7 +605,7 @@ def lab_step(
 
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) every kernel the plants call from Python, with the
-    argument types they pass (for :func:`app.models.kernels.warm_up`)."""
+    argument types they pass (for :func:`app.warmup.warm_up`)."""
     o3, o6, z3, z6 = np.ones(3), np.ones(6), np.zeros(3), np.zeros(6)
     eye = np.eye(4)
     a_n, b_b = np.ones((6, 3)), np.full((6, 3), 0.5)
@@ -626,6 +626,8 @@ def warm_up_steps() -> list:
         )  # fmt: skip
 
     return [
+        lambda: motion_filter_step(o6, o6, o6, o6, True, -o6, o6, o6, o6, 0.1, 0.01, 1.0),
+        lambda: actuator_step(o6, o6, o6, -o6, o6, o6, o6, 0.05, 0.002),
         lambda: motion_filter_update(vec(3), vec(3), vec(3), o3, o3, True, -o3, o3, o3, o3, 0.1, 0.01, 1.0),
         lambda: clamp_to_legs(a_n, b_b, z6, 0.5, 1.5),
         lambda: follow_clamped(a_n, b_b, 0.5, 1.5, 1.0, z6, z6, vec(6), vec(6), vec(6), -o6, o6, o6, o6, 0.1, 0.01),

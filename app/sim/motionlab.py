@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.errors import BosunError
-from app.ik.analytic import ComauArm
+from app.models.closed_form import ComauArm
 from app.models.lab import LabLayout
 from app.models.registry import load_robot
 from app.models.stewart import StewartPlatform

@@ -24,11 +24,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.control import tac_kernels
-from app.control.tac import CraneHead, CraneServo, HeadServo, PidGains
+from app.control.tac import CraneServo, HeadServo, PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.marine.vessel import MRU, VesselMotion, VesselParticulars, load_rao, parametric_rao
 from app.marine.waves import SPECTRA, check_sea, wave_components
+from app.models.crane_head import CraneHead
+from app.models.crane_head_kernels import c_array
 from app.models.registry import load_robot
 
 MODES = ("off", "tac", "cooperative")
@@ -201,7 +203,7 @@ class TacSimulator:
         )
         # constants of the compiled chunk (C-contiguous float64)
         self._pid_args, self._crane_args = self.head_servo.kernel_args(), self.crane_servo.kernel_args()
-        self._alpha_d, self._p_d_t = tac_kernels.c_array(system.alpha_d), tac_kernels.c_array(system.p_d_t)
+        self._alpha_d, self._p_d_t = c_array(system.alpha_d), c_array(system.p_d_t)
         self._beta0_hint = float(self.beta_d[0])
         self._started = False
         self._beta_c_prev: NDArray[np.float64] | None = None
@@ -329,7 +331,7 @@ class TacSimulator:
         alpha, integral, u = (np.array(x, dtype=float) for x in (head.alpha, head.integral, head.u))
         has_prev = self._beta_c_prev is not None
         beta_c_prev = np.array(self._beta_c_prev, dtype=float) if has_prev else np.zeros(3)
-        f = tk.c_array
+        f = c_array
         out = tk.tac_chunk(
             f(true.eta), f(meas.eta), f(meas.nu), meas is not true, float(sc.dt), crane_mode,
             tk.HEAD_LOCK if lock else tk.HEAD_SERVO, f(beta_hold), f(alpha_lock),

@@ -28,9 +28,9 @@ ESTOPS = 5
 def _engine_process(rate: float, seconds: float, robot: str, solver: str, urls: Any, results: Any) -> None:
     from app.engine.server import EngineServer
     from app.engine.session import Session
-    from app.models import kernels
+    from app.warmup import warm_up
 
-    kernels.warm_up()
+    warm_up()
     logging.getLogger("bosun").setLevel(logging.ERROR)  # the flood's refusals are counted below, not printed
     session = Session(robot_name=robot, solver_name=solver, mode="velocity")
     server = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=PUBLISH_RATE)

@@ -60,8 +60,9 @@ def engine_speed(kind: str, seconds: float = 10.0, dt: float = DEFAULT_DT, motio
     if motion and kind != "lab":
         raise SimSpeedError("motion applies to the lab plant only")
     from app.models import kernels
+    from app.warmup import warm_up
 
-    compile_s = kernels.warm_up()
+    compile_s = warm_up()
     session = _session(kind, motion)
     n = max(1, round(seconds / dt))
     t = 0.0
