@@ -24,8 +24,8 @@ def test_desired_point_and_crane_ik_with_l2_plus_xd(system):
     assert system.x_d == pytest.approx(6.51, abs=0.01)
     p = system.tcp_n(np.zeros(6), BETA_EQ60, system.p_d_t)
     # eq. (60): jib level to starboard, TCP x_d beyond the jib tip
-    o_t_b, R_t_b = system.crane_pose(BETA_EQ60)
-    np.testing.assert_allclose(p, o_t_b + R_t_b @ system.p_d_t, atol=1e-12)
+    o_t_b, R_b_t = system.crane_pose(BETA_EQ60)
+    np.testing.assert_allclose(p, o_t_b + R_b_t @ system.p_d_t, atol=1e-12)
     beta = system.crane_ik_tcp(p)[0]
     np.testing.assert_allclose(beta, BETA_EQ60, atol=1e-9)
     rng = np.random.default_rng(5)
@@ -195,5 +195,5 @@ def test_rotation_convention_in_tcp(system):
     """tcp_n uses R_b^n = Rz Ry Rx (Fossen zyx), the convention of the vessel model."""
     eta = np.array([1.0, 2.0, 3.0, 0.1, -0.05, 0.2])
     p = system.tcp_n(eta, BETA_EQ60, system.p_d_t)
-    o_t_b, R_t_b = system.crane_pose(BETA_EQ60)
-    np.testing.assert_allclose(p, euler_zyx_to_matrix(eta[3:]) @ (o_t_b + R_t_b @ system.p_d_t) + eta[:3])
+    o_t_b, R_b_t = system.crane_pose(BETA_EQ60)
+    np.testing.assert_allclose(p, euler_zyx_to_matrix(eta[3:]) @ (o_t_b + R_b_t @ system.p_d_t) + eta[:3])

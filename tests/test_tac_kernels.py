@@ -138,7 +138,7 @@ def test_head_reference(systems, rng):
         hold = rng.uniform(-0.5, 0.5, 3)
         a = compiled.head_reference(eta, nu, beta, beta_dot, p_d_n, p_d_dot, alpha_hold=hold)
         b = reference.head_reference(eta, nu, beta, beta_dot, p_d_n, p_d_dot, alpha_hold=hold)
-        for name in ("o_t_n", "R_t_n", "p_ref_t", "p_cmd_t", "v_ref_t", "alpha_ref", "alpha_dot_ref"):
+        for name in ("o_t_n", "R_n_t", "p_ref_t", "p_cmd_t", "v_ref_t", "alpha_ref", "alpha_dot_ref"):
             close(getattr(a, name), getattr(b, name), atol=1e-12 * max(1.0, float(np.abs(getattr(b, name)).max())))
         assert np.array_equal(a.saturated, b.saturated)
         if scale > 1:

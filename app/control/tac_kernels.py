@@ -138,7 +138,8 @@ def tac_chunk(
     e_c, e_s = np.empty(n), np.empty(n)
     saturated = np.zeros(n, dtype=np.bool_)
     o, R, v, w = np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3)
-    R_b_n, R_n, R_t_n, c, d = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    R_n_b, R_n_b_true, R_n_t = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    c, d = np.empty((3, 3)), np.empty((3, 3))
     o_t_n, p_cmd, v_ref_t, alpha_dot_ref = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     target, beta_c, beta_c_dot, zero = np.empty(3), np.empty(3), np.zeros(3), np.zeros(3)
     p_tcp = np.empty(3)
@@ -159,7 +160,7 @@ def tac_chunk(
     hold = alpha_d
     for k in range(n):
         em, et = eta_meas[k], eta_true[k]
-        _rot_zyx(em[3], em[4], em[5], R_b_n)
+        _rot_zyx(em[3], em[4], em[5], R_n_b)  # R_b^n of the measured η
         # crane
         if crane_mode == CRANE_HOLD:
             out_beta[k] = beta_hold
@@ -167,7 +168,7 @@ def tac_chunk(
             if crane_mode == CRANE_COOPERATIVE:
                 g0, g1, g2 = p_d_n[0] - em[0], p_d_n[1] - em[1], p_d_n[2] - em[2]
                 for r in range(3):  # p_d^n in {b}
-                    target[r] = R_b_n[0, r] * g0 + R_b_n[1, r] * g1 + R_b_n[2, r] * g2
+                    target[r] = R_n_b[0, r] * g0 + R_n_b[1, r] * g1 + R_n_b[2, r] * g2
                 _elbow_ik(elbow, target[0], target[1], target[2], beta_c)
                 raw = beta_c[0]
                 correction = _unwrap(prev_raw, raw, correction)
@@ -185,7 +186,7 @@ def tac_chunk(
             _crane_pose(chain, beta, beta_dot, o, R, v, w)
         # head reference, servo and forward kinematics
         limited = _reference_point(
-            head, hull, em, nu_meas[k], o, R, v, w, p_d_n, zero, hold, R_b_n, o_t_n, R_t_n, p_ref_t[k], p_cmd,
+            head, hull, em, nu_meas[k], o, R, v, w, p_d_n, zero, hold, R_n_b, o_t_n, R_n_t, p_ref_t[k], p_cmd,
             v_ref_t, alpha_ref[k], alpha_dot_ref, c, d,
         )  # fmt: skip
         hold = alpha_ref[k]
@@ -200,11 +201,11 @@ def tac_chunk(
         p_c_t[k] = p_tcp
         # eq. (61): e_c = |p_d^n − p_c^n|, e_s = |p_d^n − p_s^n|
         if noisy:
-            _rot_zyx(et[3], et[4], et[5], R_n)
+            _rot_zyx(et[3], et[4], et[5], R_n_b_true)  # R_b^n of the true η
         else:
-            R_n[:] = R_b_n
-        _to_n(R_n, et, o, R, p_tcp, p_c_n[k])
-        _to_n(R_n, et, o_s, eye, zero, p_s_n[k])
+            R_n_b_true[:] = R_n_b
+        _to_n(R_n_b_true, et, o, R, p_tcp, p_c_n[k])
+        _to_n(R_n_b_true, et, o_s, eye, zero, p_s_n[k])
         sc, ss = 0.0, 0.0
         for r in range(3):
             sc += (p_d_n[r] - p_c_n[k, r]) ** 2

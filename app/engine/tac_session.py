@@ -159,7 +159,7 @@ class TacSession(Scene):
     def _scene(self) -> TacScenePoints:
         """Points in {n} for drawing: ship box corners, crane polyline, head knees, TCP, desired point."""
         eta = np.asarray(self.last["eta"])
-        R = euler_zyx_to_matrix(eta[3:6])
+        R_n_b = euler_zyx_to_matrix(eta[3:6])  # R_b^n
         o = eta[:3]
         beta = np.asarray(self.last["beta"])
         F = self.system.crane.frames(beta)
@@ -173,7 +173,7 @@ class TacSession(Scene):
         ship_b = np.array([[x, y, z] for x in (-hl, hl) for y in (-hb, hb) for z in (SHIP_DECK_Z, SHIP_KEEL_Z)])
 
         def to_n(p):
-            return np.round(p @ R.T + o, 4).tolist()
+            return np.round(p @ R_n_b.T + o, 4).tolist()
 
         return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b))
 

@@ -468,8 +468,8 @@ def body_velocities(eta: NDArray, deta: NDArray, ddeta: NDArray) -> tuple[NDArra
     """ν and ν̇ in {b} from η, η̇, η̈ (Fossen 2011, eqs. 2.18, 2.29, 2.40), each (n, 6)."""
     phi, th = eta[:, 3], eta[:, 4]
     dphi, dth, dpsi = deta[:, 3], deta[:, 4], deta[:, 5]
-    R = euler_zyx_to_matrix(eta[:, 3:6])  # R_b^n
-    Rt = np.swapaxes(R, 1, 2)
+    R_n_b = euler_zyx_to_matrix(eta[:, 3:6])  # R_b^n, Fossen eq. (2.18)
+    Rt = np.swapaxes(R_n_b, 1, 2)  # R_n^b
     sf, cf, st, ct = np.sin(phi), np.cos(phi), np.sin(th), np.cos(th)
     # ω = T⁻¹(Θ) Θ̇ for the zyx convention
     p = dphi - st * dpsi

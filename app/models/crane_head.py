@@ -24,6 +24,8 @@ of the desired point:
 which tests check against finite differences; with ṗ_d^n = 0 and a still crane both reduce to
 the paper's S(ω) R o_t^b and v_b^n terms.
 
+The formulas above use the papers' R_b^n; the code names it ``R_n_b`` (:mod:`app.geometry`: from {b} to {n}).
+
 The batched references and the crane IK run compiled (:mod:`app.models.crane_head_kernels`) unless
 ``use_kernels`` is False; the NumPy code here is their reference.  The joint servos that follow these
 references are :mod:`app.control.tac`.
@@ -65,7 +67,7 @@ class HeadReference:
     """Time series of the head reference (each (n, 3) unless noted)."""
 
     o_t_n: NDArray[np.float64]
-    R_t_n: NDArray[np.float64]  # (n, 3, 3)
+    R_n_t: NDArray[np.float64]  # (n, 3, 3), R_t^n
     p_ref_t: NDArray[np.float64]  # unsaturated, eq. (50)
     p_cmd_t: NDArray[np.float64]  # after the workspace check
     v_ref_t: NDArray[np.float64]  # eq. (52)
@@ -143,9 +145,9 @@ class CraneHead:
     def tcp_n(self, eta: ArrayLike, beta: ArrayLike, p_t: ArrayLike) -> NDArray[np.float64]:
         """A head point p^t expressed in {n}: o_t^n + R_b^n R_t^b p^t."""
         eta = np.asarray(eta, dtype=float)
-        R_b_n = euler_zyx_to_matrix(eta[..., 3:6])
-        o_t_b, R_t_b = self.crane_pose(beta)
-        return _mv(R_b_n, o_t_b + _mv(R_t_b, np.asarray(p_t, dtype=float))) + eta[..., :3]
+        R_n_b = euler_zyx_to_matrix(eta[..., 3:6])  # R_b^n, Fossen eq. (2.18)
+        o_t_b, R_b_t = self.crane_pose(beta)
+        return _mv(R_n_b, o_t_b + _mv(R_b_t, np.asarray(p_t, dtype=float))) + eta[..., :3]
 
     # ------------------------------------------------------------------ references
     def head_reference(
@@ -170,19 +172,20 @@ class CraneHead:
                 *(kern.c_array(x) for x in args),
             )  # fmt: skip
             return HeadReference(*out)
-        R_b_n = euler_zyx_to_matrix(eta[:, 3:6])
-        o_t_b, R_t_b = self.crane_pose(beta)
+        R_n_b = euler_zyx_to_matrix(eta[:, 3:6])  # R_b^n, Fossen eq. (2.18)
+        o_t_b, R_b_t = self.crane_pose(beta)
         v_t_b, w_t_b = self.crane_twist(beta, beta_dot)
-        o_t_n = _mv(R_b_n, o_t_b) + eta[:, :3]  # eq. (49)
+        o_t_n = _mv(R_n_b, o_t_b) + eta[:, :3]  # eq. (49)
         p_ref_n = p_d_n - o_t_n
-        R_t_n = R_b_n @ R_t_b
-        p_ref_t = _mtv(R_t_n, p_ref_n)  # eq. (50)
+        R_n_t = R_n_b @ R_b_t  # R_t^n = R_b^n R_t^b
+        p_ref_t = _mtv(R_n_t, p_ref_n)  # eq. (50)
         w_b = nu[:, 3:6]
         # eqs. (52)–(55), exact form (see the module docstring)
-        o_b_n_dot = _mv(R_b_n, nu[:, :3])
-        p_ref_n_dot = p_d_n_dot - _mv(R_b_n, np.cross(w_b, o_t_b) + v_t_b) - o_b_n_dot
-        R_n_t_dot = -np.swapaxes(R_t_b, 1, 2) @ (_skew_batch(w_t_b) + _skew_batch(w_b)) @ np.swapaxes(R_b_n, 1, 2)
-        v_ref_t = _mv(R_n_t_dot, p_ref_n) + _mtv(R_t_n, p_ref_n_dot)
+        o_b_n_dot = _mv(R_n_b, nu[:, :3])
+        p_ref_n_dot = p_d_n_dot - _mv(R_n_b, np.cross(w_b, o_t_b) + v_t_b) - o_b_n_dot
+        # Ṙ_n^t (exact eq. 53)
+        R_t_n_dot = -np.swapaxes(R_b_t, 1, 2) @ (_skew_batch(w_t_b) + _skew_batch(w_b)) @ np.swapaxes(R_n_b, 1, 2)
+        v_ref_t = _mv(R_t_n_dot, p_ref_n) + _mtv(R_n_t, p_ref_n_dot)
         # workspace check and saturation onto the hull (§6, §8), then eq. (51)
         p_cmd, saturated = self.workspace.saturate_many(p_ref_t)
         sol = self.head.ik(p_cmd)
@@ -199,4 +202,4 @@ class CraneHead:
         alpha_dot_ref = self.head.arm_rates(alpha_ref, v_ref_t, p_cmd)
         limited = saturated | bad | clipped
         alpha_dot_ref[limited] = 0.0
-        return HeadReference(o_t_n, R_t_n, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited)
+        return HeadReference(o_t_n, R_n_t, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited)

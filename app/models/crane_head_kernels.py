@@ -302,38 +302,38 @@ def _saturate(hull, p, out):
 # ----------------------------------------------------------------------------- references
 @_jit
 def _reference_point(
-    head, hull, eta, nu, o_t_b, R_t_b, v_t_b, w_t_b, p_d, p_d_dot, hold, R_b_n, o_t_n, R_t_n, p_ref_t, p_cmd,
+    head, hull, eta, nu, o_t_b, R_b_t, v_t_b, w_t_b, p_d, p_d_dot, hold, R_n_b, o_t_n, R_n_t, p_ref_t, p_cmd,
     v_ref_t, alpha_ref, alpha_dot_ref, c, d,
 ):  # fmt: skip
     """Head references of TAC paper eqs. (49)–(56) at one instant (``CraneHead.head_reference``; the exact
-    eqs. 53–54 of :mod:`app.control.tac`), into the output rows; R_b_n is that of η.  ``hold``: the
+    eqs. 53–54 of :mod:`app.control.tac`), into the output rows; R_n_b (the papers' R_b^n) is that of η.  ``hold``: the
     reference kept where the inverse kinematics has no solution.  Returns True when limited (saturated,
     held or clipped)."""
     p_ref_n, p_ref_n_dot, q = np.empty(3), np.empty(3), np.empty(3)
     for r in range(3):
-        o_t_n[r] = (R_b_n[r, 0] * o_t_b[0] + R_b_n[r, 1] * o_t_b[1] + R_b_n[r, 2] * o_t_b[2]) + eta[r]  # eq. (49)
+        o_t_n[r] = (R_n_b[r, 0] * o_t_b[0] + R_n_b[r, 1] * o_t_b[1] + R_n_b[r, 2] * o_t_b[2]) + eta[r]  # eq. (49)
         p_ref_n[r] = p_d[r] - o_t_n[r]
-    matmul_into(R_b_n, R_t_b, R_t_n)
+    matmul_into(R_n_b, R_b_t, R_n_t)  # R_t^n = R_b^n R_t^b
     for r in range(3):
-        p_ref_t[r] = R_t_n[0, r] * p_ref_n[0] + R_t_n[1, r] * p_ref_n[1] + R_t_n[2, r] * p_ref_n[2]  # eq. (50)
+        p_ref_t[r] = R_n_t[0, r] * p_ref_n[0] + R_n_t[1, r] * p_ref_n[1] + R_n_t[2, r] * p_ref_n[2]  # eq. (50)
     # eqs. (52)–(55): ṗ_ref^n = ṗ_d^n − R_b^n (ω_b × o_t^b + v_t^b) − R_b^n ν₁
     w0, w1, w2 = nu[3], nu[4], nu[5]
     q[0] = (w1 * o_t_b[2] - w2 * o_t_b[1]) + v_t_b[0]
     q[1] = (w2 * o_t_b[0] - w0 * o_t_b[2]) + v_t_b[1]
     q[2] = (w0 * o_t_b[1] - w1 * o_t_b[0]) + v_t_b[2]
     for r in range(3):
-        rq = R_b_n[r, 0] * q[0] + R_b_n[r, 1] * q[1] + R_b_n[r, 2] * q[2]
-        rv = R_b_n[r, 0] * nu[0] + R_b_n[r, 1] * nu[1] + R_b_n[r, 2] * nu[2]
+        rq = R_n_b[r, 0] * q[0] + R_n_b[r, 1] * q[1] + R_n_b[r, 2] * q[2]
+        rv = R_n_b[r, 0] * nu[0] + R_n_b[r, 1] * nu[1] + R_n_b[r, 2] * nu[2]
         p_ref_n_dot[r] = p_d_dot[r] - rq - rv
     # Ṙ_n^t p_ref^n = −(R_t^b)ᵀ [(ω_t^b + ω_b) × ((R_b^n)ᵀ p_ref^n)]
     s0, s1, s2 = w_t_b[0] + w0, w_t_b[1] + w1, w_t_b[2] + w2
-    m0 = R_b_n[0, 0] * p_ref_n[0] + R_b_n[1, 0] * p_ref_n[1] + R_b_n[2, 0] * p_ref_n[2]
-    m1 = R_b_n[0, 1] * p_ref_n[0] + R_b_n[1, 1] * p_ref_n[1] + R_b_n[2, 1] * p_ref_n[2]
-    m2 = R_b_n[0, 2] * p_ref_n[0] + R_b_n[1, 2] * p_ref_n[1] + R_b_n[2, 2] * p_ref_n[2]
+    m0 = R_n_b[0, 0] * p_ref_n[0] + R_n_b[1, 0] * p_ref_n[1] + R_n_b[2, 0] * p_ref_n[2]
+    m1 = R_n_b[0, 1] * p_ref_n[0] + R_n_b[1, 1] * p_ref_n[1] + R_n_b[2, 1] * p_ref_n[2]
+    m2 = R_n_b[0, 2] * p_ref_n[0] + R_n_b[1, 2] * p_ref_n[1] + R_n_b[2, 2] * p_ref_n[2]
     x0, x1, x2 = s1 * m2 - s2 * m1, s2 * m0 - s0 * m2, s0 * m1 - s1 * m0
     for r in range(3):
-        rdot = -(R_t_b[0, r] * x0 + R_t_b[1, r] * x1 + R_t_b[2, r] * x2)
-        v_ref_t[r] = rdot + (R_t_n[0, r] * p_ref_n_dot[0] + R_t_n[1, r] * p_ref_n_dot[1] + R_t_n[2, r] * p_ref_n_dot[2])
+        rdot = -(R_b_t[0, r] * x0 + R_b_t[1, r] * x1 + R_b_t[2, r] * x2)
+        v_ref_t[r] = rdot + (R_n_t[0, r] * p_ref_n_dot[0] + R_n_t[1, r] * p_ref_n_dot[1] + R_n_t[2, r] * p_ref_n_dot[2])
     # workspace check and saturation onto the hull (§6, §8), then eq. (51)
     saturated = _saturate(hull, p_ref_t, p_cmd)
     lower, upper = head[4], head[5]
@@ -365,21 +365,21 @@ def head_reference(chain, head, hull, eta, nu, beta, beta_dot, p_d, p_d_dot, hol
     """``CraneHead.head_reference`` (eqs. 49–56) for rows of η, ν (n, 6), β, β̇, p_d^n, ṗ_d^n (n, 3):
     (o_t^n, R_t^n (n, 3, 3), p_ref^t, p_cmd^t, v_ref^t, α_ref, α̇_ref, limited (n,))."""
     n = eta.shape[0]
-    o_t_n, R_t_n = np.empty((n, 3)), np.empty((n, 3, 3))
+    o_t_n, R_n_t = np.empty((n, 3)), np.empty((n, 3, 3))
     p_ref_t, p_cmd, v_ref_t = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
     alpha_ref, alpha_dot_ref = np.empty((n, 3)), np.empty((n, 3))
     limited = np.empty(n, dtype=np.bool_)
     o, R, v, w = np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3)
-    R_b_n, c, d = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    R_n_b, c, d = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for k in range(n):
         _crane_pose(chain, beta[k], beta_dot[k], o, R, v, w)
-        _rot_zyx(eta[k, 3], eta[k, 4], eta[k, 5], R_b_n)
+        _rot_zyx(eta[k, 3], eta[k, 4], eta[k, 5], R_n_b)  # R_b^n, Fossen eq. (2.18)
         limited[k] = _reference_point(
-            head, hull, eta[k], nu[k], o, R, v, w, p_d[k], p_d_dot[k], hold, R_b_n, o_t_n[k], R_t_n[k], p_ref_t[k],
+            head, hull, eta[k], nu[k], o, R, v, w, p_d[k], p_d_dot[k], hold, R_n_b, o_t_n[k], R_n_t[k], p_ref_t[k],
             p_cmd[k], v_ref_t[k], alpha_ref[k], alpha_dot_ref[k], c, d,
         )  # fmt: skip
         hold = alpha_ref[k]
-    return o_t_n, R_t_n, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited
+    return o_t_n, R_n_t, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited
 
 
 # ----------------------------------------------------------------------------- warm-up

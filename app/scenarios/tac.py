@@ -252,8 +252,8 @@ class TacSimulator:
 
     def _target_b(self, eta: NDArray[np.float64]) -> NDArray[np.float64]:
         """p_d^n in {b}: where the TCP must be, seen from the vessel."""
-        R = euler_zyx_to_matrix(eta[:, 3:6])
-        return np.einsum("nji,nj->ni", R, self.p_d_n - eta[:, :3])
+        R_n_b = euler_zyx_to_matrix(eta[:, 3:6])  # R_b^n
+        return np.einsum("nji,nj->ni", R_n_b, self.p_d_n - eta[:, :3])
 
     def advance(self, n: int, frozen: bool = False) -> TacChunk:
         """Simulate the next ``n`` steps (fewer at the end).
