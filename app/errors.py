@@ -20,6 +20,27 @@ class BosunError(Exception):
     """Base class of user-facing errors: the CLI prints ``str(err)`` and exits 2."""
 
 
+class MissingExtraError(BosunError):
+    """A command needs an optional part of Bosun that is not installed (``pip install 'bosun[EXTRA]'``)."""
+
+    def __init__(self, what: str, module: str, extra: str) -> None:
+        self.module, self.extra = module, extra
+        super().__init__(
+            f"{what} needs {module}, which is not installed: pip install 'bosun[{extra}]' "
+            "(scripts/setup.sh installs every extra)"
+        )
+
+
+def require(module: str, extra: str, what: str):
+    """Import ``module`` for ``what``, or raise :class:`MissingExtraError` naming the extra to install."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise MissingExtraError(what, module.split(".")[0], extra) from None
+
+
 class RobotXmlError(BosunError):
     """A robot file that cannot be used: syntax, schema or a value out of range.
 

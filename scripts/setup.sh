@@ -40,7 +40,7 @@ if [ ! -x .venv/bin/python ]; then
   fi
 fi
 log=.venv/setup-pip.log
-if ! .venv/bin/python -m pip install --disable-pip-version-check -e '.[test,bench]' >"$log" 2>&1; then
+if ! .venv/bin/python -m pip install --disable-pip-version-check -e '.[all]' >"$log" 2>&1; then
   tail -n 30 "$log" >&2
   echo "setup: pip install failed (full log: $log)" >&2
   exit 1

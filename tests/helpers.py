@@ -2,7 +2,21 @@
 
 from __future__ import annotations
 
+import importlib.util
+from pathlib import Path
+
 import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: the source tree is here (lint and layout checks); the core job (scripts/core_job.sh) tests an
+#: installed wheel from a copy of tests/ without app/ and ui/
+needs_source = pytest.mark.skipif(not (ROOT / "app").is_dir(), reason="needs the checkout's app/ (source checks)")
+#: pygame (the ``joystick`` extra) is installed; the core job has none
+needs_pygame = pytest.mark.skipif(importlib.util.find_spec("pygame") is None, reason="pygame (bosun[joystick])")
+#: PyQt5 (the ``gui`` extra) is installed
+needs_qt = pytest.mark.skipif(importlib.util.find_spec("PyQt5") is None, reason="PyQt5 (bosun[gui])")
 
 
 def random_q(robot, rng: np.random.Generator, n: int) -> np.ndarray:

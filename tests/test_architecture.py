@@ -9,7 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers import needs_source
+
 ROOT = Path(__file__).resolve().parents[1]
+pytestmark = needs_source  # checks of the source tree itself
 FORBIDDEN = ("PyQt5", "pyqtgraph", "ui")
 
 

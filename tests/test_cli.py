@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
+from tests.helpers import needs_qt
 from tests.test_robot_xml import GOOD
 
 
@@ -32,6 +33,7 @@ def test_robots_json(capsys):
     assert by_name["kuka_youbot"]["dof"] == 5 and by_name["tac_delta_head"]["type"] == "delta"
 
 
+@needs_qt
 def test_no_command_opens_the_gui_or_says_why(capsys, monkeypatch):
     # the default command is the GUI; without any display it explains itself in one line
     for var in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM"):
@@ -42,6 +44,7 @@ def test_no_command_opens_the_gui_or_says_why(capsys, monkeypatch):
 
 
 @pytest.mark.slow
+@needs_qt
 def test_gui_attaches_to_a_running_engine_and_quits(capsys):
     import threading
 
@@ -160,3 +163,28 @@ def test_entry_points_in_a_real_process(entry):
         [*cmd, "fk", "comau_smart5_3dof", "--q", "0", "x", "0"], capture_output=True, text=True, timeout=60
     )
     assert bad.returncode == 2 and "Traceback" not in bad.stderr and "'x' is not a number" in bad.stderr
+
+
+# ---------------------------------------------------------------------------- optional extras (issue 15, item 6)
+@pytest.mark.parametrize(
+    ("argv", "module", "extra"),
+    [
+        (["gui"], "PyQt5", "gui"),
+        ([], "PyQt5", "gui"),
+        (["view", "--connect", "tcp://127.0.0.1:5555"], "pyqtgraph", "gui"),
+        (["joystick", "--connect", "tcp://127.0.0.1:5555"], "pygame", "joystick"),
+        (["joystick", "--connect", "tcp://127.0.0.1:5555", "--virtual"], "pygame", "joystick"),
+    ],
+    ids=["gui", "default", "view", "joystick", "virtual-joystick"],
+)
+def test_a_command_whose_extra_is_missing_says_what_to_install(capsys, monkeypatch, argv, module, extra):
+    """The core installs without the GUI and joystick extras; their commands then say in one line what to
+    install (exit 2), never a traceback.  A module set to None in sys.modules cannot be imported."""
+    for name in [m for m in sys.modules if m == module or m.startswith(module + ".")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, module, None)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    needed = {"gui": ("PyQt5", "pyqtgraph", "OpenGL"), "joystick": ("pygame",)}[extra]  # the first one missing
+    assert any(f"needs {m}," in err for m in needed) and f"pip install 'bosun[{extra}]'" in err, err

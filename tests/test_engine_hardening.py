@@ -17,7 +17,7 @@ from app.engine.tac_session import TacSession
 from app.marine.waves import SeaStateError, check_sea
 from app.net.codec import encode
 from app.net.transport import Client, TransportError
-from tests.helpers import process_running, wait_for
+from tests.helpers import needs_pygame, needs_qt, process_running, wait_for
 
 
 def raw_socket(url):
@@ -190,6 +190,7 @@ def _bosun():
 
 
 @pytest.mark.slow
+@needs_pygame
 def test_sigterm_stops_the_joystick_client_which_says_bye(serve):
     """Issue 13 item 6: SIGTERM did not stop `bosun joystick` (SDL took the signal): it kept streaming."""
     import os
@@ -219,6 +220,7 @@ def test_sigterm_stops_the_joystick_client_which_says_bye(serve):
 
 
 @pytest.mark.slow
+@needs_qt
 @pytest.mark.parametrize("after", [0.0, 2.0], ids=["while-the-window-is-built", "running"])
 def test_sigterm_closes_the_gui_and_its_engine(tmp_path, after):
     """SIGTERM closes the GUI and stops its engine, also when it arrives while the window is being built

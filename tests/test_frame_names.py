@@ -18,7 +18,10 @@ import ast
 import re
 from pathlib import Path
 
+from tests.helpers import needs_source
+
 ROOT = Path(__file__).resolve().parents[1] / "app"
+pytestmark = needs_source  # a check of the source tree itself
 FRAME_NAME = re.compile(r"^([RTH])_([A-Za-z0-9]+)_([A-Za-z0-9]+)$")
 SAME_FRAME = {"world": "g"}
 

@@ -19,7 +19,7 @@ from app.net.transport import Client, TransportError, check_url, is_local
 from app.teleop.client import run_joystick_client
 from app.teleop.devices import PygameJoysticks
 from app.teleop.virtual import VirtualJoystick
-from tests.helpers import arm, arm_and_hold, wait_for
+from tests.helpers import arm, arm_and_hold, needs_pygame, wait_for
 
 
 # ------------------------------------------------------------------ codec
@@ -149,6 +149,7 @@ def engine(serve):
 
 
 @pytest.mark.slow
+@needs_pygame
 def test_end_to_end_virtual_joystick_moves_tool_for_viewer(engine):
     srv = engine()
     viewer = Client(srv.url, role="viewer", name="viewer")
@@ -263,6 +264,7 @@ def test_token_and_malformed_messages(engine):
 
 
 @pytest.mark.slow
+@needs_pygame
 def test_separate_processes_server_joystick_viewer():
     """bosun server and bosun joystick --virtual as their own processes; this test is the viewer."""
     import re

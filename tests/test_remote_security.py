@@ -15,7 +15,7 @@ from app.engine.session import Session
 from app.net.security import ClientCurve, KeyFileError, ServerCurve, create_keys
 from app.net.transport import Client, TransportError
 from app.teleop.client import RoleLostError, _check_replies
-from tests.helpers import wait_for
+from tests.helpers import needs_pygame, wait_for
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -189,6 +189,7 @@ def test_keep_alives_keep_the_role_without_input(serve_session):
 
 
 @pytest.mark.slow
+@needs_pygame
 def test_bosun_joystick_without_a_joystick_exits_with_a_clear_message(serve_session):
     srv = serve_session()
     env = dict(os.environ, SDL_JOYSTICK_DISABLED="1", SDL_VIDEODRIVER="dummy")

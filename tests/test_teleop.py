@@ -113,6 +113,7 @@ def test_manual_input():
 
 @pytest.fixture
 def joysticks():
+    pytest.importorskip("pygame", reason="pygame (bosun[joystick])")
     src = PygameJoysticks()
     yield src
     src.close()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import sys
 
-from app.errors import BosunError
+from app.errors import BosunError, require
 
 
 def has_display() -> bool:
@@ -14,6 +14,12 @@ def has_display() -> bool:
         or os.environ.get("WAYLAND_DISPLAY")
         or os.environ.get("QT_QPA_PLATFORM") in ("offscreen", "minimal", "vnc")
     )
+
+
+def require_gui(what: str) -> None:
+    """:class:`~app.errors.MissingExtraError` (one line, exit 2) unless the ``gui`` extra is installed."""
+    for module in ("PyQt5.QtWidgets", "pyqtgraph", "OpenGL"):
+        require(module, "gui", what)
 
 
 def stop_requests() -> list[str]:
@@ -53,6 +59,7 @@ def run_gui(
     curve=None,
 ) -> int:
     """Open the main window; start a child engine unless ``connect`` names a running one."""
+    require_gui("the GUI")
     if not has_display():
         raise BosunError(
             "no display to open the GUI on (DISPLAY is not set); run 'bosun server' headless, "
@@ -205,6 +212,7 @@ def register(sub, helpers) -> None:
     v.add_argument("--quit-after", type=helpers["positive_float"], default=None, help=argparse.SUPPRESS)
 
     def view(a):
+        require_gui("the viewer")
         from ui.viewer import run_viewer
 
         return run_viewer(a.connect, token=a.token, curve=curve_of(a), quit_after=a.quit_after)

@@ -17,8 +17,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.errors import RobotXmlError
 from app.geometry import homogeneous, is_rotation_matrix
+from app.resources import robot_library
 
-LABS_DIR = Path(__file__).resolve().parents[2] / "robots" / "labs"
+LABS_DIR = robot_library() / "labs"  # package data (app/resources.py)
 
 
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:

@@ -18,6 +18,7 @@ from app.models.serial import SerialRobot
 from app.models.spec import RobotSpec
 from app.models.stewart import StewartPlatform
 from app.models.xml import MAX_FILE_BYTES, parse_robot_file, parse_robot_xml
+from app.resources import robot_library
 
 #: mechanism type -> factory building its kinematic model from a spec
 MODEL_FACTORIES: dict[str, Callable[[RobotSpec], Any]] = {
@@ -27,11 +28,11 @@ MODEL_FACTORIES: dict[str, Callable[[RobotSpec], Any]] = {
 }
 
 ENV_ROBOTS_DIR = "BOSUN_ROBOTS_DIR"
-LIBRARY_DIR = Path(__file__).resolve().parents[2] / "robots"
+LIBRARY_DIR = robot_library()  # package data (app/resources.py)
 
 
 def robots_dir() -> Path:
-    """The robot library: ``$BOSUN_ROBOTS_DIR`` if set, else ``robots/`` of this checkout."""
+    """The robot library: ``$BOSUN_ROBOTS_DIR`` if set, else the shipped one (package data ``app.robots``)."""
     env = os.environ.get(ENV_ROBOTS_DIR)
     return Path(env) if env else LIBRARY_DIR
 

@@ -29,8 +29,9 @@ from app.models.spec import (
     SerialSpec,
     StewartSpec,
 )
+from app.resources import robot_library
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "robots" / "robot.xsd"
+SCHEMA_PATH = robot_library() / "robot.xsd"  # package data (app/resources.py)
 MAX_FILE_BYTES = 1_000_000
 
 #: At most this many actuated joints in a serial chain (and links in the table).  Past a dozen

@@ -11,6 +11,8 @@ import threading
 import time
 from dataclasses import dataclass, field
 
+from app.errors import require
+
 
 @dataclass(frozen=True)
 class InputSample:
@@ -61,7 +63,7 @@ class PygameJoysticks:
         # SDL would take SIGINT/SIGTERM for its own quit event: the process must stay stoppable by them
         os.environ.setdefault("SDL_NO_SIGNAL_HANDLERS", "1")
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
-        import pygame
+        pygame = require("pygame", "joystick", "joystick input")
 
         self._pg = pygame
         if not pygame.display.get_init():

@@ -34,8 +34,9 @@ from pathlib import Path
 import numpy as np
 
 from app.errors import BosunError
+from app.resources import device_profiles
 
-PROFILE_DIR = Path(__file__).resolve().parent / "profiles"
+PROFILE_DIR = device_profiles()  # package data (app/resources.py)
 AXES = ("x", "y", "z", "w")
 
 

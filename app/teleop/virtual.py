@@ -16,7 +16,9 @@ SDL_JOYSTICK_TYPE_GAMECONTROLLER = 1
 
 
 def _sdl() -> ctypes.CDLL:
-    import pygame
+    from app.errors import require
+
+    pygame = require("pygame", "joystick", "the virtual joystick")
 
     libs = sorted(glob.glob(os.path.join(os.path.dirname(pygame.__file__), "..", "pygame.libs", "libSDL2-2*.so*")))
     if not libs:
