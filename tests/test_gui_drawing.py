@@ -104,7 +104,7 @@ print("RESULT " + json.dumps(out))
 """
 
 
-def _run_under_xvfb(script: str, tmp_path, screen: str = "1280x1024") -> dict:
+def _run_under_xvfb(script: str, tmp_path, screen: str = "1280x1024", timeout: float = 180) -> dict:
     if shutil.which("Xvfb") is None:
         pytest.skip("Xvfb is not installed")
     r_fd, w_fd = os.pipe()
@@ -126,7 +126,7 @@ def _run_under_xvfb(script: str, tmp_path, screen: str = "1280x1024") -> dict:
             env=env,
             capture_output=True,
             text=True,
-            timeout=180,
+            timeout=timeout,
             cwd=ROOT,
         )
     finally:

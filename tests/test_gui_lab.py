@@ -107,3 +107,37 @@ def test_bad_time_series_is_refused_with_a_dialog(qtbot, window, tmp_path):
     title, msg = next((t, m) for t, m in win.messages if "does not increase" in m)
     assert title == "Motion-Lab" and "waves.csv:4" in msg
     assert tab.state.platforms[0].source == "generator"  # nothing changed
+
+
+def test_platform_status_line_wraps_instead_of_being_cut(qtbot):
+    """In a 1280×800 window the EM8000's status ("ENGAGED source SIMULATION (Hs 2.5 m, Tp 8 s, scale 1.00, …")
+    ran past the mode box's edge and was cut.  It wraps: every word is inside the label."""
+    from types import SimpleNamespace
+
+    from PyQt5.QtCore import QRect, Qt
+
+    from ui.lab_tab import PlatformPanel
+
+    panel = PlatformPanel("em8000", "E-Motion 8000")
+    qtbot.addWidget(panel)
+    panel.resize(1280, 480)
+    panel.show()
+    qtbot.waitExposed(panel)
+    p = SimpleNamespace(
+        status="engaged", mode="engaged", source="simulation", ramp=1.0, leg_clamped=True, legs=[2.0] * 6,
+        eta=[0.0] * 6, source_info={"hs": 2.5, "tp": 8.0, "scale": [1.0, 1.0, 0.85, 1.0, 1.0, 0.6]},
+    )  # fmt: skip
+    panel.update_state(p, 1.0)
+    qtbot.wait(200)
+    label = panel.status
+    assert "LEG LIMIT" in label.text()
+    doc_text = label.text()
+    from PyQt5.QtGui import QTextDocument
+
+    doc = QTextDocument()
+    doc.setHtml(doc_text)
+    plain = doc.toPlainText()
+    rect = label.contentsRect()
+    need = label.fontMetrics().boundingRect(QRect(0, 0, rect.width(), 10_000), int(Qt.TextWordWrap), plain)
+    assert need.width() <= rect.width() and need.height() <= rect.height() + 2, (need, rect)
+    assert label.visibleRegion().boundingRect().width() >= rect.width() - 1  # the label itself is not cut either

@@ -2,6 +2,7 @@
 columns, unapplied edits kept until Apply or Esc, plots refitted when their tab comes back, labels that
 elide instead of being cut, and scene engines paused while no tab shows them (STOP still latches)."""
 
+import itertools
 import threading
 
 import numpy as np
@@ -373,3 +374,151 @@ def test_legends_reflow_so_a_narrow_panel_shows_whole_plots(qtbot):
     plots.resize(1100, 600)
     qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount == 5, timeout=GUI_WAIT)
     assert max(right_edges()) <= plots.glw.viewport().width() + 1
+
+
+def test_plots_narrowed_after_a_wide_start_are_laid_out_in_the_narrow_view(qtbot):
+    """In the 1280×800 window the plot panel is first laid out wide (five legend entries a row), then the
+    splitter narrows it to ~265 px: the legends reflowed, but the plots kept the wide layout and were cut at
+    the right (no right axes, no "0" on the time axis).  The plots follow the view's width."""
+    plots = LivePlots()
+    qtbot.addWidget(plots)
+    plots.set_description(Session(robot_name="knuckle_boom_crane").describe())
+    plots.resize(1100, 600)
+    plots.show()
+    qtbot.waitExposed(plots)
+    qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount == 5, timeout=GUI_WAIT)
+    qtbot.wait(100)
+    plots.resize(265, 600)
+
+    def right_edges():
+        return [p.mapRectToScene(p.boundingRect()).right() for p in (plots.p_xyz, plots.p_q, plots.p_s)]
+
+    qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount < 5, timeout=GUI_WAIT)
+    qtbot.wait(300)
+    assert max(right_edges()) <= plots.glw.viewport().width() + 1, (right_edges(), plots.glw.viewport().width())
+    # the right axes (solve time, prismatic joints) are inside the view
+    for twin in (plots.s_twin, plots.q_twin):
+        ax = twin.axis
+        assert ax.mapRectToScene(ax.boundingRect()).right() <= plots.glw.viewport().width() + 1
+
+
+def test_teleop_legend_units_are_the_units_their_axes_show(qtbot):
+    """A solve error of 0.1 mm: the axis shows "µm" or "mm" (SI prefix), so a legend entry "error [m]" read as
+    another unit for the same curve.  A unit in a legend entry is the one its axis shows."""
+    import re
+
+    plots = LivePlots()
+    qtbot.addWidget(plots)
+    plots.resize(700, 700)
+    plots.show()
+    qtbot.waitExposed(plots)
+    for k in range(100):
+        plots.add_state(_teleop_snapshot(0.02 * k, (1.0, 1.0, 1.0)))
+    plots.refit()
+    qtbot.waitUntil(lambda: plots.frames_drawn > 2, timeout=GUI_WAIT)
+    qtbot.wait(100)
+    axes = {id(plots.p_s.vb): plots.p_s.getAxis("left"), id(plots.s_twin.vb): plots.s_twin.axis,
+            id(plots.p_q.vb): plots.p_q.getAxis("left"), id(plots.q_twin.vb): plots.q_twin.axis}  # fmt: skip
+    checked = 0
+    for p in (plots.p_q, plots.p_s):
+        for sample, label in p.legend.items:
+            m = re.search(r"\[(.+?)\]", label.text)
+            if m is None:
+                continue
+            ax = axes[id(sample.item.getViewBox())]
+            assert f"{ax.labelUnitPrefix}{ax.labelUnits}" == m.group(1), (label.text, ax.labelUnitPrefix)
+            checked += 1
+    assert checked >= 2  # the joints' entries at least
+    err_axis = plots.p_s.getAxis("left")
+    assert err_axis.labelUnitPrefix in ("µ", "m")  # the error axis does scale its unit: the reason for the test
+
+
+def test_long_plot_titles_elide_so_two_columns_fit_their_view(qtbot):
+    """The crane head's 2×2 figures in a 540 px column: a bold title's width was its plot's minimum width, so the
+    layout was wider than the view and Figs. 9 and 12 were cut at the right.  Titles end in "…" instead."""
+    from ui.widgets.plots import legend
+
+    glw = pg.GraphicsLayoutWidget()
+    qtbot.addWidget(glw)
+    titles = ["Fig. 11 compensation error of the head", "Fig. 12 Delta arm angles and commands"]
+    plots = []
+    for col, title in enumerate(titles):
+        p = glw.addPlot(row=0, col=col, title=title)
+        p.getAxis("left").setWidth(54)
+        p.showAxis("right")
+        p.getAxis("right").setWidth(50)
+        legend(p, cols=2)
+        p.plot([0, 1], [0, 1], name="a")
+        plots.append(p)
+    glw.resize(420, 300)
+    glw.show()
+    qtbot.waitExposed(glw)
+    qtbot.wait(300)
+    width = glw.viewport().width()
+    rects = [p.mapRectToScene(p.boundingRect()) for p in plots]
+    assert rects[0].right() <= rects[1].left() + 1 and rects[1].right() <= width + 1, (rects, width)
+    for p, title in zip(plots, titles, strict=True):
+        assert plot_title(p) == title and p.header_title.toolTip() == title  # the whole title stays known
+    assert any(p.header_title.text.endswith("…") for p in plots)
+    glw.resize(1400, 300)  # room again: the whole titles
+    qtbot.waitUntil(lambda: all(p.header_title.text == t for p, t in zip(plots, titles, strict=True)), timeout=GUI_WAIT)
+
+
+def test_error_distribution_projections_fit_the_box_with_a_scale_and_marked_unreachable_targets(qtbot):
+    """Analysis (offscreen, without OpenGL): the three projections were ~60 px tall, ±300 m wide with every
+    target in one block at 0 and a stray "target" legend entry.  Now: fitted to the workspace box at one scale
+    on both axes, side by side with height, a colour scale, and the unreachable targets ringed red under a
+    legend entry that says what the ring means."""
+    from app.analysis.ik_studies import ErrorDistribution
+    from tests.test_gui_drawing import _rgb
+    from ui.analysis_tab import UNREACHABLE_PEN, AnalysisTab
+
+    lo, hi = np.array([-25.0, -25.0, -10.0]), np.array([25.0, 25.0, 25.0])
+    axes = [np.linspace(lo[k], hi[k], 4) for k in range(3)]
+    targets = np.array([[x, y, z] for x in axes[0] for y in axes[1] for z in axes[2]])
+    reachable = np.abs(targets[:, 0]) < 10.0
+    error = np.where(reachable, 1e-5, 3.0)
+    n = len(targets)
+    result = ErrorDistribution(
+        robot="r", solver="jacobian", grid=4, targets=targets, reached=targets, error=error, time_s=np.zeros(n),
+        success=reachable, reachable=reachable, box_lower=lo, box_upper=hi,
+    )  # fmt: skip
+    tab = AnalysisTab(None)
+    qtbot.addWidget(tab)
+    tab.resize(1276, 470)
+    tab.show()
+    qtbot.waitExposed(tab)
+    tab.show_result(result)
+    qtbot.wait(300)
+    assert tab.colorbar is not None and len(tab.projections) == 3
+    rects = []
+    for p, (i, j) in zip(tab.projections, ((0, 1), (0, 2), (1, 2)), strict=True):
+        (x0, x1), (y0, y1) = p.vb.viewRange()
+        assert x0 <= lo[i] and x1 >= hi[i] and y0 <= lo[j] and y1 >= hi[j]  # the whole box …
+        assert (x1 - x0) < 3 * (hi[i] - lo[i]) and (y1 - y0) < 3 * (hi[j] - lo[j])  # … and not hundreds of m
+        px, py = p.vb.viewPixelSize()
+        assert px == pytest.approx(py, rel=0.03)  # one scale on both axes
+        r = p.vb.mapRectToScene(p.vb.boundingRect())
+        assert r.height() >= 150
+        rects.append(r)
+    for a, b in itertools.pairwise(rects):
+        assert a.right() <= b.left() + 1
+    bar = tab.colorbar.mapRectToScene(tab.colorbar.boundingRect())
+    assert bar.left() >= rects[-1].right() - 1 and bar.right() <= tab.glw.viewport().width() + 1
+    texts = [label.text for _, label in tab.key.items]
+    assert "target" not in texts and any("not reachable (32 of 64)" in t for t in texts), texts
+    # the pixels: a red ring around an unreachable target, none around a reachable one (top view)
+    img = _rgb(tab.glw.grab().toImage()).astype(int)
+    red = np.abs(img - np.array(UNREACHABLE_PEN)).max(axis=-1) < 40
+    top = tab.projections[0]
+
+    def ring(k):
+        sp = top.vb.mapViewToScene(pg.Point(float(targets[k, 0]), float(targets[k, 1])))
+        vp = tab.glw.mapFromScene(sp)
+        yy, xx = np.mgrid[0 : red.shape[0], 0 : red.shape[1]]
+        d = np.hypot(xx - vp.x(), yy - vp.y())
+        return int(red[(d >= 4) & (d <= 8)].sum())
+
+    bad = int(np.flatnonzero(~reachable)[0])
+    good = int(np.flatnonzero(reachable)[0])
+    assert ring(bad) >= 8 and ring(good) == 0, (ring(bad), ring(good))

@@ -27,6 +27,7 @@ from PyQt5.QtWidgets import (
 from app.analysis.ik_studies import study_from_wire
 from ui.glprobe import gl_available
 from ui.widgets.files import choose_file
+from ui.widgets.plots import LEGEND_TEXT, axis_label, legend
 
 UNREACHABLE_PEN = (230, 60, 60)
 
@@ -41,7 +42,10 @@ class AnalysisTab(QWidget):
         self.running = False
         self.study_id = 0
         self.result = None
-        self.scatter3d = None
+        self.scatter3d = None  # the 3D scatter's GL view (self.scatter holds it, camera buttons and scale)
+        self.scatter = None
+        self.colorbar = None
+        self.projections: list = []
         lay = QVBoxLayout(self)
         row = QHBoxLayout()
         self.robot_label = QLabel()
@@ -85,9 +89,14 @@ class AnalysisTab(QWidget):
         lay.addLayout(row)
         self.summary = QLabel("")
         lay.addWidget(self.summary)
+        # the results: the 3D scatter (where OpenGL works) beside the 2D plots, both the page's full height
+        self.body = QHBoxLayout()
+        self.body.setContentsMargins(0, 0, 0, 0)
         self.glw = pg.GraphicsLayoutWidget()
-        self.glw.setMinimumHeight(250)  # three projections with axes, legends and the colour scale
-        lay.addWidget(self.glw, 1)
+        self.glw.setMinimumHeight(200)  # three projections with axes, legends and the colour scale
+        self.body.addWidget(self.glw, 3)
+        lay.addLayout(self.body, 1)
+        self.desc = None
         if link is not None:
             link.described.connect(self.on_description)
             link.study.connect(self.on_study)
@@ -98,6 +107,7 @@ class AnalysisTab(QWidget):
     def on_description(self, desc) -> None:
         if getattr(desc, "kind", None) != "teleop":
             return
+        self.desc = desc
         self.robot_ref = desc.robot
         self.robot_label.setText(f"robot: {desc.robot}")
         current = self.solver.currentText()
@@ -160,6 +170,7 @@ class AnalysisTab(QWidget):
     def show_result(self, result) -> None:
         self.result = result
         self.glw.clear()
+        self.colorbar = None
         s = result.summary()
         if hasattr(result, "grid"):
             self.summary.setText(
@@ -173,78 +184,121 @@ class AnalysisTab(QWidget):
                 f"{s['robot']} / {s['solver']}: rms error {s['rms_error_m']:.3g} m, "
                 f"max {s['max_error_m']:.3g} m over {s['samples']} targets"
             )
-            for k, name in enumerate("XYZ"):
-                p = self.glw.addPlot(row=k, col=0)
-                p.setLabel("left", name, "m")
-                p.setLabel("bottom", "t", "s")
-                p.addLegend(offset=(5, 5), colCount=2)
-                p.plot(result.t, result.target[:, k], pen=pg.mkPen((170, 170, 170), width=3), name="target")
-                p.plot(result.t, result.reached[:, k], pen=pg.mkPen((240, 150, 40), width=1.5), name="reached")
+            if self.scatter is not None:  # the 3D scatter belongs to a distribution study
+                self.scatter.setVisible(False)
+            self._show_tracking(result)
         for b in (self.export_csv, self.export_png):
             b.setEnabled(True)
 
+    def _show_tracking(self, result) -> None:
+        """X, Y and Z: the target (wide grey) and the reached point, on one time axis."""
+        plots = []
+        for k, name in enumerate("xyz"):
+            p = self.glw.addPlot(row=k, col=0)
+            axis_label(p, "left", name, "m")
+            p.showGrid(x=True, y=True, alpha=0.25)
+            p.getAxis("left").setWidth(58)
+            legend(p, cols=2, title=f"tool {name}")
+            p.plot(result.t, result.target[:, k], pen=pg.mkPen((170, 170, 170), width=3), name="target")
+            p.plot(result.t, result.reached[:, k], pen=pg.mkPen((240, 150, 40), width=1.5), name="reached")
+            p.setMinimumHeight(60)
+            plots.append(p)
+        axis_label(plots[-1], "bottom", "t", "s")
+        for p in plots[:-1]:
+            p.setXLink(plots[-1])
+            p.getAxis("bottom").setStyle(showValues=False)
+
     def _show_distribution(self, result) -> None:
-        """Three projections coloured by log10 error with a colour scale; unreachable targets ringed red."""
+        """Top, side and front projections coloured by log10 error with a colour scale, fitted to the workspace
+        box at equal scale; unreachable targets ringed red; the 3D scatter beside them."""
         if len(result.error) == 0:
             return
         err = np.log10(np.maximum(result.error, 1e-9))
         lo, hi = float(err.min()), float(max(err.max(), err.min() + 1e-9))
         cmap = pg.colormap.get("viridis")
-        self._show_3d_scatter(result.targets, cmap.map((err - lo) / (hi - lo), mode="float"))
+        bad = ~result.reachable
+        self._show_3d_scatter(result, cmap.map((err - lo) / (hi - lo), mode="float"), bad)
         order = np.argsort(-err)  # large errors first, so the small ones are drawn on top
         brushes = [pg.mkBrush(cmap.map((e - lo) / (hi - lo), mode="qcolor")) for e in err[order]]
-        bad = ~result.reachable
-        plots = []
+        box_lo = np.minimum(np.asarray(result.box_lower, dtype=float), result.targets.min(axis=0))
+        box_hi = np.maximum(np.asarray(result.box_upper, dtype=float), result.targets.max(axis=0))
+        self.projections = []
+        # one legend above the three projections (a legend in each would be wider than its plot)
+        key = pg.LegendItem(colCount=2, frame=False, labelTextSize="9pt", labelTextColor=LEGEND_TEXT)
+        self.glw.addItem(key, row=0, col=0, colspan=4)
+        self.key = key
         for col, (a, b, name) in enumerate(((0, 1, "top"), (0, 2, "side"), (1, 2, "front"))):
-            p = self.glw.addPlot(row=0, col=col, title=name)
-            p.setLabel("bottom", "xyz"[a], "m")
-            p.setLabel("left", "xyz"[b], "m")
+            p = self.glw.addPlot(row=1, col=col)
+            p.setTitle(f"{name}: {'xyz'[a]}–{'xyz'[b]}", size="9pt")
+            axis_label(p, "bottom", "xyz"[a], "m")
+            axis_label(p, "left", "xyz"[b], "m")
+            for side in ("bottom", "left"):
+                p.getAxis(side).enableAutoSIPrefix(False)  # metres on every axis, as the colour scale
             p.showGrid(x=True, y=True, alpha=0.25)
-            p.addLegend(offset=(5, 5))
-            p.addItem(
-                pg.ScatterPlotItem(
-                    result.targets[order, a], result.targets[order, b], brush=brushes, size=7, pen=None, name="target"
-                )
+            p.vb.setFlag(p.vb.GraphicsItemFlag.ItemClipsChildrenToShape, True)  # no mark spills into a neighbour
+            dots = pg.ScatterPlotItem(
+                result.targets[order, a], result.targets[order, b], brush=brushes, size=7, pen=None
             )
+            p.addItem(dots)
+            rings = None
             if bad.any():
-                p.addItem(
-                    pg.ScatterPlotItem(
-                        result.targets[bad, a],
-                        result.targets[bad, b],
-                        brush=None,
-                        pen=pg.mkPen(UNREACHABLE_PEN, width=1.2),
-                        size=10,
-                        name=f"not reachable ({int(bad.sum())})",
-                    )
+                rings = pg.ScatterPlotItem(
+                    result.targets[bad, a],
+                    result.targets[bad, b],
+                    brush=None,
+                    pen=pg.mkPen(UNREACHABLE_PEN, width=1.5),
+                    size=12,
                 )
+                p.addItem(rings)
+            if col == 0:  # the key's dot in the scale's middle colour (the dots' own brush is per target)
+                sample = pg.ScatterPlotItem(size=9, pen=None, brush=pg.mkBrush(cmap.map(0.5, mode="qcolor")))
+                key.addItem(sample, "target, coloured by its error (scale at the right)")
+                if rings is not None:
+                    key.addItem(rings, f"red ring: not reachable ({int(bad.sum())} of {len(bad)})")
+            # the workspace box at one scale on both axes: nothing squashed, no empty hundreds of metres
             p.setAspectLocked(True)
-            plots.append(p)
+            p.setRange(xRange=(box_lo[a], box_hi[a]), yRange=(box_lo[b], box_hi[b]), padding=0.06)
+            p.disableAutoRange()
+            p.setMinimumWidth(120)
+            self.projections.append(p)
         bar = pg.ColorBarItem(values=(lo, hi), colorMap=cmap, interactive=False, label="log10 error [m]")
-        self.glw.addItem(bar, row=0, col=3)
+        bar.setToolTip("the targets' colour in every view: log10 of the position error [m]")
+        self.glw.addItem(bar, row=1, col=3)
         self.colorbar = bar
 
-    def _show_3d_scatter(self, points: np.ndarray, colors: np.ndarray) -> None:
-        """The paper's 3D scatter coloured by error, where OpenGL is available (the projections always)."""
+    def _show_3d_scatter(self, result, colors: np.ndarray, bad: np.ndarray) -> None:
+        """The paper's 3D scatter coloured by error (the projections' colour scale), unreachable targets ringed
+        red, the workspace box, a floor grid and axes with their scale, camera presets; the right way up."""
         if not gl_available():
             return
-        import pyqtgraph.opengl as gl
+        from ui.widgets.view3d import RobotDrawing, _box_edges
 
-        if self.scatter3d is None:
-            from ui.widgets.glwindow import gl_view
+        if self.scatter is None:
+            from ui.widgets.machines3d import MachineView3D
 
-            tip = "targets coloured by log10 error (viridis: dark small, yellow large) [m]"
-            self.scatter3d, box = gl_view(self, tip, min_height=180)  # a native GL window (ui/widgets/glwindow.py)
-            self.layout().insertWidget(2, box, 1)
-        from ui.widgets.view3d import _box_edges
-
-        self.scatter3d.clear()
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        self.scatter3d.addItem(gl.GLLinePlotItem(pos=_box_edges(lo, hi), color=(0.5, 0.6, 0.9, 0.6), mode="lines"))
-        self.scatter3d.addItem(gl.GLScatterPlotItem(pos=points, color=colors, size=8))
-        size = float(np.max(hi - lo))
-        self.scatter3d.setCameraPosition(
-            pos=pg.Vector(*(0.5 * (lo + hi))), distance=5.0 * size, elevation=22, azimuth=-60
-        )
+            tip = (
+                "targets coloured by log10 error (the colour scale on the right), red ring: not reachable, "
+                "workspace box (blue) [m]"
+            )
+            self.scatter = MachineView3D(self, background=(0, 0, 0), tooltip=tip)  # a native GL window
+            self.scatter.box.setMinimumSize(160, 160)
+            self.scatter3d = self.scatter.view
+            self.body.insertWidget(0, self.scatter, 2)
+        self.scatter.setVisible(True)
+        draw = RobotDrawing()  # a robot in a z-down frame is shown z up, as in the teleop view
+        if self.desc is not None and getattr(self.desc, "robot", None) == result.robot:
+            draw.set_description(self.desc)
+        pts = draw.up(result.targets)
+        box = draw.up(_box_edges(result.box_lower, result.box_upper))
+        m = self.scatter
+        m.set_line("box", box, (0.5, 0.6, 0.9, 0.6), 1, mode="lines")
+        # drawn first and opaque: the larger red discs of the unreachable targets behind them show as rings
+        m.set_points("targets", pts, colors, 8, gl_options="opaque")
+        m.set_points("unreachable", pts[bad] if bad.any() else np.zeros((0, 3)), (0.9, 0.24, 0.24, 1), 14,
+                     gl_options="opaque")  # fmt: skip
+        lo, hi = np.minimum(box.min(axis=0), pts.min(axis=0)), np.maximum(box.max(axis=0), pts.max(axis=0))
+        m.preset = "iso"
+        m.set_extent(lo, hi, floor=float(lo[2]))
 
     def save_csv(self, path: str | None = None) -> None:
         if self.result is None:

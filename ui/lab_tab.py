@@ -36,6 +36,7 @@ from PyQt5.QtWidgets import (
 
 from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
+from ui.widgets.columns import scroll_column
 from ui.widgets.files import choose_file
 from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, axis_label, legend, refit, refit_on_show
@@ -93,6 +94,7 @@ class PlatformPanel(QWidget):
             ml.addWidget(b, 0, i)
         self.status = QLabel("–")
         self.status.setTextFormat(Qt.RichText)
+        self.status.setWordWrap(True)  # a long source line (Hs, Tp, six scales) wraps, never cut at the edge
         ml.addWidget(self.status, 1, 0, 1, 4)
 
         src = QGroupBox("Motion source")
@@ -148,8 +150,7 @@ class PlatformPanel(QWidget):
         lay = QHBoxLayout(self)
         lw = QWidget()
         lw.setLayout(left)
-        lw.setMaximumWidth(520)
-        lay.addWidget(lw)
+        lay.addWidget(scroll_column(lw, max_width=520))  # the controls scroll, the plots keep the height
         lay.addLayout(right, 1)
         refit_on_show(self, self._shown)
 
@@ -587,7 +588,6 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         left.addStretch(1)
         lw = QWidget()
         lw.setLayout(left)
-        lw.setMaximumWidth(480)
         self.joint_plot = pg.PlotWidget(title="Comau joints")
         axis_label(self.joint_plot.getPlotItem(), "left", "joint angle", "deg")
         legend(self.joint_plot.getPlotItem(), cols=3)
@@ -603,12 +603,16 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             p.showGrid(x=True, y=True, alpha=0.3)
             axis_label(p.getPlotItem(), "bottom", "t", "s")
         refit_on_show(w, lambda: self._shown(self.joint_plot, self.wire_plot))
+        # the stick beside the wire plot, the joints below: stacked under a 200 px stick, the wire plot was
+        # squeezed below its own header in a 1280×800 window
         right = QVBoxLayout()
         rbox.setMaximumHeight(200)
-        right.addWidget(rbox)
-        right.addWidget(self.joint_plot, 2)
-        right.addWidget(self.wire_plot, 1)
-        grid.addWidget(lw, 0, 0)
+        top = QHBoxLayout()
+        top.addWidget(rbox, 2)
+        top.addWidget(self.wire_plot, 3)
+        right.addLayout(top, 1)
+        right.addWidget(self.joint_plot, 1)
+        grid.addWidget(scroll_column(lw, max_width=480), 0, 0)  # the controls scroll, the plots keep the height
         grid.addLayout(right, 0, 1)
         grid.setColumnStretch(1, 1)
         return w

@@ -156,7 +156,7 @@ class SceneView2D(LazyDraw, QWidget):
             ("astern", "seen from astern: east [m] – up [m]", ((0, -1, 0), (0, 0, 1))),
             ("side", "seen from starboard: north [m] – up [m]", ((1, 0, 0), (0, 0, 1))),
         ]
-        self.machines = MachineView2D(self, views=views, note="crane head, 2D views (no OpenGL here)")
+        self.machines = MachineView2D(self, views=views, note="crane head, 2D views (no OpenGL here)", vertical=True)
         self.machines.setToolTip(SCENE_TIP)
         self.plot = self.machines.plots["astern"]["plot"]
         self.draw = TacDrawing()
@@ -275,8 +275,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.hull_plot = pg.PlotWidget(title="head workspace (x–z plane of {t})")
         self.hull_plot.setAspectLocked(True)
         self.hull_plot.setMinimumWidth(260)
-        axis_label(self.hull_plot.getPlotItem(), "bottom", "x^t", "m")
-        axis_label(self.hull_plot.getPlotItem(), "left", "z^t", "m")
+        axis_label(self.hull_plot.getPlotItem(), "bottom", "x<sup>t</sup>", "m")  # x in {t}
+        axis_label(self.hull_plot.getPlotItem(), "left", "z<sup>t</sup>", "m")
         self.hull_plot.showGrid(x=True, y=True, alpha=0.3)
         legend(self.hull_plot.getPlotItem(), cols=3)
         self.hull_plot.setToolTip("the head's workspace hull in its x–z plane, the reference p_ref and the TCP p_c")
@@ -337,29 +337,26 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.p_err.setToolTip("e_s: the crane tip's motion without compensation; e_c: the head TCP's error (eq. 61)")
         self.p_ang.setToolTip("Delta arm angles α and the servo commands u_α [deg]")
 
-        # the controls take the left column's full height; the plots get the room below the views
+        # three columns the page's full height: controls over the workspace hull, the scene, the plots.  (The
+        # views above the plots left the scene 130 px tall in a 1280×800 window.)
         controls.setMaximumWidth(340)
-        views = QSplitter(Qt.Horizontal)
-        views.addWidget(self.hull_plot)
-        views.addWidget(self.scene)
-        views.setStretchFactor(1, 1)
-        views.setSizes([320, 600])
-        right = QSplitter(Qt.Vertical)
-        right.addWidget(views)
-        right.addWidget(plots)
-        right.setStretchFactor(0, 1)  # a shorter page shrinks both, the plots keeping the larger share
-        right.setStretchFactor(1, 2)
-        right.setSizes([240, 480])
-        left = QWidget()
-        ll = QVBoxLayout(left)
-        ll.setContentsMargins(0, 0, 0, 0)
-        ll.addWidget(controls)
-        ll.addStretch(1)
+        self.hull_plot.setMinimumHeight(140)
+        left = QSplitter(Qt.Vertical)
+        left.addWidget(controls)
+        left.addWidget(self.hull_plot)
+        left.setStretchFactor(1, 1)
+        left.setChildrenCollapsible(False)
         main = QSplitter(Qt.Horizontal)
         main.addWidget(left)
-        main.addWidget(right)
-        main.setStretchFactor(1, 1)
-        main.setSizes([320, 960])
+        main.addWidget(self.scene)
+        main.addWidget(plots)
+        main.setChildrenCollapsible(False)
+        self.scene.setMinimumWidth(240)
+        plots.setMinimumWidth(420)
+        main.setStretchFactor(1, 2)
+        main.setStretchFactor(2, 3)
+        main.setSizes([320, 400, 560])
+        self.splitter = main
         lay = QGridLayout(self)
         lay.addWidget(main, 0, 0)
         self._set_enabled(False)

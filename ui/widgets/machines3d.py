@@ -22,6 +22,7 @@ from PyQt5.QtGui import QBrush, QColor, QPainterPath, QPen, QPolygonF
 from PyQt5.QtWidgets import QGraphicsPathItem, QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
 
 from app.models.drawing import Mesh, dedupe, support_polygon
+from ui.widgets.labels import ElidedLabel
 
 #: camera presets: elevation, azimuth [deg] (pyqtgraph's orbit camera; z is up)
 PRESETS = {"iso": (25.0, -60.0), "top": (90.0, -90.0), "side": (0.0, -90.0), "front": (0.0, 0.0)}
@@ -156,11 +157,12 @@ class MachineView3D(QWidget):
 
         bar = QHBoxLayout()
         bar.setContentsMargins(4, 2, 4, 2)
-        self.scale = QLabel("")
+        # ends in "…" where the buttons need the room (it was cut under them, and its width was the view's
+        # minimum: a 600 px wide 3D view in a 1280 px window)
+        self.scale = ElidedLabel("", min_chars=10)
         self.scale.setStyleSheet("color: #aaa")
         self.scale.setToolTip("floor grid spacing; axes at the origin: x blue, y yellow, z green (z is up)")
-        bar.addWidget(self.scale)
-        bar.addStretch(1)
+        bar.addWidget(self.scale, 1)
         self.buttons = {}
         for key, text in (
             ("iso", "Iso"),
@@ -221,11 +223,13 @@ class MachineView3D(QWidget):
             item.setData(pos=pts, color=color, width=width)
         item.setVisible(len(pts) >= 2)
 
-    def set_points(self, name: str, pts, color=(1, 1, 1, 1), size: float = 10.0) -> None:
+    def set_points(self, name: str, pts, color=(1, 1, 1, 1), size: float = 10.0, gl_options: str = "additive") -> None:
+        """Round points of ``size`` px; ``gl_options="opaque"``: depth-tested, nearer points cover farther ones
+        (and a point drawn later at the same place shows only where it is larger: a ring)."""
         pts = np.asarray(pts, dtype=float).reshape(-1, 3)
         item = self.items.get(name)
         if item is None:
-            item = self.gl.GLScatterPlotItem(pos=pts, color=color, size=size)
+            item = self.gl.GLScatterPlotItem(pos=pts, color=color, size=size, glOptions=gl_options)
             self.view.addItem(item)
             self.items[name] = item
         else:
@@ -252,8 +256,43 @@ class MachineView3D(QWidget):
         self.scale.setText(f"grid {value:g} {unit} · axes {value:g} {unit}: x blue, y yellow, z green (up)")
         if fit:
             self.center = c
-            self.distance = 1.25 * float(np.linalg.norm(hi - lo)) + 1e-3
             self.set_preset(self.preset)
+
+    def fit_distance(self, elevation: float | None = None, azimuth: float | None = None) -> float:
+        """The camera distance at which the fitted region's eight corners are all in view, looking from
+        ``elevation``, ``azimuth`` [deg] (default: the camera's) at the centre.  pyqtgraph's field of view is
+        horizontal: a distance from the size alone cut the machines at the top and bottom of a wide, low
+        view (the lab's EM1500 in a 1280×800 window) and the sides of a square one (the error scatter's box)."""
+        if self._extent is None:
+            return self.distance
+        opts = self.view.opts
+        e = math.radians(opts["elevation"] if elevation is None else elevation)
+        a = math.radians(opts["azimuth"] if azimuth is None else azimuth)
+        f = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])  # centre → camera
+        r = np.array([-math.sin(a), math.cos(a), 0.0])
+        u = np.cross(f, r)
+        w, h = max(1, self.box.width()), max(1, self.box.height())
+        th = math.tan(0.5 * math.radians(opts.get("fov", 60.0)))  # horizontal half-angle
+        tv = th * h / w
+        lo, hi = self._extent
+        v = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) - self.center
+        z_c, x_c, y_c = v @ f, np.abs(v @ r), np.abs(v @ u)
+        margin = 1.08
+        d = np.max(np.maximum(z_c + margin * x_c / th, z_c + margin * y_c / tv))
+        return float(max(d, 1.2 * np.max(z_c) + 1e-3, 1e-3))
+
+    def resizeEvent(self, ev) -> None:
+        super().resizeEvent(ev)
+        from PyQt5.QtCore import QTimer
+
+        QTimer.singleShot(0, self._refit_distance)  # once the view has its new size
+
+    def _refit_distance(self) -> None:
+        """A resized view keeps the machines whole, unless the operator has zoomed (then the zoom stays)."""
+        if self._extent is None or abs(self.view.opts["distance"] - self.distance) > 1e-6 * self.distance:
+            return
+        self.distance = self.fit_distance()
+        self.view.setCameraPosition(distance=self.distance)
 
     def fit_meshes(self, meshes: list[Mesh], floor: float | None = None) -> None:
         """:meth:`set_extent` on the meshes' bounding box."""
@@ -264,6 +303,7 @@ class MachineView3D(QWidget):
         """Look from a preset direction (``PRESETS``) at the fitted centre and distance."""
         elevation, azimuth = PRESETS[key]
         self.preset = key
+        self.distance = self.fit_distance(elevation, azimuth)
         self.view.setCameraPosition(
             pos=pg.Vector(*self.center), distance=self.distance, elevation=elevation, azimuth=azimuth
         )
@@ -306,7 +346,7 @@ class MachineView2D(QWidget):
     SIDE = ("side", "side: x–z [m]", ((1, 0, 0), (0, 0, 1)))
     TOP = ("top", "top: x–y [m]", ((1, 0, 0), (0, 1, 0)))
 
-    def __init__(self, parent: QWidget | None = None, views=None, note: str = "") -> None:
+    def __init__(self, parent: QWidget | None = None, views=None, note: str = "", vertical: bool = False) -> None:
         super().__init__(parent)
         views = views if views is not None else [self.SIDE, self.TOP]
         lay = QVBoxLayout(self)
@@ -315,7 +355,7 @@ class MachineView2D(QWidget):
             label = QLabel(note)
             label.setStyleSheet("color: #888")
             lay.addWidget(label)
-        row = QHBoxLayout()
+        row = QVBoxLayout() if vertical else QHBoxLayout()  # vertical: one above the other (a narrow column)
         lay.addLayout(row, 1)
         self.plots: dict[str, dict] = {}
         for key, title, P in views:

@@ -127,7 +127,7 @@ def legend(plot: pg.PlotItem, cols: int = 4, title: str | None = None) -> pg.Leg
     leg.layout.setContentsMargins(0, 0, 0, 0)
     head = None
     if title:
-        head = pg.LabelItem(title, size="9pt", color=LEGEND_TEXT, bold=True, justify="left")
+        head = _TitleLabel(title, size="9pt", color=LEGEND_TEXT, bold=True, justify="left")
         head.setMaximumHeight(20)
         header.addItem(head, 0, 0)
     header.addItem(leg, 1, 0)
@@ -140,6 +140,52 @@ def legend(plot: pg.PlotItem, cols: int = 4, title: str | None = None) -> pg.Leg
     for view in scene.views() if scene is not None else ():
         _LegendFitter.watch(view)
     return leg
+
+
+class _TitleLabel(pg.LabelItem):
+    """A plot's title that ends in "…" when its plot is narrower than the text (the whole title in the tool
+    tip).  A title's full width was the plot's minimum width: two columns of titled plots were laid out
+    wider than their view and cut at the right (the crane head's Figs. 9 and 12 in a 1280×800 window)."""
+
+    MIN_WIDTH = 60.0
+
+    def __init__(self, text: str, **args) -> None:
+        self.full_text = text
+        self._eliding = False
+        super().__init__(text, **args)
+        self.setToolTip(text)
+
+    def setText(self, text, **args) -> None:
+        if not self._eliding:
+            self.full_text = text
+            self.setToolTip(text)
+        super().setText(text, **args)
+
+    def updateMin(self) -> None:
+        super().updateMin()
+        self.setMinimumWidth(min(self.minimumWidth(), self.MIN_WIDTH))
+
+    def sizeHint(self, hint, constraint):
+        if hint == Qt.PreferredSize:  # the whole title when there is room
+            return pg.QtCore.QSizeF(self.item.boundingRect().width(), super().sizeHint(hint, constraint).height())
+        return super().sizeHint(hint, constraint)
+
+    def resizeEvent(self, ev) -> None:
+        super().resizeEvent(ev)
+        if self._eliding:
+            return
+        from PyQt5.QtGui import QFontMetricsF
+
+        font = self.item.font()
+        font.setPointSizeF(float(str(self.opts.get("size", "9pt")).rstrip("pt") or 9))
+        font.setBold(bool(self.opts.get("bold", False)))
+        shown = QFontMetricsF(font).elidedText(self.full_text, Qt.ElideRight, max(10.0, self.width() - 6))
+        if shown != self.text:
+            self._eliding = True
+            try:
+                super().setText(shown)
+            finally:
+                self._eliding = False
 
 
 class _HeaderLegend(pg.LegendItem):
@@ -199,15 +245,29 @@ def fit_legends(view) -> None:
         if cols != leg.columnCount:
             leg.setColumnCount(cols)
             changed = True
-    if changed and isinstance(view, pg.GraphicsView):  # lay the plots out again in the view's own width
-        QTimer.singleShot(0, lambda: pg.GraphicsView.setRange(view, view.range, padding=0, disableAutoPixel=False))
+    too_wide = central is not None and central.geometry().width() > width + 0.5
+    if (changed or too_wide) and isinstance(view, pg.GraphicsView):  # the plots laid out in the view's width
+        QTimer.singleShot(0, lambda: _relayout(view))
+
+
+def _relayout(view, tries: int = 8) -> None:
+    """Lay the view's plots out again in its own width.  A legend that reflowed lowers the layout's minimum
+    width only once Qt has passed the layout requests up the nested layouts (one level an event loop
+    pass): until then the central item is clamped to the old, wider minimum and the plots stay cut at the
+    right.  So it is tried again, a few times, until the layout fits."""
+    if sip.isdeleted(view):
+        return
+    pg.GraphicsView.setRange(view, view.range, padding=0, disableAutoPixel=False)
+    central = getattr(view, "centralWidget", None)
+    if tries > 0 and central is not None and central.geometry().width() > view.viewport().width() + 0.5:
+        QTimer.singleShot(25, lambda: _relayout(view, tries - 1))
 
 
 def plot_title(plot: pg.PlotItem) -> str:
     """The title a plot shows (in its header beside the legend, or pyqtgraph's own)."""
     head = getattr(plot, "header_title", None)
     if head is not None:
-        return head.text
+        return getattr(head, "full_text", head.text)
     return plot.titleLabel.text if plot.titleLabel.isVisible() else ""
 
 
@@ -397,6 +457,8 @@ class LivePlots(QWidget):
         legend(self.p_q, cols=6)
         legend(self.p_s, cols=2)
         self.q_twin = TwinAxis(self.p_q, "prismatic", "m")
+        for side in ("left", "right"):  # the joints' legend gives each its unit ("[m]"): the axes keep it
+            self.p_q.getAxis(side).enableAutoSIPrefix(False)
         self.q_twin.set_visible(False, keep_room=True)
         self.s_twin = TwinAxis(self.p_s, "solve time", "ms")
         for twin in (self.q_twin, self.s_twin):
@@ -418,8 +480,10 @@ class LivePlots(QWidget):
             )
         self.cur_q: list = []  # (curve, column, scale: deg per rad or 1)
         self.bands: list = []
-        self.cur_err = self.p_s.plot(pen=pg.mkPen((230, 80, 80), width=1.5), name="error [m]")
-        self.cur_time = self.s_twin.plot(pen=pg.mkPen((80, 140, 230), width=1.5), name="time [ms]")
+        # named by their axis, not a unit: the error axis shows mm or µm as the values need (the legend's
+        # "[m]" beside an axis in mm read as two units for one curve)
+        self.cur_err = self.p_s.plot(pen=pg.mkPen((230, 80, 80), width=1.5), name="error (left axis)")
+        self.cur_time = self.s_twin.plot(pen=pg.mkPen((80, 140, 230), width=1.5), name="time (right axis)")
         self.ring: Ring | None = None
         self.robot = None
         self.desc = None
