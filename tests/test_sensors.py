@@ -1,0 +1,81 @@
+"""Issue 16, item 3 (first part): the motion sensors the VVMC controller sees (app/marine/sensors.py):
+sampling at the sensor's rate, latency, band limit, per-run bias, white noise and the slow displacement
+error of an MRU ("5 cm or 5 %, whichever is higher"), all reproducible from a seed."""
+
+import math
+
+import numpy as np
+import pytest
+
+from app.marine.sensors import MRU5, TRACKER, MotionSensor, SensorError, SensorSpec
+
+
+def _run(spec, signal, dt=0.001, seed=0, rms=None):
+    s = MotionSensor(spec, np.random.default_rng(seed), dt, signal_rms=rms)
+    out = np.array([s.measure(x, np.zeros(6), np.zeros(6))[0] for x in signal])
+    return out, s
+
+
+def test_output_is_sampled_at_the_sensor_rate_and_held_between_samples():
+    signal = np.zeros((1000, 6))
+    signal[:, 3] = np.linspace(0, 0.1, 1000)  # a roll ramp
+    out, s = _run(TRACKER, signal, dt=0.0002)  # 5 steps per 1 kHz sample
+    assert s.samples == 200
+    changes = np.flatnonzero(np.diff(out[:, 3]) != 0)
+    assert np.all(np.diff(changes) == 5)
+
+
+def test_latency_delays_a_step_by_the_stated_time():
+    spec = SensorSpec(
+        name="t", source="test", rate=1000.0, latency=0.010, bandwidth=math.inf,
+        accuracy=(0.0,) * 6, rate_noise=(0.0,) * 6, accel_noise=(0.0,) * 6,
+    )  # fmt: skip
+    signal = np.zeros((100, 6))
+    signal[20:, 2] = 1.0  # heave step at t = 20 ms
+    out, _ = _run(spec, signal)
+    first = int(np.flatnonzero(out[:, 2] > 0.5)[0])
+    assert first == 30  # 10 ms later
+
+
+def test_noise_and_bias_have_the_stated_size():
+    """Roll of an MRU 5: total error rms 0.02° (product overview), half bias half white noise."""
+    biases, noise = [], []
+    for seed in range(40):
+        out, s = _run(MRU5, np.zeros((2000, 6)), dt=0.005, seed=seed)
+        biases.append(s.bias[3])
+        noise.append(np.std(out[:, 3]))
+    total = math.sqrt(np.mean(np.square(biases)) + np.mean(np.square(noise)))
+    assert total == pytest.approx(math.radians(0.02), rel=0.25)
+
+
+def test_mru_heave_error_is_5_cm_or_5_percent_whichever_is_higher():
+    t = np.arange(0, 120, 0.005)
+    small = np.zeros((t.size, 6))
+    small[:, 2] = 0.1 * np.sin(2 * np.pi * t / 8)
+    out, s = _run(MRU5, small, dt=0.005, rms=small.std(axis=0))
+    assert s.slow_rms[2] == pytest.approx(0.05)
+    big = small * 20.0  # 2 m amplitude: 5 % of 1.41 m rms = 7 cm
+    _, s_big = _run(MRU5, big, dt=0.005, rms=big.std(axis=0))
+    assert s_big.slow_rms[2] == pytest.approx(0.05 * big[:, 2].std(), rel=1e-9)
+    assert s.slow_rms[3] == 0.0  # attitudes carry no slow error in the model
+    err = out[:, 2] - small[:, 2]
+    assert 0.005 < np.std(err) < 0.15  # one 120 s run of a 25 s process: loose
+
+
+def test_the_same_seed_repeats_the_run():
+    sig = np.random.default_rng(1).normal(size=(300, 6))
+    a, _ = _run(MRU5, sig, seed=7)
+    b, _ = _run(MRU5, sig, seed=7)
+    c, _ = _run(MRU5, sig, seed=8)
+    assert np.array_equal(a, b) and not np.array_equal(a, c)
+
+
+def test_bad_specifications_are_refused_by_name():
+    with pytest.raises(SensorError, match="rate"):
+        SensorSpec("x", "y", 0.0, 0.0, 1.0, (0,) * 6, (0,) * 6, (0,) * 6)
+    with pytest.raises(SensorError, match="latency"):
+        SensorSpec("x", "y", 1.0, -1.0, 1.0, (0,) * 6, (0,) * 6, (0,) * 6)
+    with pytest.raises(SensorError, match="accuracy"):
+        SensorSpec("x", "y", 1.0, 0.0, 1.0, (0,) * 5, (0,) * 6, (0,) * 6)
+    with pytest.raises(SensorError, match="step"):
+        MotionSensor(MRU5, np.random.default_rng(0), 0.0)
