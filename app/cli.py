@@ -24,7 +24,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from app import __version__
-from app.errors import BosunError
+from app.errors import BosunError, require
 from app.geometry import matrix_to_euler_zyx
 
 EXIT_USAGE = 2
@@ -684,7 +684,7 @@ def _make_session(args: argparse.Namespace):
     if getattr(args, "plant", "teleop") == "lab":
         from app.engine.lab_session import LabSession
 
-        return LabSession()
+        return LabSession(plc=_plc_target(args))
     from app.engine.session import Session
 
     folders = list(getattr(args, "robots_dir", None) or [])
@@ -694,6 +694,20 @@ def _make_session(args: argparse.Namespace):
         if not Path(folder).is_dir():
             raise BosunError(f"--robots-dir {folder}: not a folder")
     return Session(robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0, robots_dirs=tuple(folders))
+
+
+def _plc_target(args: argparse.Namespace):
+    """The PLC of ``--plc`` (None without it); pyads must be there (the extra ``plc``)."""
+    if getattr(args, "plc", None) is None:
+        if getattr(args, "plc_host", None) or getattr(args, "plc_local_id", None):
+            raise BosunError("--plc-host and --plc-local-id go with --plc AMS_NET_ID[:PORT]")
+        return None
+    if getattr(args, "plant", "teleop") != "lab":
+        raise BosunError("--plc drives the Motion-Lab's PLC: use it with --plant lab")
+    require("pyads", "plc", "bosun server --plc")
+    from app.plc.bridge import PlcTarget
+
+    return PlcTarget.parse(args.plc, args.plc_host, args.plc_local_id)
 
 
 def cmd_server(args: argparse.Namespace) -> int:
@@ -712,6 +726,7 @@ def cmd_server(args: argparse.Namespace) -> int:
             f"binding to the non-local address {args.bind} needs CURVE keys (--curve-secret, --curve-clients); "
             "make them with 'bosun keys' (README: remote operation)"
         )
+    plc = _plc_target(args)  # before the kernels compile: a missing extra or a bad address says so at once
     # the launch secret of a GUI's own engine comes in the environment, never on the command line
     operator_secret = os.environ.pop(ENV_OPERATOR_SECRET, None) or None
     from app.warmup import warm_up
@@ -756,6 +771,8 @@ def cmd_server(args: argparse.Namespace) -> int:
         print(f"  CURVE: encrypted; {n_keys} allowed client key(s) in {curve.clients_dir}", flush=True)
     if operator_secret:
         print("  the operator role needs this engine's launch secret", flush=True)
+    if plc is not None:
+        print(f"  plant: the Motion-Lab's PLC at {plc} over ADS (pyads); STOP writes MAIN.bStop", flush=True)
     try:
         server.run(duration=args.duration)
     except KeyboardInterrupt:
@@ -1185,6 +1202,22 @@ def build_parser() -> argparse.ArgumentParser:
         type=_positive_float,
         default=5.0,
         help="seconds without a message before the operator role lapses (default 5; a warning at 2)",
+    )
+    p.add_argument(
+        "--plc",
+        default=None,
+        metavar="AMS_NET_ID[:PORT]",
+        help="with --plant lab: drive the real Motion-Lab through its TwinCAT PLC over ADS (needs the extra "
+        "plc: pip install 'bosun[plc]'), e.g. 192.168.90.150.1.1:851 (port default 851)",
+    )
+    p.add_argument(
+        "--plc-host", default=None, metavar="HOST", help="the PLC's IP or name (default: the Net ID's first 4 numbers)"
+    )
+    p.add_argument(
+        "--plc-local-id",
+        default=None,
+        metavar="AMS_NET_ID",
+        help="this machine's AMS Net ID, if the PLC's route to it names another (default: the ADS library's)",
     )
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.add_argument(

@@ -66,8 +66,9 @@ def test_import_linter_contracts_hold():
         ("sim/_bad.py", "from app.control import tac", "never import each other"),
         ("models/_bad.py", "from app.sim import motionlab", "floors"),
         ("analysis/_bad.py", "from app.engine import server", "floors"),
+        ("plc/_bad.py", "from app.engine import lab_session", "floors"),
     ],
-    ids=["plant-imports-controller", "models-import-plants", "studies-import-engine"],
+    ids=["plant-imports-controller", "models-import-plants", "studies-import-engine", "ads-bridge-imports-engine"],
 )
 def test_the_layer_contracts_catch_an_import_across_floors(tmp_path, where, line, contract):
     """The floors of ARCHITECTURE.md are enforced, not only written down: a copy of the core with one

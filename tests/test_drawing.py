@@ -285,15 +285,16 @@ def test_the_load_hangs_above_em1500s_deck_at_rest(neutral):
 
 
 def test_lab_at_rest_matches_the_layout_file():
-    """The wire of robots/labs/motionlab.xml starts at 0.8 m: with both platforms SETTLED the tool is
-    0.92 m above EM1500's platform frame, so the load hangs 0.12 m above it (its assumptions)."""
+    """The wire of robots/labs/motionlab.xml starts at 1.8 m: with both platforms SETTLED (at the lab's
+    settled heave) the tool is 2.77 m above EM1500's platform frame, so the load hangs 0.97 m above it
+    (its assumptions)."""
     s, sc = _lab_scene()
     lab: MotionLab = s.lab
     H2 = lab.platform_pose(1)
     tool_b2 = H2[:3, :3].T @ (np.array(sc.tool) - H2[:3, 3])
     load_b2 = H2[:3, :3].T @ (np.array(sc.payload) - H2[:3, 3])
-    assert -tool_b2[2] == pytest.approx(0.92, abs=0.01)  # z-down body frame
-    assert -load_b2[2] == pytest.approx(0.12, abs=0.01)
+    assert -tool_b2[2] == pytest.approx(2.77, abs=0.01)  # z-down body frame
+    assert -load_b2[2] == pytest.approx(0.97, abs=0.01)
 
 
 # ---------------------------------------------------------------------------------------------- vessel and sea

@@ -141,3 +141,26 @@ def test_platform_status_line_wraps_instead_of_being_cut(qtbot):
     need = label.fontMetrics().boundingRect(QRect(0, 0, rect.width(), 10_000), int(Qt.TextWordWrap), plain)
     assert need.width() <= rect.width() and need.height() <= rect.height() + 2, (need, rect)
     assert label.visibleRegion().boundingRect().width() >= rect.width() - 1  # the label itself is not cut either
+
+
+def test_winch_slider_is_the_labs_and_the_operational_box_is_shown(qtbot, window):
+    """Issue 16: the winch slider is the lab HMI's, an integer −100…100 mapped to u = value/100 · 0.2 m/s,
+    back to 0 on release; each platform shows its operational box and its generator and remote fields
+    range over it; the Comau's joint-limit profile is named."""
+    win, _ = window
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.desc is not None, timeout=GUI_WAIT)
+    assert "max 0.2 m/s" in tab.winch_slider_label.text()
+    assert (tab.winch_slider.minimum(), tab.winch_slider.maximum()) == (-100, 100)
+    tab.winch_slider.setSliderDown(True)
+    tab.winch_slider.setValue(50)
+    qtbot.waitUntil(lambda: abs(tab.state.winch.speed_command - 0.1) < 1e-9, timeout=GUI_WAIT)
+    tab.winch_slider.setSliderDown(False)
+    tab.winch_slider.sliderReleased.emit()
+    assert tab.winch_slider.value() == 0
+    qtbot.waitUntil(lambda: tab.state.winch.speed_command == 0.0, timeout=GUI_WAIT)
+    em8000 = tab.platforms["em8000"]
+    assert "heave -0.6…+0.6 m" in em8000.box_label.text() and "yaw -10…+10 °" in em8000.box_label.text()
+    assert em8000.gen[2][0].maximum() == pytest.approx(0.6) and em8000.remote[5].maximum() == pytest.approx(10.0)
+    assert "lab" in tab.comau_limits.text() and "q2 -30…30°" in tab.comau_limits.text()

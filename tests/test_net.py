@@ -52,6 +52,7 @@ def test_round_trip_every_client_message():
         "lab_comau_mode": {"mode": "motion_comp"},
         "lab_winch": {"mode": "local", "speed": -0.2},
         "lab_vvmc": {"on": True},
+        "lab_plc_ack": {"platform": "em8000"},
         "describe": {},
         "pause": {"on": True},
         "study_start": {"study": "distribution", "solver": "jacobian", "grid": 12},

@@ -38,7 +38,8 @@ def test_the_core_does_not_depend_on_qt_or_pygame():
     extras = PYPROJECT["project"]["optional-dependencies"]
     assert {"gui", "joystick", "bench", "test"} <= set(extras)
     assert any("pygame" in d for d in extras["joystick"]) and any("PyQt5" in d for d in extras["gui"])
-    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui]"]  # what scripts/setup.sh installs
+    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui,plc]"]  # what scripts/setup.sh installs
+    assert any(d.startswith("pyads") for d in extras["plc"])  # the real Motion-Lab's PLC (issue 16)
 
 
 def test_shipped_data_is_found_through_importlib_resources():

@@ -101,8 +101,9 @@ def test_motion_filter_in_place_equals_the_reference(rng):
         lo = rng.uniform(-2, 0, n)
         hi = lo + rng.uniform(0.01, 3, n)
         speed, accel = rng.uniform(0.05, 2, n), rng.uniform(0.1, 5, n)
+        brake = accel * rng.uniform(0.1, 1.0, n) if rng.random() < 0.5 else None  # a velocity-boundary law
         tau = float(rng.uniform(0.01, 0.3))
-        a, b = (MotionFilter(lo, hi, speed, accel, tau) for _ in range(2))
+        a, b = (MotionFilter(lo, hi, speed, accel, tau, brake=brake) for _ in range(2))
         b.use_kernels = False
         x0 = rng.uniform(lo, hi)
         for f in (a, b):
@@ -137,15 +138,17 @@ def test_comau_tool_point_equals_the_reference(lab, rng):
 
 
 def test_comau_ik_picks_the_reference_candidate(lab, rng):
-    """Eqs. (7)–(20) and the nearest-inside choice of ``MotionLab._ik`` (NumPy candidates)."""
+    """Eqs. (7)–(20) and the nearest-inside choice of ``MotionLab._ik`` (NumPy candidates) within the
+    joint limits in force (the layout's profile)."""
     T_base, signs = lab._consts[0], lab._consts[1]
     lab.robot.use_kernels = False
+    lo, hi = lab.joints.lower, lab.joints.upper
     found = 0
     try:
         for _ in range(400):
-            q_true = rng.uniform(lab.robot.lower - 0.3, lab.robot.upper + 0.3)
+            q_true = rng.uniform(lo - 0.3, hi + 0.3)
             p_tr = lab.comau.position(q_true) * rng.choice([1.0, 1.0, 1.6])  # some out of reach
-            q_near = np.ascontiguousarray(rng.uniform(lab.robot.lower, lab.robot.upper))
+            q_near = np.ascontiguousarray(rng.uniform(lo, hi))
             q, ok = sim.comau_ik(lab._comau, T_base, p_tr, q_near, signs, lab.joints.lower, lab.joints.upper)
             ref = lab._ik(p_tr, q_near)
             assert ok == (ref is not None)

@@ -64,6 +64,55 @@ def test_eq44_fixes_the_rotation_order(rng):
         assert np.abs(T_delta(d) @ w_printed - dd).max() > 1e-3
 
 
+# the lab's settled heave: motionlab_plc.json (Norwegian Motion-Laboratory repository, commit f5fbf84, MIT),
+# FB_StewartInterface.FB_init, the PLC's initial rxUdp.Actual_platform_position_heave
+LAB_SETTLED_HEAVE = {"em8000": 0.9986208, "em1500": 0.4663845}
+
+
+def test_settled_pose_has_every_leg_at_its_minimum_and_the_labs_heave(platform):
+    """Issue 16: SETTLED is all six actuators on their lower end stops; the fitted stroke puts it at the
+    lab's settled heave within 5 mm (robots/em8000.xml, em1500.xml: the fit), below Table 8's lowest heave."""
+    p = Platform(platform)
+    np.testing.assert_allclose(platform.leg_lengths(p.settled_pose), platform.leg_min, atol=1e-9)
+    assert p.settled_pose[2] == pytest.approx(LAB_SETTLED_HEAVE[platform.name], abs=0.005)
+    assert p.settled_pose[2] == pytest.approx(LAB_SETTLED_HEAVE[platform.name], abs=2e-4)  # the fit's result
+    assert np.abs(p.settled_pose[[0, 1, 3, 4, 5]]).max() < 1e-4  # heave only, up to the rounded joint points
+    assert p.settled_pose[2] > platform.pose_max[2]  # the end stops lie beyond the motion envelope
+    np.testing.assert_allclose(p.eta, p.settled_pose)  # a platform starts SETTLED
+
+
+def test_every_table8_limit_is_reachable_within_the_strokes(platform):
+    """Issue 16: the fit kept every Table 8 limit: each one reached alone (the other five at 0) has all
+    six legs inside [min_length, max_length], and forward kinematics comes back to it."""
+    for k in range(6):
+        for value in (platform.pose_min[k], platform.pose_max[k]):
+            eta = np.zeros(6)
+            eta[k] = value
+            legs = platform.leg_lengths(eta)
+            assert np.all(legs >= platform.leg_min) and np.all(legs <= platform.leg_max), (k, value, legs)
+            fk = platform.fk(legs)
+            assert fk.success
+            np.testing.assert_allclose(fk.eta, eta, atol=1e-9)
+
+
+def test_the_command_box_holds_every_command_and_table8_stays_the_hard_limit(platform):
+    """A command box inside Table 8 (the lab PLC's etaRefMin/Max, EM1500's here for both): a remote pose
+    far outside it and a generator beyond it are held to it; the box must hold neutral and lie in Table 8."""
+    box = (np.array([-0.15, -0.15, -0.3, *np.radians([-5] * 3)]), np.array([0.15, 0.15, 0.3, *np.radians([5] * 3)]))
+    p = Platform(platform, ramp_time=0.5, start="neutral", command_box=box)
+    with pytest.raises(PlatformError, match=r"exceeds the .* operational box"):
+        Generator.make([0, 0, 0.31, 0, 0, 0], np.full(6, 0.2), np.zeros(6), platform, box)
+    p.set_source("remote")
+    p.remote.set(platform.pose_max * 2)
+    p.command("engage")
+    eta = _run(p, 6.0)
+    np.testing.assert_allclose(eta[-1], box[1], atol=1e-6)  # held at the box's corner
+    assert np.all(eta <= box[1] + 1e-12) and np.all(eta >= box[0] - 1e-12)
+    for bad, words in (((0.5 * box[1], box[1]), "hold the neutral pose"), ((box[0], platform.pose_max * 2), "Table 8")):
+        with pytest.raises(PlatformError, match=words):
+            Platform(platform, command_box=bad)
+
+
 def test_symmetric_poses_against_closed_form(platform):
     """Pure heave: every leg √(r_xy² + (h0 + z)²); pure yaw: two groups of three equal legs."""
     a, b = platform.a_n, platform.b_b
@@ -145,11 +194,15 @@ def test_motion_filter_never_passes_a_limit(seed, name, dt):
 
 
 def _run(p: Platform, seconds: float, dt: float = 0.01):
+    """Step ``p``; every pose inside Table 8 widened to the settled pose (the end stops), inside the
+    command box whenever the platform is NEUTRAL or ENGAGED; speeds and accelerations within Table 8."""
     m = p.model
     eta, v_prev = [], p.eta_dot
     for _ in range(int(seconds / dt)):
         e = p.step(dt)
-        assert np.all(e >= m.pose_min - 1e-12) and np.all(e <= m.pose_max + 1e-12)
+        assert np.all(e >= p.envelope_min - 1e-12) and np.all(e <= p.envelope_max + 1e-12)
+        if p.status in ("neutral", "engaging", "engaged", "disengaging"):
+            assert np.all(e >= p.command_min - 1e-12) and np.all(e <= p.command_max + 1e-12)
         assert np.all(np.abs(p.eta_dot) <= m.speed_max * (1 + 1e-12))
         assert np.all(np.abs(p.eta_dot - v_prev) <= m.accel_max * dt * (1 + 1e-9) + 1e-12)
         v_prev = p.eta_dot

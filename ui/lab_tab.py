@@ -96,6 +96,13 @@ class PlatformPanel(QWidget):
         self.status.setTextFormat(Qt.RichText)
         self.status.setWordWrap(True)  # a long source line (Hs, Tp, six scales) wraps, never cut at the edge
         ml.addWidget(self.status, 1, 0, 1, 4)
+        self.box_label = QLabel("")  # the operational box every command is clipped to (issue 16)
+        self.box_label.setWordWrap(True)
+        self.box_label.setToolTip(
+            "Every motion source (generator, simulation, remote pose, time series) is clipped to the lab's "
+            "operational box before the motion filter (the lab PLC's etaRefMin/Max); Table 8 stays the hard limit."
+        )
+        ml.addWidget(self.box_label, 2, 0, 1, 4)
 
         src = QGroupBox("Motion source")
         sl = QVBoxLayout(src)
@@ -309,10 +316,28 @@ class PlatformPanel(QWidget):
 
     # ------------------------------------------------------------------ state
     def set_info(self, info) -> None:
-        """The platform's static data from the engine's description (leg range, pose box, its sea)."""
+        """The platform's static data from the engine's description (leg range, pose boxes, its sea).
+
+        The generator amplitudes range over the smaller side of the operational box and the remote pose
+        fields over the box (as on the lab HMI, whose amplitude fields range over etaRefMin…etaRefMax)."""
         self.info = info
         if info.spectrum is not None:
             self.spec_curve.setData(info.spectrum["omega"], info.spectrum["s"])
+        lo = info.command_min if info.command_min is not None else info.pose_min
+        hi = info.command_max if info.command_max is not None else info.pose_max
+        if len(lo) == 6 and len(hi) == 6:
+            shown = [
+                (v, w) if i < 3 else (math.degrees(v), math.degrees(w))
+                for i, (v, w) in enumerate(zip(lo, hi, strict=True))
+            ]
+            for (amp, _, _), box, (a, b) in zip(self.gen, self.remote, shown, strict=True):
+                amp.setRange(0.0, min(-a, b))
+                box.setRange(a, b)
+            parts = [
+                f"{d} {a:+.3g}…{b:+.3g} {'m' if i < 3 else '°'}"
+                for i, (d, (a, b)) in enumerate(zip(DOFS, shown, strict=True))
+            ]
+            self.box_label.setText("operational box (command limit): " + ", ".join(parts))
 
     def update_state(self, p, t: float) -> None:
         status = p.status.upper()
@@ -511,6 +536,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
     """The Motion-Lab HMI; ``link_factory`` makes the link to the lab engine on first view."""
 
     notice = pyqtSignal(str, str)
+    plc_link = pyqtSignal(str, str)  # the plant's link as a status light: state (ok/warn/error/off), detail
     engine_label = "Motion-Lab"
 
     def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
@@ -530,12 +556,56 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.tabs.addTab(self._control(), "Comau && winch")
         self.tabs.addTab(self._scene_tab(), "Scene && load")
         self.start = QLabel("The Motion-Lab engine starts when this tab is first opened.")
+        self.plc_bar = self._plc_bar()
         lay = QVBoxLayout(self)
         lay.addWidget(self.start)
+        lay.addWidget(self.plc_bar)
         lay.addWidget(self.tabs)
         self._set_enabled(False)
 
     # ------------------------------------------------------------------ layout
+    def _plc_bar(self) -> QWidget:
+        """The PLC's error, as the lab HMI shows it, with Acknowledge; never a modal box (STOP stays live)."""
+        bar = QWidget()
+        bar.setStyleSheet("background: #5a1f1d; color: white;")
+        row = QHBoxLayout(bar)
+        row.setContentsMargins(6, 3, 6, 3)
+        self.plc_text = QLabel("")
+        self.plc_text.setWordWrap(True)
+        row.addWidget(self.plc_text, 1)
+        self.plc_ack = QPushButton("Acknowledge")
+        self.plc_ack.setFocusPolicy(Qt.NoFocus)  # Space stays STOP
+        self.plc_ack.setToolTip("writes MAIN.bReset; a platform in WARNING/ERROR: its bReset, then SETTLED")
+        self.plc_ack.clicked.connect(lambda: self._send("lab_plc_ack"))
+        row.addWidget(self.plc_ack)
+        bar.hide()
+        return bar
+
+    def _show_plant(self, state) -> None:
+        """The plant backend's link: a status light (simulated, PLC ok / stale / lost / connecting / error)
+        and, while the PLC reports an error, the bar above the tabs."""
+        pl = getattr(state, "plant", None)
+        if pl is None or pl.backend != "plc":
+            self.plc_link.emit("off", "simulated")
+            self.plc_bar.hide()
+            return
+        if pl.link == "lost":
+            light = ("error", f"LOST: {pl.last_error}")
+        elif pl.link == "connecting":
+            light = ("warn", f"connecting: {pl.last_error or pl.target}")
+        elif pl.plc_error:
+            light = ("error", f"ERROR: {pl.plc_error}")
+        elif pl.link == "stale":
+            light = ("warn", f"no data for {pl.data_age:.1f} s")
+        else:
+            light = ("ok", pl.plc_state or "connected")
+        self.plc_link.emit(*light)
+        show = bool(pl.plc_error) and pl.connected
+        if show:
+            self.plc_text.setText(f"<b>PLC error</b>: {pl.plc_error}")
+            self.plc_ack.setEnabled(not state.estop)  # the E-STOP's reset resets the PLC: acknowledge after it
+        self.plc_bar.setVisible(show)
+
     def _control(self) -> QWidget:
         w = QWidget()
         grid = QGridLayout(w)
@@ -547,6 +617,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.comau_mode.model().item(COMAU_MODES.index("hold")).setEnabled(False)  # shown, not chosen
         self.comau_mode.activated.connect(lambda i: self._send("lab_comau_mode", mode=COMAU_MODES[i]))
         cl.addRow("mode", self.comau_mode)
+        self.comau_limits = QLabel("")  # the joint-limit profile in force (issue 16)
+        self.comau_limits.setTextFormat(Qt.RichText)
+        self.comau_limits.setWordWrap(True)
+        cl.addRow(self.comau_limits)
         self.joint_pos_bars = [_bar() for _ in range(3)]
         self.joint_speed_bars = [_bar() for _ in range(3)]
         for k in range(3):
@@ -565,7 +639,9 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self._slider_timer = QTimer(self)  # the engine zeroes a LOCAL speed not refreshed for 0.3 s
         self._slider_timer.setInterval(100)
         self._slider_timer.timeout.connect(lambda: self._slider(self.winch_slider.value()))
-        wl.addRow("speed (springs back)", self.winch_slider)
+        # the lab HMI's "Velocity Setpoint - max 0.2 m/s": −100…100, u = value/100 · top speed, springs back
+        self.winch_slider_label = QLabel("velocity setpoint (springs back)")
+        wl.addRow(self.winch_slider_label, self.winch_slider)
         rbox = QGroupBox("REMOTE drive (Comau tool x, y, z; winch w)")
         rl = QVBoxLayout(rbox)
         self.stick = VirtualStick(aux_axis="w winch")
@@ -665,7 +741,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         elif not self.winch_slider.isSliderDown():
             self._slider_timer.stop()
         if self.desc is not None and self.desc.winch is not None:
-            vmax = self.desc.winch.speed_max
+            vmax = self.desc.winch.speed_max  # u = value/100 · 0.2 m/s (the lab HMI, motionlab_plc.json)
             self._send("lab_winch", speed=vmax * value / 100.0)
 
     def on_reply(self, re: str, ok: bool, error: str) -> None:
@@ -684,11 +760,24 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             if info.name in self.platforms:
                 self.platforms[info.name].set_info(info)
         self.scene.set_description(desc)
+        if desc.winch is not None:
+            self.winch_slider_label.setText(f"velocity setpoint, max {desc.winch.speed_max:g} m/s (springs back)")
+        if desc.comau_profile:
+            lim = ", ".join(
+                f"q{k + 1} {math.degrees(a):.0f}…{math.degrees(b):.0f}°"
+                for k, (a, b) in enumerate(zip(desc.comau_lower, desc.comau_upper, strict=True))
+            )
+            law = f", A = {desc.comau_boundary_accel:.3g} rad/s² at the limits" if desc.comau_boundary_accel else ""
+            speed = max(desc.comau_speed) if desc.comau_speed else 0.0
+            self.comau_limits.setText(
+                f"joint limits <b>{desc.comau_profile}</b>: {lim}, {math.degrees(speed):.0f}°/s{law}"
+            )
 
     def on_state(self, state) -> None:
         if getattr(state, "kind", None) != "lab":
             return
         self.state = state
+        self._show_plant(state)
         t = state.t
         for p in state.platforms:
             self.platforms[p.name].update_state(p, t)
@@ -701,8 +790,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
                 _set_bar(self.joint_speed_bars[k], use, f"{100 * use:.0f} %")
             wi = d.winch
             _set_bar(self.wire_bar, (w.length - wi.min) / (wi.max - wi.min), f"{w.length:.3f} m")
-        self.comau_mode.setCurrentIndex(COMAU_MODES.index(c.mode))
-        self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w.mode))
+        if c.mode in COMAU_MODES:  # the PLC may report a mode Bosun does not offer (shown in its light)
+            self.comau_mode.setCurrentIndex(COMAU_MODES.index(c.mode))
+        if w.mode in ("local", "remote", "motion_comp"):
+            self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w.mode))
         self.winch_slider.setEnabled(w.mode == "local")
         self.vvmc.blockSignals(True)
         self.vvmc.setChecked(state.vvmc)

@@ -187,6 +187,7 @@ class MainWindow(QMainWindow):
         self.motion_lab.on_link = lambda lk: self._watch_link("Motion-Lab", lk)
         self.crane_head.notice.connect(self.on_marine_notice)
         self.motion_lab.notice.connect(self.on_marine_notice)
+        self.motion_lab.plc_link.connect(lambda state, detail: self.status.lights["plc"].set(state, detail))
         self.status.alarms.ack.connect(self.acknowledge)
         self.gui_alarms = AlarmList("GUI", note=lambda lvl, text: None)
         self.status.lights["engine"].set("ok", "connected")
@@ -519,6 +520,8 @@ class MainWindow(QMainWindow):
             self.lost.add(origin)
             if origin == "teleop":
                 self.status.set_lost()
+            if origin == "Motion-Lab":  # its engine is gone: nothing is known of the PLC link
+                self.status.lights["plc"].set("unknown", "unknown")
             self.show_error(
                 "Engine connection lost" if origin == "teleop" else f"{origin} engine lost",
                 f"{message}. The engine holds its machines when input stops; reconnecting.",

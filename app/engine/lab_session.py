@@ -9,12 +9,17 @@ messages, see docs/protocol.md): ``lab_platform`` (neutral / settle / engage / d
 Comau tool point in REMOTE (s_x, s_y, s_z; 0.25 m/s at full stick, in the robot base frame) and the
 winch in REMOTE (s_w, up to its speed limit).  After an E-STOP reset every machine holds where it
 stands until the operator commands it anew.
+
+The machines are driven through a plant backend (:mod:`app.plant`): ``simulated`` steps the
+:class:`~app.sim.motionlab.MotionLab`, ``plc`` (``--plc AMS_NET_ID``) drives the real lab through its
+TwinCAT PLC and keeps the same model set to what the PLC reports; the scene does not know which.
+``lab_plc_ack`` acknowledges a PLC error as the lab's HMI does.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -22,7 +27,6 @@ import numpy as np
 from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, Scene
 from app.errors import BosunError
-from app.marine.vessel import VesselParticulars, parametric_rao
 from app.marine.waves import SPECTRA
 from app.marine.waves import spectrum as sea_spectrum
 from app.models.lab import load_lab, resolve_lab
@@ -39,8 +43,9 @@ from app.net.snapshots import (
     WinchInfo,
     WinchState,
 )
+from app.plant.base import LabBackend
+from app.plant.simulated import SimulatedLab
 from app.sim.motionlab import REMOTE_TOOL_SPEED, MotionLab
-from app.sim.stewart import Generator, WaveSimulation, parse_timeseries_csv
 from app.teleop.pipeline import InputPipeline
 
 STEP = 0.01
@@ -52,29 +57,56 @@ SOURCES = ("simulation", "generator", "remote", "timeseries")
 
 @dataclass
 class LabSession(Scene):
+    """The Motion-Lab scene.  ``comau_profile`` names the Comau's joint-limit profile (``lab``: the
+    lab program's limits and velocity-boundary law, ``datasheet``: Table 6); ``None`` takes the
+    layout's default (``<crane limits=…>``, ``lab`` for motionlab.xml).  Chosen at start: a profile
+    never changes under a moving arm.  ``plc``: an :class:`app.plc.bridge.PlcTarget` to drive the real
+    lab's PLC (``plc_options``: the bridge's timeouts); ``None`` simulates."""
+
     lab_name: str = "motionlab"
+    comau_profile: str | None = None
+    plc: Any = None
+    plc_options: dict[str, Any] = field(default_factory=dict)
 
     KIND: ClassVar[str] = "lab"
     TITLE: ClassVar[str] = "the Motion-Lab"
     COMMANDS: ClassVar[dict[str, str]] = {
-        m: m for m in ("lab_platform", "lab_source", "lab_remote_pose", "lab_comau_mode", "lab_winch", "lab_vvmc")
+        m: m
+        for m in (
+            "lab_platform",
+            "lab_source",
+            "lab_remote_pose",
+            "lab_comau_mode",
+            "lab_winch",
+            "lab_vvmc",
+            "lab_plc_ack",
+        )
     }
 
     def __post_init__(self) -> None:
         self._init_scene()
         self.robot_name, self.solver_name, self.mode = "motionlab", "analytic", "lab"
         self.layout = load_lab(self.lab_name)
-        self.lab = MotionLab(self.layout, at_work=True)
+        self.lab = MotionLab(self.layout, at_work=True, comau_profile=self.comau_profile)
+        self.plant: LabBackend
+        if self.plc is None:
+            self.plant = SimulatedLab(self.lab)
+        else:
+            from app.plant.plc import PlcLab
+
+            self.plant = PlcLab(self.lab, self.plc, **self.plc_options)
         self.names = [n for n, _ in self.layout.platforms]
         self._carry = 0.0
         self.input = InputPipeline(note=self.note, axes=4)
         self.alarms = AlarmList("Motion-Lab", note=self.note)
         self._local_speed_time = -np.inf
-        self._rao = None
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
         self.spectra: list[tuple[str, float, float] | None] = [None for _ in self.names]  # the last simulated sea
         self.vvmc = False
-        self.note("info", f"Motion-Lab: {', '.join(self.names)} SETTLED, Comau REMOTE, winch LOCAL")
+        if self.plc is None:
+            self.note("info", f"Motion-Lab: {', '.join(self.names)} SETTLED, Comau REMOTE, winch LOCAL")
+        else:
+            self.note("info", f"Motion-Lab on its PLC at {self.plc}: connecting; the machines as the PLC reports them")
 
     def _platform(self, name: str) -> int:
         if name not in self.names:
@@ -86,55 +118,22 @@ class LabSession(Scene):
             raise CommandError("E-STOP is latched; reset first")
 
     # ------------------------------------------------------------------ commands
+    def _plant(self, fn, *args) -> Any:
+        """A command to the plant backend; its refusal becomes the command's (nothing changed)."""
+        try:
+            return fn(*args)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+
     def lab_platform(self, platform: str, action: str) -> None:
         self._guard()
         k = self._platform(platform)
-        try:
-            self.lab.platforms[k].command(action)
-        except BosunError as err:
-            raise CommandError(str(err)) from None
+        self._plant(self.plant.platform, k, action)
         self.note("info", f"{platform}: {action.upper()}")
 
     def lab_source(self, platform: str, source: str, **p: Any) -> None:
         k = self._platform(platform)
-        plat = self.lab.platforms[k]
-        try:
-            if plat.mode == "engaged":
-                raise CommandError(f"{platform} is ENGAGED; disengage before changing the motion source")
-            if source == "generator":
-                obj = Generator.make(
-                    p.get("amplitude", [0.0] * 6), p.get("frequency", [0.1] * 6), p.get("phase", [0.0] * 6), plat.model
-                )
-                info = {"amplitude": obj.amplitude.tolist(), "frequency": obj.frequency.tolist()}
-            elif source == "simulation":
-                if self._rao is None:
-                    self._rao = parametric_rao(VesselParticulars())
-                args = (
-                    self._rao,
-                    p.get("spectrum", "jonswap"),
-                    p.get("hs", 2.0),
-                    p.get("tp", 8.0),
-                    p.get("heading", 150.0 if k == 0 else 90.0),
-                    int(p.get("seed", 1)),
-                )
-                src = WaveSimulation(*args, np.ones(6))
-                auto = WaveSimulation.auto_scale(src.significant, plat.model)
-                scale = np.asarray(p["scale"], dtype=float) if p.get("scale") else auto
-                if scale.shape != (6,) or np.any(scale < 0) or np.any(scale > 10):
-                    raise CommandError("scale needs six factors between 0 and 10")
-                obj = WaveSimulation(*args, scale)
-                info = {"hs": args[2], "tp": args[3], "heading": args[4], "scale": scale.tolist()}
-                info["significant"] = src.significant.tolist()
-            elif source == "timeseries":
-                if not p.get("csv"):
-                    raise CommandError("timeseries needs the CSV text (columns t,x,y,z,phi,theta,psi)")
-                obj = parse_timeseries_csv(p["csv"], p.get("name", "time series"))
-                info = {"duration": obj.duration, "samples": int(obj.t.size)}
-            else:
-                obj, info = None, {}
-            plat.set_source(source, obj)
-        except BosunError as err:
-            raise CommandError(str(err)) from None
+        info = self._plant(self.plant.source, k, source, p)
         self.sources[k] = {"source": source, **info}
         if source == "simulation":
             self.spectra[k] = (p.get("spectrum", "jonswap"), float(info["hs"]), float(info["tp"]))
@@ -143,56 +142,61 @@ class LabSession(Scene):
 
     def lab_remote_pose(self, platform: str, eta: list[float]) -> None:
         k = self._platform(platform)
-        try:
-            self.lab.platforms[k].remote.set(eta)
-        except BosunError as err:
-            raise CommandError(str(err)) from None
+        self._plant(self.plant.remote_pose, k, eta)
 
     def lab_comau_mode(self, mode: str) -> None:
         self._guard()
         if mode == "remote":
             self.input.disarm("Comau REMOTE selected")
-        try:
-            self.lab.set_comau_mode(mode)
-        except BosunError as err:
-            raise CommandError(str(err)) from None
+        self._plant(self.plant.comau_mode, mode)
         self.note("info", f"Comau: {mode.upper()}")
 
     def lab_winch(self, mode: str | None = None, speed: float | None = None) -> None:
         self._guard()
-        try:
-            if mode is not None:
-                if mode == "remote":
-                    self.input.disarm("winch REMOTE selected")
-                self.lab.set_winch_mode(mode)
-                self.note("info", f"winch: {mode.upper()}")
-            if speed is not None:
-                if self.lab.winch.mode != "local":
-                    raise CommandError("the speed slider drives the winch in LOCAL mode only")
-                lim = self.layout.winch["speed"]
-                self.lab.winch.speed_command = float(np.clip(speed, -lim, lim))
-                self._local_speed_time = time.monotonic()  # the GUI resends while the slider is held
-        except BosunError as err:
-            raise CommandError(str(err)) from None
+        if mode is not None:
+            if mode == "remote":
+                self.input.disarm("winch REMOTE selected")
+            self._plant(self.plant.winch_mode, mode)
+            self.note("info", f"winch: {mode.upper()}")
+        if speed is not None:
+            if self.lab.winch.mode != "local":
+                raise CommandError("the speed slider drives the winch in LOCAL mode only")
+            lim = self.plant.winch_speed_max
+            self._plant(self.plant.winch_speed, float(np.clip(speed, -lim, lim)))
+            self._local_speed_time = time.monotonic()  # the GUI resends while the slider is held
 
     def lab_vvmc(self, on: bool) -> None:
         self._guard()
         self.input.disarm("VVMC switched")  # off puts the Comau in REMOTE: a held stick must not drive it
-        self.lab.set_vvmc(on)
+        self._plant(self.plant.vvmc, on)
         self.vvmc = on
         self.note("info", f"VVMC {'ON: Comau and winch MOTION_COMP' if on else 'OFF: Comau REMOTE, winch LOCAL'}")
+
+    def lab_plc_ack(self, platform: str | None = None) -> None:
+        """Acknowledge the PLC's error as the lab HMI does (``MAIN.bReset``; a platform in WARNING or ERROR:
+        its ``bReset``, then ``eModeCmd`` := SETTLED).  Refused while the E-STOP is latched: its reset
+        resets the PLC, an acknowledgement must not undo a STOP."""
+        self._guard()
+        k = None if platform is None else self._platform(platform)
+        self.note("info", self._plant(self.plant.acknowledge, k))
 
     def estop(self, source: str = "operator") -> None:
         if not self.estop_latched:
             self.note("error", f"E-STOP from {source}: platforms, robot and winch braking to rest")
+            why = self.plant.ready()
+            if why:
+                self.note("error", f"E-STOP latched here, not yet on the plant ({why}): written as soon as it is back")
         self.estop_latched = True
         self.vvmc = False
-        self.lab.estop()
+        self.plant.estop()
 
     def reset(self) -> None:
         if self.estop_latched:
+            why = self.plant.ready()
+            if why:
+                raise CommandError(f"reset refused: {why}; the E-STOP stays latched")
+            self._plant(self.plant.reset)
             self.estop_latched = False
-            self.lab.reset()
             self.input.disarm("E-STOP reset")
             held = ", ".join(f"{n} {p.status.upper()}" for n, p in zip(self.names, self.lab.platforms, strict=True))
             self.note("info", f"E-STOP reset: every machine holds where it stands ({held}, Comau HOLD, winch LOCAL)")
@@ -202,14 +206,10 @@ class LabSession(Scene):
         inp = self.input.step(now)
         if inp.stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
-        lab = self.lab
         s = inp.signal if inp.enabled and not self.estop_latched else np.zeros(4)
-        if lab.comau_mode == "remote":
-            lab.tool_velocity_cmd = REMOTE_TOOL_SPEED * s[:3]
-        if lab.winch.mode == "remote":
-            lab.winch.speed_command = self.layout.winch["speed"] * s[3]
-        elif lab.winch.mode == "local" and time.monotonic() - self._local_speed_time > LOCAL_SPEED_TIMEOUT:
-            lab.winch.speed_command = 0.0  # the spring-return slider is not being held (or the GUI is gone)
+        self.plant.drive(REMOTE_TOOL_SPEED * s[:3], self.plant.winch_speed_max * s[3])  # REMOTE modes only
+        if self.lab.winch.mode == "local" and time.monotonic() - self._local_speed_time > LOCAL_SPEED_TIMEOUT:
+            self.plant.winch_speed(0.0)  # the spring-return slider is not being held (or the GUI is gone)
 
     def _check_alarms(self) -> None:
         al, lab = self.alarms, self.lab
@@ -241,6 +241,20 @@ class LabSession(Scene):
                 f"{name}: target beyond an actuator stroke, scaled back (leg limit)",
             )
         al.set("payload_below_deck", self._payload_below_deck(), "critical", "payload below the EM1500 deck")
+        self._check_link()
+
+    def _check_link(self) -> None:
+        """Alarms of the plant's link (the plc backend): lost or stale link, the PLC's error, unusable symbols."""
+        link = self.plant.link(time.monotonic())
+        al = self.alarms
+        down = link.link in ("connecting", "lost")
+        stop = "; STOP latched here, written on reconnect" if self.estop_latched else ""
+        al.set(
+            "plc_link", down, "critical", f"PLC link {link.link.upper()}: {link.last_error or 'no answer yet'}{stop}"
+        )
+        al.set("plc_stale", link.link == "stale", "warning", f"PLC data {link.data_age:.1f} s old: holding the last")
+        al.set("plc_error", bool(link.plc_error), "critical", f"PLC error: {link.plc_error} (acknowledge: lab_plc_ack)")
+        al.set("plc_symbols", bool(link.problems), "warning", f"{len(link.problems)} PLC symbol(s) not usable")
 
     def _payload_below_deck(self) -> bool:
         """The load inside EM1500's footprint and below its top plate (z-down body frame: z > 0)."""
@@ -251,6 +265,12 @@ class LabSession(Scene):
         return bool(np.hypot(p_b2[0], p_b2[1]) <= radius and p_b2[2] > 0.0)
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
+        for kind, text in self.plant.poll(now):  # the real plant's data and link events, also while paused
+            if kind in ("link_lost", "link_up"):
+                self.input.disarm("PLC link lost" if kind == "link_lost" else "PLC link back")
+                self.note("error" if kind == "link_lost" else "info", text)
+            else:
+                self.note(kind, text)
         if self.paused:  # time stands still; the stop button still latches
             if self.input.step(now).stop:
                 self.estop(source=f"the stop button of {self.input.profile.name}")
@@ -261,9 +281,12 @@ class LabSession(Scene):
             return
         self._carry -= n * STEP
         self._apply_input(now)
-        for _ in range(min(n, 50)):  # never more than 0.5 s of catch-up in one tick
-            self.lab.step(STEP)
+        self.plant.step(STEP, min(n, 50))  # never more than 0.5 s of catch-up in one tick
         self._check_alarms()
+
+    def close(self) -> None:
+        """The plant backend's thread and connection (the PLC's)."""
+        self.plant.close()
 
     # ------------------------------------------------------------------ state
     def _scene(self) -> LabScenePoints:
@@ -308,9 +331,11 @@ class LabSession(Scene):
                     pose_min=m.pose_min.tolist(),
                     pose_max=m.pose_max.tolist(),
                     spectrum=spec,
+                    command_min=lab.platforms[k].command_min.tolist(),
+                    command_max=lab.platforms[k].command_max.tolist(),
+                    settled=lab.platforms[k].settled_pose.tolist(),
                 )
             )
-        r = lab.robot
         return LabDescription(
             seq=self.describe_seq,
             title="Motion-Lab",
@@ -318,12 +343,17 @@ class LabSession(Scene):
             lab_xml=resolve_lab(self.lab_name).read_text(encoding="utf-8"),
             platforms=plats,
             comau_xml=resolve(self.layout.crane_robot).read_text(encoding="utf-8"),
-            comau_lower=r.lower.tolist(),
-            comau_upper=r.upper.tolist(),
-            comau_speed=r.speed.tolist(),
-            winch=WinchInfo(min=w["min_length"], max=w["max_length"], speed_max=w["speed"]),
+            comau_lower=lab.joints.lower.tolist(),  # the profile in force
+            comau_upper=lab.joints.upper.tolist(),
+            comau_speed=lab.joints.speed.tolist(),
+            comau_profile=lab.profile.name,
+            comau_profiles=list(self.layout.crane_profiles or [lab.profile.name]),
+            comau_accel=float(lab.joints.accel[0]),
+            comau_boundary_accel=float(lab.joints.brake[0]),
+            winch=WinchInfo(min=w["min_length"], max=w["max_length"], speed_max=self.plant.winch_speed_max),
             sources=list(SOURCES),
             spectra=list(SPECTRA),
+            backend=self.plant.NAME,
         )
 
     def snapshot(self) -> LabSnapshot:
@@ -359,4 +389,5 @@ class LabSession(Scene):
             tool_error_b2=s.e_t_b2.tolist(),
             payload_height_error=float(s.payload_height_error),
             scene=self._scene(),
+            plant=self.plant.link(time.monotonic()),
         )

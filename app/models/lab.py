@@ -3,6 +3,12 @@
 A layout names two Stewart platforms, the serial crane mounted on the first, the winch, the
 payload and the work point VVMC keeps the tool at.  Frames are given as position + unit
 quaternion [w x y z], as in the lab's calibration file.  Errors name the file and the line.
+
+What belongs to the lab's installation rather than to a machine lives here too: each platform's
+*operational box* (``<command_box>``, the lab PLC's ``etaRefMin/Max``: the command limit of every
+motion source, inside the machine's Table 8 hard limits) and the crane's joint-limit *profiles*
+(``<joint_limits name=…>``: the lab's own program limits next to the robot file's data sheet,
+``datasheet``, always available; ``<crane limits=…>`` names the default).  Angles in degrees.
 """
 
 from __future__ import annotations
@@ -34,6 +40,26 @@ def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
     )
 
 
+DATASHEET = "datasheet"  # the crane robot file's own limits (Motion-Lab Table 6), always a profile
+
+
+@dataclass(frozen=True, eq=False)
+class JointLimitProfile:
+    """Joint limits of the lab's crane for one use (SI: rad, rad/s, rad/s²).
+
+    ``lower``/``upper``/``speed`` are ``None`` in the ``datasheet`` profile (the robot file's limits);
+    ``boundary_accel`` is A of the velocity-boundary law |q̇| ≤ √(2 A d) near a limit (``None``: the
+    joint acceleration limit, as the motion filter always brakes).
+    """
+
+    name: str
+    lower: NDArray[np.float64] | None = None
+    upper: NDArray[np.float64] | None = None
+    speed: NDArray[np.float64] | None = None
+    boundary_accel: float | None = None
+    source: str = ""
+
+
 @dataclass(frozen=True, eq=False)
 class LabLayout:
     """A parsed lab layout.  Transforms are 4×4, named ``T_<to>_<from>`` (the papers' H_from^to).
@@ -49,6 +75,10 @@ class LabLayout:
     winch : dict   min_length, max_length, start_length [m], speed [m/s], accel [m/s²]
     payload_mass : float [kg];  payload_damping : float [1/s]
     work_point_b2 : ndarray (3,)   the tool's place in platform 2's body frame [m]
+    command_boxes : tuple of 2 × (min, max) or None   operational pose box of each platform [m, rad]
+        (None: the platform's Table 8 box)
+    crane_profiles : dict name → JointLimitProfile   ``datasheet`` and the file's ``<joint_limits>``
+    crane_profile : str   the default profile (``<crane limits=…>``; ``datasheet`` when absent)
     """
 
     name: str
@@ -65,6 +95,19 @@ class LabLayout:
     payload_mass: float
     payload_damping: float
     work_point_b2: NDArray[np.float64]
+    command_boxes: tuple[tuple[NDArray[np.float64], NDArray[np.float64]] | None, ...] = (None, None)
+    crane_profiles: dict[str, JointLimitProfile] | None = None
+    crane_profile: str = DATASHEET
+
+    def profile(self, name: str | None = None) -> JointLimitProfile:
+        """The crane's joint-limit profile ``name`` (default: the layout's); RobotXmlError if unknown."""
+        profiles = self.crane_profiles or {DATASHEET: JointLimitProfile(DATASHEET)}
+        key = self.crane_profile if name is None else name
+        if key not in profiles:
+            raise RobotXmlError(
+                self.path, None, f"unknown crane joint-limit profile {key!r} (this layout has {', '.join(profiles)})"
+            )
+        return profiles[key]
 
 
 def resolve_lab(name_or_path: str = "motionlab") -> Path:
@@ -160,6 +203,40 @@ def parse_lab_xml(text: str | bytes, path: str = "<string>") -> LabLayout:
     wp = need(root, "work_point")
     if wp.get("on") != names[1][0]:
         raise fail(wp, f"<work_point on=...> must name the second platform '{names[1][0]}'")
+    boxes = []
+    for p in plats:
+        box = p.find("command_box")
+        if box is None:
+            boxes.append(None)
+            continue
+        lo, hi = nums(box, "min", 6), nums(box, "max", 6)
+        if not (np.all(lo < 0.0) and np.all(hi > 0.0)):
+            raise fail(box, "<command_box> must contain the neutral pose: every min < 0 < every max")
+        scale = np.array([1.0, 1.0, 1.0, math.pi / 180, math.pi / 180, math.pi / 180])  # m, m, m, deg → rad
+        boxes.append((lo * scale, hi * scale))
+    profiles = {DATASHEET: JointLimitProfile(DATASHEET, source="the crane robot file (Motion-Lab Table 6)")}
+    crane_accel = math.radians(positive(crane, "accel"))
+    for el in crane.findall("joint_limits"):
+        name = el.get("name", "")
+        if not name or name in profiles:
+            raise fail(el, f"<joint_limits> needs a unique name other than '{DATASHEET}', got '{name}'")
+        lo, hi = np.radians(nums(el, "min", 3)), np.radians(nums(el, "max", 3))
+        if not np.all(lo < hi):
+            raise fail(el, "<joint_limits> every min must be below its max")
+        speed = np.radians(nums(el, "speed", 3))
+        if not np.all(speed > 0):
+            raise fail(el, "<joint_limits> speeds must be positive")
+        a_b = math.radians(positive(el, "boundary_accel"))
+        if a_b > crane_accel * (1 + 1e-12):
+            # braking at A must be possible with the joints' acceleration limit (the filter's invariant)
+            raise fail(el, "<joint_limits> boundary_accel must not exceed the crane's accel")
+        src = el.find("source")
+        profiles[name] = JointLimitProfile(
+            name, lo, hi, speed, a_b, " ".join((src.text or "").split()) if src is not None else ""
+        )
+    default = crane.get("limits", DATASHEET)
+    if default not in profiles:
+        raise fail(crane, f"<crane limits='{default}'> names no profile (this layout has {', '.join(profiles)})")
     src = root.find("source")
     return LabLayout(
         name=root.get("name", Path(path).stem),
@@ -170,10 +247,13 @@ def parse_lab_xml(text: str | bytes, path: str = "<string>") -> LabLayout:
         T_world_n2=frame(plats[1]),
         crane_robot=crane.get("robot", ""),
         T_b1_r=frame(crane),
-        crane_accel=math.radians(positive(crane, "accel")),
+        crane_accel=crane_accel,
         park_q=np.radians(nums(park, "q", 3)),
         winch=winch,
         payload_mass=positive(payload, "mass"),
         payload_damping=damping,
         work_point_b2=nums(wp, "xyz", 3),
+        command_boxes=(boxes[0], boxes[1]),
+        crane_profiles=profiles,
+        crane_profile=default,
     )

@@ -97,6 +97,8 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "lab_comau_mode": {"mode": ("enum", True, ("settled", "remote", "motion_comp"))},
     "lab_winch": {"mode": ("enum", False, ("local", "remote", "motion_comp")), "speed": ("float", False, 10.0)},
     "lab_vvmc": {"on": ("bool", True, None)},
+    # the real lab's PLC (``--plc``): acknowledge its error as the lab HMI does (``platform``: only that one)
+    "lab_plc_ack": {"platform": ("str", False, 32)},
 }
 
 #: scene commands the server hands to the scene's command table (fields as keywords)
@@ -116,6 +118,7 @@ SCENE_MESSAGES = frozenset(
         "lab_comau_mode",
         "lab_winch",
         "lab_vvmc",
+        "lab_plc_ack",
     }
 )
 

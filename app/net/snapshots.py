@@ -330,6 +330,27 @@ class LabScenePoints:
 
 
 @dataclass(kw_only=True, slots=True)
+class PlantLink:
+    """The lab's plant backend and, for ``plc``, the link to the TwinCAT PLC (docs/protocol.md)."""
+
+    backend: str = "simulated"  # simulated | plc
+    target: str = ""  # the PLC: "AMS_NET_ID:PORT at HOST"
+    link: str = "simulated"  # simulated | connecting | ok | lost
+    connected: bool = False  # the ADS connection is up (always true when simulated)
+    plc_state: str = ""  # MAIN.eState by name (NORMAL, STOP, …), "" before the first value
+    ads_state: int = 0  # the PLC's ADS state (5: RUN), 0 before the first
+    plc_error: str = ""  # what the PLC reports wrong (main state, a platform WARNING/ERROR), one line; "" if nothing
+    last_error: str = ""  # the link's last error, one line
+    reconnects: int = 0  # connections made after the first
+    data_age: float = -1.0  # s since the last value from the PLC (-1: none yet)
+    stop_written: bool = False  # MAIN.bStop read back TRUE on this connection after Bosun wrote it
+    problems: list[str] = field(default_factory=list)  # symbols missing or of another size (never used)
+    devices: dict[str, dict[str, Any]] = field(
+        default_factory=dict
+    )  # per device (em8000, comau, mru1 …) its PLC states
+
+
+@dataclass(kw_only=True, slots=True)
 class LabSnapshot(Snapshot):
     """The Norwegian Motion-Laboratory (``bosun server --plant lab``)."""
 
@@ -342,6 +363,7 @@ class LabSnapshot(Snapshot):
     tool_error_b2: list[float] = field(default_factory=list)  # tool − work point in EM1500's body frame [m]
     payload_height_error: float = 0.0  # [m]
     scene: LabScenePoints | None = None
+    plant: PlantLink | None = None  # the plant backend and its link (optional: older engines have none)
 
 
 @dataclass(kw_only=True, slots=True)
@@ -349,9 +371,12 @@ class PlatformInfo:
     name: str
     robot_xml: str  # the platform's robot file
     leg_range: list[float]  # [min, max] leg length [m]
-    pose_min: list[float]  # pose box [m, rad]
+    pose_min: list[float]  # pose box [m, rad]: Table 8, the hard limit
     pose_max: list[float]
     spectrum: dict[str, list[float]] | None = None  # the simulated sea's S(ω): ``omega`` [rad/s], ``s`` [m²s]
+    command_min: list[float] | None = None  # the operational box every command is clipped to [m, rad] (issue 16)
+    command_max: list[float] | None = None
+    settled: list[float] | None = None  # the SETTLED pose (all legs at their minimum length) [m, rad]
 
 
 @dataclass(kw_only=True, slots=True)
@@ -370,9 +395,14 @@ class LabDescription(Description):
     comau_lower: list[float] = field(default_factory=list)  # [rad]
     comau_upper: list[float] = field(default_factory=list)
     comau_speed: list[float] = field(default_factory=list)  # [rad/s]
+    comau_profile: str = ""  # the joint-limit profile in force (``lab``, ``datasheet``, …; issue 16)
+    comau_profiles: list[str] = field(default_factory=list)  # the profiles the layout offers
+    comau_accel: float | None = None  # joint acceleration limit [rad/s²]
+    comau_boundary_accel: float | None = None  # A of the velocity bound √(2 A d) at the joint limits [rad/s²]
     winch: WinchInfo | None = None
     sources: list[str] = field(default_factory=list)
     spectra: list[str] = field(default_factory=list)
+    backend: str = "simulated"  # the plant backend: simulated | plc
 
 
 SNAPSHOTS: dict[str, type[Snapshot]] = {c.KIND: c for c in (TeleopSnapshot, TacSnapshot, LabSnapshot)}

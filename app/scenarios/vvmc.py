@@ -47,6 +47,7 @@ class VvmcScenario:
     settle: float = 10.0  # not counted in the statistics [s] (after the ramp)
     rao: str | None = None
     lab: str = "motionlab"
+    comau_profile: str | None = None  # the Comau's joint-limit profile; None: the layout's (``lab``)
 
     def __post_init__(self) -> None:
         if self.spectrum not in SPECTRA:
@@ -92,10 +93,9 @@ def _sources(sc: VvmcScenario, lab: MotionLab) -> None:
     rao = load_rao(sc.rao) if sc.rao else parametric_rao(VesselParticulars())
     for p, heading in zip(lab.platforms, (sc.heading1, sc.heading2), strict=True):
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, np.ones(6))
-        scale = WaveSimulation.auto_scale(src.significant, p.model)
+        scale = WaveSimulation.auto_scale(src.significant, p.model, box=p.command_box)
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, scale)
-        p.mode = "neutral"
-        p.filter.reset(np.zeros(6))
+        p.place_at_neutral()
         p.ramp_time = sc.ramp
         p.set_source("simulation", src)
         p.command("engage")
@@ -111,7 +111,7 @@ def simulate(
     """One run; ``progress(n_steps_done)`` is called every 100 steps.  ``use_kernels``: compiled
     (True) or the NumPy reference (False) lab; default the lab's own (compiled when numba is there)."""
     layout = load_lab(sc.lab)
-    lab = MotionLab(layout, at_work=True)
+    lab = MotionLab(layout, at_work=True, comau_profile=sc.comau_profile)
     if use_kernels is not None:
         lab.use_kernels = use_kernels
     _sources(sc, lab)
@@ -147,6 +147,10 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
     """The JSON summary: rms relative tool-point error with and without VVMC, swing, utilisation."""
     layout = load_lab(sc.lab)
     robot = load_robot(layout.crane_robot)
+    prof = layout.profile(sc.comau_profile)  # utilisation of the limits in force
+    lower = robot.lower if prof.lower is None else prof.lower
+    upper = robot.upper if prof.upper is None else prof.upper
+    speed = robot.speed if prof.speed is None else prof.speed
     t0 = sc.ramp + sc.settle
 
     def stats(run: VvmcRun) -> dict:
@@ -154,7 +158,7 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
         e = run.e_t_b2[m]
         e0 = e  # from the work point, the same measure for both runs
         swing = np.degrees(np.arccos(np.clip(np.cos(run.swing[m, 0]) * np.cos(run.swing[m, 1]), -1, 1)))
-        q_range = robot.upper - robot.lower
+        q_range = upper - lower
         return {
             "rms_tool_error_m": _rms(np.linalg.norm(e0, axis=1)),
             "rms_tool_error_xyz_m": [_rms(e0[:, k]) for k in range(3)],
@@ -163,7 +167,7 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
             "rms_payload_height_error_m": _rms(run.height_error[m]) if run.compensated else None,
             "payload_swing_rms_deg": _rms(swing),
             "payload_swing_max_deg": float(swing.max()) if swing.size else 0.0,
-            "joint_speed_utilisation": [float(v) for v in np.max(np.abs(run.qd[m]), axis=0) / robot.speed],
+            "joint_speed_utilisation": [float(v) for v in np.max(np.abs(run.qd[m]), axis=0) / speed],
             "joint_range_utilisation": [float(v) for v in np.ptp(run.q[m], axis=0) / q_range],
             "winch_speed_utilisation": float(np.max(np.abs(run.L_w_dot[m])) / layout.winch["speed"]),
             "winch_length_range_m": [float(run.L_w[m].min()), float(run.L_w[m].max())],

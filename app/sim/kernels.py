@@ -36,6 +36,7 @@ __all__ = [
     "clamp_to_legs",
     "comau_ik",
     "comau_tool",
+    "command_clip",
     "follow_clamped",
     "lab_step",
     "leg_lengths",
@@ -66,11 +67,12 @@ def braking_speed(d, a, dt):
 
 
 @_jit
-def motion_filter_update(x, v, a, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, tau, dt, speed_scale):
-    """One :meth:`MotionFilter.step` in place: x, v, a become x⁺, v⁺, a (x_ref may be x itself)."""
+def motion_filter_update(x, v, a, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, brake, tau, dt, speed_scale):
+    """One :meth:`MotionFilter.step` in place: x, v, a become x⁺, v⁺, a (x_ref may be x itself); ``brake``
+    (≤ accel) is the deceleration of the velocity bound at the position limits."""
     n = x.shape[0]
-    up = braking_speed(upper - x, accel, dt)
-    down = braking_speed(x - lower, accel, dt)
+    up = braking_speed(upper - x, brake, dt)
+    down = braking_speed(x - lower, brake, dt)
     for i in range(n):
         v_des = (x_ref[i] - x[i]) / max(tau, dt)
         if use_v_ref:
@@ -88,11 +90,11 @@ def motion_filter_update(x, v, a, x_ref, v_ref, use_v_ref, lower, upper, speed, 
 
 
 @_jit
-def motion_filter_step(x, v, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, tau, dt, speed_scale):
+def motion_filter_step(x, v, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, brake, tau, dt, speed_scale):
     """One :meth:`MotionFilter.step`: (x⁺, v⁺, a), new arrays."""
     x_new, v_new, a_new = x.copy(), v.copy(), np.empty(x.shape[0])
     motion_filter_update(
-        x_new, v_new, a_new, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, tau, dt, speed_scale
+        x_new, v_new, a_new, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, brake, tau, dt, speed_scale
     )  # fmt: skip
     return x_new, v_new, a_new
 
@@ -305,13 +307,27 @@ def clamp_to_legs(a_n, b_b, eta, lo, hi):
 
 
 @_jit
+def command_clip(eta, v, lower, upper):
+    """The lab PLC's etaRef = LIMIT(etaRefMin, u, etaRefMax) (FB_StewartInterface): η clipped to the
+    command box, and its feed-forward rate zeroed in each clipped DOF; new arrays (η', η̇')."""
+    n = eta.shape[0]
+    e, r = np.empty(n), np.empty(n)
+    for i in range(n):
+        e[i] = min(max(eta[i], lower[i]), upper[i])
+        r[i] = v[i] if e[i] == eta[i] else 0.0
+    return e, r
+
+
+@_jit
 def follow_clamped(a_n, b_b, lo, hi, gain, eta_s, v_s, x, v, a, lower, upper, speed, accel, tau, dt):
     """An engaged platform's step in place (``Platform.step``): the source pose η_s times the ramp gain,
-    scaled back into the leg strokes (:func:`clamp_to_legs`, eqs. 31–38), then the motion filter with the
-    feed-forward gain·η̇_s.  Returns whether the pose was scaled back."""
-    target, clamped = clamp_to_legs(a_n, b_b, gain * eta_s, lo, hi)
+    clipped to the command box (the filter's limits while engaged, :func:`command_clip`), scaled back
+    into the leg strokes (:func:`clamp_to_legs`, eqs. 31–38), then the motion filter with the feed-forward
+    gain·η̇_s.  Returns whether the pose was scaled back."""
+    eta_c, v_c = command_clip(gain * eta_s, gain * v_s, lower, upper)
+    target, clamped = clamp_to_legs(a_n, b_b, eta_c, lo, hi)
     on = np.bool_(True)  # a plain bool: a literal True would compile a second specialisation
-    motion_filter_update(x, v, a, target, gain * v_s, on, lower, upper, speed, accel, tau, dt, 1.0)
+    motion_filter_update(x, v, a, target, v_c, on, lower, upper, speed, accel, accel, tau, dt, 1.0)
     return clamped
 
 
@@ -468,7 +484,7 @@ def pendulum_step(alpha, beta, alpha_dot, beta_dot, dt, ax, ay, az, L, Ld, c, g)
 def lab_step(
     x1, v1, a1, x2, v2, a2, rates,
     cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r, w_b2, park_q,
-    q, qd, qdd, q_lo, q_hi, q_speed, q_accel, q_tau, comau_mode, v_cmd,
+    q, qd, qdd, q_lo, q_hi, q_speed, q_accel, q_brake, q_tau, comau_mode, v_cmd,
     wl, wv, wa, w_lo, w_hi, w_speed, w_accel, w_tau, track, speed_cmd,
     target, has_target, alpha, beta, alpha_dot, beta_dot, damping, g,
     a_n1, b_b1, a_n2, b_b2,
@@ -479,14 +495,14 @@ def lab_step(
 
     Platforms: η, η̇, η̈ of EM8000 (x1, v1, a1) and EM1500 (x2, v2, a2); ``rates`` (2, 3, 3, 3) receives
     R, Ṙ, R̈ of both bodies (eqs. 33, 47, 51).  Comau (``cm`` = a1, d1, a2, a3, L; joint filter q, q̇, q̈
-    and limits): ``comau_mode`` 0 settled (to ``park_q`` at a quarter speed), 1 remote (q̇ = J⁺ v_cmd,
-    eq. 21), 2 motion_comp (the work point w_b2 fixed in {b2} through eqs. 54–56 inverted, IK of
-    eqs. 7–20, feed-forward q̇ = J⁺ ṗ_t^r of eq. 21), 3 brake (HOLD or E-STOP).  Tool point p, ṗ, p̈
-    in {n1} (eqs. 54, 56, 57) and in {g} (eq. 55).  Winch (filter wl, wv, wa and limits): ``track``
-    keeps the load's height relative to EM1500 at ``target`` (in {b2}; captured now unless
-    ``has_target``), else the speed command.  Load: RK4 of eqs. (29)–(30) / (60)–(61) with p̈_t^g of
-    eq. (57).  Sample: e_b2 (tool minus work point in {b2}), the work point and the load (eq. 58) in
-    {g}, the legs of both platforms.
+    and limits, ``q_brake`` the deceleration A of the velocity bound at the joint limits): ``comau_mode``
+    0 settled (to ``park_q`` at a quarter speed), 1 remote (q̇ = J⁺ v_cmd, eq. 21), 2 motion_comp (the
+    work point w_b2 fixed in {b2} through eqs. 54–56 inverted, IK of eqs. 7–20, feed-forward
+    q̇ = J⁺ ṗ_t^r of eq. 21), 3 brake (HOLD or E-STOP).  Tool point p, ṗ, p̈ in {n1} (eqs. 54, 56, 57)
+    and in {g} (eq. 55).  Winch (filter wl, wv, wa and limits): ``track`` keeps the load's height
+    relative to EM1500 at ``target`` (in {b2}; captured now unless ``has_target``), else the speed
+    command.  Load: RK4 of eqs. (29)–(30) / (60)–(61) with p̈_t^g of eq. (57).  Sample: e_b2 (tool
+    minus work point in {b2}), the work point and the load (eq. 58) in {g}, the legs of both platforms.
 
     Returns (has_target, α, β, α̇, β̇, payload height error).
     """
@@ -509,12 +525,14 @@ def lab_step(
             q[i] = min(max(q[i] + vn * dt, q_lo[i]), q_hi[i])
     else:
         if comau_mode == 0:
-            motion_filter_update(q, qd, qdd, park_q, park_q, off, q_lo, q_hi, q_speed, q_accel, q_tau, dt, 0.25)
+            motion_filter_update(
+                q, qd, qdd, park_q, park_q, off, q_lo, q_hi, q_speed, q_accel, q_brake, q_tau, dt, 0.25
+            )
         elif comau_mode == 1:
             J = comau_tool(cm, q, qd, qdd)[3]
             rate = lstsq3(J, v_cmd)  # eq. (21)
             q_ref = q + rate * dt
-            motion_filter_update(q, qd, qdd, q_ref, rate, on, q_lo, q_hi, q_speed, q_accel, q_tau, dt, 1.0)
+            motion_filter_update(q, qd, qdd, q_ref, rate, on, q_lo, q_hi, q_speed, q_accel, q_brake, q_tau, dt, 1.0)
         else:  # inverse kinematic control with feed-forward of both platforms
             # the work point fixed in {b2}, in {n1} (eq. 39 through {g})
             w = _mv(R2b, w_b2[0], w_b2[1], w_b2[2])
@@ -537,7 +555,7 @@ def lab_step(
                 q_d = q.copy()
             J = comau_tool(cm, q_d, qd, qdd)[3]
             rate = lstsq3(J, v_tr)  # eq. (21)
-            motion_filter_update(q, qd, qdd, q_d, rate, on, q_lo, q_hi, q_speed, q_accel, q_tau, dt, 1.0)
+            motion_filter_update(q, qd, qdd, q_d, rate, on, q_lo, q_hi, q_speed, q_accel, q_brake, q_tau, dt, 1.0)
         for i in range(3):
             at_limit[i] = q[i] <= q_lo[i] + 1e-6 or q[i] >= q_hi[i] - 1e-6 or abs(qd[i]) >= q_speed[i] * (1 - 1e-3)
 
@@ -574,7 +592,7 @@ def lab_step(
         s = min(max(speed_cmd, -w_speed[0]), w_speed[0])
         ref[0] = wl[0] + s * dt
         ref_v[0] = s
-    motion_filter_update(wl, wv, wa, ref, ref_v, on, w_lo, w_hi, w_speed, w_accel, w_tau, dt, 1.0)
+    motion_filter_update(wl, wv, wa, ref, ref_v, on, w_lo, w_hi, w_speed, w_accel, w_accel, w_tau, dt, 1.0)
     at_limit[3] = wl[0] <= w_lo[0] + 1e-6 or wl[0] >= w_hi[0] - 1e-6 or abs(wv[0]) >= w_speed[0] * (1 - 1e-3)
 
     # ---- the load (eqs. 29–30 / 60–61 with p̈_t^g of eq. 57, in {d}: (x, −y, −z))
@@ -609,7 +627,7 @@ def warm_up_steps() -> list:
     o3, o6, z3, z6 = np.ones(3), np.ones(6), np.zeros(3), np.zeros(6)
     eye = np.eye(4)
     a_n, b_b = np.ones((6, 3)), np.full((6, 3), 0.5)
-    cm = np.array([0.15, 0.45, 0.64, 0.16, 2.27])
+    cm = np.array([0.35, 0.83, 1.16, 0.25, 2.269])  # any numbers compile; these are Tables 3/7 (L = 2.269 m)
     signs = np.array([1.0, -1.0])
 
     def vec(n: int, value: float = 0.0) -> np.ndarray:
@@ -619,18 +637,19 @@ def warm_up_steps() -> list:
         lab_step(
             z6, z6, z6, z6, z6, z6, np.zeros((2, 3, 3, 3)),
             cm, eye, signs, eye, eye, eye, eye, o3, z3,
-            vec(3), vec(3), vec(3), vec(3, -3.0), vec(3, 3.0), o3, o3, 0.05, 2, z3,
+            vec(3), vec(3), vec(3), vec(3, -3.0), vec(3, 3.0), o3, o3, o3, 0.05, 2, z3,
             vec(1, 1.0), vec(1), vec(1), vec(1, 0.3), vec(1, 2.5), vec(1, 0.5), vec(1, 1.5), 0.05, True, 0.0,
             vec(3), False, 0.0, 0.0, 0.0, 0.0, 0.1, 9.81, a_n, b_b, a_n, b_b,
             vec(3), vec(3), vec(3), vec(3), np.zeros(4, dtype=np.bool_), vec(3), vec(3), vec(3), vec(6), vec(6), 0.01,
         )  # fmt: skip
 
     return [
-        lambda: motion_filter_step(o6, o6, o6, o6, True, -o6, o6, o6, o6, 0.1, 0.01, 1.0),
+        lambda: motion_filter_step(o6, o6, o6, o6, True, -o6, o6, o6, o6, o6, 0.1, 0.01, 1.0),
         lambda: actuator_step(o6, o6, o6, -o6, o6, o6, o6, 0.05, 0.002),
-        lambda: motion_filter_update(vec(3), vec(3), vec(3), o3, o3, True, -o3, o3, o3, o3, 0.1, 0.01, 1.0),
+        lambda: motion_filter_update(vec(3), vec(3), vec(3), o3, o3, True, -o3, o3, o3, o3, o3, 0.1, 0.01, 1.0),
         lambda: clamp_to_legs(a_n, b_b, z6, 0.5, 1.5),
         lambda: follow_clamped(a_n, b_b, 0.5, 1.5, 1.0, z6, z6, vec(6), vec(6), vec(6), -o6, o6, o6, o6, 0.1, 0.01),
+        lambda: command_clip(z6, z6, -o6, o6),
         lambda: pendulum_step(0.1, 0.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.0, 1.0, 0.0, 0.1, 9.81),
         lambda: pose_in(eye, z6),
         lab,

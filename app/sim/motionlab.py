@@ -278,21 +278,44 @@ class MotionLab:
     ----------
     layout : LabLayout
     at_work : bool   start with the tool on the work point (default: the park configuration)
+    comau_profile : str, optional
+        The Comau's joint-limit profile: ``datasheet`` (the robot file, Table 6) or one of the
+        layout's ``<joint_limits>`` (``lab``: the lab's program limits with its velocity-boundary
+        law); default the layout's ``<crane limits=…>``.
+
+    Attributes
+    ----------
+    profile : JointLimitProfile   the profile in force (``joints`` is the filter built from it:
+        its lower, upper, speed and the boundary deceleration ``brake``)
     """
 
-    def __init__(self, layout: LabLayout, at_work: bool = False) -> None:
+    def __init__(self, layout: LabLayout, at_work: bool = False, comau_profile: str | None = None) -> None:
         self.layout = layout
         self.models = tuple(load_robot(robot) for _, robot in layout.platforms)
-        self.platforms = tuple(Platform(m) for m in self.models)
+        try:
+            self.platforms = tuple(
+                Platform(m, command_box=box) for m, box in zip(self.models, layout.command_boxes, strict=True)
+            )
+        except BosunError as err:
+            raise LabError(f"{layout.path}: {err}") from None
         self.robot = load_robot(layout.crane_robot)
         arm = ComauArm.match(self.robot)
         if arm is None:
             raise LabError(f"crane robot '{layout.crane_robot}' is not a Comau-type 3-DOF arm (Motion-Lab Table 3)")
         self.arm = arm
         self.comau = ComauKinematics.from_arm(arm)
-        lo, hi = self.robot.lower, self.robot.upper
-        speed = self.robot.speed
-        self.joints = MotionFilter(lo, hi, speed, np.full(3, layout.crane_accel), tau=0.05)
+        self.profile = layout.profile(comau_profile)
+        prof = self.profile
+        lo = self.robot.lower if prof.lower is None else prof.lower
+        hi = self.robot.upper if prof.upper is None else prof.upper
+        speed = self.robot.speed if prof.speed is None else prof.speed
+        if np.any(lo < self.robot.lower - 1e-12) or np.any(hi > self.robot.upper + 1e-12):
+            raise LabError(f"{layout.path}: Comau profile '{prof.name}' leaves the robot file's joint limits")
+        accel = np.full(3, layout.crane_accel)
+        brake = None if prof.boundary_accel is None else np.full(3, prof.boundary_accel)
+        self.joints = MotionFilter(lo, hi, speed, accel, tau=0.05, brake=brake)
+        if not np.all((layout.park_q >= lo) & (layout.park_q <= hi)):
+            raise LabError(f"{layout.path}: the Comau's park configuration is outside its '{prof.name}' joint limits")
         self.joints.reset(layout.park_q)
         self.comau_mode = "remote"
         self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]
@@ -392,7 +415,8 @@ class MotionLab:
         return T_n1_n2[:3, :3] @ self.layout.work_point_b2 + T_n1_n2[:3, 3], None, None
 
     def _ik(self, p_tr: NDArray[np.float64], q_near: NDArray[np.float64]) -> NDArray[np.float64] | None:
-        """Analytic IK (eqs. 7–20): the exact candidate inside the limits nearest ``q_near``."""
+        """Analytic IK (eqs. 7–20): the exact candidate inside the joint limits in force (the profile's)
+        nearest ``q_near``."""
         best, best_d = None, np.inf
         if getattr(self.robot, "use_kernels", False):  # the compiled eqs. (7)–(20), tested equal
             Q, flags = self.arm.kernel_candidates(p_tr, float(q_near[0]), np.array(self.arm.SIGNS["auto"]))
@@ -402,7 +426,7 @@ class MotionLab:
         for q, exact in candidates:
             q = q.copy()
             q[0] = q_near[0] + math.remainder(q[0] - q_near[0], 2 * math.pi)
-            if not exact or not np.all((q >= self.robot.lower - 1e-9) & (q <= self.robot.upper + 1e-9)):
+            if not exact or not np.all((q >= self.joints.lower - 1e-9) & (q <= self.joints.upper + 1e-9)):
                 continue
             d = float(np.sum((q - q_near) ** 2))
             if d < best_d:
@@ -461,6 +485,15 @@ class MotionLab:
         self.last = self._sample()
         return self.last
 
+    def refresh(self) -> LabSample:
+        """Recompute the derived state (rotation rates, tool point, the sample) from the machines' states
+        as they are, without stepping: the ``plc`` plant backend sets platform poses, joints and wire
+        length from the real lab's measurements and calls this (app/plant/plc.py)."""
+        self._rates = self._rotation_rates()
+        self._update_tool()
+        self.last = self._sample()
+        return self.last
+
     def _step_compiled(self, dt: float) -> LabSample:
         """Everything after the platforms in one :func:`app.sim.kernels.lab_step` call."""
         (p1, p2), (m1, m2), f, w, pd = self.platforms, self.models, self.joints, self.winch, self.pendulum
@@ -474,7 +507,7 @@ class MotionLab:
         has, pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, h_err = sim_kernels.lab_step(
             p1.filter.x, p1.filter.v, p1.filter.a, p2.filter.x, p2.filter.v, p2.filter.a, self._rates_buf,
             self._comau, *self._consts,
-            f.x, f.v, f.a, f.lower, f.upper, f.speed, f.accel, f.tau, mode,
+            f.x, f.v, f.a, f.lower, f.upper, f.speed, f.accel, f.brake, f.tau, mode,
             np.ascontiguousarray(self.tool_velocity_cmd, dtype=float),
             wf.x, wf.v, wf.a, wf.lower, wf.upper, wf.speed, wf.accel, wf.tau,
             not self.frozen and w.mode == "motion_comp", float(w.speed_command),

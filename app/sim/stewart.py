@@ -7,6 +7,16 @@ fifth of the Table 8 speeds, ENGAGE fades the source in over ``ramp_time`` with 
 and DISENGAGE fades it out back to neutral.  Whatever the source and the mode, every pose goes
 through :class:`MotionFilter`, so pose, velocity and acceleration never pass the Table 8 limits.
 
+Two boxes (issue 16).  The *command box* (the lab PLC's operational box etaRefMin/Max, from the lab
+layout; the Table 8 box when none is given) limits every command: a source's pose is clipped to it
+(etaRef = LIMIT(etaRefMin, u, etaRefMax), FB_StewartInterface) and it is the filter's position box
+in NEUTRAL and ENGAGED, so no source can pass it.  SETTLED is the pose with all six legs at their
+minimum length (the actuators on their lower end stops), found by forward kinematics: the lab's
+platforms settle 0.9986 m / 0.4664 m below neutral, beyond Table 8's lowest heave (0.885 / 0.407 m).
+Raising and settling therefore run in the *envelope*, Table 8 widened just enough to hold the
+settled pose; the filter's box is widened when SETTLE is accepted and narrowed to the command box
+only at rest at neutral, so no switch ever leaves the state outside its box.
+
 Sources:
 
 * ``simulation``: a vessel in irregular waves (:class:`app.marine.vessel.VesselMotion`), each DOF
@@ -59,16 +69,35 @@ class MotionFilter:
     intersection is never empty: a state the filter produced can always be brought to rest
     inside the limits, and no step crosses a limit.
 
+    The braking deceleration ``brake`` defaults to the acceleration limit; a smaller one is a
+    velocity-boundary law of its own, |v⁺| ≤ b(d, A, dt) ≤ min(d/dt, √(2 A d)) with d the distance
+    to the limit (the Motion-Lab's Comau program, A = 1 rad/s²: Flacco, De Luca and Khatib, IEEE
+    T-RO 2015, eq. 13; here in its exact discrete form :func:`~app.sim.actuators.braking_speed`).
+    It must not exceed ``accel``, or a stop along the bound would need more than the limit.
+
     Parameters
     ----------
     lower, upper, speed, accel : array_like (n,)
     tau : float   time constant of the tracking loop [s]
+    brake : array_like (n,), optional   deceleration A of the bound at the position limits
+        (default ``accel``; larger values are taken as ``accel``)
     """
 
-    def __init__(self, lower: ArrayLike, upper: ArrayLike, speed: ArrayLike, accel: ArrayLike, tau: float = 0.1):
-        # C-contiguous float64: the compiled step has one signature and never compiles in a control tick
-        self.lower, self.upper = np.ascontiguousarray(lower, dtype=float), np.ascontiguousarray(upper, dtype=float)
+    def __init__(
+        self,
+        lower: ArrayLike,
+        upper: ArrayLike,
+        speed: ArrayLike,
+        accel: ArrayLike,
+        tau: float = 0.1,
+        brake: ArrayLike | None = None,
+    ) -> None:
+        # C-contiguous float64: the compiled step has one signature and never compiles in a control tick;
+        # the position limits are the filter's own copies (set_limits writes into them)
+        self.lower, self.upper = np.array(lower, dtype=float, order="C"), np.array(upper, dtype=float, order="C")
         self.speed, self.accel = np.ascontiguousarray(speed, dtype=float), np.ascontiguousarray(accel, dtype=float)
+        b = self.accel if brake is None else np.minimum(np.asarray(brake, dtype=float), self.accel)
+        self.brake = np.array(np.broadcast_to(b, self.accel.shape), dtype=float, order="C")
         self.tau = float(tau)
         self.x = np.zeros_like(self.lower)
         self.v = np.zeros_like(self.lower)
@@ -80,8 +109,20 @@ class MotionFilter:
         self.v = np.zeros_like(self.x)
         self.a = np.zeros_like(self.x)
 
+    def set_limits(self, lower: ArrayLike, upper: ArrayLike) -> None:
+        """New position limits, written into the same (C-contiguous) arrays.
+
+        Only a box that holds the state and lets it stop inside keeps the filter's guarantee: widening
+        always does; a platform narrows its box only at rest inside the new one (:class:`Platform`).
+        """
+        lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        if not (np.all(self.x >= lo - 1e-12) and np.all(self.x <= hi + 1e-12)):
+            raise PlatformError(f"limits {lo.tolist()} … {hi.tolist()} do not hold the state {self.x.tolist()}")
+        self.lower[:] = lo
+        self.upper[:] = hi
+
     def _braking(self, d: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
-        return braking_speed(d, self.accel, dt)
+        return braking_speed(d, self.brake, dt)
 
     def step(
         self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
@@ -96,7 +137,7 @@ class MotionFilter:
             sim_kernels.motion_filter_update(
                 self.x, self.v, self.a, np.ascontiguousarray(x_ref, dtype=float),
                 np.ascontiguousarray(v_ref, dtype=float) if use_v else self.x, use_v, self.lower, self.upper,
-                self.speed, self.accel, float(self.tau), float(dt), float(speed_scale),
+                self.speed, self.accel, self.brake, float(self.tau), float(dt), float(speed_scale),
             )  # fmt: skip
             return self.x
         return self._step_reference(x_ref, v_ref, dt, speed_scale)
@@ -129,23 +170,34 @@ class Generator:
     phase: NDArray[np.float64]
 
     @staticmethod
-    def make(amplitude: ArrayLike, frequency: ArrayLike, phase: ArrayLike, platform: StewartPlatform) -> Generator:
+    def make(
+        amplitude: ArrayLike,
+        frequency: ArrayLike,
+        phase: ArrayLike,
+        platform: StewartPlatform,
+        box: tuple[ArrayLike, ArrayLike] | None = None,
+    ) -> Generator:
+        """A checked generator: six finite amplitudes within the smaller side of ``box`` (the
+        platform's command box (min, max) [m, rad]; default its Table 8 box, as the lab HMI's
+        amplitude fields range over etaRefMin…etaRefMax), frequencies 0.01–1 Hz."""
         A, f, ph = (np.asarray(v, dtype=float).reshape(-1) for v in (amplitude, frequency, phase))
         for name, v in (("amplitude", A), ("frequency", f), ("phase", ph)):
             if v.shape != (6,) or not np.all(np.isfinite(v)):
                 raise PlatformError(f"generator {name} needs six finite numbers, got {v.tolist()}")
         lo, hi = GENERATOR_FREQ_RANGE
+        box_lo, box_hi = (platform.pose_min, platform.pose_max) if box is None else box
+        what = "limit" if box is None else "operational box"
         for k, dof in enumerate(("surge", "sway", "heave", "roll", "pitch", "yaw")):
             if A[k] < 0:
                 raise PlatformError(f"generator {dof} amplitude must not be negative")
             if A[k] > 0 and not lo <= f[k] <= hi:
                 raise PlatformError(f"generator {dof} frequency {f[k]:g} Hz is outside {lo:g}–{hi:g} Hz")
-            reach = min(-platform.pose_min[k], platform.pose_max[k])
+            reach = min(-box_lo[k], box_hi[k])
             if A[k] > reach + 1e-12:
                 unit, s = ("°", 180 / math.pi) if k >= 3 else ("m", 1.0)
                 raise PlatformError(
                     f"generator {dof} amplitude {A[k] * s:.3g} {unit} exceeds "
-                    f"the {platform.name} limit {reach * s:.3g} {unit}"
+                    f"the {platform.name} {what} {reach * s:.3g} {unit}"
                 )
         return Generator(A, f, ph)
 
@@ -265,10 +317,17 @@ class WaveSimulation:
         self.significant = significant_response(self.rao, sea_spectrum(self.spectrum, w, self.hs, self.tp), w, heading)
 
     @staticmethod
-    def auto_scale(significant: ArrayLike, platform: StewartPlatform, fill: float = 0.8) -> NDArray[np.float64]:
+    def auto_scale(
+        significant: ArrayLike,
+        platform: StewartPlatform,
+        fill: float = 0.8,
+        box: tuple[ArrayLike, ArrayLike] | None = None,
+    ) -> NDArray[np.float64]:
         """Per-DOF scale ≤ 1 fitting the most probable largest response of ~1000 cycles
-        (≈ 0.93 H_s, Rayleigh) to ``fill`` of the smaller side of each pose limit."""
-        reach = np.minimum(-platform.pose_min, platform.pose_max)
+        (≈ 0.93 H_s, Rayleigh) to ``fill`` of the smaller side of each limit of ``box`` (the
+        command box (min, max); default the platform's Table 8 box)."""
+        lo, hi = (platform.pose_min, platform.pose_max) if box is None else box
+        reach = np.minimum(-np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
         peak = 0.93 * np.asarray(significant, dtype=float)
         with np.errstate(divide="ignore", invalid="ignore"):
             s = np.where(peak > 1e-9, fill * reach / peak, 1.0)
@@ -279,17 +338,19 @@ class WaveSimulation:
 
 
 class Remote:
-    """The pose last commanded by a client (``remote`` source); clipped to the pose box."""
+    """The pose last commanded by a client (``remote`` source); clipped to the command box
+    ``box`` = (min, max) (default the platform's Table 8 box)."""
 
-    def __init__(self, platform: StewartPlatform) -> None:
+    def __init__(self, platform: StewartPlatform, box: tuple[ArrayLike, ArrayLike] | None = None) -> None:
         self.platform = platform
+        self.box = (platform.pose_min, platform.pose_max) if box is None else box
         self.eta = np.zeros(6)
 
     def set(self, eta: ArrayLike) -> None:
         e = np.asarray(eta, dtype=float).reshape(-1)
         if e.shape != (6,) or not np.all(np.isfinite(e)):
             raise PlatformError(f"remote pose needs six finite numbers, got {np.asarray(eta).tolist()}")
-        self.eta = np.clip(e, self.platform.pose_min, self.platform.pose_max)
+        self.eta = np.clip(e, *self.box)
 
     def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return self.eta.copy(), np.zeros(6)
@@ -310,20 +371,48 @@ class Platform:
     model : StewartPlatform
     ramp_time : float   ENGAGE / DISENGAGE fade time [s]; default 5
     start : str         initial mode, ``settled`` (default) or ``neutral``
+    command_box : (min, max) of array_like (6,), optional
+        The operational box every command is clipped to [m, rad] (the lab layout's
+        ``<command_box>``); default the Table 8 box.  It must hold the neutral pose and lie inside
+        Table 8.
+
+    Attributes
+    ----------
+    settled_pose : ndarray (6,)   all legs at ``leg_min`` (forward kinematics)
+    command_min, command_max : ndarray (6,)   the command box
+    envelope_min, envelope_max : ndarray (6,)   Table 8 widened to hold the settled pose
     """
 
-    def __init__(self, model: StewartPlatform, ramp_time: float = 5.0, start: str = "settled") -> None:
+    def __init__(
+        self,
+        model: StewartPlatform,
+        ramp_time: float = 5.0,
+        start: str = "settled",
+        command_box: tuple[ArrayLike, ArrayLike] | None = None,
+    ) -> None:
         self.model = model
         self.ramp_time = float(ramp_time)
-        self.filter = MotionFilter(model.pose_min, model.pose_max, model.speed_max, model.accel_max)
-        self.settled_pose = np.zeros(6)
-        self.settled_pose[2] = model.pose_max[2]  # heave down (z-down) to the end of its stroke
+        lo, hi = (model.pose_min, model.pose_max) if command_box is None else command_box
+        self.command_min = np.array(lo, dtype=float).reshape(6)
+        self.command_max = np.array(hi, dtype=float).reshape(6)
+        if not (np.all(self.command_min < 0) and np.all(self.command_max > 0)):
+            raise PlatformError(f"{model.name}: the command box must hold the neutral pose (every min < 0 < max)")
+        if np.any(self.command_min < model.pose_min - 1e-12) or np.any(self.command_max > model.pose_max + 1e-12):
+            raise PlatformError(f"{model.name}: the command box leaves the Table 8 pose limits")
+        self.settled_pose = self._settled(model)
+        self.envelope_min = np.minimum(model.pose_min, self.settled_pose)
+        self.envelope_max = np.maximum(model.pose_max, self.settled_pose)
         self.mode = start
         self.transition = ""  # "raising", "settling", "engaging", "disengaging" or ""
-        self.filter.reset(self.settled_pose if start == "settled" else np.zeros(6))
+        if start == "settled":
+            self.filter = MotionFilter(self.envelope_min, self.envelope_max, model.speed_max, model.accel_max)
+            self.filter.reset(self.settled_pose)
+        else:
+            self.filter = MotionFilter(self.command_min, self.command_max, model.speed_max, model.accel_max)
+            self.filter.reset(np.zeros(6))
         self.source_name = "generator"
         self.source = Generator(np.zeros(6), np.full(6, 0.1), np.zeros(6))
-        self.remote = Remote(model)
+        self.remote = Remote(model, (self.command_min, self.command_max))
         self.t_source = 0.0
         self.gain = 0.0
         self.frozen = False
@@ -332,6 +421,37 @@ class Platform:
         margin = 0.02 * (model.leg_max - model.leg_min)
         #: the leg lengths a target may ask for: the stroke less a 2 % margin at each end [m]
         self.leg_band = (float(model.leg_min + margin), float(model.leg_max - margin))
+
+    @staticmethod
+    def _settled(model: StewartPlatform) -> NDArray[np.float64]:
+        """The settled pose: forward kinematics (eqs. 31–38 solved by Newton) of six legs at ``leg_min``,
+        started below the lowest Table 8 heave (z-down)."""
+        start = np.zeros(6)
+        start[2] = model.pose_max[2]
+        fk = model.fk(np.full(6, model.leg_min), start)
+        if not fk.success:
+            raise PlatformError(
+                f"{model.name}: no pose has all legs at their minimum length (residual {fk.residual:.3g} m)"
+            )
+        return fk.eta
+
+    @property
+    def command_box(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(min, max) of the command box [m, rad]."""
+        return self.command_min.copy(), self.command_max.copy()
+
+    def place_at_neutral(self) -> None:
+        """Put the platform at rest at neutral in NEUTRAL (a scenario's start; the operator raises instead)."""
+        self.filter.reset(np.zeros(6))
+        self.mode, self.transition, self.gain = "neutral", "", 0.0
+        self._limit_to("command")
+
+    def _limit_to(self, box: str) -> None:
+        """The filter's position box: ``envelope`` (raising, settling, settled) or ``command``."""
+        if box == "envelope":
+            self.filter.set_limits(self.envelope_min, self.envelope_max)
+        else:
+            self.filter.set_limits(self.command_min, self.command_max)
 
     @property
     def use_kernels(self) -> bool:
@@ -372,6 +492,7 @@ class Platform:
                     f"{self.model.name}: SETTLE is done from NEUTRAL or HOLDING (now {self.status.upper()})"
                 )
             self.mode, self.transition = "neutral", "settling"
+            self._limit_to("envelope")  # widening: the state is inside either way
         elif action == "engage":
             if self.mode != "neutral" or busy:
                 raise PlatformError(f"{self.model.name}: ENGAGE needs NEUTRAL (now {self.status.upper()})")
@@ -461,6 +582,8 @@ class Platform:
                 self.gain = max(0.0, self.gain - dt / self.ramp_time) if self.ramp_time > 0 else 0.0
             eta_s, v_s = self.source(self.t_source)
             g = smoothstep(self.gain) if self.transition == "disengaging" else self.gain
+            # every source through the command box (the filter's box while engaged), as the lab
+            # PLC's etaRef = LIMIT(etaRefMin, u, etaRefMax); a clipped DOF loses its feed-forward
             if self.use_kernels and not (self.transition == "disengaging" and self.gain <= 0.0):
                 m = self.model  # the scaled source clamped to the legs and filtered, in one call
                 self.leg_clamped = sim_kernels.follow_clamped(
@@ -469,7 +592,9 @@ class Platform:
                     float(f.tau), float(dt),
                 )  # fmt: skip
                 return f.x.copy()
-            target, v_ref = self._clamp_to_legs(g * eta_s), g * v_s
+            u, u_dot = g * np.asarray(eta_s, dtype=float), g * np.asarray(v_s, dtype=float)
+            eta_c = np.minimum(np.maximum(u, f.lower), f.upper)
+            target, v_ref = self._clamp_to_legs(eta_c), np.where(eta_c == u, u_dot, 0.0)
             if self.transition == "disengaging" and self.gain <= 0.0:
                 target, v_ref = np.zeros(6), None
                 if np.all(np.abs(f.x) < 1e-6) and np.all(np.abs(f.v) < 1e-6):
@@ -479,6 +604,7 @@ class Platform:
             speed_scale = TRANSFER_SPEED_FRACTION
             if self.transition == "raising" and self._at_rest(0.0):
                 self.mode, self.transition = "neutral", ""
+                self._limit_to("command")  # at rest at neutral: inside the command box
         if self.transition == "settling" or (self.mode == "settled" and not self.transition):
             target, v_ref = self.settled_pose, None
             speed_scale = TRANSFER_SPEED_FRACTION

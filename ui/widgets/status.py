@@ -59,6 +59,9 @@ class StatusPanel(QWidget):
             "engine": StatusLight("engine", "engine connection and loop"),
             "input": StatusLight("input", "input device: joystick, on-screen stick or keyboard"),
             "plant": StatusLight("plant", "simulated manipulator: moving, holding, E-STOP"),
+            "plc": StatusLight(
+                "PLC", "the Motion-Lab's PLC link (bosun server --plant lab --plc): simulated, ok, lost, error"
+            ),
         }
         for w in self.lights.values():
             lights.addWidget(w, 1)

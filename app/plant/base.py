@@ -1,0 +1,120 @@
+"""The interface of a Motion-Lab plant backend.
+
+The scene keeps one model of the lab, a :class:`~app.sim.motionlab.MotionLab` (``backend.lab``): its
+platforms, robot, winch and load are what the scene draws, publishes and raises alarms on.  The
+backend owns the machines behind that model:
+
+* ``simulated`` steps the model: it *is* the plant;
+* ``plc`` never steps it: every tick it sets the model to the states the lab's PLC reported (a mirror),
+  and turns the scene's commands into writes of the PLC's symbols.
+
+The scene calls the commands (each done, or refused with :class:`BackendError` and one line), calls
+:meth:`LabBackend.poll` at the start of every tick (also while paused) and :meth:`LabBackend.step` to
+advance, and reads :meth:`LabBackend.link` for its snapshot.  A backend that talks to hardware does so
+from its own thread and hands data over through a queue drained in :meth:`LabBackend.poll`; nothing
+calls into the engine's loop.
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.errors import BosunError
+from app.net.snapshots import PlantLink
+from app.sim.motionlab import MotionLab
+
+
+class BackendError(BosunError):
+    """A command the plant backend refuses (one line); nothing was changed or sent."""
+
+
+class LabBackend(abc.ABC):
+    """What the Motion-Lab scene needs from a plant.  Platforms are given by index ``k`` (0: EM8000,
+    1: EM1500, the layout's order).
+
+    Parameters
+    ----------
+    lab : MotionLab   the scene's model of the lab (stepped, or set from measurements)
+    """
+
+    NAME: ClassVar[str] = ""
+
+    def __init__(self, lab: MotionLab) -> None:
+        self.lab = lab
+        self.layout = lab.layout
+        self.names = [n for n, _ in lab.layout.platforms]
+
+    @property
+    def winch_speed_max(self) -> float:
+        """The winch speed the operator's slider and stick command at full deflection [m/s]."""
+        return float(self.layout.winch["speed"])
+
+    # ------------------------------------------------------------------ commands
+    @abc.abstractmethod
+    def platform(self, k: int, action: str) -> None:
+        """``neutral``, ``settle``, ``engage`` or ``disengage`` (the lab HMI's mode buttons)."""
+
+    @abc.abstractmethod
+    def source(self, k: int, source: str, params: dict[str, Any]) -> dict[str, Any]:
+        """Choose a platform's motion source with its parameters; returns what the scene shows of it."""
+
+    @abc.abstractmethod
+    def remote_pose(self, k: int, eta: Any) -> None:
+        """The pose [m, rad] a platform follows in REMOTE."""
+
+    @abc.abstractmethod
+    def comau_mode(self, mode: str) -> None: ...
+
+    @abc.abstractmethod
+    def winch_mode(self, mode: str) -> None: ...
+
+    @abc.abstractmethod
+    def winch_speed(self, speed: float) -> None:
+        """LOCAL: the spring-return slider's speed [m/s] (0 when it is let go)."""
+
+    @abc.abstractmethod
+    def vvmc(self, on: bool) -> None: ...
+
+    @abc.abstractmethod
+    def drive(self, tool_velocity_r: NDArray[np.float64], winch_speed: float) -> None:
+        """The operator's stick, every tick: Comau tool velocity in its base frame [m/s] (REMOTE) and the
+        winch speed [m/s] (REMOTE); zeros when the input may not move anything."""
+
+    @abc.abstractmethod
+    def estop(self) -> None:
+        """Stop every machine (also with the link to the plant down: then as soon as it is back)."""
+
+    @abc.abstractmethod
+    def reset(self) -> None:
+        """Clear the E-STOP: every machine holds where it stands until commanded anew."""
+
+    def acknowledge(self, k: int | None) -> str:
+        """Acknowledge the plant's fault (the PLC's error state; ``k``: one platform only); returns what
+        was done, one line."""
+        raise BackendError(f"no PLC: this engine runs the {self.NAME} lab (bosun server --plant lab --plc …)")
+
+    # ------------------------------------------------------------------ loop and state
+    def poll(self, now: float) -> list[tuple[str, str]]:
+        """Start of a tick (also while paused): take what came from the plant.  Returns log lines
+        ``(level, text)`` and link events ``("link_lost" | "link_up", text)`` (the scene disarms the
+        input on both)."""
+        return []
+
+    @abc.abstractmethod
+    def step(self, dt: float, n: int) -> None:
+        """Advance the model by ``n`` steps of ``dt`` seconds (simulated), or nothing (the real lab)."""
+
+    @abc.abstractmethod
+    def link(self, now: float) -> PlantLink:
+        """The backend and the state of its link, for the snapshot."""
+
+    def ready(self) -> str:
+        """ "" when commands reach the plant now, else why not (one line)."""
+        return ""
+
+    def close(self) -> None:  # noqa: B027 - optional: a simulated plant owns nothing to release
+        """Release threads and connections."""
