@@ -495,10 +495,12 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
             dt=args.dt,
             seed=args.seed,
             rao=args.rao,
+            sensors=args.sensors,
+            antisway=args.antisway,
         )
     except VvmcError as err:
         raise BosunError(str(err)) from None
-    out = _make_out(args, f"vvmc_hs{sc.hs:g}_seed{sc.seed}")
+    out = _make_out(args, f"vvmc_hs{sc.hs:g}_seed{sc.seed}_{sc.sensors}" + ("_antisway" if sc.antisway else ""))
     n = round(sc.duration / sc.dt)
     bar = _progress_bar("sim vvmc", unit="step")
     t0 = time.perf_counter()
@@ -513,7 +515,9 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
         c, u = doc["compensated"], doc["uncompensated"]
         print(
             f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, EM8000 heading {sc.heading1:g}°, EM1500 {sc.heading2:g}°, "
-            f"{sc.duration:g} s, seed {sc.seed} ({'RAO ' + sc.rao if sc.rao else 'parametric vessel'})"
+            f"{sc.duration:g} s, seed {sc.seed} ({'RAO ' + sc.rao if sc.rao else 'parametric vessel'}); "
+            f"the controllers see the platforms through: {_SENSOR_NAMES[sc.sensors]}"
+            + ("; anti-swing on" if sc.antisway else "")
         )
         print(
             f"  tool point rel. EM1500, rms: {1000 * u['rms_tool_error_m']:.1f} mm without, "
@@ -532,6 +536,63 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
             f"  {speed:.1f}× real time; wrote {out}/timeseries.csv, platforms.png, tool_error.png, "
             "robot_winch_load.png, summary.json"
         )
+    return 0
+
+
+_SENSOR_NAMES = {
+    "true": "the simulation's true states",
+    "mru": "an MRU H on each platform",
+    "tracker": "a laser tracker",
+}
+
+
+def cmd_sim_antisway(args: argparse.Namespace) -> int:
+    """The anti-swing aims of issue 16: a 4° swing at L = 2 m (free) and VVMC at Hs (default 2 m)."""
+    import time
+
+    from app.analysis.antisway_report import save_antisway
+    from app.scenarios.antisway import antisway_study, free_swing
+    from app.scenarios.vvmc import VvmcError, VvmcScenario
+
+    try:
+        sc = VvmcScenario(hs=args.hs, tp=args.tp, duration=args.duration, seed=args.seed, sensors=args.sensors)
+    except VvmcError as err:
+        raise BosunError(str(err)) from None
+    out = _make_out(args, f"antisway_hs{sc.hs:g}_seed{sc.seed}")
+    n = round(sc.duration / sc.dt)
+    bar = _progress_bar("sim antisway", unit="step")
+    t0 = time.perf_counter()
+    free = [free_swing(active) for active in (False, True)]
+    done = [0]
+
+    def progress(k: int) -> None:
+        bar(min(done[0] + k, 2 * n), 2 * n)
+        if k == n:
+            done[0] += n
+
+    study = antisway_study(sc, progress=progress)
+    wall = time.perf_counter() - t0
+    with _atomic_dir(out) as tmp:
+        doc = save_antisway(sc, free, study, tmp, wall)
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+        return 0
+    f0, f1 = doc["free_swing"]
+    print("Anti-swing (LQR at L = 3 m, c = 0.1, Ts = 5 ms, scheduled over L; EKF on the wire angle):")
+    t_off = (
+        "not within {:.0f} s".format(f0["duration_s"])
+        if f0["time_below_0_5_deg_s"] is None
+        else (f"{f0['time_below_0_5_deg_s']:.1f} s")
+    )
+    t_on = "not reached" if f1["time_below_0_5_deg_s"] is None else f"{f1['time_below_0_5_deg_s']:.1f} s"
+    print(f"  4° swing at L = 2 m below 0.5°: {t_on} with anti-swing, {t_off} without (aim ≤ 10 s)")
+    a, b = doc["vvmc"], doc["vvmc_antisway"]
+    print(
+        f"  VVMC at Hs {sc.hs:g} m: swing rms {a['payload_swing_rms_deg']:.3f}° → {b['payload_swing_rms_deg']:.3f}° "
+        f"({doc['swing_reduction_percent']:.0f} % less; aim ≥ 80 %), tool from the work point rms "
+        f"{1000 * a['rms_tool_error_m']:.2f} → {1000 * b['rms_tool_error_m']:.2f} mm (aim ≤ 5 mm)"
+    )
+    print(f"  {wall:.0f} s; wrote {out}/free_swing.png, vvmc_swing.png, summary.json")
     return 0
 
 
@@ -1084,7 +1145,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_sim)
 
-    p = sub.add_parser("sim", help="simulations: sim tac, sim tac-sweep (crane head), sim vvmc (Motion-Lab)")
+    p = sub.add_parser(
+        "sim", help="simulations: sim tac, sim tac-sweep (crane head), sim vvmc, sim antisway (Motion-Lab)"
+    )
     sims = p.add_subparsers(dest="sim", metavar="WHAT", parser_class=_Parser, required=True)
 
     def add_sea_args(p: argparse.ArgumentParser) -> None:
@@ -1147,12 +1210,30 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--heading1", type=_finite_float, default=150.0, help="EM8000 vessel wave heading [deg] (150)")
     b.add_argument("--heading2", type=_finite_float, default=90.0, help="EM1500 vessel wave heading [deg] (90)")
     b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time [s] (default 300)")
-    b.add_argument("--dt", type=_positive_float, default=0.01, help="time step [s] (default 0.01)")
+    b.add_argument(
+        "--dt", type=_positive_float, default=0.005, help="time step [s] (default 0.005: the lab PLC's task)"
+    )
     b.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
     b.add_argument("--rao", default=None, metavar="FILE", help="RAO table (.mat or .csv); default parametric vessel")
-    b.add_argument("--out", default=None, help="output folder (default out/vvmc_hsHS_seedSEED)")
+    b.add_argument(
+        "--sensors",
+        choices=["true", "mru", "tracker"],
+        default="true",
+        help="what the controllers see of the platforms: the true states, an MRU H on each, or a laser tracker",
+    )
+    b.add_argument("--antisway", action="store_true", help="add the load-swing estimator and anti-swing law")
+    b.add_argument("--out", default=None, help="output folder (default out/vvmc_hsHS_seedSEED_SENSORS)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_sim_vvmc)
+    b = sims.add_parser("antisway", help="load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)")
+    b.add_argument("--hs", type=_positive_float, default=2.0, help="significant wave height [m] (default 2)")
+    b.add_argument("--tp", type=_positive_float, default=8.0, help="peak period [s] (default 8)")
+    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time in waves [s] (300)")
+    b.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
+    b.add_argument("--sensors", choices=["true", "mru", "tracker"], default="true", help="as for sim vvmc")
+    b.add_argument("--out", default=None, help="output folder (default out/antisway_hsHS_seedSEED)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_sim_antisway)
     _load_plugin_commands(sub)
 
     def add_engine_args(p: argparse.ArgumentParser) -> None:

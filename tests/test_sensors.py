@@ -1,6 +1,6 @@
 """Issue 16, item 3 (first part): the motion sensors the VVMC controller sees (app/marine/sensors.py):
-sampling at the sensor's rate, latency, band limit, per-run bias, white noise and the slow displacement
-error of an MRU ("5 cm or 5 %, whichever is higher"), all reproducible from a seed."""
+sampling at the sensor's rate, latency, band limit, per-run bias, white noise and the integration errors
+of an MRU's displacements (its "5 cm or 5 %"), all reproducible from a seed."""
 
 import math
 
@@ -10,8 +10,8 @@ import pytest
 from app.marine.sensors import MRU5, TRACKER, MotionSensor, SensorError, SensorSpec
 
 
-def _run(spec, signal, dt=0.001, seed=0, rms=None):
-    s = MotionSensor(spec, np.random.default_rng(seed), dt, signal_rms=rms)
+def _run(spec, signal, dt=0.001, seed=0):
+    s = MotionSensor(spec, np.random.default_rng(seed), dt)
     out = np.array([s.measure(x, np.zeros(6), np.zeros(6))[0] for x in signal])
     return out, s
 
@@ -37,29 +37,34 @@ def test_latency_delays_a_step_by_the_stated_time():
     assert first == 30  # 10 ms later
 
 
+@pytest.mark.slow
 def test_noise_and_bias_have_the_stated_size():
-    """Roll of an MRU 5: total error rms 0.02° (product overview), half bias half white noise."""
+    """Roll of the lab's MRU H: total error rms 0.05° (product overview), half bias half white noise."""
     biases, noise = [], []
     for seed in range(40):
         out, s = _run(MRU5, np.zeros((2000, 6)), dt=0.005, seed=seed)
         biases.append(s.bias[3])
         noise.append(np.std(out[:, 3]))
     total = math.sqrt(np.mean(np.square(biases)) + np.mean(np.square(noise)))
-    assert total == pytest.approx(math.radians(0.02), rel=0.25)
+    assert total == pytest.approx(math.radians(0.05), rel=0.25)
 
 
-def test_mru_heave_error_is_5_cm_or_5_percent_whichever_is_higher():
+@pytest.mark.slow
+def test_mru_heave_errors_are_a_scale_error_and_integrated_accelerometer_noise():
+    """Heave (and surge, sway) come from integrating the accelerometer: a per-run scale error of rms 5 %
+    and the accelerometer's 0.01 m/s² through the 25 s heave filter.  At a platform's wave period that is
+    millimetres — inside the product's "5 cm or 5 %"."""
     t = np.arange(0, 120, 0.005)
-    small = np.zeros((t.size, 6))
-    small[:, 2] = 0.1 * np.sin(2 * np.pi * t / 8)
-    out, s = _run(MRU5, small, dt=0.005, rms=small.std(axis=0))
-    assert s.slow_rms[2] == pytest.approx(0.05)
-    big = small * 20.0  # 2 m amplitude: 5 % of 1.41 m rms = 7 cm
-    _, s_big = _run(MRU5, big, dt=0.005, rms=big.std(axis=0))
-    assert s_big.slow_rms[2] == pytest.approx(0.05 * big[:, 2].std(), rel=1e-9)
-    assert s.slow_rms[3] == 0.0  # attitudes carry no slow error in the model
-    err = out[:, 2] - small[:, 2]
-    assert 0.005 < np.std(err) < 0.15  # one 120 s run of a 25 s process: loose
+    sig = np.zeros((t.size, 6))
+    sig[:, 2] = 0.1 * np.sin(2 * np.pi * t / 8)
+    scales, errs = [], []
+    for seed in range(30):
+        out, s = _run(MRU5, sig, dt=0.005, seed=seed)
+        scales.append(s.scale[2] - 1.0)
+        errs.append(np.std(out[:, 2] - s.scale[2] * sig[:, 2]))  # what is left after the scale error
+        assert s.scale[3] == 1.0  # attitudes are measured, not integrated
+    assert np.std(scales) == pytest.approx(0.05, rel=0.35)
+    assert 0.0005 < np.median(errs) < 0.01
 
 
 def test_the_same_seed_repeats_the_run():
@@ -77,5 +82,7 @@ def test_bad_specifications_are_refused_by_name():
         SensorSpec("x", "y", 1.0, -1.0, 1.0, (0,) * 6, (0,) * 6, (0,) * 6)
     with pytest.raises(SensorError, match="accuracy"):
         SensorSpec("x", "y", 1.0, 0.0, 1.0, (0,) * 5, (0,) * 6, (0,) * 6)
+    with pytest.raises(SensorError, match="scale_error"):
+        SensorSpec("x", "y", 1.0, 0.0, 1.0, (0,) * 6, (0,) * 6, (0,) * 6, scale_error=1.5)
     with pytest.raises(SensorError, match="step"):
         MotionSensor(MRU5, np.random.default_rng(0), 0.0)

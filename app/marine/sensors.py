@@ -4,21 +4,26 @@ A :class:`MotionSensor` turns the true motion of a platform or vessel (η, η̇,
 Fossen's order x, y, z, φ, θ, ψ) into what the PLC reads every cycle.  Each output sample is taken
 from the true signal ``latency`` seconds ago, passed through a first-order low-pass of ``bandwidth``
 (the sensor's own filtering), held until the next sample (``rate``), and carries a constant bias
-(drawn once per run), white noise, and — for the displacements an inertial sensor integrates — a slow
-error with the accuracy figure as its rms and the sensor's heave period as its time scale.
+(drawn once per run) and white noise.  The displacements an inertial sensor integrates (surge, sway,
+heave) carry instead the errors of that integration: a per-run scale error (the "5 %" of an MRU's
+heave accuracy) and its accelerometer error integrated twice through the heave filter (a leaky double
+integrator with the sensor's heave period), the long-period error behind the "5 cm" — at a Stewart
+platform's wave periods (5–12 s) it comes to millimetres; its velocities the same integrated once.
 
 Two specifications ship, with the source of every figure (the rest are assumptions, named):
 
-* :data:`MRU5` — a Kongsberg Seatex MRU 5 (5th generation).  Kongsberg Seatex, "5th generation MRU"
-  product overview (2013): roll/pitch accuracy 0.02° (the MRU 5+: 0.01°), heave 5 cm or 5 % whichever
-  is higher, heave period up to 25 s, acceleration 0.01 m/s², output data rate 200 Hz.  The lab reads
+* :data:`MRU5` — a Kongsberg Seatex MRU H (5th generation), the lab's own (Motion-Lab paper §2.5: one
+  on each platform).  Kongsberg Seatex, "5th generation MRU" product overview (2013): MRU H roll/pitch
+  accuracy 0.05° (MRU 5: 0.02°, MRU 5+: 0.01°), heave 5 cm or 5 % whichever is higher, heave period up
+  to 25 s, acceleration 0.01 m/s², output data rate 200 Hz.  The lab reads
   two such MRUs over UDP into its 5 ms PLC task (motionlab_plc.json, ``network``/``mru_rx_struct``:
   Norwegian Motion-Laboratory repository, commit f5fbf84, MIT).  Assumed: latency one output sample
   (5 ms), bandwidth 20 Hz, yaw 0.1° (an MRU has no heading reference of its own), surge/sway like heave,
-  angular rates 0.02°/s.
+  angular rates 0.02°/s, the 5 % as the rms of the scale error, the heave filter with ζ = 1/√2 at the
+  25 s period.
 * :data:`TRACKER` — a Leica AT960 laser tracker measuring the tool's pose relative to EM1500: transverse
   maximum permissible error ±(15 µm + 6 µm/m), typical results half of it (Leica Absolute Tracker user
-  manual, ISO 10360-10 specifications); assumed 1 kHz, 2 ms latency, 0.02 mm noise, no slow error.
+  manual, ISO 10360-10 specifications); assumed 1 kHz, 2 ms latency, 0.02 mm noise, nothing integrated.
 
 The model is a statement of what the controller may know, not a sensor fusion: errors of the
 displacement are independent of those of the rates and accelerations.
@@ -50,9 +55,10 @@ def _six(v) -> tuple[float, ...]:
 class SensorSpec:
     """What a sensor delivers (all 6-vectors in η's order x, y, z, φ, θ, ψ; SI units).
 
-    ``accuracy``: rms of the displacement error (split into a per-run bias, ``bias_share`` of the
-    variance, white noise and, where ``slow`` is set, a slow error of that rms with ``slow_period``);
-    ``rate_noise``, ``accel_noise``: white noise on η̇ and η̈."""
+    ``accuracy``: rms of the error of η (a per-run bias, ``bias_share`` of the variance, and white
+    noise); ``rate_noise``, ``accel_noise``: white noise on η̇ and η̈.  Where ``integrated`` is set, η
+    and η̇ of that DOF are the sensor's integration of its own acceleration instead: a per-run scale
+    error of rms ``scale_error`` and ``accel_noise`` through the heave filter (``heave_period``)."""
 
     name: str
     source: str
@@ -62,9 +68,9 @@ class SensorSpec:
     accuracy: tuple[float, ...]
     rate_noise: tuple[float, ...]
     accel_noise: tuple[float, ...]
-    slow: tuple[float, ...] = (0.0,) * 6  # rms of the slow displacement error per DOF
-    slow_relative: float = 0.0  # ... at least this share of the signal's own rms ("5 % whichever is higher")
-    slow_period: float = 25.0  # s
+    integrated: tuple[bool, ...] = (False,) * 6  # η, η̇ integrated from the sensor's own acceleration
+    scale_error: float = 0.0  # rms of the per-run scale error of the integrated DOFs
+    heave_period: float = 25.0  # s: the heave filter's period
     bias_share: float = 0.5
 
     def __post_init__(self) -> None:
@@ -74,30 +80,32 @@ class SensorSpec:
                 raise SensorError(f"sensor {name} must be positive, got {v!r}")
         if not (math.isfinite(self.latency) and self.latency >= 0):
             raise SensorError(f"sensor latency must be ≥ 0 s, got {self.latency!r}")
-        for name in ("accuracy", "rate_noise", "accel_noise", "slow"):
+        for name in ("accuracy", "rate_noise", "accel_noise"):
             v = np.asarray(getattr(self, name), dtype=float)
             if v.shape != (6,) or not np.all(np.isfinite(v)) or np.any(v < 0):
                 raise SensorError(f"sensor {name} must be six finite numbers ≥ 0")
-        if not (0.0 <= self.bias_share <= 1.0) or not (0.0 <= self.slow_relative < 1.0):
-            raise SensorError("sensor bias_share must be in [0, 1] and slow_relative in [0, 1)")
-        if not (self.slow_period > 0):
-            raise SensorError(f"sensor slow_period must be positive, got {self.slow_period!r}")
+        if len(self.integrated) != 6:
+            raise SensorError("sensor integrated must name six DOFs")
+        if not (0.0 <= self.bias_share <= 1.0) or not (0.0 <= self.scale_error < 1.0):
+            raise SensorError("sensor bias_share must be in [0, 1] and scale_error in [0, 1)")
+        if not (self.heave_period > 0):
+            raise SensorError(f"sensor heave_period must be positive, got {self.heave_period!r}")
 
 
 _DEG = math.pi / 180.0
 MRU5 = SensorSpec(
-    name="Kongsberg Seatex MRU 5 (5th generation)",
-    source="Kongsberg Seatex 5th generation MRU overview (2013): roll/pitch 0.02°, heave 5 cm or 5 %, 25 s, "
-    "0.01 m/s², 200 Hz; latency, bandwidth, yaw and rate noise assumed",
+    name="Kongsberg Seatex MRU H (5th generation)",
+    source="Kongsberg Seatex 5th generation MRU overview (2013): MRU H roll/pitch 0.05°, heave 5 cm or 5 %, "
+    "25 s, 0.01 m/s², 200 Hz; latency, bandwidth, yaw, rate noise and the filter assumed",
     rate=200.0,
     latency=0.005,
     bandwidth=20.0,
-    accuracy=_six([0.0, 0.0, 0.0, 0.02 * _DEG, 0.02 * _DEG, 0.1 * _DEG]),
+    accuracy=_six([0.0, 0.0, 0.0, 0.05 * _DEG, 0.05 * _DEG, 0.1 * _DEG]),
     rate_noise=_six([0.01, 0.01, 0.01, 0.02 * _DEG, 0.02 * _DEG, 0.02 * _DEG]),
     accel_noise=_six([0.01, 0.01, 0.01, 0.05 * _DEG, 0.05 * _DEG, 0.05 * _DEG]),
-    slow=_six([0.05, 0.05, 0.05, 0.0, 0.0, 0.0]),
-    slow_relative=0.05,
-    slow_period=25.0,
+    integrated=(True, True, True, False, False, False),
+    scale_error=0.05,
+    heave_period=25.0,
 )
 TRACKER = SensorSpec(
     name="Leica AT960 laser tracker (6-DOF probe)",
@@ -119,24 +127,22 @@ class MotionSensor:
     ----------
     spec : SensorSpec
     rng : numpy.random.Generator
-        Draws the run's biases and every noise sample (a seeded run repeats exactly).
+        Draws the run's biases and scale errors and every noise sample (a seeded run repeats exactly).
     dt : float
         The simulation step [s] (≤ the sample period; the latency is rounded to whole steps).
-    signal_rms : array_like (6,), optional
-        The expected rms of η per DOF, for ``slow_relative`` ("5 % whichever is higher").
     """
 
-    def __init__(self, spec: SensorSpec, rng: np.random.Generator, dt: float, signal_rms: ArrayLike | None = None):
+    def __init__(self, spec: SensorSpec, rng: np.random.Generator, dt: float):
         if not (dt > 0 and math.isfinite(dt)):
             raise SensorError(f"sensor step must be positive, got {dt!r}")
         self.spec, self.rng, self.dt = spec, rng, float(dt)
         acc = np.asarray(spec.accuracy)
         self.bias = rng.standard_normal(6) * acc * math.sqrt(spec.bias_share)
         self.noise = acc * math.sqrt(1.0 - spec.bias_share)
-        rms = np.zeros(6) if signal_rms is None else np.abs(np.asarray(signal_rms, dtype=float))
-        self.slow_rms = np.maximum(np.asarray(spec.slow), spec.slow_relative * rms) * (np.asarray(spec.slow) > 0)
-        self.slow_state = rng.standard_normal(6) * self.slow_rms
-        self._tau_slow = spec.slow_period / (2 * math.pi)
+        self.integrated = np.asarray(spec.integrated, dtype=bool)
+        self.scale = 1.0 + rng.standard_normal(6) * spec.scale_error * self.integrated
+        self.int_err = np.zeros((2, 6))  # the heave filter's state: displacement and velocity error
+        self._wc = 2 * math.pi / spec.heave_period
         self._delay = deque(maxlen=max(1, round(spec.latency / self.dt) + 1))
         self._period = 1.0 / spec.rate
         self._since = math.inf  # time since the last sample: the first call samples
@@ -149,12 +155,6 @@ class MotionSensor:
         true = np.concatenate([np.asarray(eta, float), np.asarray(eta_dot, float), np.asarray(eta_ddot, float)])
         self._delay.append(true)
         self._since += self.dt
-        # the slow error evolves with the simulation (first-order Gauss–Markov of rms slow_rms)
-        if np.any(self.slow_rms > 0):
-            phi = math.exp(-self.dt / self._tau_slow)
-            self.slow_state = phi * self.slow_state + math.sqrt(
-                1 - phi * phi
-            ) * self.slow_rms * self.rng.standard_normal(6)
         if self._since + 1e-12 < self._period:
             return self.out
         sample_dt = self._since if math.isfinite(self._since) else self._period
@@ -167,9 +167,20 @@ class MotionSensor:
             self._lp = self._lp + k * (x - self._lp)
         s = self.spec
         n = self.rng.standard_normal(18)
-        eta_m = self._lp[:6] + self.bias + self.noise * n[:6] + self.slow_state
+        accel_err = np.asarray(s.accel_noise) * n[12:]
+        eta_m = self._lp[:6] + self.bias + self.noise * n[:6]
         eta_dot_m = self._lp[6:12] + np.asarray(s.rate_noise) * n[6:12]
-        eta_ddot_m = self._lp[12:] + np.asarray(s.accel_noise) * n[12:]
+        eta_ddot_m = self._lp[12:] + accel_err
+        m = self.integrated
+        if np.any(m):
+            # the accelerometer's error through the heave filter, ë = a_err − 2ζω_c ė − ω_c² e, ζ = 1/√2
+            # (semi-implicit Euler at the sample period), and the per-run scale error of the integration
+            e, ed = self.int_err
+            ed = ed + sample_dt * (accel_err - math.sqrt(2.0) * self._wc * ed - self._wc**2 * e)
+            e = e + sample_dt * ed
+            self.int_err = np.array([e, ed])
+            eta_m[m] = (self.scale * self._lp[:6] + e)[m]
+            eta_dot_m[m] = (self.scale * self._lp[6:12] + ed)[m]
         self.out = (eta_m, eta_dot_m, eta_ddot_m)
         self.samples += 1
         return self.out

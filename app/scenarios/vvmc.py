@@ -7,6 +7,12 @@ in EM1500's body frame by inverse kinematic control (analytic IK, eqs. 7–20, p
 feed-forward joint velocity J⁻¹ ṗ of eq. 21 computed from both platforms' velocities, eqs. 54–56),
 and the winch keeps the payload's height relative to EM1500.  Without compensation the robot and
 winch hold still.  The same seas drive both runs, so the two are directly comparable.
+
+``sensors`` chooses what the controllers see of the platforms (issue 16, item 3): ``true`` (the
+simulation's states), ``mru`` (a Kongsberg MRU 5 on each platform) or ``tracker`` (a laser tracker),
+each a :class:`~app.marine.sensors.MotionSensor` sampled at its own rate inside the PLC's 5 ms step;
+scores always use the true states.  ``antisway`` adds the load-swing estimator and the anti-swing law
+(:mod:`app.scenarios.swing`) to the Comau's command.
 """
 
 from __future__ import annotations
@@ -19,10 +25,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.errors import BosunError
+from app.marine.sensors import SENSORS, MotionSensor
 from app.marine.vessel import VesselParticulars, load_rao, parametric_rao
 from app.marine.waves import SPECTRA, check_sea
 from app.models.lab import load_lab
 from app.models.registry import load_robot
+from app.scenarios.swing import SwingControl
 from app.sim.motionlab import MotionLab
 from app.sim.stewart import WaveSimulation
 
@@ -41,13 +49,16 @@ class VvmcScenario:
     heading1: float = 150.0  # EM8000 vessel: bow quartering sea
     heading2: float = 90.0  # EM1500 vessel: beam sea
     duration: float = 300.0
-    dt: float = 0.01
+    dt: float = 0.005  # the lab PLC's task (motionlab_plc.json, ads_hmi.plc_task)
     seed: int = 1
     ramp: float = 5.0  # platform ENGAGE fade [s]
     settle: float = 10.0  # not counted in the statistics [s] (after the ramp)
     rao: str | None = None
     lab: str = "motionlab"
     comau_profile: str | None = None  # the Comau's joint-limit profile; None: the layout's (``lab``)
+    sensors: str = "true"  # what the controllers see of the platforms: true | mru | tracker
+    antisway: bool = False  # the load-swing estimator and anti-swing law on the Comau's command
+    swing_measurement: str = "angles"  # the estimator's measurement: angles (wire sensor) | payload (tracker)
 
     def __post_init__(self) -> None:
         if self.spectrum not in SPECTRA:
@@ -64,6 +75,10 @@ class VvmcScenario:
                 f"{self.ramp + self.settle:g} s start-up"
             )
         check_sea(self.hs, self.tp)
+        if self.sensors not in ("true", *SENSORS):
+            raise VvmcError(f"--sensors must be one of true, {', '.join(SENSORS)}; got {self.sensors!r}")
+        if self.swing_measurement not in ("angles", "payload"):
+            raise VvmcError(f"the swing measurement must be angles or payload, got {self.swing_measurement!r}")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -87,18 +102,33 @@ class VvmcRun:
     at_limit: NDArray[np.bool_]
     leg_clamped: NDArray[np.bool_]
     cancelled: bool = False
+    offset_b2: NDArray[np.float64] | None = None  # the anti-swing offset of the tool target, in {b2}
+    swing_estimate: NDArray[np.float64] | None = None  # the estimator's (α, β)
 
 
-def _sources(sc: VvmcScenario, lab: MotionLab) -> None:
+def _sources(sc: VvmcScenario, lab: MotionLab) -> list[NDArray[np.float64]]:
+    """Both platforms in the sea; returns the expected rms of each platform's motion (6,) per DOF."""
     rao = load_rao(sc.rao) if sc.rao else parametric_rao(VesselParticulars())
+    rms = []
     for p, heading in zip(lab.platforms, (sc.heading1, sc.heading2), strict=True):
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, np.ones(6))
         scale = WaveSimulation.auto_scale(src.significant, p.model, box=p.command_box)
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, scale)
+        rms.append(src.significant * scale / 4.0)  # significant = 4σ
         p.place_at_neutral()
         p.ramp_time = sc.ramp
         p.set_source("simulation", src)
         p.command("engage")
+    return rms
+
+
+def _sensors(sc: VvmcScenario, lab: MotionLab, rms: list[NDArray[np.float64]]) -> None:
+    if sc.sensors == "true":
+        lab.set_sensors(None)
+        return
+    spec = SENSORS[sc.sensors]
+    rng = np.random.default_rng([sc.seed, 16_3])  # its own stream: the seas are the same as without
+    lab.set_sensors(tuple(MotionSensor(spec, rng, sc.dt) for _ in rms))
 
 
 def simulate(
@@ -114,19 +144,29 @@ def simulate(
     lab = MotionLab(layout, at_work=True, comau_profile=sc.comau_profile)
     if use_kernels is not None:
         lab.use_kernels = use_kernels
-    _sources(sc, lab)
+    rms = _sources(sc, lab)
+    _sensors(sc, lab, rms)
     lab.set_vvmc(compensate)
+    swing_ctl = None
+    if sc.antisway and compensate:
+        swing_ctl = SwingControl(lab, np.random.default_rng([sc.seed, 16_4]), measurement=sc.swing_measurement)
     n = round(sc.duration / sc.dt)
     t, L, Ld, h = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     eta1, eta2, q, qd, e, swing = (np.empty((n, k)) for k in (6, 6, 3, 3, 3, 2))
+    off_b2, est = np.zeros((n, 3)), np.zeros((n, 2))
     at_limit = np.zeros((n, 4), dtype=bool)
     clamped = np.zeros((n, 2), dtype=bool)
     p1, p2 = lab.platforms
+    R_g_n1 = layout.T_world_n1[:3, :3]
     done = n
     for i in range(n):
         s = lab.step(sc.dt)
         t[i], eta1[i], eta2[i], q[i], qd[i], e[i] = s.t, s.eta1, s.eta2, s.q, s.qd, s.e_t_b2
         L[i], Ld[i], swing[i], h[i] = s.L_w, s.L_w_dot, s.swing, s.payload_height_error
+        if swing_ctl is not None:
+            off_b2[i] = lab.platform_pose(1)[:3, :3].T @ (R_g_n1 @ lab.tool_offset[0])  # the offset in force
+            swing_ctl.step(sc.dt)
+            est[i] = swing_ctl.ekf.x[:2]
         at_limit[i] = lab.at_limit
         clamped[i, 0], clamped[i, 1] = p1.leg_clamped, p2.leg_clamped
         if progress is not None and (i + 1) % 100 == 0:
@@ -136,7 +176,8 @@ def simulate(
             break
     sl = slice(0, done)
     series = (t, eta1, eta2, q, qd, e, L, Ld, swing, h, at_limit, clamped)
-    return VvmcRun(compensate, *(x[sl] for x in series), cancelled=done < n)
+    extra = {"offset_b2": off_b2[sl], "swing_estimate": est[sl]} if swing_ctl is not None else {}
+    return VvmcRun(compensate, *(x[sl] for x in series), cancelled=done < n, **extra)
 
 
 def _rms(x: NDArray[np.float64]) -> float:
@@ -159,8 +200,15 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
         e0 = e  # from the work point, the same measure for both runs
         swing = np.degrees(np.arccos(np.clip(np.cos(run.swing[m, 0]) * np.cos(run.swing[m, 1]), -1, 1)))
         q_range = upper - lower
+        target = e0 if run.offset_b2 is None else e0 - run.offset_b2[m]  # from the target the Comau tracks
+        est = {}
+        if run.swing_estimate is not None:
+            err = np.degrees(run.swing_estimate[m] - run.swing[m])
+            est = {"swing_estimate_rms_error_deg": [_rms(err[:, 0]), _rms(err[:, 1])]}
         return {
+            **est,
             "rms_tool_error_m": _rms(np.linalg.norm(e0, axis=1)),
+            "rms_tool_tracking_error_m": _rms(np.linalg.norm(target, axis=1)),
             "rms_tool_error_xyz_m": [_rms(e0[:, k]) for k in range(3)],
             "max_tool_error_m": float(np.max(np.linalg.norm(e0, axis=1))) if e0.size else 0.0,
             "mean_tool_offset_m": [float(v) for v in e.mean(axis=0)],
@@ -179,6 +227,8 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
     s_on, s_off = stats(on), stats(off)
     off_rms = s_off["rms_tool_error_m"]
     return {
+        "sensors": sc.sensors,
+        "antisway": sc.antisway,
         "measured_from_s": t0,
         "compensated": s_on,
         "uncompensated": s_off,

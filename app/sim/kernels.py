@@ -483,6 +483,7 @@ def pendulum_step(alpha, beta, alpha_dot, beta_dot, dt, ax, ay, az, L, Ld, c, g)
 @_jit
 def lab_step(
     x1, v1, a1, x2, v2, a2, rates,
+    cx1, cv1, ca1, cx2, cv2, ca2, measured, off_p, off_v,
     cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r, w_b2, park_q,
     q, qd, qdd, q_lo, q_hi, q_speed, q_accel, q_brake, q_tau, comau_mode, v_cmd,
     wl, wv, wa, w_lo, w_hi, w_speed, w_accel, w_tau, track, speed_cmd,
@@ -494,7 +495,11 @@ def lab_step(
     """One :meth:`MotionLab.step` after the platforms, in place (the reference is the NumPy methods).
 
     Platforms: η, η̇, η̈ of EM8000 (x1, v1, a1) and EM1500 (x2, v2, a2); ``rates`` (2, 3, 3, 3) receives
-    R, Ṙ, R̈ of both bodies (eqs. 33, 47, 51).  Comau (``cm`` = a1, d1, a2, a3, L; joint filter q, q̇, q̈
+    R, Ṙ, R̈ of both bodies (eqs. 33, 47, 51).  The controllers (the Comau's MOTION_COMP and the winch's
+    height tracking) see the platforms as measured, (cx1, cv1, ca1) and (cx2, cv2, ca2), when
+    ``measured`` (else the true states); the plant, the load and the scores always use the true ones.
+    ``off_p``, ``off_v``: an offset (position, velocity in {n1}) added to the work point the Comau
+    tracks in MOTION_COMP (the anti-swing law's).  Comau (``cm`` = a1, d1, a2, a3, L; joint filter q, q̇, q̈
     and limits, ``q_brake`` the deceleration A of the velocity bound at the joint limits): ``comau_mode``
     0 settled (to ``park_q`` at a quarter speed), 1 remote (q̇ = J⁺ v_cmd, eq. 21), 2 motion_comp (the
     work point w_b2 fixed in {b2} through eqs. 54–56 inverted, IK of eqs. 7–20, feed-forward
@@ -514,6 +519,13 @@ def lab_step(
         for j in range(3):
             rates[0, 0, i, j], rates[0, 1, i, j], rates[0, 2, i, j] = R1[i, j], Rd1[i, j], Rdd1[i, j]
             rates[1, 0, i, j], rates[1, 1, i, j], rates[1, 2, i, j] = R2b[i, j], Rd2[i, j], Rdd2[i, j]
+    # ... and as the controllers see them
+    if measured:
+        cR1, cRd1, _ = stewart_rates(cx1, cv1, ca1)
+        cR2, cRd2, _ = stewart_rates(cx2, cv2, ca2)
+    else:
+        cx1, cv1, cx2, cv2 = x1, v1, x2, v2
+        cR1, cRd1, cR2, cRd2 = R1, Rd1, R2b, Rd2
 
     # ---- the Comau
     if comau_mode == 3:  # brake at the acceleration limits to rest, then stay
@@ -534,21 +546,22 @@ def lab_step(
             q_ref = q + rate * dt
             motion_filter_update(q, qd, qdd, q_ref, rate, on, q_lo, q_hi, q_speed, q_accel, q_brake, q_tau, dt, 1.0)
         else:  # inverse kinematic control with feed-forward of both platforms
-            # the work point fixed in {b2}, in {n1} (eq. 39 through {g})
-            w = _mv(R2b, w_b2[0], w_b2[1], w_b2[2])
-            Rdw = _mv(Rd2, w_b2[0], w_b2[1], w_b2[2])
-            pw = _mv(T_n1_n2, x2[0] + w[0], x2[1] + w[1], x2[2] + w[2])
-            vw = _mv(T_n1_n2, v2[0] + Rdw[0], v2[1] + Rdw[1], v2[2] + Rdw[2])
+            # the work point fixed in {b2} (plus the offset), in {n1} (eq. 39 through {g}), as measured
+            w = _mv(cR2, w_b2[0], w_b2[1], w_b2[2])
+            Rdw = _mv(cRd2, w_b2[0], w_b2[1], w_b2[2])
+            pw = _mv(T_n1_n2, cx2[0] + w[0], cx2[1] + w[1], cx2[2] + w[2])
+            vw = _mv(T_n1_n2, cv2[0] + Rdw[0], cv2[1] + Rdw[1], cv2[2] + Rdw[2])
             for i in range(3):
-                pw[i] = T_n1_n2[i, 3] + pw[i]
+                pw[i] = T_n1_n2[i, 3] + pw[i] + off_p[i]
+                vw[i] = vw[i] + off_v[i]
             # eqs. (54), (56) inverted for the tool point in {r}
-            b = _mtv(R1, pw[0] - x1[0], pw[1] - x1[1], pw[2] - x1[2])
+            b = _mtv(cR1, pw[0] - cx1[0], pw[1] - cx1[1], pw[2] - cx1[2])
             p_tr = _mtv(T_b1_r, b[0] - T_b1_r[0, 3], b[1] - T_b1_r[1, 3], b[2] - T_b1_r[2, 3])
             arm = _mv(T_b1_r, p_tr[0], p_tr[1], p_tr[2])
             for i in range(3):
                 arm[i] = T_b1_r[i, 3] + arm[i]
-            Rd_arm = _mv(Rd1, arm[0], arm[1], arm[2])
-            c = _mtv(R1, vw[0] - v1[0] - Rd_arm[0], vw[1] - v1[1] - Rd_arm[1], vw[2] - v1[2] - Rd_arm[2])
+            Rd_arm = _mv(cRd1, arm[0], arm[1], arm[2])
+            c = _mtv(cR1, vw[0] - cv1[0] - Rd_arm[0], vw[1] - cv1[1] - Rd_arm[1], vw[2] - cv1[2] - Rd_arm[2])
             v_tr = _mtv(T_b1_r, c[0], c[1], c[2])
             q_d, found = comau_ik(cm, T_base, p_tr, q, signs, q_lo, q_hi)
             if not found:  # out of reach: hold, limits intact
@@ -568,25 +581,26 @@ def lab_step(
         v_t_g[i] = vg[i]
         a_t_g[i] = ag[i]
 
-    # ---- the winch
+    # ---- the winch (its height tracking sees EM1500 as measured)
     H2 = pose_in(T_g_n2, x2)  # H^g_b2, eq. (39)
+    cH2 = pose_in(T_g_n2, cx2) if measured else H2
     ref, ref_v = np.empty(1), np.empty(1)
     if track:
         if not has_target:  # keep the load where it is now, relative to EM1500
             sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
             L0 = wl[0]
-            pp0 = p_t_g[0] + L0 * -sa - H2[0, 3]
-            pp1 = p_t_g[1] - L0 * (ca * sb) - H2[1, 3]
-            pp2 = p_t_g[2] - L0 * (ca * cb) - H2[2, 3]
-            t = _mtv(H2, pp0, pp1, pp2)
+            pp0 = p_t_g[0] + L0 * -sa - cH2[0, 3]
+            pp1 = p_t_g[1] - L0 * (ca * sb) - cH2[1, 3]
+            pp2 = p_t_g[2] - L0 * (ca * cb) - cH2[2, 3]
+            t = _mtv(cH2, pp0, pp1, pp2)
             for i in range(3):
                 target[i] = t[i]
             has_target = True
-        tg = _mv(H2, target[0], target[1], target[2])
-        Rdt = _mv(Rd2, target[0], target[1], target[2])
-        vtg = _mv(T_g_n2, v2[0] + Rdt[0], v2[1] + Rdt[1], v2[2] + Rdt[2])
+        tg = _mv(cH2, target[0], target[1], target[2])
+        Rdt = _mv(cRd2, target[0], target[1], target[2])
+        vtg = _mv(T_g_n2, cv2[0] + Rdt[0], cv2[1] + Rdt[1], cv2[2] + Rdt[2])
         # heights along gravity: the load hangs L_w below the tool (small swing)
-        ref[0] = p_t_g[2] - (tg[2] + H2[2, 3])
+        ref[0] = p_t_g[2] - (tg[2] + cH2[2, 3])
         ref_v[0] = v_t_g[2] - vtg[2]
     else:
         s = min(max(speed_cmd, -w_speed[0]), w_speed[0])
@@ -635,7 +649,7 @@ def warm_up_steps() -> list:
 
     def lab() -> None:
         lab_step(
-            z6, z6, z6, z6, z6, z6, np.zeros((2, 3, 3, 3)),
+            z6, z6, z6, z6, z6, z6, np.zeros((2, 3, 3, 3)), z6, z6, z6, z6, z6, z6, True, z3, z3,
             cm, eye, signs, eye, eye, eye, eye, o3, z3,
             vec(3), vec(3), vec(3), vec(3, -3.0), vec(3, 3.0), o3, o3, o3, 0.05, 2, z3,
             vec(1, 1.0), vec(1), vec(1), vec(1, 0.3), vec(1, 2.5), vec(1, 0.5), vec(1, 1.5), 0.05, True, 0.0,

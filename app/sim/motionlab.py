@@ -339,6 +339,12 @@ class MotionLab:
         self._out = tuple(np.zeros(n) for n in (3, 3, 3, 6, 6))  # e_t_b2, p_w_g, p_p_g, legs1, legs2
         self._use_kernels = False  # the set-up below runs the reference; the flag is set at the end
         self.payload_target_b2: NDArray[np.float64] | None = None
+        # what the controllers see of the platforms: None, the true states; else one streaming sensor per
+        # platform (app/marine/sensors.py: MRU or tracker), measured after the platforms' step
+        self.sensors: tuple | None = None
+        self.measured: tuple[tuple[NDArray, NDArray, NDArray], ...] | None = None
+        # an offset (position, velocity in {n1}) added to the work point the Comau tracks (anti-swing)
+        self.tool_offset = (np.zeros(3), np.zeros(3))
         self.t = 0.0
         self.frozen = False
         self.at_limit = np.zeros(4, dtype=bool)  # joints 1–3, winch: at a position or speed limit
@@ -378,26 +384,34 @@ class MotionLab:
             return sim_kernels.pose_in(self._T_world_n[k], p.filter.x)
         return T_n @ StewartPlatform.pose_matrix(p.eta)
 
-    def work_point(self) -> tuple[NDArray, NDArray, NDArray]:
-        """The work point fixed in {b2}: position, velocity, acceleration in {n1}."""
-        p2 = self.platforms[1]
-        R, Rd, Rdd = self._rates[1]
+    def work_point(self, seen: bool = False) -> tuple[NDArray, NDArray, NDArray]:
+        """The work point fixed in {b2}: position, velocity, acceleration in {n1} (``seen``: as the
+        controllers see EM1500, :meth:`set_sensors`)."""
+        if seen:
+            eta, eta_dot, eta_ddot, (R, Rd, Rdd) = self._view(1)
+        else:
+            p2 = self.platforms[1]
+            eta, eta_dot, eta_ddot, (R, Rd, Rdd) = p2.eta, p2.eta_dot, p2.eta_ddot, self._rates[1]
         w = self.layout.work_point_b2
         T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
         R12 = T_n1_n2[:3, :3]
-        p = T_n1_n2[:3, 3] + R12 @ (p2.eta[:3] + R @ w)
-        v = R12 @ (p2.eta_dot[:3] + Rd @ w)
-        a = R12 @ (p2.eta_ddot[:3] + Rdd @ w)
+        p = T_n1_n2[:3, 3] + R12 @ (eta[:3] + R @ w)
+        v = R12 @ (eta_dot[:3] + Rd @ w)
+        a = R12 @ (eta_ddot[:3] + Rdd @ w)
         return p, v, a
 
-    def to_robot_base(self, p_n1, v_n1) -> tuple[NDArray, NDArray]:
-        """Invert eqs. (54) and (56) for the tool point in {r} (position and velocity)."""
-        p1 = self.platforms[0]
-        R, Rd, _ = self._rates[0]
+    def to_robot_base(self, p_n1, v_n1, seen: bool = False) -> tuple[NDArray, NDArray]:
+        """Invert eqs. (54) and (56) for the tool point in {r} (position and velocity); ``seen``: with
+        EM8000 as the controllers see it."""
+        if seen:
+            eta, eta_dot, _, (R, Rd, _) = self._view(0)
+        else:
+            p1 = self.platforms[0]
+            eta, eta_dot, (R, Rd, _) = p1.eta, p1.eta_dot, self._rates[0]
         R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
-        p_tr = R_r.T @ (R.T @ (p_n1 - p1.eta[:3]) - p_r)
+        p_tr = R_r.T @ (R.T @ (p_n1 - eta[:3]) - p_r)
         arm = p_r + R_r @ p_tr
-        v_tr = R_r.T @ (R.T @ (v_n1 - p1.eta_dot[:3] - Rd @ arm))
+        v_tr = R_r.T @ (R.T @ (v_n1 - eta_dot[:3] - Rd @ arm))
         return p_tr, v_tr
 
     def work_configuration(self) -> NDArray[np.float64]:
@@ -468,11 +482,47 @@ class MotionLab:
         self.set_comau_mode("hold")
         self.set_winch_mode("local")
 
+    # ------------------------------------------------------------------ sensors and offsets
+    def set_sensors(self, sensors: tuple | None) -> None:
+        """Let the controllers see the platforms through ``sensors`` (one
+        :class:`~app.marine.sensors.MotionSensor` per platform, EM8000 then EM1500), or the true
+        states (None).  The plant, the load and every score keep the true states."""
+        if sensors is not None and len(sensors) != len(self.platforms):
+            raise LabError(f"one sensor per platform ({len(self.platforms)}), got {len(sensors)}")
+        self.sensors = None if sensors is None else tuple(sensors)
+        self.measured = None
+
+    def set_tool_offset(self, p_n1: ArrayLike, v_n1: ArrayLike) -> None:
+        """Offset (position [m], velocity [m/s] in {n1}) added to the work point the Comau tracks in
+        MOTION_COMP, from the next step on (the anti-swing law's; zero: the work point itself)."""
+        p, v = np.asarray(p_n1, dtype=float), np.asarray(v_n1, dtype=float)
+        if p.shape != (3,) or v.shape != (3,) or not (np.all(np.isfinite(p)) and np.all(np.isfinite(v))):
+            raise LabError("a tool offset is a finite position and velocity (3 values each)")
+        self.tool_offset = (np.ascontiguousarray(p), np.ascontiguousarray(v))
+
+    def _measure(self) -> None:
+        if self.sensors is None:
+            self.measured = None
+            return
+        self.measured = tuple(
+            tuple(np.ascontiguousarray(a, dtype=float) for a in s.measure(p.eta, p.eta_dot, p.eta_ddot))
+            for s, p in zip(self.sensors, self.platforms, strict=True)
+        )
+
+    def _view(self, k: int) -> tuple[NDArray, NDArray, NDArray, tuple[NDArray, NDArray, NDArray]]:
+        """Platform k as the controllers see it: η, η̇, η̈ and (R, Ṙ, R̈)."""
+        if self.measured is None:
+            p = self.platforms[k]
+            return p.eta, p.eta_dot, p.eta_ddot, self._rates[k]
+        eta, eta_dot, eta_ddot = self.measured[k]
+        return eta, eta_dot, eta_ddot, StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+
     # ------------------------------------------------------------------ step
     def step(self, dt: float) -> LabSample:
         self.t += dt
         for p in self.platforms:
             p.step(dt)
+        self._measure()
         if self._use_kernels:
             self.last = self._step_compiled(dt)
             return self.last
@@ -504,8 +554,10 @@ class MotionLab:
         has = self.payload_target_b2 is not None
         target = self.payload_target_b2 if has else self._target
         e_b2, p_w_g, p_p_g, legs1, legs2 = self._out
+        true = ((p1.filter.x, p1.filter.v, p1.filter.a), (p2.filter.x, p2.filter.v, p2.filter.a))
+        seen = true if self.measured is None else self.measured
         has, pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, h_err = sim_kernels.lab_step(
-            p1.filter.x, p1.filter.v, p1.filter.a, p2.filter.x, p2.filter.v, p2.filter.a, self._rates_buf,
+            *true[0], *true[1], self._rates_buf, *seen[0], *seen[1], self.measured is not None, *self.tool_offset,
             self._comau, *self._consts,
             f.x, f.v, f.a, f.lower, f.upper, f.speed, f.accel, f.brake, f.tau, mode,
             np.ascontiguousarray(self.tool_velocity_cmd, dtype=float),
@@ -551,9 +603,10 @@ class MotionLab:
             J = self.comau.jacobian(f.x)
             qd = np.linalg.lstsq(J, self.tool_velocity_cmd, rcond=1e-6)[0]  # eq. (21)
             f.step(f.x + qd * dt, qd, dt)
-        else:  # motion_comp: inverse kinematic control with feed-forward of both platforms
-            p_n1, v_n1, _ = self.work_point()
-            p_tr, v_tr = self.to_robot_base(p_n1, v_n1)
+        else:  # motion_comp: inverse kinematic control with feed-forward of both platforms, as measured
+            p_n1, v_n1, _ = self.work_point(seen=True)
+            p_off, v_off = self.tool_offset
+            p_tr, v_tr = self.to_robot_base(p_n1 + p_off, v_n1 + v_off, seen=True)
             q_d = self._ik(p_tr, f.x)
             if q_d is None:  # out of reach: hold the nearest reachable direction, limits intact
                 q_d = f.x.copy()
@@ -583,15 +636,15 @@ class MotionLab:
         if self.frozen:
             w.speed_command = 0.0
             w.step(dt)
-        elif w.mode == "motion_comp":
-            R2, o2 = self._b2_to_g()
+        elif w.mode == "motion_comp":  # EM1500 as the controllers see it
+            eta2, eta_dot2, _, (_, Rd, _) = self._view(1)
+            H2 = self.layout.T_world_n2 @ StewartPlatform.pose_matrix(eta2)  # eq. (39)
+            R2, o2 = H2[:3, :3], H2[:3, 3]
             if self.payload_target_b2 is None:  # keep the payload where it is now, relative to EM1500
                 self.payload_target_b2 = R2.T @ (self.p_p_g() - o2)
             target_g = R2 @ self.payload_target_b2 + o2
-            p2 = self.platforms[1]
-            _, Rd, _ = self._rates[1]
             R_g_n2 = self.layout.T_world_n2[:3, :3]
-            v_target_g = R_g_n2 @ (p2.eta_dot[:3] + Rd @ self.payload_target_b2)
+            v_target_g = R_g_n2 @ (eta_dot2[:3] + Rd @ self.payload_target_b2)
             # heights along gravity: z_d = −z_g; the load hangs L_w below the tool (small swing)
             L_ref = float(self.p_t_g[2] - target_g[2])
             Ld_ref = float(self.v_t_g[2] - v_target_g[2])
