@@ -592,6 +592,11 @@ def cmd_sim_antisway(args: argparse.Namespace) -> int:
         f"({doc['swing_reduction_percent']:.0f} % less; aim ≥ 80 %), tool from the work point rms "
         f"{1000 * a['rms_tool_error_m']:.2f} → {1000 * b['rms_tool_error_m']:.2f} mm (aim ≤ 5 mm)"
     )
+    print(
+        f"  the pendulum's own oscillation (0.8-1.2 × √(g/L)/2π): {a['swing_pendulum_band_rms_deg']:.3f}° → "
+        f"{b['swing_pendulum_band_rms_deg']:.3f}° rms ({doc['pendulum_band_reduction_percent']:.0f} % less); "
+        "the rest is the forced lean φ ≈ a/g of the compensating tool"
+    )
     print(f"  {wall:.0f} s; wrote {out}/free_swing.png, vvmc_swing.png, summary.json")
     return 0
 

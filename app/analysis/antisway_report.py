@@ -58,6 +58,7 @@ def save_antisway(sc: VvmcScenario, free: list[dict], study: dict, out: Path, wa
         "vvmc": study["vvmc"],
         "vvmc_antisway": study["vvmc_antisway"],
         "swing_reduction_percent": study["swing_reduction_percent"],
+        "pendulum_band_reduction_percent": study["pendulum_band_reduction_percent"],
         "wall_time_s": wall_s,
         "figures": [p.name for p in paths],
     }
