@@ -164,3 +164,189 @@ def test_winch_slider_is_the_labs_and_the_operational_box_is_shown(qtbot, window
     assert "heave -0.6…+0.6 m" in em8000.box_label.text() and "yaw -10…+10 °" in em8000.box_label.text()
     assert em8000.gen[2][0].maximum() == pytest.approx(0.6) and em8000.remote[5].maximum() == pytest.approx(10.0)
     assert "lab" in tab.comau_limits.text() and "q2 -30…30°" in tab.comau_limits.text()
+
+
+# ---------------------------------------------------------------------------- the lab HMI's parity (issue 16, item 5)
+def _color_px(widget, rgb: tuple[int, int, int], tol: int = 40) -> int:
+    """Pixels of ``widget`` (as it paints) within ``tol`` of ``rgb``."""
+    from tests.test_gui_drawing import _rgb
+
+    a = _rgb(widget.grab().toImage()).astype(int)
+    return int((np.abs(a - np.array(rgb)).max(axis=2) <= tol).sum())
+
+
+def test_status_word_lights_and_generator_defaults_as_the_lab_hmi(qtbot, window):
+    """Item 5: each platform shows its Rexroth status (operation state, system status, operation mode) and
+    follows it (SETTLED → TRANSIT while raising); the machine and sensor lights are green where the model
+    runs and grey for the tracker and the remote interface (in the screen's pixels); the sine generator's
+    fields start at the lab's defaults with its ranges and steps."""
+    from ui.widgets.status import LIGHT
+
+    win, _ = window
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.desc is not None, timeout=GUI_WAIT)
+    em8000 = tab.platforms["em8000"]
+    qtbot.waitUntil(lambda: "SETTLED" in em8000.motion_label.text(), timeout=GUI_WAIT)
+    text = em8000.motion_label.text()
+    assert "SYSTEM_OK" in text and "op mode <b>NORMAL</b>" in text and "0x01000002" in text
+    lights = tab.machine_lights
+    qtbot.waitUntil(lambda: lights["em8000"].state == "ok", timeout=GUI_WAIT)
+    green, grey = (tuple(int(LIGHT[k][i : i + 2], 16) for i in (1, 3, 5)) for k in ("ok", "off"))
+    for name in ("em8000", "em1500", "comau", "mru1", "mru2"):
+        assert lights[name].state == "ok" and _color_px(lights[name], green) > 30, name
+    for name in ("tracker", "remote"):
+        assert lights[name].state == "off" and _color_px(lights[name], grey, 12) > 30, name
+        assert _color_px(lights[name], green) == 0 and "not connected" in lights[name].toolTip()
+    # the generator as the lab's HMI: 0.2 m heave, 2° roll and pitch at 0.1 Hz; 0.01-1 Hz step 0.02, ±180° step 10
+    values = [(a.value(), f.value(), p.value()) for a, f, p in em8000.gen]
+    assert [v[0] for v in values] == pytest.approx([0, 0, 0.2, 2.0, 2.0, 0], abs=1e-9)
+    assert [v[1] for v in values] == pytest.approx([0.1] * 6, abs=1e-3) and [v[2] for v in values] == [0.0] * 6
+    _, f, ph = em8000.gen[0]
+    assert (f.minimum(), f.maximum(), f.singleStep()) == pytest.approx((0.01, 1.0, 0.02))
+    assert (ph.minimum(), ph.maximum(), ph.singleStep()) == pytest.approx((-180, 180, 10))
+    em8000.buttons["neutral"].click()
+    qtbot.waitUntil(lambda: "TRANSIT" in em8000.motion_label.text(), timeout=GUI_WAIT)
+
+
+def test_comau_joint_jog_from_the_gui_holds_enable_and_stops_on_release(qtbot, window):
+    """Item 5: with enable held (Shift), a held jog button moves its joint only and letting go stops it;
+    without enable the engine refuses the jog and says so once per press, nothing moves."""
+    from PyQt5.QtCore import Qt
+
+    win, _ = window
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    tab.tabs.setCurrentIndex(2)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.state.comau.mode == "remote", timeout=GUI_WAIT)
+    qtbot.wait(300)  # the stick seen at neutral with enable released
+    q0 = np.array(tab.state.comau.q)
+    plus = tab.jog_buttons[(2, 1)]
+    qtbot.mousePress(plus, Qt.LeftButton)  # not armed: refused, said once, nothing moves
+    qtbot.waitUntil(lambda: any("lab_comau_jog refused" in m for _, m in win.messages), timeout=GUI_WAIT)
+    qtbot.wait(600)  # five more refreshes, each refused
+    qtbot.mouseRelease(plus, Qt.LeftButton)
+    refused = [m for _, m in win.messages if "lab_comau_jog refused" in m]
+    assert len(refused) == 1 and "not armed" in refused[0]
+    assert np.allclose(tab.state.comau.q, q0, atol=1e-9)
+    tab.stick.key(Qt.Key_Shift, True)  # enable held: the input arms
+    qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
+    qtbot.mousePress(plus, Qt.LeftButton)
+    qtbot.waitUntil(
+        lambda: tab.state.comau_jog.joint == 2 and "jogging q2 +25 %" in tab.jog_label.text(), timeout=GUI_WAIT
+    )
+    qtbot.waitUntil(lambda: tab.state.comau.q[1] - q0[1] > np.radians(2.0), timeout=GUI_WAIT)
+    qtbot.mouseRelease(plus, Qt.LeftButton)
+    qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and tab.state.comau.qd == [0, 0, 0], timeout=GUI_WAIT)
+    q = np.array(tab.state.comau.q)
+    assert np.allclose(q[[0, 2]], q0[[0, 2]], atol=1e-9)  # q1 and q3 never moved
+    qtbot.wait(500)
+    assert tab.state.comau.q == pytest.approx(q.tolist(), abs=1e-12)  # and q2 stays where it was let go
+    tab.stick.key(Qt.Key_Shift, False)
+
+
+def test_lab_csv_logger_writes_every_state_for_its_duration(qtbot, window, tmp_path):
+    """Item 5: the lab HMI's CSV logger: a file, a duration, progress and a sample count; every published
+    state (25 a second) for the duration, then it stops by itself."""
+    import csv
+
+    from ui.csv_logger import LAB_LOG_COLUMNS
+
+    win, _ = window
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
+    path = tmp_path / "lab.csv"
+    tab.log_path.setText(str(path))
+    tab.log_duration.setValue(2)
+    assert (tab.log_duration.minimum(), tab.log_duration.maximum()) == (1, 1200)
+    tab.log_button.click()
+    assert tab.logger is not None and tab.log_button.text() == "Stop logging"
+    qtbot.waitUntil(lambda: tab.logger is None, timeout=GUI_WAIT)
+    rows = list(csv.reader(path.open()))
+    assert tuple(rows[0]) == LAB_LOG_COLUMNS and len(rows) - 1 == 51  # 0 … 2 s every 0.04 s
+    t = np.array([float(r[0]) for r in rows[1:]])
+    assert t[-1] == pytest.approx(2.0) and np.allclose(np.diff(t), 0.04, atol=1e-6)  # none lost
+    assert tab.log_progress.value() == 1000 and tab.log_samples.text() == "51 samples"
+    assert tab.log_button.text() == "Start logging"
+    assert "CSV logger duration reached: 51 samples in lab.csv" in win.status.log_view.toPlainText()
+
+
+def test_lab_csv_logger_stops_cleanly_when_the_engine_goes(qtbot, tmp_path):
+    """Item 5: an engine that goes away ends the log with a complete file and says so; so does closing."""
+    from ui.lab_tab import MotionLabTab
+
+    srv, th = _serve(LabSession(), 50)
+    notices = []
+    tab = MotionLabTab(link_factory=lambda: EngineLink(srv.url, name="gui-lab"), use_gl=False)
+    qtbot.addWidget(tab)
+    tab.notice.connect(lambda lvl, text: notices.append(text))
+    tab.show()
+    assert tab.connect_engine()
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
+    path = tmp_path / "lost.csv"
+    tab.log_path.setText(str(path))
+    tab.log_duration.setValue(600)
+    tab.start_logger()
+    qtbot.waitUntil(lambda: tab.logger is not None and tab.logger.rows > 10, timeout=GUI_WAIT)
+    srv.stop()
+    th.join(timeout=5)
+    srv.close()
+    qtbot.waitUntil(lambda: tab.logger is None, timeout=GUI_WAIT)
+    assert any("engine lost" in n for n in notices)
+    assert all(light.state == "unknown" for light in tab.machine_lights.values())  # nothing known any more
+    lines = path.read_text().splitlines()
+    assert len(lines) > 11 and all(len(line.split(",")) == len(lines[0].split(",")) for line in lines)
+    tab.close_link()
+
+
+def test_load_swing_tab_activates_anti_swing_and_shows_estimate_beside_the_true_swing(qtbot):
+    """Issue 16, item 4 (the lab HMI's "Pendel Estimator" tab): Activate is refused-by-design without VVMC
+    (disabled, and the engine's refusal shown if sent); with VVMC on, a 4° swing given to the load, Reset
+    then Activate: the swing is damped below 0.5°, the estimate curve follows the true one and the error
+    plot carries the ±2σ band; Deactivate turns it off."""
+    import math
+
+    from ui.lab_tab import MotionLabTab
+
+    ses = LabSession()
+    srv, th = _serve(ses, 50)
+    notices = []
+    tab = MotionLabTab(link_factory=lambda: EngineLink(srv.url, name="gui-lab"), use_gl=False)
+    qtbot.addWidget(tab)
+    tab.notice.connect(lambda lvl, text: notices.append(text))
+    tab.resize(1200, 800)
+    tab.show()
+    try:
+        assert tab.connect_engine()
+        tab.tabs.setCurrentIndex(tab.tabs.count() - 1)
+        assert tab.tabs.tabText(tab.tabs.currentIndex()) == "Load swing"
+        qtbot.waitUntil(lambda: tab.state is not None and tab.state.swing is not None, timeout=GUI_WAIT)
+        buttons = tab.swing_buttons
+        assert not buttons["activate"].isEnabled() and "needs VVMC on" in tab.swing_label.text()
+        buttons["activate"].setEnabled(True)  # sent anyway: the engine refuses, the GUI says why
+        buttons["activate"].click()
+        qtbot.waitUntil(lambda: any("turn VVMC on first" in n for n in notices), timeout=GUI_WAIT)
+        tab.vvmc.click()
+        qtbot.waitUntil(lambda: tab.state.vvmc and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
+        qtbot.wait(1500)  # the Comau settles on the work point
+        pd = ses.lab.pendulum
+        pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = math.radians(4.0), 0.0, 0.0, 0.0
+        buttons["reset"].click()
+        buttons["activate"].click()
+        qtbot.waitUntil(lambda: tab.state.swing.active and "ACTIVE" in tab.swing_label.text(), timeout=GUI_WAIT)
+        qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) < 0.5, timeout=GUI_WAIT)
+        qtbot.wait(500)
+        true, est = tab.swing_state_curves[0].getData()[1], tab.swing_state_curves[1].getData()[1]
+        assert np.nanmax(true) > 1.5  # the swing was seen …
+        assert np.nanmax(np.abs(est[-25:] - true[-25:])) < 0.5  # … and the estimate follows it
+        band = tab.swing_err_curves[2].getData()[1]
+        assert np.all(band[-25:] > 0) and np.all(tab.swing_err_curves[3].getData()[1][-25:] < 0)
+        assert np.nanmax(np.abs(tab.swing_off_curves[0].getData()[1])) > 5.0  # the law moved the tool [mm]
+        buttons["deactivate"].click()
+        qtbot.waitUntil(lambda: not tab.state.swing.active and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
+    finally:
+        tab.close_link()
+        srv.stop()
+        th.join(timeout=5)
+        srv.close()

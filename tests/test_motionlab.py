@@ -480,3 +480,329 @@ def test_the_labs_comau_code_uses_bosuns_joint_convention_and_which_L():
     np.testing.assert_allclose(F[2] - F[1], [0, 0, 1.160], atol=1e-12)  # upper arm a2 vertical
     np.testing.assert_allclose(F[4] - F[3], [2.269, 0, 0], atol=1e-12)  # extension arm L horizontal along x
     assert robot.position(np.radians([45.0, 0.0, -90.0]))[1] < 0
+
+
+# ----------------------------------------------------------------------------- the lab HMI's parity (issue 16, item 5)
+def _stick(enable: bool):
+    from app.teleop.devices import InputSample
+
+    return InputSample((0.0, 0.0, 0.0, 0.0), (enable,), "test stick")
+
+
+def _armed_lab(**kw):
+    """A lab engine with the operator's input armed (stick at neutral, enable released, then held)."""
+    from app.engine.lab_session import LabSession
+
+    ses, t = LabSession(**kw), 0.0
+    for pressed in (False, True):
+        for _ in range(3):
+            t += 0.02
+            ses.feed(_stick(pressed), t)
+            ses.tick(t, 0.02)
+    assert ses.snapshot().flags.armed
+    return ses, t
+
+
+def _drive(ses, t: float, seconds: float, jog=None, enable: bool = True, check=None) -> float:
+    """Tick with the enable held (fresh input every tick), the jog ``(joint, speed)`` refreshed every tick."""
+    for _ in range(round(seconds / 0.02)):
+        t += 0.02
+        if jog is not None:
+            ses.lab_comau_jog(*jog)
+        ses.feed(_stick(enable), t)
+        ses.tick(t, 0.02)
+        if check is not None:
+            check(ses.snapshot())
+    return t
+
+
+def test_comau_jog_moves_one_joint_within_the_labs_profile():
+    """Item 5: a held jog moves only its joint, at the chosen share of the profile's 30°/s, and runs into the
+    lab's limit under its velocity-boundary law (A = 1 rad/s²) without passing it; the other joints stay."""
+    ses, t = _armed_lab()
+    f = ses.lab.joints
+    lo, hi, V = f.lower.copy(), f.upper.copy(), float(f.speed[0])
+    q0 = f.x.copy()
+    t = _drive(ses, t, 1.0, jog=(2, -0.5))
+    snap = ses.snapshot()
+    assert snap.comau_jog.joint == 2 and snap.comau_jog.speed == -0.5
+    # at the commanded speed (app/plant/simulated.py divides out the REMOTE step's 1 + dt/τ)
+    assert snap.comau.qd[1] == pytest.approx(-0.5 * V, rel=1e-6)
+    assert snap.comau_jog.qd == pytest.approx(-0.5 * V)
+    prev = {"q": f.x.copy()}
+
+    def holds(s):
+        q, qd = np.array(s.comau.q), np.array(s.comau.qd)
+        assert np.all(q >= lo - 1e-12) and np.all(q <= hi + 1e-12) and np.all(np.abs(qd) <= V * (1 + 1e-12))
+        assert _velocity_bound_holds(prev["q"], qd, lo, hi, 1.0, V, 0.01)
+        np.testing.assert_allclose(q[[0, 2]], q0[[0, 2]], atol=1e-9)  # only q2 moves
+        prev["q"] = q
+
+    t = _drive(ses, t, 6.0, jog=(2, -1.0), check=holds)  # into q2's lower limit (−30°) at full speed
+    assert f.x[1] == pytest.approx(lo[1], abs=1e-3) and abs(f.v[1]) < 1e-6
+
+
+def test_comau_jog_not_refreshed_within_0_3_s_returns_to_zero():
+    """Item 5 (regression, safety H62): a jog whose refresh stops (the GUI froze or went away, a lost release)
+    halts on its own after 0.3 s like the winch's spring-return slider; releasing the enable halts it at
+    once; a zero speed (the button let go) stops it and is never refused."""
+    import time
+
+    from app.engine.lab_session import JOG_TIMEOUT
+
+    ses, t = _armed_lab()
+    t = _drive(ses, t, 0.5, jog=(1, 0.5))
+    assert ses.snapshot().comau.qd[0] > 0.2
+    time.sleep(JOG_TIMEOUT + 0.05)  # no refresh for longer than the timeout (engine receive clock)
+    t = _drive(ses, t, 0.5)  # fresh stick input, enable held: only the jog is stale
+    snap = ses.snapshot()
+    assert snap.comau_jog.joint == 0 and "not refreshed" in snap.comau_jog.reason
+    assert snap.comau.qd == [0.0, 0.0, 0.0]
+    q = list(snap.comau.q)
+    t = _drive(ses, t, 1.0)
+    assert ses.snapshot().comau.q == q  # it stays stopped
+    t = _drive(ses, t, 0.2, jog=(3, 0.5))  # enable released mid-jog: stops at once, input disarmed
+    t = _drive(ses, t, 0.3, enable=False)
+    snap = ses.snapshot()
+    assert snap.comau_jog.joint == 0 and "input not enabled" in snap.comau_jog.reason and snap.comau.qd == [0, 0, 0]
+    ses.lab_comau_jog(3, 0.0)  # a release is taken even now
+    assert ses.snapshot().comau_jog.reason == ""
+
+
+def test_comau_jog_is_refused_outside_remote_under_estop_and_unarmed():
+    """Item 5: refused (one line, nothing moves) while the E-STOP is latched, in MOTION_COMP (VVMC), SETTLED
+    or HOLD, and while the operator's input is not armed; an E-STOP during a jog stops it."""
+    from app.engine.lab_session import LabSession
+    from app.engine.scene import CommandError
+
+    unarmed = LabSession()
+    with pytest.raises(CommandError, match="not armed"):
+        unarmed.lab_comau_jog(1, 0.5)
+    with pytest.raises(CommandError, match="joint must be 1, 2 or 3"):
+        unarmed.lab_comau_jog(0, 0.5)
+    ses, t = _armed_lab()
+    t = _drive(ses, t, 0.3, jog=(1, 0.5))
+    ses.estop("test")
+    assert ses.snapshot().comau_jog.joint == 0
+    with pytest.raises(CommandError, match="E-STOP is latched"):
+        ses.lab_comau_jog(1, 0.5)
+    ses.lab_comau_jog(1, 0.0)  # a stop is always taken
+    t = _drive(ses, t, 0.5)
+    assert ses.snapshot().comau.qd == [0.0, 0.0, 0.0]
+    ses.reset()  # the Comau is in HOLD
+    with pytest.raises(CommandError, match=r"needs REMOTE \(the Comau is HOLD\)"):
+        ses.lab_comau_jog(1, 0.5)
+    ses.lab_vvmc(True)
+    with pytest.raises(CommandError, match=r"needs REMOTE .*MOTION_COMP with VVMC on"):
+        ses.lab_comau_jog(2, 0.5)
+    ses.lab_vvmc(False)
+    ses.lab_comau_mode("settled")
+    with pytest.raises(CommandError, match="SETTLED"):
+        ses.lab_comau_jog(2, 0.5)
+
+
+def test_simulated_platforms_report_the_rexroth_status_word():
+    """Item 5: the simulated platforms give the status word the PLC reads from the Rexroth controllers
+    (state bits 0–3, status 4–7, op mode 24–31), mapped from the model: SETTLED, TRANSIT while raising,
+    NEUTRAL, ENGAGED, the FREEZE states under an E-STOP and while holding after it; WARNING while a target
+    is scaled back to the strokes; typed over the wire."""
+    from app.engine.lab_session import LabSession
+    from app.net.snapshots import snapshot_from_wire, to_wire
+    from app.plant.simulated import motion_status
+    from app.plc.symbols import decode_status
+
+    ses = LabSession()
+    t = _tick(ses, 0.1)
+
+    def motion(k):
+        m = ses.snapshot().platforms[k].motion
+        assert decode_status(m.word) == {"state": m.state, "status": m.status, "opmode": m.opmode}
+        return m.state, m.status, m.opmode
+
+    assert motion(0) == motion(1) == ("SETTLED", "SYSTEM_OK", "NORMAL")
+    assert ses.snapshot().platforms[0].motion.word == 0x01000002
+    ses.lab_platform("em8000", "neutral")
+    t = _tick(ses, 1.0, t)
+    assert motion(0)[0] == "TRANSIT" and motion(1)[0] == "SETTLED"
+    t = _tick(ses, 15.0, t)
+    assert motion(0) == ("NEUTRAL", "SYSTEM_OK", "NORMAL")
+    ses.lab_platform("em8000", "engage")  # the lab's default generator (0.2 m heave, 2° roll and pitch)
+    t = _tick(ses, 2.0, t)
+    assert motion(0)[0] == "ENGAGED"
+    ses.estop("test")
+    t = _tick(ses, 1.0, t)
+    assert motion(0)[0] == "ENGAGED_FREEZE" and motion(1)[0] == "SETTLED"
+    ses.reset()
+    t = _tick(ses, 1.0, t)
+    assert ses.snapshot().platforms[0].status == "holding" and motion(0)[0] == "NEUTRAL_FREEZE"
+    back = snapshot_from_wire(to_wire(ses.snapshot()))
+    assert back.platforms[0].motion.state == "NEUTRAL_FREEZE" and back.platforms[0].motion.word == 0x01000005
+    plat = ses.lab.platforms[1]
+    plat.leg_clamped = True  # LEG LIMIT: a target scaled back to the strokes
+    assert (motion_status(plat).status, motion_status(plat).word) == ("WARNING", 0x01000042)
+
+
+def test_the_status_word_bits_are_the_labs(shared_data):
+    """The enumerations behind the status word against motionlab_plc.json (skipped without ../shared)."""
+    from app.plc.symbols import STEWART_OPMODE, STEWART_STATE, STEWART_STATUS
+
+    ref = json.loads((shared_data / "motionlab_plc.json").read_text(encoding="utf-8"))["stewart"]
+
+    def table(prefix):
+        return next(v for k, v in ref.items() if k.startswith(prefix))
+
+    assert table("state_E_StewartState (Rexroth motion status bits 0-3)") == STEWART_STATE
+    assert table("status_E_StewartStatus (bits 4-7)") == STEWART_STATUS
+    assert table("opmode_E_StewartOpMode (bits 24-31)") == STEWART_OPMODE
+
+
+def test_machine_lights_and_generator_defaults_of_the_simulated_lab():
+    """Item 5: the lab HMI's "Machine and Sensor States" in its order: platforms, Comau and MRUs active while
+    the model runs, no laser tracker, "remote" active while remote poses arrive (within the lab remote
+    interface's 0.5 s); the sine generator's defaults and ranges are the lab's (motionlab_plc.json), the
+    platforms start with them."""
+    import time
+
+    from app.engine.lab_session import LabSession
+
+    ses = LabSession()
+    lights = {m.name: m.state for m in ses.snapshot().machines}
+    assert [m.name for m in ses.snapshot().machines] == [
+        "em8000",
+        "em1500",
+        "comau",
+        "mru1",
+        "mru2",
+        "tracker",
+        "remote",
+    ]
+    assert lights == {**dict.fromkeys(("em8000", "em1500", "comau", "mru1", "mru2"), "active"),
+                      "tracker": "absent", "remote": "absent"}  # fmt: skip
+    ses.lab_remote_pose("em1500", [0.0] * 6)
+    assert {m.name: m.state for m in ses.snapshot().machines}["remote"] == "active"
+    time.sleep(0.55)
+    assert {m.name: m.state for m in ses.snapshot().machines}["remote"] == "absent"
+    from app.marine.sensors import MRU5, TRACKER, MotionSensor
+
+    rng = np.random.default_rng(5)  # the controllers read an MRU on EM8000 and a laser tracker on EM1500
+    ses.lab.set_sensors((MotionSensor(MRU5, rng, 0.01), MotionSensor(TRACKER, rng, 0.01)))
+    shown = {m.name: m for m in ses.snapshot().machines}
+    assert shown["tracker"].state == "active" and "AT960" in shown["tracker"].detail
+    assert "MRU H" in shown["mru1"].detail and shown["mru2"].detail == "simulated: EM1500"
+    desc = ses.describe()
+    for info in desc.platforms:
+        g = info.generator
+        np.testing.assert_allclose(g.amplitude, [0, 0, 0.2, math.radians(2), math.radians(2), 0], atol=1e-12)
+        np.testing.assert_allclose(g.frequency, 0.6283 / (2 * math.pi), rtol=1e-12)
+        assert g.phase == [0.0] * 6 and g.frequency_range == [0.01, 1.0, 0.02]
+        np.testing.assert_allclose(g.phase_range, np.radians([-180, 180, 10]), atol=1e-12)
+    assert desc.comau_jog_timeout == pytest.approx(0.3)
+    src = ses.lab.platforms[0].source
+    np.testing.assert_allclose(src.amplitude, desc.platforms[0].generator.amplitude, atol=1e-12)
+
+
+def test_the_generator_defaults_are_the_labs(shared_data):
+    """Against motionlab_plc.json itself (skipped without ../shared)."""
+    from app.engine.lab_session import LabSession
+
+    ref = json.loads((shared_data / "motionlab_plc.json").read_text(encoding="utf-8"))["stewart"]
+    sine = ref["sine_generator_defaults"]
+    g = LabSession().describe().platforms[0].generator
+    amp = [math.radians(float(v.split()[0])) if isinstance(v, str) else float(v) for v in sine["sineAmplitude"]]
+    np.testing.assert_allclose(g.amplitude, amp, atol=1e-12)
+    np.testing.assert_allclose(2 * np.pi * np.array(g.frequency), sine["sineOmega_rad_s"], rtol=1e-12)
+    np.testing.assert_allclose(g.phase, sine["sinePhase"], atol=1e-12)
+    f_lo, f_hi, f_step = sine["hmi_ranges"]["freq_Hz"]
+    assert g.frequency_range == [f_lo, f_hi, float(f_step.split()[1])]
+    p_lo, p_hi, p_step = sine["hmi_ranges"]["phase_deg"]
+    np.testing.assert_allclose(np.degrees(g.phase_range), [p_lo, p_hi, float(p_step.split()[1])], atol=1e-9)
+
+
+# ------------------------------------------------------------------------ load swing in the engine (issue 16, item 4)
+def _swing_lab(swing_deg: float = 4.0, L: float = 2.0):
+    """A lab engine with VVMC on (platforms still, the Comau on the work point), then the load given a swing
+    (a kick the estimator's model has no cause for, so it is reset as the operator would)."""
+    from app.engine.lab_session import LabSession
+
+    ses = LabSession()
+    ses.lab_vvmc(True)
+    ses.lab.winch.filter.x[0] = L
+    t = _tick(ses, 2.0)  # the Comau settles on the work point, the load at rest
+    pd = ses.lab.pendulum
+    pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = math.radians(swing_deg), 0.0, 0.0, 0.0
+    ses.lab_antisway("reset")  # the estimator converged on "no swing": told to expect one again (the HMI's Reset)
+    return ses, t
+
+
+def _swing_deg(snap) -> float:
+    return math.degrees(snap.pendulum.swing)
+
+
+def test_antisway_in_the_engine_damps_a_swing_the_estimate_follows_it():
+    """Item 4 in the engine (the lab HMI's "Pendel Estimator" tab): with the law off a 4° swing at L = 2 m
+    is still > 2° after 10 s; activated, it is below 0.5° within 10 s (the engine's 10 ms steps, the LQR
+    designed at 5 ms) with the tool offset within its 0.3 m; the estimate follows the true swing to within
+    a few tenths of a degree after its first second and its error stays inside ~4σ of its own covariance."""
+    ses, t = _swing_lab()
+    t = _tick(ses, 10.0, t)
+    snap = ses.snapshot()
+    assert snap.swing is not None and not snap.swing.active and _swing_deg(snap) > 2.0
+    assert snap.swing.offset == [0.0, 0.0]
+    ses, t = _swing_lab()
+    ses.lab_antisway("activate")
+    worst = {"err": 0.0, "z": 0.0, "off": 0.0}
+
+    def watch(s):
+        worst["off"] = max(worst["off"], float(np.abs(s.swing.offset).max()))
+        if s.t - t0 < 1.0:  # the estimator starts at "no swing" (σ 2.9°): judged once it has seen a second
+            return
+        e, sig = np.abs(s.swing.error[:2]), np.array(s.swing.sigma[:2])
+        worst["err"] = max(worst["err"], float(np.degrees(e).max()))
+        worst["z"] = max(worst["z"], float((e / sig).max()))
+
+    t0 = ses.snapshot().t
+    t = _tick(ses, 10.0, t, check=watch)
+    snap = ses.snapshot()
+    assert snap.swing.active and snap.swing.reason == ""
+    assert _swing_deg(snap) < 0.5, _swing_deg(snap)
+    assert 0.005 < worst["off"] <= 0.3 and worst["err"] < 0.6 and worst["z"] < 4.0, worst
+    assert np.linalg.norm(snap.tool_error_b2) < 0.01  # back on the work point as the swing dies
+
+
+def test_antisway_is_refused_without_vvmc_dropped_by_estop_and_vvmc_off_reset_needs_rest():
+    """Item 4 (safety H63): the law acts only while VVMC holds the work point: refused without it and under
+    E-STOP; an E-STOP or VVMC off switches it off with the reason (its offset returns to zero along the
+    law, no jump); reset (the estimator) only with the law off and the tool back; deactivate is always
+    taken; an unknown action is refused in one line."""
+    from app.engine.lab_session import LabSession
+    from app.engine.scene import CommandError
+
+    ses = LabSession()
+    with pytest.raises(CommandError, match="turn VVMC on first"):
+        ses.lab_antisway("activate")
+    with pytest.raises(CommandError, match="action must be"):
+        ses.lab_antisway("kick")
+    ses, t = _swing_lab()
+    ses.lab_antisway("activate")
+    t = _tick(ses, 0.5, t)
+    assert np.abs(ses.snapshot().swing.offset).max() > 1e-3
+    with pytest.raises(CommandError, match="deactivate first"):
+        ses.lab_antisway("reset")
+    ses.lab_vvmc(False)
+    t = _tick(ses, 0.1, t)
+    snap = ses.snapshot()
+    assert not snap.swing.active and snap.swing.reason == "VVMC off"
+    with pytest.raises(CommandError, match="deactivate first"):  # the offset is still on its way back
+        ses.lab_antisway("reset")
+    t = _tick(ses, 10.0, t)
+    assert np.abs(ses.snapshot().swing.offset).max() < 1e-3
+    ses.lab_antisway("reset")
+    assert ses.snapshot().swing.estimate == [0.0, 0.0, 0.0, 0.0]
+    ses.lab_vvmc(True)
+    ses.lab_antisway("activate")
+    ses.estop("test")
+    snap = ses.snapshot()
+    assert not snap.swing.active and snap.swing.reason == "E-STOP"
+    with pytest.raises(CommandError, match="E-STOP is latched"):
+        ses.lab_antisway("activate")
+    ses.lab_antisway("deactivate")  # always taken

@@ -53,6 +53,8 @@ def test_round_trip_every_client_message():
         "lab_winch": {"mode": "local", "speed": -0.2},
         "lab_vvmc": {"on": True},
         "lab_plc_ack": {"platform": "em8000"},
+        "lab_comau_jog": {"joint": 2, "speed": -0.25},
+        "lab_antisway": {"action": "activate"},
         "describe": {},
         "pause": {"on": True},
         "study_start": {"study": "distribution", "solver": "jacobian", "grid": 12},

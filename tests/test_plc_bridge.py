@@ -456,6 +456,48 @@ def test_states_written_by_the_plc_appear_in_the_snapshot(lab_plc, session):
 
 
 @pytest.mark.slow
+def test_the_lab_hmis_status_word_lights_and_a_refused_jog_over_the_plc(lab_plc, session):
+    """Issue 16, item 5: the Rexroth status (eState, eStatus, eOpMode) and the machine and sensor lights
+    (``MAIN.<dev>.bActive``) appear in the snapshot as the PLC reports them, in the same fields the
+    simulation fills; the tracker's and the remote interface's are unknown (no symbol); a Comau jog is
+    refused with the reason (the PLC takes joint speeds only from its UDP remote interface), nothing written."""
+    from app.net.snapshots import snapshot_from_wire, to_wire
+
+    ses, plc = session, lab_plc
+    pump(ses, connected)
+    plc.set("MAIN.em8000.eState", "<b", STATE["ENGAGED"])
+    plc.set("MAIN.em8000.eStatus", "<b", 4)  # WARNING
+    plc.set("MAIN.em8000.eOpMode", "<b", 1)  # NORMAL
+    plc.set("MAIN.em8000.bActive", "<?", True)
+    plc.set("MAIN.mru1.bActive", "<?", True)
+    plc.set("MAIN.comau.eMode", "<b", 1)  # REMOTE
+
+    def shown(s) -> bool:
+        m = s.platforms[0].motion
+        return m is not None and (m.state, m.status, m.opmode) == ("ENGAGED", "WARNING", "NORMAL")
+
+    snap = pump(ses, lambda s: shown(s) and s.comau.mode == "remote")
+    assert snap.platforms[0].motion.word == 8 | 4 << 4 | 1 << 24
+    assert snap.platforms[1].motion.state == "SETTLED"
+    lights = {m.name: m.state for m in snap.machines}
+    assert lights == {"em8000": "active", "em1500": "inactive", "comau": "inactive", "mru1": "active",
+                      "mru2": "inactive", "tracker": "unknown", "remote": "unknown"}  # fmt: skip
+    back = snapshot_from_wire(to_wire(snap))
+    assert back.platforms[0].motion.status == "WARNING" and back.machines[0].detail == "MAIN.em8000.bActive True"
+    arm(ses)
+    before = list(ses.plant.bridge.stats.written)
+    with pytest.raises(CommandError, match="UDP remote interface"):
+        ses.command("lab_comau_jog", joint=1, speed=0.5)
+    ses.command("lab_comau_jog", joint=1, speed=0.0)  # a stop is taken (nothing to send)
+    pump(ses, lambda s: True)
+    assert list(ses.plant.bridge.stats.written) == before and ses.snapshot().comau_jog.joint == 0
+    # issue 16, item 4: the estimator and anti-swing run on the simulated lab only (the lab's runs in its PLC)
+    with pytest.raises(CommandError, match="anti-swing: the plc plant has none"):
+        ses.command("lab_antisway", action="activate")
+    assert ses.snapshot().swing is None
+
+
+@pytest.mark.slow
 def test_link_loss_and_recovery_stop_latched_and_resent_nothing_replayed(lab_plc, session):
     ses, plc = session, lab_plc
     pump(ses, connected)

@@ -10,6 +10,7 @@ plots.  Everything goes through the lab engine (``bosun server --plant lab``).
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -25,21 +26,25 @@ from PyQt5.QtWidgets import (
     QGroupBox,
     QHBoxLayout,
     QLabel,
+    QLineEdit,
     QProgressBar,
     QPushButton,
     QSlider,
+    QSpinBox,
     QStackedWidget,
     QTabWidget,
     QVBoxLayout,
     QWidget,
 )
 
+from ui.csv_logger import LAB_DURATION_RANGE, LabCsvLogger
 from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.columns import scroll_column
 from ui.widgets.files import choose_file
 from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, axis_label, legend, refit, refit_on_show
+from ui.widgets.status import StatusLight
 from ui.widgets.stick import VirtualStick
 
 HISTORY_S = 60.0
@@ -50,6 +55,26 @@ COMAU_MODES = ("settled", "remote", "motion_comp", "hold")
 PLATFORM_COLUMNS = ("t", *DOFS)  # position [m], attitude [deg]
 # engine time, Comau q [deg] and q̇ [rad/s], swing α β [rad], tool − work point in {b2} [m], wire length [m]
 LAB_COLUMNS = ("t", "q1", "q2", "q3", "qd1", "qd2", "qd3", "alpha", "beta", "err_x", "err_y", "err_z", "wire")
+# issue 16, item 4: the swing estimator's estimate α̂ β̂, its error (estimate − true) and 1-σ [deg], the law's offset [mm]
+SWING_COLUMNS = ("t", "alpha", "beta", "alpha_hat", "beta_hat", "err_a", "err_b", "sig_a", "sig_b", "off_x", "off_y")
+# issue 16, item 5: the lab HMI's "Machine and Sensor States" lights (engine name, shown name) and their colours
+MACHINES = (
+    ("em8000", "EM8000"),
+    ("em1500", "EM1500"),
+    ("comau", "Comau"),
+    ("mru1", "MRU1"),
+    ("mru2", "MRU2"),
+    ("tracker", "tracker"),
+    ("remote", "remote"),
+)
+MACHINE_LIGHT = {
+    "active": ("ok", "on"),
+    "inactive": ("error", "OFF"),
+    "absent": ("off", "n/c"),
+    "unknown": ("unknown", "?"),
+}
+MOTION_COLOR = {"SYSTEM_OK": "#3c9", "WARNING": "#fa3", "ERROR": "#e33"}
+JOG_RESEND_MS = 100  # a held jog button resends its speed this often (the engine stops a jog after 0.3 s)
 
 
 def _bar(fmt: str = "%p %") -> QProgressBar:
@@ -103,6 +128,16 @@ class PlatformPanel(QWidget):
             "operational box before the motion filter (the lab PLC's etaRefMin/Max); Table 8 stays the hard limit."
         )
         ml.addWidget(self.box_label, 2, 0, 1, 4)
+        self.motion_label = QLabel("Rexroth status: –")  # the Stewart status word (issue 16, item 5)
+        self.motion_label.setTextFormat(Qt.RichText)
+        self.motion_label.setWordWrap(True)
+        self.motion_label.setToolTip(
+            "the platform controller's motion status word as the lab HMI shows it: operation state "
+            "(E_StewartState, bits 0-3), system status (E_StewartStatus, 4-7) and operation mode (E_StewartOpMode, "
+            "24-31); from the PLC, or made by the simulation from its own state (app/plant/simulated.py)"
+        )
+        ml.addWidget(self.motion_label, 3, 0, 1, 4)
+        self._generator_defaults_shown = False
 
         src = QGroupBox("Motion source")
         sl = QVBoxLayout(src)
@@ -180,13 +215,14 @@ class PlatformPanel(QWidget):
             amp.setDecimals(3)
             amp.setSingleStep(0.01 if i < 3 else 0.5)
             amp.setSuffix(" °" if i >= 3 else " m")
-            f = QDoubleSpinBox()
+            f = QDoubleSpinBox()  # the lab HMI's ranges (motionlab_plc.json); the engine's description sets them
             f.setRange(0.01, 1.0)
             f.setDecimals(3)
             f.setValue(0.1)
-            f.setSingleStep(0.01)
+            f.setSingleStep(0.02)
             ph = QDoubleSpinBox()
-            ph.setRange(-360, 360)
+            ph.setRange(-180, 180)
+            ph.setSingleStep(10)
             g.addWidget(QLabel(dof), i + 1, 0)
             for j, box in enumerate((amp, f, ph)):
                 g.addWidget(box, i + 1, j + 1)
@@ -338,6 +374,27 @@ class PlatformPanel(QWidget):
                 for i, (d, (a, b)) in enumerate(zip(DOFS, shown, strict=True))
             ]
             self.box_label.setText("operational box (command limit): " + ", ".join(parts))
+        self._set_generator(getattr(info, "generator", None))
+
+    def _set_generator(self, g) -> None:
+        """The lab HMI's sine generator (issue 16, item 5): frequency and phase ranges and steps always, the
+        defaults once (an operator's values stay when the description changes)."""
+        if g is None:
+            return
+        f_lo, f_hi, f_step = g.frequency_range
+        p_lo, p_hi, p_step = (math.degrees(v) for v in g.phase_range)
+        for _, f, ph in self.gen:
+            f.setRange(f_lo, f_hi)
+            f.setSingleStep(f_step)
+            ph.setRange(p_lo, p_hi)
+            ph.setSingleStep(p_step)
+        if not self._generator_defaults_shown:
+            self._generator_defaults_shown = True
+            for i, (amp, f, ph) in enumerate(self.gen):
+                to_shown = math.degrees if i >= 3 else float
+                amp.setValue(to_shown(g.amplitude[i]))
+                f.setValue(g.frequency[i])
+                ph.setValue(math.degrees(g.phase[i]))
 
     def update_state(self, p, t: float) -> None:
         status = p.status.upper()
@@ -351,6 +408,7 @@ class PlatformPanel(QWidget):
             f" &nbsp; ramp {100 * p.ramp:.0f} %"
             + (" &nbsp; <b style='color:#f80'>LEG LIMIT</b>" if p.leg_clamped else "")
         )
+        self._show_motion(getattr(p, "motion", None))
         engaged = p.mode == "engaged"
         self.buttons["neutral"].setEnabled(p.status in ("settled", "holding"))
         self.buttons["settle"].setEnabled(p.status in ("neutral", "holding"))
@@ -365,6 +423,19 @@ class PlatformPanel(QWidget):
             self._t_last = t
             eta = np.asarray(p.eta)
             self.ring.push([t, *eta[:3], *np.degrees(eta[3:])])
+
+    def _show_motion(self, m) -> None:
+        """The Rexroth status word: operation state, system status, operation mode (as the lab HMI)."""
+        if m is None:
+            text = "Rexroth status: –"
+        else:
+            color = MOTION_COLOR.get(m.status, "#e33")
+            text = (
+                f"Rexroth: state <b>{m.state or '–'}</b> &nbsp; status <b style='color:{color}'>{m.status or '–'}</b>"
+                f" &nbsp; op mode <b>{m.opmode or '–'}</b> &nbsp; (0x{m.word:08X})"
+            )
+        if text != self.motion_label.text():
+            self.motion_label.setText(text)
 
     def draw(self) -> None:
         r = self.ring
@@ -548,6 +619,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.desc = None  # the engine's LabDescription
         self._t_last = -math.inf
         self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), LAB_COLUMNS)
+        self.swing_ring = Ring(int(HISTORY_S * SAMPLE_HZ), SWING_COLUMNS)
         self.tabs = QTabWidget()
         self.platforms = {n: PlatformPanel(n, t) for n, t in (("em8000", "E-Motion 8000"), ("em1500", "E-Motion 1500"))}
         for n, p in self.platforms.items():
@@ -555,12 +627,15 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self.tabs.addTab(p, n.upper())
         self.tabs.addTab(self._control(), "Comau && winch")
         self.tabs.addTab(self._scene_tab(), "Scene && load")
+        self.tabs.addTab(self._swing_tab(), "Load swing")
         self.start = QLabel("The Motion-Lab engine starts when this tab is first opened.")
         self.plc_bar = self._plc_bar()
+        self.logger: LabCsvLogger | None = None
         lay = QVBoxLayout(self)
         lay.addWidget(self.start)
         lay.addWidget(self.plc_bar)
         lay.addWidget(self.tabs)
+        lay.addWidget(self._status_strip())  # the lab HMI's bottom: machine and sensor states, CSV logger
         self._set_enabled(False)
 
     # ------------------------------------------------------------------ layout
@@ -606,10 +681,195 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self.plc_ack.setEnabled(not state.estop)  # the E-STOP's reset resets the PLC: acknowledge after it
         self.plc_bar.setVisible(show)
 
+    # ------------------------------------------------------------------ the lab HMI's bottom (issue 16, item 5)
+    def _status_strip(self) -> QWidget:
+        """Below the sub-tabs, on every one of them: the lab HMI's "Machine and Sensor States" lights and its
+        CSV logger (file, duration 1–1200 s, start / stop, progress, sample count)."""
+        w = QWidget()
+        col = QVBoxLayout(w)
+        col.setContentsMargins(0, 0, 0, 0)
+        col.setSpacing(2)
+        lights = QHBoxLayout()
+        lights.addWidget(QLabel("<b>Machine and sensor states</b>"))
+        self.machine_lights: dict[str, StatusLight] = {}
+        for key, name in MACHINES:
+            light = StatusLight(name, "")
+            light.setMinimumWidth(90)
+            self.machine_lights[key] = light
+            lights.addWidget(light, 1)
+        col.addLayout(lights)
+        row = QHBoxLayout()
+        row.addWidget(QLabel("<b>CSV logger</b>"))
+        self.log_path = QLineEdit(os.path.join(os.getcwd(), "bosun_lab_log.csv"))
+        self.log_path.setToolTip("the file the logger writes (overwritten)")
+        row.addWidget(self.log_path, 2)
+        browse = QPushButton("…")
+        browse.setFocusPolicy(Qt.NoFocus)
+        browse.setMaximumWidth(32)
+        browse.setToolTip("choose the log file")
+        browse.clicked.connect(
+            lambda: choose_file(self, "Log file", self.log_path.text(), "CSV (*.csv)", self.log_path.setText, save=True)
+        )
+        row.addWidget(browse)
+        self.log_duration = QSpinBox()
+        self.log_duration.setRange(*(int(v) for v in LAB_DURATION_RANGE))  # the lab HMI's 1..1200 s
+        self.log_duration.setValue(60)
+        self.log_duration.setSuffix(" s")
+        self.log_duration.setToolTip("logging duration in engine time (the lab HMI's 1–1200 s)")
+        row.addWidget(self.log_duration)
+        self.log_button = QPushButton("Start logging")
+        self.log_button.setFocusPolicy(Qt.NoFocus)  # Space stays STOP
+        self.log_button.setToolTip(
+            "write every published lab state (time, both platforms' η, Comau q, wire, swing, VVMC error) to the file; "
+            "stops by itself after the duration, when the engine is lost or the tab closes"
+        )
+        self.log_button.clicked.connect(self.toggle_logger)
+        row.addWidget(self.log_button)
+        self.log_progress = _bar()
+        _set_bar(self.log_progress, 0.0, "not logging")
+        row.addWidget(self.log_progress, 2)
+        self.log_samples = QLabel("0 samples")
+        self.log_samples.setMinimumWidth(90)
+        row.addWidget(self.log_samples)
+        col.addLayout(row)
+        return w
+
+    def _show_machines(self, state) -> None:
+        shown = {m.name: m for m in getattr(state, "machines", None) or []}
+        for key, light in self.machine_lights.items():
+            m = shown.get(key)
+            look, word = MACHINE_LIGHT.get(m.state, MACHINE_LIGHT["unknown"]) if m is not None else ("unknown", "?")
+            light.set(look, word)
+            tip = m.detail if m is not None else "the engine does not report it"
+            if light.toolTip() != tip:
+                light.setToolTip(tip)
+
+    def toggle_logger(self) -> None:
+        if self.logger is None:
+            self.start_logger()
+        else:
+            self.stop_logger("stopped by the operator")
+
+    def start_logger(self) -> None:
+        try:
+            self.logger = LabCsvLogger(self.log_path.text(), float(self.log_duration.value()))
+        except (OSError, ValueError) as err:
+            self.notice.emit("error", f"Motion-Lab: CSV logger not started: {err}")
+            return
+        self.log_button.setText("Stop logging")
+        self._show_log(self.logger)
+        self.notice.emit("info", f"Motion-Lab: logging to {self.logger.path} for {self.logger.duration:g} s")
+
+    def stop_logger(self, reason: str) -> None:
+        """End the log (the file stays complete); says why and how many samples it holds."""
+        lg, self.logger = self.logger, None
+        if lg is None:
+            return
+        lg.close(reason)
+        self.log_button.setText("Start logging")
+        self._show_log(lg)
+        self.notice.emit("info", f"Motion-Lab: CSV logger {lg.reason}: {lg.rows} samples in {lg.path.name}")
+
+    def _show_log(self, lg: LabCsvLogger) -> None:
+        _set_bar(self.log_progress, lg.progress, f"{lg.elapsed:.1f} / {lg.duration:g} s")
+        self.log_samples.setText(f"{lg.rows} samples")
+
+    def log_states(self, states: list) -> None:
+        """Every state the engine published (also when the GUI lags) goes to the logger."""
+        lg = self.logger
+        if lg is None:
+            return
+        for st in states:
+            if not lg.add(st):
+                self.stop_logger(lg.reason)
+                return
+        self._show_log(lg)
+
+    def _connection(self, ok: bool, message: str) -> None:
+        if not ok:  # the engine is gone: nothing more to log, nothing known about the machines
+            self.stop_logger(f"stopped: engine lost ({message})" if message else "stopped: engine lost")
+            self._show_machines(None)
+
+    def _linked(self, make) -> bool:
+        done = super()._linked(make)
+        if done:
+            for signal, slot in (("states", self.log_states), ("connection", self._connection)):
+                if hasattr(self.link, signal):
+                    getattr(self.link, signal).connect(slot)
+        return done
+
+    def close_link(self) -> None:
+        self.stop_logger("stopped: the Motion-Lab tab closed")
+        self._jog_release()
+        super().close_link()
+
+    # ------------------------------------------------------------------ Comau joint jog (issue 16, item 5)
+    def _jog_buttons(self, k: int) -> QWidget:
+        """Joint ``k``'s (0-2) jog buttons: press and hold to move it, let go to stop."""
+        row = QWidget()
+        lay = QHBoxLayout(row)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.joint_pos_bars[k], 1)
+        for sign, text in ((-1, "−"), (1, "+")):
+            b = QPushButton(text)
+            b.setFocusPolicy(Qt.NoFocus)  # Space stays STOP; the keyboard stays with the stick
+            b.setFixedWidth(34)
+            b.setToolTip(
+                f"jog q{k + 1} {'down' if sign < 0 else 'up'}: press and hold with enable held (Shift or ENABLE); it "
+                "stops when let go, when enable is released, and by itself 0.3 s after the last refresh. REMOTE only: "
+                "refused in MOTION_COMP / VVMC, under E-STOP and over the lab's PLC"
+            )
+            b.pressed.connect(lambda j=k + 1, sg=sign: self._jog_press(j, sg))
+            b.released.connect(self._jog_release)
+            self.jog_buttons[(k + 1, sign)] = b
+            lay.addWidget(b)
+        return row
+
+    def _jog_send(self) -> None:
+        if self._jogging is not None:
+            joint, sign = self._jogging
+            self._send("lab_comau_jog", joint=joint, speed=sign * self.jog_speed.value() / 100.0)
+
+    def _jog_press(self, joint: int, sign: int) -> None:
+        self._jogging, self._jog_told = (joint, sign), False
+        self._jog_send()
+        self._jog_timer.start()
+
+    def _jog_resend(self) -> None:
+        """While the button is held its speed is refreshed (the engine drops a jog 0.3 s after the last)."""
+        if self._jogging is not None and self.jog_buttons[self._jogging].isDown():
+            self._jog_send()
+        else:
+            self._jog_release()
+
+    def _jog_release(self) -> None:
+        self._jog_timer.stop()
+        if self._jogging is not None:
+            self._send("lab_comau_jog", joint=self._jogging[0], speed=0.0)
+            self._jogging = None
+
+    def _show_jog(self, state) -> None:
+        c, jog = state.comau, getattr(state, "comau_jog", None)
+        can = c.mode == "remote" and not state.vvmc and not state.estop
+        for b in self.jog_buttons.values():
+            if b.isEnabled() != can and not b.isDown():
+                b.setEnabled(can)
+        if jog is not None and jog.joint:
+            text = f"jogging q{jog.joint} {100 * jog.speed:+.0f} % ({math.degrees(jog.qd):+.1f}°/s)"
+        elif not can:
+            text = "jog: Comau REMOTE only (not in MOTION_COMP / VVMC, not under E-STOP)"
+        elif jog is not None and jog.reason:
+            text = f"jog stopped: {jog.reason}"
+        else:
+            text = "hold enable (Shift or ENABLE), then press and hold a joint's button"
+        if text != self.jog_label.text():
+            self.jog_label.setText(text)
+
     def _control(self) -> QWidget:
         w = QWidget()
         grid = QGridLayout(w)
-        cbox = QGroupBox("Comau SMART-5 NJ 110-3.0 (3-DOF, extension arm)")
+        cbox = QGroupBox("Comau SMART-5 NJ 110-3.0")  # a longer title widened the column past its scroll area
+        cbox.setToolTip("Comau SMART-5 NJ 110-3.0, 3-DOF with the lab's extension arm")
         cl = QFormLayout(cbox)
         self.comau_mode = QComboBox()
         self.comau_mode.addItems([m.upper() for m in COMAU_MODES])
@@ -623,9 +883,24 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         cl.addRow(self.comau_limits)
         self.joint_pos_bars = [_bar() for _ in range(3)]
         self.joint_speed_bars = [_bar() for _ in range(3)]
+        self.jog_buttons: dict[tuple[int, int], QPushButton] = {}  # (joint 1-3, sign) -> button
+        self._jogging: tuple[int, int] | None = None  # the held button
+        self._jog_told = False  # a refusal of this press was shown
+        self._jog_timer = QTimer(self)
+        self._jog_timer.setInterval(JOG_RESEND_MS)
+        self._jog_timer.timeout.connect(self._jog_resend)
         for k in range(3):
-            cl.addRow(f"q{k + 1} position", self.joint_pos_bars[k])
+            cl.addRow(f"q{k + 1} position", self._jog_buttons(k))  # with its jog buttons (issue 16, item 5)
             cl.addRow(f"q{k + 1} speed use", self.joint_speed_bars[k])
+        self.jog_speed = QSpinBox()
+        self.jog_speed.setRange(5, 100)
+        self.jog_speed.setValue(25)
+        self.jog_speed.setSuffix(" % of the joint speed")
+        self.jog_speed.setToolTip("the speed of the − / + jog buttons, a share of the joint-limit profile's speed")
+        cl.addRow("jog speed", self.jog_speed)
+        self.jog_label = QLabel("–")
+        self.jog_label.setWordWrap(True)
+        cl.addRow(self.jog_label)
         wbox = QGroupBox("Winch")
         wl = QFormLayout(wbox)
         self.winch_mode = QComboBox()
@@ -641,7 +916,9 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self._slider_timer.timeout.connect(lambda: self._slider(self.winch_slider.value()))
         # the lab HMI's "Velocity Setpoint - max 0.2 m/s": −100…100, u = value/100 · top speed, springs back
         self.winch_slider_label = QLabel("velocity setpoint (springs back)")
-        wl.addRow(self.winch_slider_label, self.winch_slider)
+        self.winch_slider_label.setWordWrap(True)  # a label as wide as the column cut its right side off
+        wl.addRow(self.winch_slider_label)
+        wl.addRow(self.winch_slider)
         rbox = QGroupBox("REMOTE drive (Comau tool x, y, z; winch w)")
         rl = QVBoxLayout(rbox)
         self.stick = VirtualStick(aux_axis="w winch")
@@ -656,6 +933,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.vvmc.setMinimumHeight(36)
         self.readout = QLabel("–")
         self.readout.setTextFormat(Qt.RichText)
+        self.readout.setWordWrap(True)  # wraps rather than widening the column past its scroll area
         left = QVBoxLayout()
         left.addWidget(cbox)
         left.addWidget(wbox)
@@ -721,6 +999,100 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         refit_on_show(w, lambda: self._shown(self.swing_plot, self.err_plot))
         return w
 
+    def _swing_tab(self) -> QWidget:
+        """The lab HMI's "Pendel Estimator" tab (issue 16, item 4): anti-swing Activate / Deactivate / Reset,
+        the pendulum states (estimate beside the true swing), the error states with the estimator's ±2σ,
+        the damping parameter and the law's tool offset."""
+        w = QWidget()
+        col = QVBoxLayout(w)
+        row = QHBoxLayout()
+        self.swing_buttons: dict[str, QPushButton] = {}
+        for action, tip in (
+            ("activate", "add the anti-swing law's offset to the work point the Comau tracks (VVMC on)"),
+            ("deactivate", "the law off: its offset returns to zero along the law (the tool back on the work point)"),
+            ("reset", "the estimator back to 'no swing' with its initial covariance (law off, tool back)"),
+        ):
+            b = QPushButton(action.capitalize())
+            b.setFocusPolicy(Qt.NoFocus)  # Space stays STOP
+            b.setToolTip(tip)
+            b.setMinimumHeight(30)
+            b.clicked.connect(lambda _=False, a=action: self._send("lab_antisway", action=a))
+            self.swing_buttons[action] = b
+            row.addWidget(b)
+        self.swing_label = QLabel("–")
+        self.swing_label.setTextFormat(Qt.RichText)
+        self.swing_label.setWordWrap(True)
+        row.addWidget(self.swing_label, 1)
+        col.addLayout(row)
+        red, blue, grey = (230, 90, 80), (90, 140, 240), (150, 150, 150)
+        self.swing_state_plot = pg.PlotWidget(title="pendulum states: estimate (dashed) and true swing")
+        axis_label(self.swing_state_plot.getPlotItem(), "left", "angle", "deg")
+        legend(self.swing_state_plot.getPlotItem(), cols=4)
+        self.swing_state_curves = [
+            self.swing_state_plot.plot(pen=pg.mkPen(c, width=1.5, style=st), name=n)
+            for c, st, n in (
+                (red, Qt.SolidLine, "φα"),
+                (red, Qt.DashLine, "φα estimate"),
+                (blue, Qt.SolidLine, "φβ"),
+                (blue, Qt.DashLine, "φβ estimate"),
+            )
+        ]
+        self.swing_err_plot = pg.PlotWidget(title="error states: estimate − true, with the estimator's ±2σ")
+        axis_label(self.swing_err_plot.getPlotItem(), "left", "error", "deg")
+        legend(self.swing_err_plot.getPlotItem(), cols=3)
+        self.swing_err_curves = [
+            self.swing_err_plot.plot(pen=pg.mkPen(c, width=w_, style=st), name=n)
+            for c, w_, st, n in (
+                (red, 1.5, Qt.SolidLine, "α error"),
+                (blue, 1.5, Qt.SolidLine, "β error"),
+                (grey, 1.0, Qt.DotLine, "±2σ"),
+                (grey, 1.0, Qt.DotLine, None),
+            )
+        ]
+        self.swing_off_plot = pg.PlotWidget(title="anti-swing tool offset from the work point (in {d})")
+        axis_label(self.swing_off_plot.getPlotItem(), "left", "offset", "mm")
+        legend(self.swing_off_plot.getPlotItem(), cols=2)
+        self.swing_off_curves = [
+            self.swing_off_plot.plot(pen=pg.mkPen(c, width=1.5), name=n) for c, n in ((red, "x"), ((90, 200, 90), "y"))
+        ]
+        for p in (self.swing_state_plot, self.swing_err_plot, self.swing_off_plot):
+            p.showGrid(x=True, y=True, alpha=0.3)
+            axis_label(p.getPlotItem(), "bottom", "t", "s")
+            p.setMinimumHeight(150)
+            col.addWidget(p, 1)
+        refit_on_show(w, lambda: self._shown(self.swing_state_plot, self.swing_err_plot, self.swing_off_plot))
+        return w
+
+    def _show_swing(self, state) -> None:
+        sw = getattr(state, "swing", None)
+        if sw is None:
+            for b in self.swing_buttons.values():
+                b.setEnabled(False)
+            text = "the load-swing estimator runs on the simulated lab (the real lab's runs in its PLC)"
+        else:
+            ok = state.vvmc and not state.estop
+            self.swing_buttons["activate"].setEnabled(ok and not sw.active)
+            self.swing_buttons["deactivate"].setEnabled(sw.active)
+            off = 1000 * float(np.max(np.abs(sw.offset)))
+            self.swing_buttons["reset"].setEnabled(not sw.active and off < 1.0 and not state.estop)
+            if sw.active:
+                status = "<b style='color:#3c9'>anti-swing ACTIVE</b>"
+            elif not state.vvmc:
+                status = "anti-swing off <span style='color:#888'>(needs VVMC on)</span>"
+            else:
+                status = "anti-swing off"
+            if sw.reason and not sw.active:
+                status += f" &nbsp; last: {sw.reason}"
+            sat = " &nbsp; <b style='color:#f80'>AT ITS LIMIT</b>" if sw.saturated else ""
+            nees = f" &nbsp; NEES {sw.nees:.1f}" if sw.nees is not None else ""
+            text = (
+                f"{status} &nbsp; estimator: {sw.measurement}, damping c = {sw.damping:g} /s &nbsp; LQR designed at "
+                f"L = {sw.design_length:g} m, c = {sw.design_damping:g} /s, T<sub>s</sub> = {1000 * sw.design_step:g} ms "
+                f"(scheduled over L){nees} &nbsp; offset {off:.1f} mm{sat}"
+            )
+        if text != self.swing_label.text():
+            self.swing_label.setText(text)
+
     def _set_enabled(self, on: bool) -> None:
         self.tabs.setEnabled(on)
         self.start.setVisible(not on)
@@ -747,6 +1119,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and "no longer the operator" in error:
             self.notice.emit("error", f"Motion-Lab: operator role lost: {error}")
+        if not ok and re == "lab_comau_jog":  # resent while held: said once per press
+            if self._jog_told:
+                return
+            self._jog_told = True
         if not ok and (re.startswith("lab_") or re == "reset"):
             self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
 
@@ -778,6 +1154,9 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             return
         self.state = state
         self._show_plant(state)
+        self._show_machines(state)
+        self._show_jog(state)
+        self._show_swing(state)
         t = state.t
         for p in state.platforms:
             self.platforms[p.name].update_state(p, t)
@@ -808,6 +1187,13 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         if t - self._t_last >= 1.0 / SAMPLE_HZ - 1e-9:
             self._t_last = t
             self.ring.push([t, *np.degrees(c.q), *c.qd, pend.alpha, pend.beta, *state.tool_error_b2, w.length])
+            sw = getattr(state, "swing", None)
+            if sw is not None:
+                err = sw.error if sw.error is not None else [math.nan] * 4
+                self.swing_ring.push(
+                    [t, *np.degrees([pend.alpha, pend.beta, *sw.estimate[:2], *err[:2], *sw.sigma[:2]]),
+                     *(1000 * np.asarray(sw.offset[:2]))]
+                )  # fmt: skip
             if state.scene is not None:
                 self.scene.update_scene(state.scene)
             self._draw()
@@ -832,3 +1218,15 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         for c, col in zip(self.err_curves, ("err_x", "err_y", "err_z"), strict=True):
             c.setData(t, 1000 * r[col])
         self.wire_curve.setData(t, r["wire"])
+        s = self.swing_ring
+        if s.n >= 2:
+            ts = s["t"]
+            for c, col in zip(self.swing_state_curves, ("alpha", "alpha_hat", "beta", "beta_hat"), strict=True):
+                c.setData(ts, s[col])
+            self.swing_err_curves[0].setData(ts, s["err_a"])
+            self.swing_err_curves[1].setData(ts, s["err_b"])
+            two = 2 * np.maximum(s["sig_a"], s["sig_b"])
+            self.swing_err_curves[2].setData(ts, two)
+            self.swing_err_curves[3].setData(ts, -two)
+            for c, col in zip(self.swing_off_curves, ("off_x", "off_y"), strict=True):
+                c.setData(ts, s[col])

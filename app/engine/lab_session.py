@@ -14,6 +14,11 @@ The machines are driven through a plant backend (:mod:`app.plant`): ``simulated`
 :class:`~app.sim.motionlab.MotionLab`, ``plc`` (``--plc AMS_NET_ID``) drives the real lab through its
 TwinCAT PLC and keeps the same model set to what the PLC reports; the scene does not know which.
 ``lab_plc_ack`` acknowledges a PLC error as the lab's HMI does.
+
+The lab HMI's parity (issue 16, item 5): ``lab_comau_jog`` jogs one Comau joint in REMOTE (the operator's
+input armed, refreshed within :data:`JOG_TIMEOUT`, else it returns to zero), each platform's Rexroth status
+word, the "Machine and Sensor States" lights and the sine generator's defaults and ranges, for both
+backends alike.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from app.models.lab import load_lab, resolve_lab
 from app.models.registry import resolve
 from app.models.stewart import StewartPlatform
 from app.net.snapshots import (
+    ComauJog,
     ComauState,
     LabDescription,
     LabScenePoints,
@@ -40,16 +46,21 @@ from app.net.snapshots import (
     PendulumState,
     PlatformInfo,
     PlatformState,
+    SineGenerator,
+    SwingState,
     WinchInfo,
     WinchState,
 )
-from app.plant.base import LabBackend
+from app.plant.base import GENERATOR_DEFAULT, LabBackend
 from app.plant.simulated import SimulatedLab
+from app.plc.symbols import GENERATOR_FREQUENCY_HZ, GENERATOR_PHASE_DEG
+from app.scenarios.swing import SwingControl
 from app.sim.motionlab import REMOTE_TOOL_SPEED, MotionLab
 from app.teleop.pipeline import InputPipeline
 
 STEP = 0.01
 LOCAL_SPEED_TIMEOUT = 0.3  # s: a LOCAL winch speed not refreshed this long returns to zero
+JOG_TIMEOUT = 0.3  # s: a Comau jog speed not refreshed this long returns to zero (issue 16, item 5)
 
 
 SOURCES = ("simulation", "generator", "remote", "timeseries")
@@ -80,6 +91,8 @@ class LabSession(Scene):
             "lab_winch",
             "lab_vvmc",
             "lab_plc_ack",
+            "lab_comau_jog",
+            "lab_antisway",
         )
     }
 
@@ -103,6 +116,14 @@ class LabSession(Scene):
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
         self.spectra: list[tuple[str, float, float] | None] = [None for _ in self.names]  # the last simulated sea
         self.vvmc = False
+        self._jog: tuple[int, float, float] | None = None  # Comau jog: joint (1-3), speed fraction, time received
+        self._jog_reason = ""
+        # the load-swing estimator and anti-swing law (issue 16, item 4): on the simulated lab, stepped with it
+        self.swing: SwingControl | None = None
+        self._swing_reason = ""
+        if self.plc is None:
+            self.swing = SwingControl(self.lab, np.random.default_rng(16_4), active=False)
+            self.plant.after_step = self._swing_step
         if self.plc is None:
             self.note("info", f"Motion-Lab: {', '.join(self.names)} SETTLED, Comau REMOTE, winch LOCAL")
         else:
@@ -180,6 +201,113 @@ class LabSession(Scene):
         k = None if platform is None else self._platform(platform)
         self.note("info", self._plant(self.plant.acknowledge, k))
 
+    # ------------------------------------------------------------------ Comau joint jog (issue 16, item 5)
+    def lab_comau_jog(self, joint: int, speed: float) -> None:
+        """Jog joint ``joint`` (1–3) at ``speed`` (−1…1) × the profile's joint speed, resent while the operator
+        holds it; 0 stops any jog and is always taken.  Refused while the E-STOP is latched, unless the Comau is
+        in REMOTE (never in MOTION_COMP / VVMC, SETTLED or HOLD), while the operator's input is not armed and
+        fresh (enable held: the stick's rules), and where the plant takes no joint speeds (the lab's PLC).
+        The joint filter keeps the profile's limits and velocity-boundary law.  A jog not refreshed within
+        :data:`JOG_TIMEOUT`, or whose input stops being enabled, returns to zero (:meth:`_apply_input`)."""
+        if joint not in (1, 2, 3):
+            raise CommandError(f"Comau jog: joint must be 1, 2 or 3 (q1-q3), got {joint}")
+        speed = float(np.clip(speed, -1.0, 1.0))
+        if speed == 0.0:
+            self._stop_jog("")
+            return
+        self._guard()
+        lab = self.lab
+        if self.vvmc or lab.comau_mode != "remote":
+            vvmc = " with VVMC on" if self.vvmc else ""
+            raise CommandError(f"Comau jog needs REMOTE (the Comau is {lab.comau_mode.upper()}{vvmc})")
+        if not (self.input.armed and self.input.last.enabled):
+            why = self.input.last.reason or "not armed"
+            raise CommandError(f"Comau jog refused: the input is not armed ({why}); centre the stick, hold enable")
+        qd = np.zeros(3)
+        qd[joint - 1] = speed * float(lab.joints.speed[joint - 1])
+        self._plant(self.plant.comau_jog, qd)
+        if self._jog is None or self._jog[0] != joint or (self._jog[1] > 0) != (speed > 0):
+            self.note("info", f"Comau jog q{joint} {100 * speed:+.0f} %")
+        self._jog = (joint, speed, time.monotonic())
+        self._jog_reason = ""
+
+    def _stop_jog(self, reason: str) -> None:
+        """End the jog (the plant's joint speeds to zero); ``reason`` why, "" when the operator let go."""
+        if self._jog is not None:
+            self.plant.comau_jog(np.zeros(3))  # a stop is never refused
+            if reason:
+                self.note("warning", f"Comau jog q{self._jog[0]} stopped: {reason}")
+            self._jog = None
+        self._jog_reason = reason
+
+    # ------------------------------------------------------------------ load swing (issue 16, item 4)
+    def lab_antisway(self, action: str) -> None:
+        """The lab HMI's "Pendel Estimator" buttons: ``activate`` adds the anti-swing law's offset to the work
+        point the Comau tracks (VVMC on, no E-STOP), ``deactivate`` brings the offset back to zero along the
+        law (always taken), ``reset`` puts the estimator back to "no swing" (only with the law off and its
+        offset back at zero: a reset must not make the tool jump)."""
+        sw = self.swing
+        if sw is None:
+            name = self.plant.NAME
+            raise CommandError(f"anti-swing: the {name} plant has none here (the lab runs its estimator in the PLC)")
+        if action == "deactivate":
+            if sw.active:
+                self.note("info", "anti-swing OFF: the tool returns to the work point")
+            sw.active, self._swing_reason = False, "deactivated"
+            return
+        self._guard()
+        if action == "activate":
+            if not self.vvmc or self.lab.comau_mode != "motion_comp":
+                raise CommandError("anti-swing acts on the compensated work point: turn VVMC on first")
+            if not sw.active:
+                self.note("info", "anti-swing ON: the law's offset is added to the Comau's work point")
+            sw.active, self._swing_reason = True, ""
+        elif action == "reset":
+            if sw.active or float(np.max(np.abs(sw.law.p))) > 1e-3:
+                raise CommandError("anti-swing reset: deactivate first and let the tool return to the work point")
+            sw.reset()
+            self.note("info", "swing estimator reset (no swing, initial covariance)")
+        else:
+            raise CommandError(f"anti-swing: action must be activate, deactivate or reset, got {action!r}")
+
+    def _swing_off(self, reason: str) -> None:
+        """The law off (its offset returns to zero along the law) when what it needs is gone."""
+        if self.swing is not None and self.swing.active:
+            self.swing.active = False
+            self._swing_reason = reason
+            self.note("warning", f"anti-swing OFF: {reason}")
+
+    def _swing_step(self, dt: float) -> None:
+        """After each plant step: the estimator sees the step, the law sets the next step's offset."""
+        sw = self.swing
+        if sw is None:
+            return
+        if sw.active and (self.estop_latched or not self.vvmc or self.lab.comau_mode != "motion_comp"):
+            self._swing_off("E-STOP" if self.estop_latched else "VVMC off")
+        sw.step(dt)
+
+    def _swing_state(self) -> SwingState | None:
+        sw = self.swing
+        if sw is None:
+            return None
+        ekf, truth = sw.ekf, sw.truth()
+        return SwingState(
+            active=sw.active,
+            measurement=sw.measurement,
+            estimate=ekf.x.tolist(),
+            sigma=ekf.sigma().tolist(),
+            error=(ekf.x - truth).tolist(),
+            nees=float(ekf.nees(truth)),
+            nis=float(getattr(ekf, "nis", 0.0)),
+            offset=sw.law.p.tolist(),
+            saturated=bool(sw.law.saturated),
+            damping=float(ekf.c),
+            design_length=float(sw.design.L),
+            design_damping=float(sw.design.c),
+            design_step=float(sw.design.Ts),
+            reason=self._swing_reason,
+        )
+
     def estop(self, source: str = "operator") -> None:
         if not self.estop_latched:
             self.note("error", f"E-STOP from {source}: platforms, robot and winch braking to rest")
@@ -189,6 +317,8 @@ class LabSession(Scene):
         self.estop_latched = True
         self.vvmc = False
         self.plant.estop()
+        self._jog = None  # the plant dropped it with the stop
+        self._swing_off("E-STOP")
 
     def reset(self) -> None:
         if self.estop_latched:
@@ -207,7 +337,15 @@ class LabSession(Scene):
         if inp.stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
         s = inp.signal if inp.enabled and not self.estop_latched else np.zeros(4)
-        self.plant.drive(REMOTE_TOOL_SPEED * s[:3], self.plant.winch_speed_max * s[3])  # REMOTE modes only
+        if self._jog is not None:  # the jog's stale halt: the stick's rules (issue 16, item 5)
+            if not inp.enabled:
+                self._stop_jog(f"input not enabled ({inp.reason})")
+            elif self.lab.comau_mode != "remote":
+                self._stop_jog(f"the Comau left REMOTE ({self.lab.comau_mode.upper()})")
+            elif time.monotonic() - self._jog[2] > JOG_TIMEOUT:
+                self._stop_jog(f"not refreshed for {JOG_TIMEOUT:g} s")
+        tool = np.zeros(3) if self._jog is not None else REMOTE_TOOL_SPEED * s[:3]  # a jog moves one joint only
+        self.plant.drive(tool, self.plant.winch_speed_max * s[3])  # REMOTE modes only
         if self.lab.winch.mode == "local" and time.monotonic() - self._local_speed_time > LOCAL_SPEED_TIMEOUT:
             self.plant.winch_speed(0.0)  # the spring-return slider is not being held (or the GUI is gone)
 
@@ -334,6 +472,13 @@ class LabSession(Scene):
                     command_min=lab.platforms[k].command_min.tolist(),
                     command_max=lab.platforms[k].command_max.tolist(),
                     settled=lab.platforms[k].settled_pose.tolist(),
+                    generator=SineGenerator(  # the lab HMI's (motionlab_plc.json), issue 16, item 5
+                        amplitude=list(GENERATOR_DEFAULT[0]),
+                        frequency=list(GENERATOR_DEFAULT[1]),
+                        phase=list(GENERATOR_DEFAULT[2]),
+                        frequency_range=list(GENERATOR_FREQUENCY_HZ),
+                        phase_range=[float(np.radians(v)) for v in GENERATOR_PHASE_DEG],
+                    ),
                 )
             )
         return LabDescription(
@@ -354,6 +499,7 @@ class LabSession(Scene):
             sources=list(SOURCES),
             spectra=list(SPECTRA),
             backend=self.plant.NAME,
+            comau_jog_timeout=JOG_TIMEOUT,
         )
 
     def snapshot(self) -> LabSnapshot:
@@ -374,6 +520,7 @@ class LabSession(Scene):
                     legs=np.round(m.leg_lengths(p.eta), 5).tolist(),
                     leg_clamped=bool(p.leg_clamped),
                     ramp=float(p.gain),
+                    motion=self.plant.motion_status(k),
                 )
             )
         return LabSnapshot(
@@ -390,4 +537,13 @@ class LabSession(Scene):
             payload_height_error=float(s.payload_height_error),
             scene=self._scene(),
             plant=self.plant.link(time.monotonic()),
+            machines=self.plant.machines(time.monotonic()),
+            comau_jog=self._jog_state(),
+            swing=self._swing_state(),
         )
+
+    def _jog_state(self) -> ComauJog:
+        j = self._jog
+        if j is None:
+            return ComauJog(reason=self._jog_reason)
+        return ComauJog(joint=j[0], speed=j[1], qd=j[1] * float(self.lab.joints.speed[j[0] - 1]))

@@ -99,6 +99,11 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "lab_vvmc": {"on": ("bool", True, None)},
     # the real lab's PLC (``--plc``): acknowledge its error as the lab HMI does (``platform``: only that one)
     "lab_plc_ack": {"platform": ("str", False, 32)},
+    # the Comau's joint jog (issue 16, item 5): ``joint`` 1–3 (q1–q3), ``speed`` a fraction of the profile's
+    # joint speed; resent while held, zero when let go (a speed not refreshed for 0.3 s returns to zero)
+    "lab_comau_jog": {"joint": ("int", True, 3), "speed": ("float", True, 1.0)},
+    # the load-swing estimator and anti-swing law (issue 16, item 4; the lab HMI's "Pendel Estimator" buttons)
+    "lab_antisway": {"action": ("enum", True, ("activate", "deactivate", "reset"))},
 }
 
 #: scene commands the server hands to the scene's command table (fields as keywords)
@@ -119,6 +124,8 @@ SCENE_MESSAGES = frozenset(
         "lab_winch",
         "lab_vvmc",
         "lab_plc_ack",
+        "lab_comau_jog",
+        "lab_antisway",
     }
 )
 

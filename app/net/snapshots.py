@@ -292,6 +292,7 @@ class PlatformState:
     legs: list[float]  # six leg lengths [m]
     leg_clamped: bool
     ramp: float  # 0..1
+    motion: MotionStatus | None = None  # the Stewart status word as the Rexroth controller reports it (issue 16)
 
 
 @dataclass(kw_only=True, slots=True)
@@ -350,6 +351,70 @@ class PlantLink:
     )  # per device (em8000, comau, mru1 …) its PLC states
 
 
+# issue 16, item 5 (the lab HMI's status feedback, lights, jog and generator): optional fields
+@dataclass(kw_only=True, slots=True)
+class MotionStatus:
+    """A platform's Rexroth motion status word (E_StewartState bits 0–3, E_StewartStatus 4–7, E_StewartOpMode
+    24–31; motionlab_plc.json), by name: from the PLC, or made by the simulated plant from its own state."""
+
+    state: str = ""  # TRANSIT, OFF, SETTLED, OIL_HEATING, NEUTRAL, NEUTRAL_FREEZE, ENGAGED, ENGAGED_FREEZE
+    status: str = ""  # SYSTEM_OK, WARNING, ERROR
+    opmode: str = ""  # MANUAL, NORMAL
+    word: int = 0  # the status word itself (txHmi.status)
+
+
+@dataclass(kw_only=True, slots=True)
+class MachineLight:
+    """One of the lab HMI's "Machine and Sensor States" lights (em8000, em1500, comau, mru1, mru2, tracker,
+    remote)."""
+
+    name: str
+    state: str  # active | inactive (a device that should talk and does not) | absent (not connected) | unknown
+    detail: str = ""  # one line: where the state comes from
+
+
+@dataclass(kw_only=True, slots=True)
+class ComauJog:
+    """The Comau's joint jog (``lab_comau_jog``) as the engine applies it."""
+
+    joint: int = 0  # 1–3 (q1–q3) while jogging, 0 when not
+    speed: float = 0.0  # fraction of the profile's joint speed, −1…1
+    qd: float = 0.0  # the joint speed commanded [rad/s]
+    reason: str = ""  # why the last jog stopped or was refused, one line ("" when none)
+
+
+@dataclass(kw_only=True, slots=True)
+class SineGenerator:
+    """The lab HMI's sine generator for one platform: its defaults and field ranges (motionlab_plc.json)."""
+
+    amplitude: list[float]  # default amplitudes [m, rad]; their range is the operational box
+    frequency: list[float]  # default frequencies [Hz]
+    phase: list[float]  # default phases [rad]
+    frequency_range: list[float]  # min, max, step [Hz]
+    phase_range: list[float]  # min, max, step [rad]
+
+
+@dataclass(kw_only=True, slots=True)
+class SwingState:
+    """The load-swing estimator and anti-swing law (``lab_antisway``, issue 16 item 4; the lab HMI's "Pendel
+    Estimator" tab): the EKF's estimate of eqs. (29)-(30), its 1-σ, the law's tool offset."""
+
+    active: bool  # the anti-swing law adds its offset to the Comau's work point
+    measurement: str  # what updates the EKF: ``angles`` (a wire-angle sensor) | ``payload`` (the load's position)
+    estimate: list[float]  # α, β [rad], α̇, β̇ [rad/s]
+    sigma: list[float]  # the estimate's 1-σ from the EKF's covariance, same units
+    error: list[float] | None = None  # estimate − true (a simulated lab knows the truth; None on the real one)
+    nees: float | None = None  # normalised estimation error squared (χ² with 4 degrees of freedom)
+    nis: float = 0.0  # the last update's normalised innovation squared
+    offset: list[float] = field(default_factory=lambda: [0.0, 0.0])  # the law's tool offset in {d} x, y [m]
+    saturated: bool = False  # the law's output at its acceleration or offset limit
+    damping: float = 0.0  # c of eqs. (29)-(30) the estimator assumes [1/s]
+    design_length: float = 0.0  # the wire length the LQR was designed at [m] (scheduled over the wire length)
+    design_damping: float = 0.0  # the damping c of the LQR's design [1/s] (the lab's 0.1)
+    design_step: float = 0.0  # the LQR's sample time [s] (the lab's 5 ms)
+    reason: str = ""  # why the law is off or was switched off, one line ("" when none)
+
+
 @dataclass(kw_only=True, slots=True)
 class LabSnapshot(Snapshot):
     """The Norwegian Motion-Laboratory (``bosun server --plant lab``)."""
@@ -364,6 +429,9 @@ class LabSnapshot(Snapshot):
     payload_height_error: float = 0.0  # [m]
     scene: LabScenePoints | None = None
     plant: PlantLink | None = None  # the plant backend and its link (optional: older engines have none)
+    machines: list[MachineLight] = field(default_factory=list)  # the lab HMI's machine and sensor lights (item 5)
+    comau_jog: ComauJog | None = None  # the Comau's joint jog (item 5)
+    swing: SwingState | None = None  # the load-swing estimator and anti-swing (item 4; None: not available)
 
 
 @dataclass(kw_only=True, slots=True)
@@ -377,6 +445,7 @@ class PlatformInfo:
     command_min: list[float] | None = None  # the operational box every command is clipped to [m, rad] (issue 16)
     command_max: list[float] | None = None
     settled: list[float] | None = None  # the SETTLED pose (all legs at their minimum length) [m, rad]
+    generator: SineGenerator | None = None  # the lab HMI's sine-generator defaults and ranges (issue 16, item 5)
 
 
 @dataclass(kw_only=True, slots=True)
@@ -403,6 +472,7 @@ class LabDescription(Description):
     sources: list[str] = field(default_factory=list)
     spectra: list[str] = field(default_factory=list)
     backend: str = "simulated"  # the plant backend: simulated | plc
+    comau_jog_timeout: float | None = None  # a jog speed not refreshed this long returns to zero [s] (item 5)
 
 
 SNAPSHOTS: dict[str, type[Snapshot]] = {c.KIND: c for c in (TeleopSnapshot, TacSnapshot, LabSnapshot)}

@@ -18,18 +18,34 @@ calls into the engine's loop.
 from __future__ import annotations
 
 import abc
+import math
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from app.errors import BosunError
-from app.net.snapshots import PlantLink
+from app.net.snapshots import MachineLight, MotionStatus, PlantLink
+from app.plc.symbols import GENERATOR_AMPLITUDE, GENERATOR_OMEGA, GENERATOR_PHASE
 from app.sim.motionlab import MotionLab
 
 
 class BackendError(BosunError):
     """A command the plant backend refuses (one line); nothing was changed or sent."""
+
+
+#: the lab HMI's "Machine and Sensor States" lights, in its order (motionlab_plc.json ``hmi_tabs``)
+MACHINES = ("em8000", "em1500", "comau", "mru1", "mru2", "tracker", "remote")
+#: the lab's remote interface counts as gone after this long without a message (``remote_interface.timeout_ms``)
+REMOTE_TIMEOUT = 0.5
+#: the lab PLC's sine-generator defaults (``sineAmplitude``, ``sineOmega`` / 2π, ``sinePhase``): amplitude [m, rad],
+#: frequency [Hz], phase [rad]; a ``lab_source`` generator without a field takes these
+GENERATOR_DEFAULT = (
+    list(GENERATOR_AMPLITUDE),
+    [w / (2 * math.pi) for w in GENERATOR_OMEGA],
+    list(GENERATOR_PHASE),
+)
 
 
 class LabBackend(abc.ABC):
@@ -47,6 +63,9 @@ class LabBackend(abc.ABC):
         self.lab = lab
         self.layout = lab.layout
         self.names = [n for n, _ in lab.layout.platforms]
+        #: called after each model step with its dt (the scene's load-swing estimator; a plant that steps no
+        #: model of its own, the PLC's, never calls it)
+        self.after_step: Callable[[float], None] | None = None
 
     @property
     def winch_speed_max(self) -> float:
@@ -92,6 +111,13 @@ class LabBackend(abc.ABC):
     def reset(self) -> None:
         """Clear the E-STOP: every machine holds where it stands until commanded anew."""
 
+    def comau_jog(self, qd: NDArray[np.float64]) -> None:
+        """The Comau's joint jog: joint speeds [rad/s] (3; one non-zero, or all zero to stop), REMOTE only.
+        The scene refreshes it while the operator holds a jog button and zeroes it when the jog goes stale
+        (issue 16, item 5).  A plant that cannot take joint speeds refuses a non-zero jog."""
+        if np.any(np.asarray(qd) != 0.0):
+            raise BackendError(f"Comau joint jog: the {self.NAME} plant takes no joint speeds")
+
     def acknowledge(self, k: int | None) -> str:
         """Acknowledge the plant's fault (the PLC's error state; ``k``: one platform only); returns what
         was done, one line."""
@@ -111,6 +137,15 @@ class LabBackend(abc.ABC):
     @abc.abstractmethod
     def link(self, now: float) -> PlantLink:
         """The backend and the state of its link, for the snapshot."""
+
+    @abc.abstractmethod
+    def motion_status(self, k: int) -> MotionStatus | None:
+        """Platform ``k``'s Rexroth status word (state, status, op mode) as the lab's HMI shows it; None when
+        nothing is known (issue 16, item 5)."""
+
+    @abc.abstractmethod
+    def machines(self, now: float) -> list[MachineLight]:
+        """The lab HMI's "Machine and Sensor States" lights: em8000, em1500, comau, mru1, mru2, tracker, remote."""
 
     def ready(self) -> str:
         """ "" when commands reach the plant now, else why not (one line)."""

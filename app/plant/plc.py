@@ -35,8 +35,8 @@ from numpy.typing import NDArray
 from app.errors import BosunError, one_line
 from app.marine.waves import check_sea
 from app.marine.waves import spectrum as sea_spectrum
-from app.net.snapshots import PlantLink
-from app.plant.base import BackendError, LabBackend
+from app.net.snapshots import MachineLight, MotionStatus, PlantLink
+from app.plant.base import GENERATOR_DEFAULT, BackendError, LabBackend
 from app.plc.bridge import (
     STOP,
     AdsBridge,
@@ -179,10 +179,10 @@ class PlcLab(LabBackend):
         plat = self.lab.platforms[k]
         if source == "generator":
             try:
-                g = Generator.make(
-                    p.get("amplitude", [0.0] * 6),
-                    p.get("frequency", [0.1] * 6),
-                    p.get("phase", [0.0] * 6),
+                g = Generator.make(  # absent fields: the lab PLC's defaults
+                    p.get("amplitude", GENERATOR_DEFAULT[0]),
+                    p.get("frequency", GENERATOR_DEFAULT[1]),
+                    p.get("phase", GENERATOR_DEFAULT[2]),
                     plat.model,
                     plat.command_box,
                 )
@@ -255,6 +255,15 @@ class PlcLab(LabBackend):
     def drive(self, tool_velocity_r: NDArray[np.float64], winch_speed: float) -> None:
         """The stick does not reach the PLC over ADS: the lab takes Comau joint speeds and the REMOTE
         winch speed from its UDP remote interface, which Bosun does not drive."""
+
+    def comau_jog(self, qd: NDArray[np.float64]) -> None:
+        """Refused (a stop, all zeros, is a no-op): the lab PLC takes Comau joint speeds only from its UDP
+        remote interface (``qDotRef``), which Bosun does not drive (issue 16, item 5)."""
+        if np.any(np.asarray(qd) != 0.0):
+            raise BackendError(
+                "Comau jog: the lab PLC takes Comau joint speeds only from its UDP remote interface (qDotRef), "
+                "which Bosun does not drive; nothing was sent"
+            )
 
     def estop(self) -> None:
         self.stop = True
@@ -476,6 +485,48 @@ class PlcLab(LabBackend):
         }
         for mru in ("mru1", "mru2"):
             out[mru] = {"active": bool(v.get(f"MAIN.{mru}.bActive", False))}
+        return out
+
+    def motion_status(self, k: int) -> MotionStatus | None:
+        """The platform's Rexroth status as the PLC reports it: eState / eStatus / eOpMode (notified), each
+        missing one from the status word of ``txHmi`` (bits 0–3, 4–7, 24–31); the word made of the three shown.
+        None while the link is not up or nothing came yet."""
+        if self.state != "ok":
+            return None
+        v, m = self.values, f"MAIN.{self.names[k]}"
+        hmi = v.get(f"{m}.txHmi")
+        polled = int(hmi["status"]) & 0xFFFFFFFF if hmi else None
+        names, word, known = {}, 0, False
+        for key, table, symbol, shift, mask in (
+            ("state", STEWART_STATE, "eState", 0, 0xF),
+            ("status", STEWART_STATUS, "eStatus", 4, 0xF),
+            ("opmode", STEWART_OPMODE, "eOpMode", 24, 0xFF),
+        ):
+            raw = v.get(f"{m}.{symbol}")
+            if raw is None and polled is not None:
+                raw = (polled >> shift) & mask
+            known |= raw is not None
+            names[key] = enum_name(table, raw)
+            word |= (int(raw or 0) & mask) << shift
+        return MotionStatus(**names, word=word) if known else None
+
+    def machines(self, now: float) -> list[MachineLight]:
+        """``MAIN.<dev>.bActive`` of the platforms, the Comau and the MRUs, as the lab HMI's lights; the laser
+        tracker's and the remote interface's are not read (motionlab_plc.json names no symbol for them)."""
+        out = []
+        for dev in ("em8000", "em1500", "comau", "mru1", "mru2"):
+            name = f"MAIN.{dev}.bActive"
+            if self.state != "ok":
+                out.append(MachineLight(name=dev, state="unknown", detail=f"PLC link {self.state}"))
+            elif name in self.unusable:
+                out.append(MachineLight(name=dev, state="unknown", detail=f"{name} not usable on this PLC"))
+            elif name not in self.values:
+                out.append(MachineLight(name=dev, state="unknown", detail=f"no {name} yet"))
+            else:
+                on = bool(self.values[name])
+                out.append(MachineLight(name=dev, state="active" if on else "inactive", detail=f"{name} {on}"))
+        for dev in ("tracker", "remote"):
+            out.append(MachineLight(name=dev, state="unknown", detail="not read over ADS (no symbol known)"))
         return out
 
     def link(self, now: float) -> PlantLink:

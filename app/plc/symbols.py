@@ -76,6 +76,12 @@ def decode_status(status: int) -> dict[str, str]:
     }
 
 
+def encode_status(state: str, status: str = "SYSTEM_OK", opmode: str = "NORMAL") -> int:
+    """The status word :func:`decode_status` reads, from the three names (issue 16, item 5: the simulated
+    platforms report their state in the same word as the Rexroth controllers)."""
+    return STEWART_STATE[state] | (STEWART_STATUS[status] << 4) | (STEWART_OPMODE[opmode] << 24)
+
+
 # ----------------------------------------------------------------------------- types
 #: IEC 61131-3 elementary types as little-endian struct formats (TwinCAT on x86 / ARM: little endian)
 TYPES = {"BOOL": "?", "SINT": "b", "INT": "h", "DINT": "i", "REAL": "f", "LREAL": "d"}
@@ -262,3 +268,14 @@ def wave_inputs(omega: Any, s: Any, hs: float) -> WaveInputs:
     sigma = math.sqrt(max(smax, 0.0))
     lam = hs * hs / (16.0 * math.pi * w0 * sigma * sigma) if sigma > 0 else 0.1
     return WaveInputs(w0=w0, lam=min(1.0, max(0.01, lam)), sigma=sigma)
+
+
+# ----------------------------------------------------------------------------- the lab HMI's sine generator
+# Issue 16, item 5.  FB_StewartInterface.FB_init's defaults and the lab HMI's field ranges
+# (motionlab_plc.json: Norwegian Motion-Laboratory repository, commit f5fbf84, MIT: ``stewart.
+# sine_generator_defaults``); the amplitude fields range over the operational box (etaRefMin..etaRefMax).
+GENERATOR_AMPLITUDE = (0.0, 0.0, 0.2, math.radians(2.0), math.radians(2.0), 0.0)  # sineAmplitude [m, rad]
+GENERATOR_OMEGA = (0.6283,) * 6  # sineOmega [rad/s] (0.1 Hz)
+GENERATOR_PHASE = (0.0,) * 6  # sinePhase [rad]
+GENERATOR_FREQUENCY_HZ = (0.01, 1.0, 0.02)  # the HMI's frequency field: min, max, step [Hz]
+GENERATOR_PHASE_DEG = (-180.0, 180.0, 10.0)  # the HMI's phase field: min, max, step [deg]
