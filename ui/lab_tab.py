@@ -29,6 +29,7 @@ from PyQt5.QtWidgets import (
     QLineEdit,
     QProgressBar,
     QPushButton,
+    QSizePolicy,
     QSlider,
     QSpinBox,
     QStackedWidget,
@@ -1055,11 +1056,19 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.swing_off_curves = [
             self.swing_off_plot.plot(pen=pg.mkPen(c, width=1.5), name=n) for c, n in ((red, "x"), ((90, 200, 90), "y"))
         ]
-        for p in (self.swing_state_plot, self.swing_err_plot, self.swing_off_plot):
+        grid = QGridLayout()  # two plots over each other beside the third: the page fits a 1280 × 800 screen
+        plots = (self.swing_state_plot, self.swing_err_plot, self.swing_off_plot)
+        for p, (r, c, rows) in zip(plots, ((0, 0, 1), (1, 0, 1), (0, 1, 2)), strict=True):
             p.showGrid(x=True, y=True, alpha=0.3)
             axis_label(p.getPlotItem(), "bottom", "t", "s")
-            p.setMinimumHeight(150)
-            col.addWidget(p, 1)
+            p.setMinimumHeight(120)
+            # a plot's size hint (pyqtgraph's 640 × 480) would make the page, and with it every Motion-Lab page,
+            # taller than the window: the plots take the height there is, at least their minimum
+            p.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Ignored)
+            grid.addWidget(p, r, c, rows, 1)
+        grid.setColumnStretch(0, 3)
+        grid.setColumnStretch(1, 2)
+        col.addLayout(grid, 1)
         refit_on_show(w, lambda: self._shown(self.swing_state_plot, self.swing_err_plot, self.swing_off_plot))
         return w
 
@@ -1087,8 +1096,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             nees = f" &nbsp; NEES {sw.nees:.1f}" if sw.nees is not None else ""
             text = (
                 f"{status} &nbsp; estimator: {sw.measurement}, damping c = {sw.damping:g} /s &nbsp; LQR designed at "
-                f"L = {sw.design_length:g} m, c = {sw.design_damping:g} /s, T<sub>s</sub> = {1000 * sw.design_step:g} ms "
-                f"(scheduled over L){nees} &nbsp; offset {off:.1f} mm{sat}"
+                f"L = {sw.design_length:g} m, c = {sw.design_damping:g} /s, "
+                f"T<sub>s</sub> = {1000 * sw.design_step:g} ms (scheduled over L){nees} &nbsp; offset {off:.1f} mm{sat}"
             )
         if text != self.swing_label.text():
             self.swing_label.setText(text)
