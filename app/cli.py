@@ -546,6 +546,82 @@ _SENSOR_NAMES = {
 }
 
 
+# ----------------------------------------------------------------------------- vessels (issue 17)
+def cmd_vessel_list(args: argparse.Namespace) -> int:
+    from app.marine.vessels import DEFAULT_VESSEL, VESSELS
+
+    if args.json:
+        _print_json({"default": DEFAULT_VESSEL, "vessels": VESSELS})
+        return 0
+    for name, text in VESSELS.items():
+        print(f"{name:20s} {text}{'  (default)' if name == DEFAULT_VESSEL else ''}")
+    print("or any RAO file: --vessel FILE.mat|FILE.csv")
+    return 0
+
+
+def cmd_vessel_rao(args: argparse.Namespace) -> int:
+    """6-DOF motion RAOs of a monohull from its main particulars (Capytaine BEM + viscous roll damping)."""
+    import dataclasses
+    import shlex
+
+    from app.marine.bem import BemError, BemInputs, compute_raos
+    from app.marine.hull import HullError
+    from app.marine.vessel import VesselError, VesselParticulars, rao_to_csv
+
+    names = ("lpp", "beam", "draft", "cb", "gm_t", "gm_l", "r44", "r55", "r66", "mass")
+    given = {n: getattr(args, n) for n in names if getattr(args, n) is not None}
+    try:
+        name = args.name or ("MSS supply vessel" if not given else "monohull")
+        vessel = VesselParticulars(**given, name=name)
+        inputs = BemInputs(
+            vessel=vessel, cwp=args.cwp, roll_damping=args.roll_damping, nx=args.nx, nz=args.nz,
+            w_min=args.w_min, w_max=args.w_max, n_w=args.n_w, heading_step=args.heading_step,
+        )  # fmt: skip
+        out = Path(args.out)
+        if out.is_dir():
+            raise BosunError(f"--out {out} is a folder; give a .csv file")
+        result = compute_raos(inputs, progress=_progress_bar("vessel rao", unit="frequency"))
+    except (BemError, HullError, VesselError) as err:
+        raise BosunError(str(err)) from None
+    argv = getattr(args, "argv", None) or []
+    command = "bosun " + " ".join(shlex.quote(a) for a in argv) if argv else "bosun vessel rao"
+    header = {
+        "command": command,
+        "inputs": inputs.to_dict(),
+        "vessel": dataclasses.asdict(vessel),
+        "info": result.info,
+    }
+    text = rao_to_csv(result.table)
+    lines = text.splitlines(keepends=True)
+    meta = "".join(f"# {line}\n" for line in json.dumps(header, indent=1, sort_keys=True).splitlines())
+    body = lines[0] + "# made by: " + command + "\n" + meta + "".join(lines[1:])
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(f".{out.name}.partial")
+        tmp.write_text(body, encoding="utf-8")
+        tmp.replace(out)
+    except OSError as err:
+        raise BosunError(f"cannot write {out}: {err.strerror or err}") from None
+    info = result.info
+    if args.json:
+        _print_json({"out": str(out), **header})
+        return 0
+    t = result.table
+    print(f"{vessel.name}: {t.w.size} frequencies × {t.headings.size} headings, {info['panels']} panels", end="")
+    print(f" (+{info['lid_panels']} lid), {info['wall_s']:.0f} s")
+    cwp, cm = info["waterplane_coefficient"], info["midship_section_coefficient"]
+    origin = "given" if inputs.cwp is not None else "from GM_L − GM_T"
+    print(f"  hull: C_WP {cwp:.3f} ({origin}), C_M {cm:.3f}, z_G {info['z_g_m']:+.2f} m above the waterline")
+    ratio = 100 * info["roll_radiation_damping_ratio"]
+    print(
+        f"  roll: ω4 {info['roll_natural_frequency_rad_s']:.3f} rad/s, radiation damping {ratio:.2f} % of critical,",
+        end="",
+    )
+    print(f" viscous added to {100 * inputs.roll_damping:g} %")
+    print(f"wrote {out}")
+    return 0
+
+
 def cmd_sim_antisway(args: argparse.Namespace) -> int:
     """The anti-swing aims of issue 16: a 4° swing at L = 2 m (free) and VVMC at Hs (default 2 m)."""
     import time
@@ -603,6 +679,7 @@ def cmd_sim_antisway(args: argparse.Namespace) -> int:
 
 def cmd_sim_tac(args: argparse.Namespace) -> int:
     from app.analysis.tac_report import save_run
+    from app.marine.vessels import vessel_label
     from app.scenarios.tac import simulate
 
     sc = _scenario(args)
@@ -616,7 +693,7 @@ def cmd_sim_tac(args: argparse.Namespace) -> int:
     else:
         print(
             f"TAC {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, {sc.duration:g} s "
-            f"({'MSS table ' + sc.rao if sc.rao else 'parametric vessel'})"
+            f"(vessel {vessel_label(sc.rao)})"
         )
         print(
             f"  e_c rms {doc['rms_e_c_m']:.3f} m (max {doc['max_e_c_m']:.3f})   e_s rms {doc['rms_e_s_m']:.3f} m "
@@ -1150,6 +1227,41 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_sim)
 
+    p = sub.add_parser("vessel", help="vessels: vessel list, vessel rao (RAOs from main particulars, Capytaine)")
+    ves = p.add_subparsers(dest="vessel_cmd", metavar="WHAT", parser_class=_Parser, required=True)
+    b = ves.add_parser("list", help="the vessels known by name (the default first)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_vessel_list)
+    b = ves.add_parser(
+        "rao", help="6-DOF motion RAOs of a monohull from its main particulars (boundary elements, extra 'marine')"
+    )
+    for flag, unit, what in (
+        ("--lpp", "m", "length between perpendiculars"), ("--beam", "m", "beam"), ("--draft", "m", "draft"),
+        ("--cb", "", "block coefficient"), ("--gm-t", "m", "transverse metacentric height"),
+        ("--gm-l", "m", "longitudinal metacentric height"), ("--r44", "m", "roll radius of gyration"),
+        ("--r55", "m", "pitch radius of gyration"), ("--r66", "m", "yaw radius of gyration"), ("--mass", "kg", "mass"),
+    ):  # fmt: skip
+        b.add_argument(
+            flag, dest=flag[2:].replace("-", "_"), type=_positive_float, default=None,
+            help=f"{what}{' [' + unit + ']' if unit else ''} (default: the MSS supply vessel's)",
+        )  # fmt: skip
+    b.add_argument("--name", default=None, help="the vessel's name (in the table's header)")
+    b.add_argument(
+        "--cwp", type=_positive_float, default=None, help="waterplane coefficient (default: from GM_L − GM_T)"
+    )
+    b.add_argument(
+        "--roll-damping", type=_positive_float, default=0.15, help="total ζ44 at the roll natural frequency (0.15)"
+    )
+    b.add_argument("--nx", type=int, default=40, help="panels along the half hull (default 40)")
+    b.add_argument("--nz", type=int, default=8, help="panels down its girth (default 8)")
+    b.add_argument("--w-min", type=_positive_float, default=0.1, help="lowest wave frequency [rad/s] (0.1)")
+    b.add_argument("--w-max", type=_positive_float, default=2.0, help="highest wave frequency [rad/s] (2.0)")
+    b.add_argument("--n-w", type=int, default=40, help="number of frequencies (default 40)")
+    b.add_argument("--heading-step", type=_positive_float, default=10.0, help="heading step [deg] (default 10)")
+    b.add_argument("--out", default="out/vessel_rao.csv", help="the RAO table (CSV; default out/vessel_rao.csv)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_vessel_rao)
+
     p = sub.add_parser(
         "sim", help="simulations: sim tac, sim tac-sweep (crane head), sim vvmc, sim antisway (Motion-Lab)"
     )
@@ -1173,13 +1285,16 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--dt", type=_positive_float, default=0.01, help="time step [s] (default 0.01)")
         p.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
         p.add_argument(
+            "--vessel",
             "--rao",
+            dest="rao",
             default=None,
-            metavar="FILE",
-            help="RAO table (.mat MSS vessel or .csv); default: the built-in parametric supply vessel",
+            metavar="NAME|FILE",
+            help="vessel: supply (default: RAOs by boundary elements), supply-closed-form, or an RAO table "
+            "(.mat MSS vessel or .csv); bosun vessel list",
         )
         p.add_argument(
-            "--roll-damping", type=_positive_float, default=0.15, help="ζ44 of the parametric vessel (default 0.15)"
+            "--roll-damping", type=_positive_float, default=0.15, help="ζ44 of supply-closed-form (default 0.15)"
         )
         p.add_argument(
             "--crane-share",
@@ -1348,6 +1463,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``bosun`` and ``python -m app``; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # what made an output (vessel rao writes it)
     if args.command is None:
         # the GUI when it is installed, else the robot library
         args = parser.parse_args(["gui"] if "gui" in _commands(parser) else ["robots"])

@@ -45,7 +45,7 @@ if ! .venv/bin/python -m pip install --disable-pip-version-check -e '.[all]' >"$
   echo "setup: pip install failed (full log: $log)" >&2
   exit 1
 fi
-PYGAME_HIDE_SUPPORT_PROMPT=1 .venv/bin/python -c "import app, numpy, scipy, lxml, PyQt5, pyqtgraph, pygame" \
+PYGAME_HIDE_SUPPORT_PROMPT=1 .venv/bin/python -c "import app, numpy, scipy, lxml, PyQt5, pyqtgraph, pygame, capytaine, distributed" \
   || { echo "setup: installed packages do not import" >&2; exit 1; }
 # compile ahead: numba caches the kernels' machine code on disk, so no engine compiles in its first tick
 .venv/bin/python -c "from app.warmup import warm_up; t = warm_up(); print(f'setup: kernels compiled ({t:.1f} s)')" \

@@ -38,8 +38,10 @@ def test_the_core_does_not_depend_on_qt_or_pygame():
     extras = PYPROJECT["project"]["optional-dependencies"]
     assert {"gui", "joystick", "bench", "test"} <= set(extras)
     assert any("pygame" in d for d in extras["joystick"]) and any("PyQt5" in d for d in extras["gui"])
-    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui,plc]"]  # what scripts/setup.sh installs
+    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui,plc,marine,study]"]  # what setup.sh installs
     assert any(d.startswith("pyads") for d in extras["plc"])  # the real Motion-Lab's PLC (issue 16)
+    assert any(d.startswith("capytaine") for d in extras["marine"])  # bosun vessel rao (issue 17)
+    assert any(d.startswith("dask[distributed]") for d in extras["study"])  # bosun study operability (issue 17)
 
 
 def test_shipped_data_is_found_through_importlib_resources():
@@ -72,4 +74,5 @@ def test_the_wheel_carries_the_data(tmp_path):
     assert robots and robots <= names
     assert {"app/robots/robot.xsd", "app/robots/labs/motionlab.xml", "app/robots/README.md"} <= names
     assert {f"app/teleop/profiles/{p.name}" for p in (ROOT / "app/teleop/profiles").glob("*.toml")} <= names
+    assert "app/marine/data/supply_bem.csv" in names  # the default vessel's RAOs (issue 17)
     assert "ui/app.py" in names and not any(n.startswith(("tests/", "robots/")) for n in names)

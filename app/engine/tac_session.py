@@ -21,6 +21,7 @@ from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, Scene
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
+from app.marine.vessels import vessel_label
 from app.marine.waves import SPECTRA
 from app.models.registry import resolve
 from app.net.snapshots import (
@@ -186,7 +187,7 @@ class TacSession(Scene):
             commands=sorted(self.COMMANDS),
             crane_xml=resolve(sc.crane).read_text(encoding="utf-8"),
             head_xml=resolve(sc.head).read_text(encoding="utf-8"),
-            vessel=f"RAO file {sc.rao}" if sc.rao else "built-in parametric supply vessel",
+            vessel=vessel_label(sc.rao),
             ship=ShipBox(length=SHIP_LENGTH, beam=SHIP_BEAM, deck_z=SHIP_DECK_Z, keel_z=SHIP_KEEL_Z),
             alpha_limits=[float(self.system.head.lower[0]), float(self.system.head.upper[0])],
             hull=Hull(points=self._hull["points"], faces=self._hull["faces"]),

@@ -27,7 +27,8 @@ from app.control import tac_kernels
 from app.control.tac import CraneServo, HeadServo, PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
-from app.marine.vessel import MRU, VesselMotion, VesselParticulars, load_rao, parametric_rao
+from app.marine.vessel import MRU, VesselMotion
+from app.marine.vessels import vessel_rao
 from app.marine.waves import SPECTRA, check_sea, wave_components
 from app.models.crane_head import CraneHead
 from app.models.crane_head_kernels import c_array
@@ -54,8 +55,8 @@ class TacScenario:
     dt: float = 0.01  # [s]
     seed: int = 1
     mode: str = "tac"
-    rao: str | None = None  # RAO file (.mat or .csv); None = the built-in parametric model
-    roll_damping: float = 0.15
+    rao: str | None = None  # vessel name or RAO file (.mat or .csv); None = the default vessel (app/marine/vessels.py)
+    roll_damping: float = 0.15  # ζ44 of the closed-form vessel (supply-closed-form)
     crane_share: float = 0.3  # chosen from a share × k_p sweep at Hs 4.5–5 m (README)
     crane_kp: float = 1.0
     mru_noise: float = 0.0  # scale of the MRU noise (1 = 2 cm, 0.05°, 2 cm/s, 0.1°/s)
@@ -176,7 +177,7 @@ class TacSimulator:
             system = CraneHead(load_robot(sc.crane), load_robot(sc.head))
         self.system = system
         rng = np.random.default_rng(sc.seed)
-        rao = load_rao(sc.rao) if sc.rao else parametric_rao(VesselParticulars(roll_damping=sc.roll_damping))
+        rao = vessel_rao(sc.rao, sc.roll_damping)
         sea = wave_components(
             sc.spectrum, sc.hs, sc.tp, rng, n_freq=sc.n_freq, heading=math.radians(sc.heading), spreading=sc.spreading
         )
