@@ -154,3 +154,77 @@ def test_teleop_engine_refuses_crane_head_commands(engines):
                 c.request(mtype, **fields)
         finally:
             c.close()
+
+
+# ---------------------------------------------------------------------------- the vessel (issue 17, item 2)
+def test_the_tab_names_the_vessel_and_loads_an_rao_file(qtbot, window, engines, tmp_path):
+    """The crane-head tab shows the engine's vessel model and offers the vessels it knows by name; a named
+    vessel and an RAO file (read here, sent in parts) reach the engine, which then runs that table; a file
+    that does not load is said in one line and nothing changes."""
+    from app.marine.vessel import load_rao, parametric_rao, rao_to_csv
+
+    win, _ = window
+    tac = engines[1]
+    ses = tac.session
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.desc is not None and tab.state is not None, timeout=GUI_WAIT)
+    items = [tab.vessel.combo.itemText(i) for i in range(tab.vessel.combo.count())]
+    assert items == ["supply", "supply-closed-form", "RAO file…"] and tab.vessel.combo.currentText() == "supply"
+    assert "boundary elements" in tab.vessel.label.text()
+    tab.vessel.combo.setCurrentIndex(1)
+    tab.vessel.combo.activated.emit(1)  # the operator's pick
+    qtbot.waitUntil(lambda: "supply-closed-form" in tab.vessel.label.text(), timeout=GUI_WAIT)
+    assert ses.sim.vessel  # the engine runs on
+    # a table large enough to go in several parts (Bosun's CSV, 60 × 72 rows)
+    table = parametric_rao(w=np.linspace(0.1, 3.0, 60), headings_deg=np.arange(0, 360, 5))
+    path = tmp_path / "big_vessel.csv"
+    path.write_text(rao_to_csv(table))
+    assert len(path.read_text()) > 3 * 55_000
+    assert tab.vessel.send_file(str(path))
+    qtbot.waitUntil(lambda: tab.vessel.label.text() == "vessel: RAO file big_vessel.csv", timeout=GUI_WAIT)
+    assert tab.vessel.combo.currentText() == "RAO file…"
+    got = ses.vessel_table
+    np.testing.assert_allclose(got.w, table.w) and np.testing.assert_allclose(got.amp, table.amp, rtol=1e-7)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("w,heading_deg\n1,2\n")
+    assert not tab.vessel.send_file(str(bad))
+    qtbot.waitUntil(
+        lambda: any("RAO file not sent" in m and "missing column" in m for _, m in win.messages), timeout=GUI_WAIT
+    )
+    assert ses.vessel_table is got
+    from tests.conftest import SHARED_DATA
+
+    mss = SHARED_DATA / "supply_mss.mat"
+    if mss.is_file():  # the MSS .mat format through the same path
+        assert tab.vessel.send_file(str(mss))
+        qtbot.waitUntil(lambda: "supply_mss.mat" in tab.vessel.label.text(), timeout=GUI_WAIT)
+        np.testing.assert_allclose(ses.vessel_table.amp, load_rao(mss).amp, rtol=1e-7, atol=1e-12)
+
+
+def test_set_vessel_parts_in_order_or_refused():
+    """Issue 17, item 2 (engine): parts out of order are refused and the upload starts anew; a table that does
+    not parse is refused with its line; a name the engine does not know is refused; nothing changes."""
+    from app.engine.scene import CommandError
+    from app.marine.vessel import parametric_rao, rao_to_csv
+
+    ses = TacSession()
+    before = ses.sim
+    text = rao_to_csv(parametric_rao(w=np.linspace(0.1, 3.0, 30), headings_deg=np.arange(0, 360, 10)))
+    a, b = text[: len(text) // 2], text[len(text) // 2 :]
+    with pytest.raises(CommandError, match="part 1 out of order"):
+        ses.set_vessel(csv=b, part=1, parts=2, label="x.csv")
+    ses.set_vessel(csv=a, part=0, parts=2, label="x.csv")
+    assert ses.sim is before  # not until the last part
+    ses.set_vessel(csv=b, part=1, parts=2, label="x.csv")
+    assert ses.sim is not before and ses.describe().vessel == "RAO file x.csv"
+    now = ses.sim
+    with pytest.raises(CommandError, match=r"y.csv:3: expected 14 fields"):
+        ses.set_vessel(csv=a.splitlines()[1] + "\n" + a.splitlines()[2] + "\n1,2\n", label="y.csv")
+    with pytest.raises(CommandError, match="unknown vessel 'tanker'"):
+        ses.set_vessel(vessel="tanker")
+    with pytest.raises(CommandError, match="not both"):
+        ses.set_vessel(vessel="supply", csv=a)
+    assert ses.sim is now
+    ses.set_vessel(vessel="supply")
+    assert ses.vessel_table is None and ses.describe().vessel.startswith("supply: ")

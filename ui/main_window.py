@@ -473,7 +473,7 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ messages
     def on_marine_notice(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
-        if level == "error" and ("refused" in text or "not started" in text or "engine:" in text):
+        if level == "error" and any(w in text for w in ("refused", "not started", "not sent", "engine:")):
             self.show_error("Motion-Lab" if text.startswith("Motion-Lab") else "Crane head", text)
 
     def show_error(self, title: str, message: str) -> None:

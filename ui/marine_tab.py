@@ -30,6 +30,7 @@ from ui.scene_tab import SceneEngineMixin
 from ui.widgets.fields import EngineFields
 from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
+from ui.widgets.vessel import VesselRow
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
@@ -260,6 +261,9 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         form.addRow("Tp", self.tp)
         form.addRow("heading", self.heading)
         form.addRow(self.apply_sea)
+        self.vessel = VesselRow(lambda **f: self._send("set_vessel", **f))  # issue 17, item 2
+        self.vessel.error.connect(lambda text: self.notice.emit("error", f"crane head: RAO file not sent: {text}"))
+        form.addRow("vessel", self.vessel)
         form.addRow("mode", self.mode)
         self.readout = QLabel("not connected")
         self.readout.setTextFormat(Qt.RichText)
@@ -362,7 +366,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self._set_enabled(False)
 
     def _set_enabled(self, on: bool) -> None:
-        for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode):
+        for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode, self.vessel):
             w.setEnabled(on)
         self.start.setVisible(not on)
 
@@ -382,7 +386,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and "no longer the operator" in error:
             self.notice.emit("error", f"crane head: operator role lost: {error}")
-        if not ok and re in ("set_sea", "set_tac_mode", "reset"):
+        if not ok and re in ("set_sea", "set_tac_mode", "set_vessel", "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state
@@ -391,6 +395,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         if getattr(desc, "kind", None) != "tac":
             return
         self.desc = desc
+        self.vessel.set_engine(desc.vessel, list(getattr(desc, "vessels", None) or []))
         self.scene.set_description(desc)
         if desc.hull is not None:
             self.hull = desc.hull

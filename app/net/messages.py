@@ -66,6 +66,15 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     },
     "study_cancel": {},
     # crane-head scene (``bosun server --plant tac``)
+    # the crane-head scene's vessel (issue 17, item 2): a name (``bosun vessel list``) or an RAO table in Bosun's CSV,
+    # sent in parts of ≤ 60 000 characters (``part`` 0 … ``parts`` − 1, in order; a part 0 starts anew)
+    "set_vessel": {
+        "vessel": ("str", False, 64),
+        "csv": ("str", False, 60_000),
+        "part": ("int", False, 63),
+        "parts": ("int", False, 64),
+        "label": ("str", False, 256),
+    },
     "set_sea": {
         "spectrum": ("enum", True, ("jonswap", "pm", "torsethaugen")),
         "hs": ("float", True, 30.0),
@@ -117,6 +126,7 @@ SCENE_MESSAGES = frozenset(
         "study_cancel",
         "set_sea",
         "set_tac_mode",
+        "set_vessel",
         "lab_platform",
         "lab_source",
         "lab_remote_pose",

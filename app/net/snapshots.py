@@ -270,6 +270,7 @@ class TacDescription(Description):
     crane_xml: str = ""  # the offshore crane's robot file
     head_xml: str = ""  # the Delta head's robot file
     vessel: str = ""  # the vessel model (name)
+    vessels: list[str] = field(default_factory=list)  # the vessels the engine knows by name (set_vessel, issue 17)
     ship: ShipBox | None = None
     alpha_limits: list[float] = field(default_factory=list)  # Delta arm limits [rad]
     hull: Hull | None = None

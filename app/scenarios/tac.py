@@ -27,7 +27,7 @@ from app.control import tac_kernels
 from app.control.tac import CraneServo, HeadServo, PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
-from app.marine.vessel import MRU, VesselMotion
+from app.marine.vessel import MRU, RAOTable, VesselMotion
 from app.marine.vessels import vessel_rao
 from app.marine.waves import SPECTRA, check_sea, wave_components
 from app.models.crane_head import CraneHead
@@ -171,13 +171,14 @@ def summarise(data: TacChunk, scenario: TacScenario, wall_time_s: float) -> dict
 class TacSimulator:
     """Stepwise simulation of one scenario (see the module docstring)."""
 
-    def __init__(self, scenario: TacScenario, system: CraneHead | None = None) -> None:
+    def __init__(self, scenario: TacScenario, system: CraneHead | None = None, rao: RAOTable | None = None) -> None:
         self.scenario = sc = scenario
         if system is None:
             system = CraneHead(load_robot(sc.crane), load_robot(sc.head))
         self.system = system
         rng = np.random.default_rng(sc.seed)
-        rao = vessel_rao(sc.rao, sc.roll_damping)
+        if rao is None:  # the scenario's vessel (a name or a file); else a table handed over (an engine's upload)
+            rao = vessel_rao(sc.rao, sc.roll_damping)
         sea = wave_components(
             sc.spectrum, sc.hs, sc.tp, rng, n_freq=sc.n_freq, heading=math.radians(sc.heading), spreading=sc.spreading
         )
