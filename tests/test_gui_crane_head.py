@@ -184,7 +184,7 @@ def test_the_tab_names_the_vessel_and_loads_an_rao_file(qtbot, window, engines, 
     assert tab.vessel.send_file(str(path))
     qtbot.waitUntil(lambda: tab.vessel.label.text() == "vessel: RAO file big_vessel.csv", timeout=GUI_WAIT)
     assert tab.vessel.combo.currentText() == "RAO file…"
-    got = ses.vessel_table
+    got = ses.vessel.table
     np.testing.assert_allclose(got.w, table.w) and np.testing.assert_allclose(got.amp, table.amp, rtol=1e-7)
     bad = tmp_path / "bad.csv"
     bad.write_text("w,heading_deg\n1,2\n")
@@ -192,14 +192,14 @@ def test_the_tab_names_the_vessel_and_loads_an_rao_file(qtbot, window, engines, 
     qtbot.waitUntil(
         lambda: any("RAO file not sent" in m and "missing column" in m for _, m in win.messages), timeout=GUI_WAIT
     )
-    assert ses.vessel_table is got
+    assert ses.vessel.table is got
     from tests.conftest import SHARED_DATA
 
     mss = SHARED_DATA / "supply_mss.mat"
     if mss.is_file():  # the MSS .mat format through the same path
         assert tab.vessel.send_file(str(mss))
         qtbot.waitUntil(lambda: "supply_mss.mat" in tab.vessel.label.text(), timeout=GUI_WAIT)
-        np.testing.assert_allclose(ses.vessel_table.amp, load_rao(mss).amp, rtol=1e-7, atol=1e-12)
+        np.testing.assert_allclose(ses.vessel.table.amp, load_rao(mss).amp, rtol=1e-7, atol=1e-12)
 
 
 def test_set_vessel_parts_in_order_or_refused():
@@ -227,4 +227,4 @@ def test_set_vessel_parts_in_order_or_refused():
         ses.set_vessel(vessel="supply", csv=a)
     assert ses.sim is now
     ses.set_vessel(vessel="supply")
-    assert ses.vessel_table is None and ses.describe().vessel.startswith("supply: ")
+    assert ses.vessel.table is None and ses.describe().vessel.startswith("supply: ")

@@ -806,3 +806,29 @@ def test_antisway_is_refused_without_vvmc_dropped_by_estop_and_vvmc_off_reset_ne
     with pytest.raises(CommandError, match="E-STOP is latched"):
         ses.lab_antisway("activate")
     ses.lab_antisway("deactivate")  # always taken
+
+
+# --------------------------------------------------------------------------- the wave simulator's vessel (issue 17)
+def test_the_lab_wave_simulator_takes_a_vessel_by_name_or_table():
+    """Issue 17, item 2: the lab engine's wave simulator runs the default vessel (RAOs by boundary elements:
+    it sways in a beam sea), another by name (the closed form: no sway) or an uploaded table, from the next
+    SIMULATION source on; the description names it."""
+    from app.engine.lab_session import LabSession
+    from app.engine.scene import CommandError
+    from app.marine.vessel import parametric_rao, rao_to_csv
+
+    ses = LabSession()
+    assert ses.describe().vessel.startswith("supply: ") and ses.describe().vessels == ["supply", "supply-closed-form"]
+
+    def sway():
+        ses.lab_source("em1500", "simulation", hs=2.0, tp=8.0, heading=90.0, seed=1)
+        return ses.lab.platforms[1].source.significant[1]
+
+    assert sway() > 0.1
+    ses.set_vessel(vessel="supply-closed-form")
+    assert ses.describe().vessel.startswith("supply-closed-form: ") and sway() == 0.0
+    text = rao_to_csv(parametric_rao(w=np.linspace(0.1, 3.0, 20), headings_deg=np.arange(0, 360, 30)))
+    ses.set_vessel(csv=text, label="mine.csv")
+    assert ses.describe().vessel == "RAO file mine.csv" and sway() == 0.0
+    with pytest.raises(CommandError, match="unknown vessel"):
+        ses.set_vessel(vessel="tanker")

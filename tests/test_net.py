@@ -55,6 +55,7 @@ def test_round_trip_every_client_message():
         "lab_plc_ack": {"platform": "em8000"},
         "lab_comau_jog": {"joint": 2, "speed": -0.25},
         "lab_antisway": {"action": "activate"},
+        "set_vessel": {"csv": "w,heading_deg\n", "part": 1, "parts": 3, "label": "mine.csv"},
         "describe": {},
         "pause": {"on": True},
         "study_start": {"study": "distribution", "solver": "jacobian", "grid": 12},

@@ -495,6 +495,10 @@ def test_the_lab_hmis_status_word_lights_and_a_refused_jog_over_the_plc(lab_plc,
     with pytest.raises(CommandError, match="anti-swing: the plc plant has none"):
         ses.command("lab_antisway", action="activate")
     assert ses.snapshot().swing is None
+    # issue 17, item 2: the PLC's wave simulator takes w0, lambda, sigma only
+    with pytest.raises(CommandError, match="takes no RAO table"):
+        ses.command("set_vessel", vessel="supply-closed-form")
+    assert ses.describe().vessels == []
 
 
 @pytest.mark.slow

@@ -47,6 +47,7 @@ from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, axis_label, legend, refit, refit_on_show
 from ui.widgets.status import StatusLight
 from ui.widgets.stick import VirtualStick
+from ui.widgets.vessel import VesselRow
 
 HISTORY_S = 60.0
 SAMPLE_HZ = 25
@@ -253,6 +254,10 @@ class PlatformPanel(QWidget):
         form.addRow("Hs", self.sim_hs)
         form.addRow("Tp", self.sim_tp)
         form.addRow("wave heading", self.sim_heading)
+        # the wave simulator's vessel (issue 17, item 2): one for the scene, shown in both platforms' panels
+        self.vessel = VesselRow(lambda **f: self.command.emit("set_vessel", f))
+        self.vessel.error.connect(lambda text: self.command.emit("_error", {"text": f"RAO file not sent: {text}"}))
+        form.addRow("vessel", self.vessel)
         self.auto_scale = QCheckBox("auto scale (fit to the limits)")
         self.auto_scale.setChecked(True)
         form.addRow(self.auto_scale)
@@ -1132,7 +1137,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             if self._jog_told:
                 return
             self._jog_told = True
-        if not ok and (re.startswith("lab_") or re == "reset"):
+        if not ok and (re.startswith("lab_") or re in ("reset", "set_vessel")):
             self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state
@@ -1144,6 +1149,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         for info in desc.platforms:
             if info.name in self.platforms:
                 self.platforms[info.name].set_info(info)
+        for panel in self.platforms.values():  # the wave simulator's vessel (none over the PLC)
+            panel.vessel.setVisible(bool(desc.vessels))
+            if desc.vessels:
+                panel.vessel.set_engine(desc.vessel, list(desc.vessels))
         self.scene.set_description(desc)
         if desc.winch is not None:
             self.winch_slider_label.setText(f"velocity setpoint, max {desc.winch.speed_max:g} m/s (springs back)")

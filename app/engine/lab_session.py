@@ -31,7 +31,9 @@ import numpy as np
 
 from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, Scene
+from app.engine.vessel_upload import VesselChoice
 from app.errors import BosunError
+from app.marine.vessels import VESSELS
 from app.marine.waves import SPECTRA
 from app.marine.waves import spectrum as sea_spectrum
 from app.models.lab import load_lab, resolve_lab
@@ -93,6 +95,7 @@ class LabSession(Scene):
             "lab_plc_ack",
             "lab_comau_jog",
             "lab_antisway",
+            "set_vessel",
         )
     }
 
@@ -116,6 +119,7 @@ class LabSession(Scene):
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
         self.spectra: list[tuple[str, float, float] | None] = [None for _ in self.names]  # the last simulated sea
         self.vvmc = False
+        self.vessel = VesselChoice()  # the wave simulator's vessel (set_vessel, issue 17)
         self._jog: tuple[int, float, float] | None = None  # Comau jog: joint (1-3), speed fraction, time received
         self._jog_reason = ""
         # the load-swing estimator and anti-swing law (issue 16, item 4): on the simulated lab, stepped with it
@@ -160,6 +164,19 @@ class LabSession(Scene):
             self.spectra[k] = (p.get("spectrum", "jonswap"), float(info["hs"]), float(info["tp"]))
         self.changed()
         self.note("info", f"{platform}: motion source {source.upper()}")
+
+    def set_vessel(
+        self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
+    ) -> None:
+        """The wave simulator's vessel (issue 17, item 2): by name or an RAO table sent in parts; it makes the
+        platforms' seas from the next SIMULATION source on (a platform's source changes only out of ENGAGED)."""
+        if self.plc is not None:
+            self._plant(self.plant.set_vessel_rao, None)  # refused with the reason
+        if not self.vessel.take(vessel, csv, part, parts, label):
+            return
+        self._plant(self.plant.set_vessel_rao, self.vessel.rao())
+        self.changed()
+        self.note("info", f"wave simulator vessel: {self.vessel.label} (from the next SIMULATION source on)")
 
     def lab_remote_pose(self, platform: str, eta: list[float]) -> None:
         k = self._platform(platform)
@@ -500,6 +517,8 @@ class LabSession(Scene):
             spectra=list(SPECTRA),
             backend=self.plant.NAME,
             comau_jog_timeout=JOG_TIMEOUT,
+            vessel=self.vessel.label if self.plc is None else "",
+            vessels=list(VESSELS) if self.plc is None else [],
         )
 
     def snapshot(self) -> LabSnapshot:

@@ -19,10 +19,10 @@ import numpy as np
 
 from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, Scene
+from app.engine.vessel_upload import VesselChoice
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
-from app.marine.vessel import RAOTable, load_rao_csv
-from app.marine.vessels import VESSELS, vessel_label
+from app.marine.vessels import VESSELS
 from app.marine.waves import SPECTRA
 from app.models.registry import resolve
 from app.net.snapshots import (
@@ -59,10 +59,8 @@ class TacSession(Scene):
     def __post_init__(self) -> None:
         self._init_scene()
         self.robot_name, self.solver_name, self.mode = "tac", "-", self.scenario.mode
-        self.vessel_table: RAOTable | None = None  # an uploaded RAO table (set_vessel csv); None: the scenario's
-        self.vessel_name = vessel_label(self.scenario.rao)
-        self._upload: list[str] = []  # the parts of an RAO table received so far
-        self.sim = TacSimulator(self.scenario)
+        self.vessel = VesselChoice(self.scenario.rao)  # set_vessel (issue 17, item 2)
+        self.sim = TacSimulator(self.scenario, rao=self.vessel.rao(self.scenario.roll_damping))
         self.system = self.sim.system
         self._carry = 0.0
         self.holding = False  # after an E-STOP reset: frozen until a mode is commanded
@@ -94,7 +92,7 @@ class TacSession(Scene):
     def _rebuild(self) -> None:
         """A new simulator for the scenario and vessel; the machine stays where it is."""
         beta, alpha = self.sim.crane_servo.beta.copy(), self.sim.head_servo.alpha.copy()
-        self.sim = TacSimulator(self.scenario, self.system, rao=self.vessel_table)
+        self.sim = TacSimulator(self.scenario, self.system, rao=self.vessel.rao(self.scenario.roll_damping))
         self.sim.crane_servo.beta, self.sim.head_servo.alpha = beta, alpha
         self.sim.continue_from_current = True
         self.sea_seq += 1
@@ -106,39 +104,11 @@ class TacSession(Scene):
         """The vessel by name (``supply``, ``supply-closed-form``) or an RAO table in Bosun's CSV, sent in
         ``parts`` parts (issue 17, item 2).  A table that does not parse is refused with its file, line and
         field; nothing changes until the last part has arrived and parsed."""
-        if (vessel is None) == (csv is None):
-            raise CommandError("set_vessel: give a vessel name or an RAO table (csv), not both")
-        if vessel is not None:
-            if vessel not in VESSELS:
-                raise CommandError(f"unknown vessel {vessel!r} (known: {', '.join(VESSELS)}; or send an RAO table)")
-            try:
-                sc = replace(self.scenario, rao=vessel)
-                TacSimulator(sc, self.system)  # loads and checks before anything changes
-            except BosunError as err:
-                raise CommandError(str(err)) from None
-            self.scenario, self.vessel_table, self.vessel_name = sc, None, vessel_label(vessel)
-            self._rebuild()
-            self.note("info", f"vessel: {self.vessel_name}")
+        if not self.vessel.take(vessel, csv, part, parts, label):
             return
-        if not (1 <= parts <= 64 and 0 <= part < parts):
-            raise CommandError(f"set_vessel: part {part} of {parts} (1 to 64 parts, numbered from 0)")
-        if part == 0:
-            self._upload = []
-        if part != len(self._upload):
-            self._upload = []
-            raise CommandError(f"set_vessel: part {part} out of order (expected {len(self._upload)}); send it again")
-        self._upload.append(csv or "")
-        if len(self._upload) < parts:
-            return
-        text, self._upload = "".join(self._upload), []
-        name = label or "RAO table"
-        try:
-            table = load_rao_csv(text, where=name)
-        except BosunError as err:
-            raise CommandError(str(err)) from None
-        self.vessel_table, self.vessel_name = table, f"RAO file {name}"
         self._rebuild()
-        self.note("info", f"vessel: {self.vessel_name} ({table.w.size} frequencies × {table.headings.size} headings)")
+        t = self.sim.vessel_rao
+        self.note("info", f"vessel: {self.vessel.label} ({t.w.size} frequencies × {t.headings.size} headings)")
 
     def set_tac_mode(self, mode: str) -> None:
         if mode not in MODES:
@@ -239,7 +209,7 @@ class TacSession(Scene):
             commands=sorted(self.COMMANDS),
             crane_xml=resolve(sc.crane).read_text(encoding="utf-8"),
             head_xml=resolve(sc.head).read_text(encoding="utf-8"),
-            vessel=self.vessel_name,
+            vessel=self.vessel.label,
             vessels=list(VESSELS),
             ship=ShipBox(length=SHIP_LENGTH, beam=SHIP_BEAM, deck_z=SHIP_DECK_Z, keel_z=SHIP_KEEL_Z),
             alpha_limits=[float(self.system.head.lower[0]), float(self.system.head.upper[0])],

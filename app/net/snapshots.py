@@ -473,6 +473,8 @@ class LabDescription(Description):
     sources: list[str] = field(default_factory=list)
     spectra: list[str] = field(default_factory=list)
     backend: str = "simulated"  # the plant backend: simulated | plc
+    vessel: str = ""  # the wave simulator's vessel model ("" over the PLC; issue 17, item 2)
+    vessels: list[str] = field(default_factory=list)  # the vessels the engine knows by name (set_vessel)
     comau_jog_timeout: float | None = None  # a jog speed not refreshed this long returns to zero [s] (item 5)
 
 

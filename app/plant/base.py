@@ -111,6 +111,12 @@ class LabBackend(abc.ABC):
     def reset(self) -> None:
         """Clear the E-STOP: every machine holds where it stands until commanded anew."""
 
+    def set_vessel_rao(self, table: Any) -> None:
+        """The RAO table the wave simulator uses from its next SIMULATION source on (issue 17, item 2)."""
+        raise BackendError(
+            f"the {self.NAME} lab's wave simulator takes no RAO table (the lab PLC's: w0, lambda, sigma only)"
+        )
+
     def comau_jog(self, qd: NDArray[np.float64]) -> None:
         """The Comau's joint jog: joint speeds [rad/s] (3; one non-zero, or all zero to stop), REMOTE only.
         The scene refreshes it while the operator holds a jog button and zeroes it when the jog goes stale

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.errors import BosunError
-from app.marine.vessel import VesselParticulars, parametric_rao
+from app.marine.vessels import vessel_rao
 from app.net.snapshots import MachineLight, MotionStatus, PlantLink
 from app.plant.base import GENERATOR_DEFAULT, REMOTE_TIMEOUT, BackendError, LabBackend
 from app.plc.symbols import decode_status, encode_status
@@ -103,7 +103,7 @@ class SimulatedLab(LabBackend):
                 info: dict[str, Any] = {"amplitude": obj.amplitude.tolist(), "frequency": obj.frequency.tolist()}
             elif source == "simulation":
                 if self._rao is None:
-                    self._rao = parametric_rao(VesselParticulars())
+                    self._rao = vessel_rao()  # the default vessel (issue 17: RAOs by boundary elements)
                 args = (
                     self._rao,
                     p.get("spectrum", "jonswap"),
@@ -133,6 +133,9 @@ class SimulatedLab(LabBackend):
         except BosunError as err:
             raise BackendError(str(err)) from None
         return info
+
+    def set_vessel_rao(self, table: Any) -> None:
+        self._rao = table
 
     def remote_pose(self, k: int, eta: Any) -> None:
         _refused(self.lab.platforms[k].remote.set, eta)

@@ -182,6 +182,7 @@ class TacSimulator:
         sea = wave_components(
             sc.spectrum, sc.hs, sc.tp, rng, n_freq=sc.n_freq, heading=math.radians(sc.heading), spreading=sc.spreading
         )
+        self.vessel_rao = rao
         self.vessel = VesselMotion(rao, sea)
         s = sc.mru_noise
         self.mru = (

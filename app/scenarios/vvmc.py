@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from app.errors import BosunError
 from app.marine.sensors import SENSORS, MotionSensor
-from app.marine.vessel import VesselParticulars, load_rao, parametric_rao
+from app.marine.vessels import vessel_rao
 from app.marine.waves import SPECTRA, check_sea
 from app.models.lab import load_lab
 from app.models.registry import load_robot
@@ -108,7 +108,7 @@ class VvmcRun:
 
 def _sources(sc: VvmcScenario, lab: MotionLab) -> list[NDArray[np.float64]]:
     """Both platforms in the sea; returns the expected rms of each platform's motion (6,) per DOF."""
-    rao = load_rao(sc.rao) if sc.rao else parametric_rao(VesselParticulars())
+    rao = vessel_rao(sc.rao)  # a name or a file; None: the default vessel (issue 17)
     rms = []
     for p, heading in zip(lab.platforms, (sc.heading1, sc.heading2), strict=True):
         src = WaveSimulation(rao, sc.spectrum, sc.hs, sc.tp, heading, sc.seed, np.ones(6))

@@ -1,0 +1,65 @@
+"""``set_vessel`` of the scenes with a vessel (issue 17, item 2): a vessel by name, or an RAO table in Bosun's
+CSV sent in parts (a client message is at most 64 KiB).  :class:`VesselChoice` checks the message and puts
+the parts together; the scene applies what it returns."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from app.engine.scene import CommandError
+from app.errors import BosunError
+from app.marine.vessel import RAOTable, load_rao_csv
+from app.marine.vessels import VESSELS, vessel_label, vessel_rao
+
+MAX_PARTS = 64
+
+
+@dataclass
+class VesselChoice:
+    """The scene's vessel: ``table`` (None: ``name`` is a named vessel) and ``label`` (one line, shown)."""
+
+    name: str | None = None  # a named vessel (None: the default), or None with a table
+    table: RAOTable | None = None
+    label: str = field(default="")
+    _parts: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.label = self.label or vessel_label(self.name)
+
+    def rao(self, roll_damping: float = 0.15) -> RAOTable:
+        return self.table if self.table is not None else vessel_rao(self.name, roll_damping)
+
+    def take(
+        self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
+    ) -> bool:
+        """One ``set_vessel`` message.  True when the vessel changed (a name, or the last part of a table that
+        parsed); False while parts are still coming.  :class:`CommandError` (nothing changes) otherwise."""
+        if (vessel is None) == (csv is None):
+            raise CommandError("set_vessel: give a vessel name or an RAO table (csv), not both")
+        if vessel is not None:
+            if vessel not in VESSELS:
+                raise CommandError(f"unknown vessel {vessel!r} (known: {', '.join(VESSELS)}; or send an RAO table)")
+            try:
+                vessel_rao(vessel)  # loads and checks before anything changes
+            except BosunError as err:
+                raise CommandError(str(err)) from None
+            self.name, self.table, self.label, self._parts = vessel, None, vessel_label(vessel), []
+            return True
+        if not (1 <= parts <= MAX_PARTS and 0 <= part < parts):
+            raise CommandError(f"set_vessel: part {part} of {parts} (1 to {MAX_PARTS} parts, numbered from 0)")
+        if part == 0:
+            self._parts = []
+        if part != len(self._parts):
+            expected, self._parts = len(self._parts), []
+            raise CommandError(f"set_vessel: part {part} out of order (expected {expected}); send the table again")
+        self._parts.append(csv or "")
+        if len(self._parts) < parts:
+            return False
+        text, self._parts = "".join(self._parts), []
+        where = label or "RAO table"
+        try:
+            table = load_rao_csv(text, where=where)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
+        self.name, self.table, self.label = None, table, f"RAO file {where}"
+        return True
