@@ -482,6 +482,7 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     import time
 
     from app.analysis.vvmc_report import save_runs
+    from app.marine.vessels import vessel_label
     from app.scenarios.vvmc import VvmcError, VvmcScenario, simulate
 
     try:
@@ -515,7 +516,7 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
         c, u = doc["compensated"], doc["uncompensated"]
         print(
             f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, EM8000 heading {sc.heading1:g}°, EM1500 {sc.heading2:g}°, "
-            f"{sc.duration:g} s, seed {sc.seed} ({'RAO ' + sc.rao if sc.rao else 'parametric vessel'}); "
+            f"{sc.duration:g} s, seed {sc.seed} (vessel {vessel_label(sc.rao)}); "
             f"the controllers see the platforms through: {_SENSOR_NAMES[sc.sensors]}"
             + ("; anti-swing on" if sc.antisway else "")
         )
@@ -1334,7 +1335,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--dt", type=_positive_float, default=0.005, help="time step [s] (default 0.005: the lab PLC's task)"
     )
     b.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
-    b.add_argument("--rao", default=None, metavar="FILE", help="RAO table (.mat or .csv); default parametric vessel")
+    b.add_argument(
+        "--vessel", "--rao", dest="rao", default=None, metavar="NAME|FILE",
+        help="the platforms' vessel: supply (default: RAOs by boundary elements), supply-closed-form, or an RAO file",
+    )  # fmt: skip
     b.add_argument(
         "--sensors",
         choices=["true", "mru", "tracker"],
