@@ -547,6 +547,43 @@ _SENSOR_NAMES = {
 }
 
 
+# ----------------------------------------------------------------------------- operability (issue 17)
+def cmd_study_operability(args: argparse.Namespace) -> int:
+    """The crane-head compensation's operability over a scatter diagram, one simulation per cell on Dask."""
+    from app.analysis.operability import OperabilityError, OperabilityStudy, load_scatter, run_study, save
+
+    try:
+        study = OperabilityStudy(
+            mode=args.mode, headings=tuple(args.headings), seeds=args.seeds, duration=args.duration,
+            criterion=args.criterion, vessel=args.vessel, spectrum=args.spectrum,
+        )  # fmt: skip
+        scatter = load_scatter(args.scatter)
+        out = Path(args.out)
+        if out.exists() and not out.is_dir():
+            raise BosunError(f"output folder {out} is a file")
+        result = run_study(
+            study, scatter, out, scheduler=args.scheduler, workers=args.workers,
+            progress=_progress_bar("study operability", unit="sim"),
+        )  # fmt: skip
+        doc = save(result, out)
+    except OperabilityError as err:
+        raise BosunError(str(err)) from None
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+        return 0
+    where = "cache" if not result.computed else f"{result.workers} workers at {result.scheduler}"
+    print(
+        f"operability, {study.mode}, rms(e_c) ≤ {study.criterion:g} m: {len(result.table)} cells × seeds, "
+        f"{result.computed} simulated ({where}), {result.cached} from the cache, {result.wall_s:.0f} s"
+    )
+    for h, v in result.operability.items():
+        print(f"  heading {h:5g}°: {100 * v:5.1f} % workable")
+    if doc["cells_per_minute"]:
+        print(f"  {doc['cells_per_minute']:.1f} simulations per minute")
+    print(f"wrote {out}/table.csv, summary.json, operability_polar.png, heatmap.png (cells cached in {out}/cells)")
+    return 0
+
+
 # ----------------------------------------------------------------------------- vessels (issue 17)
 def cmd_vessel_list(args: argparse.Namespace) -> int:
     from app.marine.vessels import DEFAULT_VESSEL, VESSELS
@@ -1227,6 +1264,27 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated time [s] (default 20)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_sim)
+
+    p = sub.add_parser(
+        "study", help="studies on a Dask cluster: study operability (scatter diagram × headings × seeds)"
+    )
+    stu = p.add_subparsers(dest="study_cmd", metavar="WHAT", parser_class=_Parser, required=True)
+    b = stu.add_parser(
+        "operability", help="crane-head compensation over a wave scatter diagram: one simulation per cell (Dask)"
+    )
+    b.add_argument("--mode", choices=["off", "tac", "cooperative"], default="tac", help="compensation (default tac)")
+    b.add_argument("--scatter", required=True, metavar="FILE", help="scatter diagram CSV: hs\\tp,TP1,… then HS,p1,…")
+    b.add_argument("--headings", type=float, nargs="+", default=[90.0, 135.0, 180.0], help="[deg] (90 135 180)")
+    b.add_argument("--seeds", type=int, default=2, help="wave seeds per cell and heading (default 2)")
+    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time per run [s] (300)")
+    b.add_argument("--criterion", type=_positive_float, default=0.1, help="workable: rms(e_c) ≤ this [m] (0.1)")
+    b.add_argument("--vessel", default=None, metavar="NAME|FILE", help="vessel (default supply); bosun vessel list")
+    b.add_argument("--spectrum", choices=["jonswap", "pm", "torsethaugen"], default="jonswap", help="default jonswap")
+    b.add_argument("--scheduler", default=None, metavar="tcp://HOST:8786", help="a Dask scheduler (default: local)")
+    b.add_argument("--workers", type=int, default=None, help="local cluster's worker processes (default: cores)")
+    b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_study_operability)
 
     p = sub.add_parser("vessel", help="vessels: vessel list, vessel rao (RAOs from main particulars, Capytaine)")
     ves = p.add_subparsers(dest="vessel_cmd", metavar="WHAT", parser_class=_Parser, required=True)

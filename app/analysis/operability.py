@@ -1,0 +1,337 @@
+"""Operability (workability) of crane-head compensation over a wave scatter diagram, on Dask (issue 17, item 3).
+
+One simulation (:func:`app.scenarios.tac.simulate`) per scatter-diagram cell (Hs × Tp) × heading × seed, run
+as tasks on a Dask cluster — a local one by default, any scheduler given by its address — each result kept
+in ``OUT/cells/KEY.json`` as soon as it arrives, so an interrupted study resumes with what is missing.  Per
+cell and heading the seeds are averaged (rms e_c, the saturated share) or maximised (max e_c); a cell is
+*workable* when its mean rms(e_c) of eq. (61) is at most the criterion.  The operability of a heading is the
+probability-weighted share of workable cells, Σ p(Hs, Tp) · workable / Σ p (DNV-RP-H103's and DNV-ST-N001's
+workability: the share of time a limiting criterion is met).
+
+Scatter diagram CSV (``load_scatter``): a header row ``hs\\tp,TP1,TP2,…`` (peak periods [s]) and one row per
+significant wave height ``HS,p1,p2,…`` (probabilities or counts of occurrence; normalised here; empty = 0),
+``#`` lines are comments.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.errors import BosunError
+
+CELL_VERSION = 1  # bump when a cell's simulation changes: older cached cells are not used
+
+
+class OperabilityError(BosunError):
+    """A study that cannot be made (one line)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Scatter:
+    hs: NDArray[np.float64]  # (n_hs,) [m]
+    tp: NDArray[np.float64]  # (n_tp,) [s]
+    prob: NDArray[np.float64]  # (n_hs, n_tp), sums to 1
+    source: str = "scatter"
+
+
+def load_scatter(path: str | Path) -> Scatter:
+    """A scatter diagram from CSV (module docstring); one-line errors with file, line and field."""
+    path = Path(path)
+    if not path.is_file():
+        raise OperabilityError(f"{path}: no such scatter diagram")
+    lines = [
+        (n, line) for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]  # fmt: skip
+    if len(lines) < 2:
+        raise OperabilityError(f"{path}: a header row of peak periods and at least one row of Hs are needed")
+
+    def number(text: str, n: int, what: str, empty: float | None = None) -> float:
+        text = text.strip()
+        if not text and empty is not None:
+            return empty
+        try:
+            v = float(text)
+        except ValueError:
+            raise OperabilityError(f"{path}:{n}: {what}: {text!r} is not a number") from None
+        if not math.isfinite(v) or v < 0:
+            raise OperabilityError(f"{path}:{n}: {what}: {text} must be a finite number ≥ 0")
+        return v
+
+    n0, head = lines[0]
+    cells = next(csv.reader(io.StringIO(head)))
+    tp = np.array([number(c, n0, f"peak period (column {k + 2})") for k, c in enumerate(cells[1:])])
+    if tp.size == 0 or np.any(tp <= 0) or np.any(np.diff(tp) <= 0):
+        raise OperabilityError(f"{path}:{n0}: peak periods must be positive and increasing")
+    hs, rows = [], []
+    for n, line in lines[1:]:
+        row = next(csv.reader(io.StringIO(line)))
+        if len(row) != tp.size + 1:
+            raise OperabilityError(f"{path}:{n}: expected {tp.size + 1} fields, got {len(row)}")
+        hs.append(number(row[0], n, "Hs"))
+        rows.append([number(c, n, f"Tp {t:g} s", empty=0.0) for c, t in zip(row[1:], tp, strict=True)])
+    h = np.array(hs)
+    if np.any(h <= 0) or np.any(np.diff(h) <= 0):
+        raise OperabilityError(f"{path}: significant wave heights must be positive and increasing")
+    p = np.array(rows)
+    if p.sum() <= 0:
+        raise OperabilityError(f"{path}: no cell has a probability above zero")
+    return Scatter(h, tp, p / p.sum(), source=str(path))
+
+
+@dataclass(frozen=True)
+class OperabilityStudy:
+    mode: str = "tac"
+    headings: tuple[float, ...] = (90.0, 135.0, 180.0)
+    seeds: int = 2
+    duration: float = 300.0
+    criterion: float = 0.1  # rms(e_c) [m] a workable cell keeps to
+    vessel: str | None = None  # a name or an RAO file (None: the default vessel)
+    spectrum: str = "jonswap"
+    dt: float = 0.01
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("off", "tac", "cooperative"):
+            raise OperabilityError(f"mode must be off, tac or cooperative, got {self.mode!r}")
+        if not self.headings:
+            raise OperabilityError("at least one heading is needed")
+        if self.seeds < 1:
+            raise OperabilityError(f"seeds must be ≥ 1, got {self.seeds}")
+        if not (self.duration > 0 and self.criterion > 0):
+            raise OperabilityError("duration and criterion must be positive")
+
+
+def cell_params(study: OperabilityStudy, hs: float, tp: float, heading: float, seed: int) -> dict[str, Any]:
+    """Everything one cell's simulation depends on (its cache key is the hash of this)."""
+    vessel = study.vessel
+    if vessel is not None and Path(vessel).is_file():  # a file: its content, not its path, is the input
+        vessel = f"{Path(vessel).resolve()}#{hashlib.sha256(Path(vessel).read_bytes()).hexdigest()[:16]}"
+    return {
+        "v": CELL_VERSION, "mode": study.mode, "hs": float(hs), "tp": float(tp), "heading": float(heading),
+        "seed": int(seed), "duration": float(study.duration), "dt": float(study.dt), "spectrum": study.spectrum,
+        "vessel": vessel,
+    }  # fmt: skip
+
+
+def cell_key(params: dict[str, Any]) -> str:
+    return hashlib.sha256(json.dumps(params, sort_keys=True).encode()).hexdigest()[:20]
+
+
+def run_cell(params: dict[str, Any]) -> dict[str, Any]:
+    """One simulation (a Dask task: a module-level function of plain data)."""
+    from app.scenarios.tac import TacScenario, simulate
+
+    vessel = params["vessel"]
+    if vessel is not None and "#" in vessel:
+        vessel = vessel.split("#", 1)[0]
+    sc = TacScenario(
+        hs=params["hs"], tp=params["tp"], heading=params["heading"], duration=params["duration"], dt=params["dt"],
+        seed=params["seed"], mode=params["mode"], spectrum=params["spectrum"], rao=vessel,
+    )  # fmt: skip
+    t0 = time.perf_counter()
+    d = simulate(sc).summary
+    return {
+        **params,
+        "rms_e_c_m": float(d["rms_e_c_m"]), "max_e_c_m": float(d["max_e_c_m"]), "rms_e_s_m": float(d["rms_e_s_m"]),
+        "ratio": float(d["ratio_rms"]), "saturated_percent": float(d["saturated_pct"]),
+        "wall_s": time.perf_counter() - t0, "pid": os.getpid(),
+    }  # fmt: skip
+
+
+@dataclass
+class StudyResult:
+    study: OperabilityStudy
+    scatter: Scatter
+    table: list[dict[str, Any]]  # per (hs, tp, heading) with p > 0
+    operability: dict[float, float]  # per heading, 0…1
+    computed: int = 0
+    cached: int = 0
+    wall_s: float = 0.0
+    workers: int = 0
+    scheduler: str = ""
+    cells: list[dict[str, Any]] = field(default_factory=list)  # every simulation
+
+
+def _client(scheduler: str | None, workers: int | None):
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise OperabilityError("operability studies need Dask: pip install 'bosun[study]'") from None
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="20s"), None
+        except OSError as err:
+            raise OperabilityError(f"no Dask scheduler at {scheduler}: {err}") from None
+    cluster = LocalCluster(
+        n_workers=workers or max(1, (os.cpu_count() or 1)), threads_per_worker=1, processes=True,
+        dashboard_address=None,
+    )  # fmt: skip
+    return Client(cluster), cluster
+
+
+def run_study(
+    study: OperabilityStudy,
+    scatter: Scatter,
+    out: str | Path,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> StudyResult:
+    """Run (or resume) the study; every finished cell is in ``out/cells`` at once."""
+    out = Path(out)
+    cache = out / "cells"
+    cache.mkdir(parents=True, exist_ok=True)
+    todo, done = [], []
+    for i, hs in enumerate(scatter.hs):
+        for j, tp in enumerate(scatter.tp):
+            if scatter.prob[i, j] <= 0:
+                continue
+            for heading in study.headings:
+                for seed in range(1, study.seeds + 1):
+                    p = cell_params(study, hs, tp, heading, seed)
+                    f = cache / f"{cell_key(p)}.json"
+                    if f.is_file():
+                        try:
+                            done.append(json.loads(f.read_text(encoding="utf-8")))
+                            continue
+                        except (OSError, ValueError):
+                            pass  # a torn file: run the cell again
+                    todo.append(p)
+    total = len(todo) + len(done)
+    cached = len(done)
+    if progress is not None:
+        progress(cached, total)
+    t0 = time.perf_counter()
+    n_workers, address = 0, "cache"
+    if todo:
+        from distributed import as_completed
+
+        client, cluster = _client(scheduler, workers)
+        try:
+            n_workers = len(client.scheduler_info().get("workers", {}))
+            address = client.scheduler.address
+            futures = client.map(run_cell, todo, pure=False)
+            for fut in as_completed(futures):
+                res = fut.result()
+                key = cell_key({k: res[k] for k in todo[0]})
+                tmp = cache / f".{key}.partial"
+                tmp.write_text(json.dumps(res), encoding="utf-8")
+                tmp.replace(cache / f"{key}.json")
+                done.append(res)
+                if progress is not None:
+                    progress(len(done), total)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    wall = time.perf_counter() - t0
+    table, oper = aggregate(study, scatter, done)
+    return StudyResult(study, scatter, table, oper, len(todo), cached, wall, n_workers, address, done)
+
+
+def aggregate(
+    study: OperabilityStudy, scatter: Scatter, cells: list[dict[str, Any]]
+) -> tuple[list[dict[str, Any]], dict[float, float]]:
+    by: dict[tuple[float, float, float], list[dict[str, Any]]] = {}
+    for c in cells:
+        by.setdefault((c["hs"], c["tp"], c["heading"]), []).append(c)
+    table = []
+    oper: dict[float, float] = {}
+    for heading in study.headings:
+        good = 0.0
+        for i, hs in enumerate(scatter.hs):
+            for j, tp in enumerate(scatter.tp):
+                p = float(scatter.prob[i, j])
+                if p <= 0:
+                    continue
+                runs = sorted(by.get((float(hs), float(tp), float(heading)), []), key=lambda c: c["seed"])
+                if len(runs) != study.seeds:
+                    raise OperabilityError(
+                        f"cell Hs {hs:g} m, Tp {tp:g} s, {heading:g}°: {len(runs)} of {study.seeds} runs"
+                    )
+                rms = float(np.mean([r["rms_e_c_m"] for r in runs]))
+                ok = rms <= study.criterion
+                good += p * ok
+                table.append({
+                    "hs": float(hs), "tp": float(tp), "heading": float(heading), "probability": p,
+                    "rms_e_c_m": rms, "max_e_c_m": float(max(r["max_e_c_m"] for r in runs)),
+                    "ratio": float(np.mean([r["ratio"] for r in runs])),
+                    "saturated_percent": float(np.mean([r["saturated_percent"] for r in runs])),
+                    "workable": bool(ok),
+                })  # fmt: skip
+        oper[float(heading)] = good
+    return table, oper
+
+
+def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
+    """table.csv, summary.json, operability_polar.png, heatmap.png (one panel a heading)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    st, sc = result.study, result.scatter
+    cols = ("hs", "tp", "heading", "probability", "rms_e_c_m", "max_e_c_m", "ratio", "saturated_percent", "workable")
+    with open(out / "table.csv", "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for row in result.table:
+            w.writerow([row[c] if not isinstance(row[c], float) else f"{row[c]:.6g}" for c in cols])
+    doc = {
+        "study": asdict(st), "scatter": sc.source, "criterion_rms_e_c_m": st.criterion,
+        "operability": {f"{h:g}": v for h, v in result.operability.items()},
+        "cells": len(result.table), "simulations": len(result.cells), "computed": result.computed,
+        "cached": result.cached, "wall_s": result.wall_s, "workers": result.workers, "scheduler": result.scheduler,
+        "cells_per_minute": 60.0 * result.computed / result.wall_s if result.computed and result.wall_s > 0 else None,
+    }  # fmt: skip
+    (out / "summary.json").write_text(json.dumps(doc, indent=2), encoding="utf-8")
+    heads = list(result.operability)
+    fig = plt.figure(figsize=(5, 5))
+    ax = fig.add_subplot(projection="polar")
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)
+    th = np.radians(heads + [heads[0]]) if len(heads) > 1 else np.radians(heads)
+    r = [100 * result.operability[h] for h in heads]
+    ax.plot(th, r + [r[0]] if len(heads) > 1 else r, "o-", color="tab:blue")
+    ax.set_ylim(0, 100)
+    ax.set_title(f"operability [%], {st.mode}, rms(e_c) ≤ {st.criterion:g} m\n(heading: 0 following, 180 head sea)")
+    fig.tight_layout()
+    fig.savefig(out / "operability_polar.png", dpi=110)
+    plt.close(fig)
+    fig, axes = plt.subplots(1, len(heads), figsize=(4.2 * len(heads), 3.8), squeeze=False)
+    for ax, h in zip(axes[0], heads, strict=True):
+        grid = np.full((sc.hs.size, sc.tp.size), np.nan)
+        for row in result.table:
+            if row["heading"] == h:
+                grid[np.searchsorted(sc.hs, row["hs"]), np.searchsorted(sc.tp, row["tp"])] = row["rms_e_c_m"]
+        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
+        for i in range(sc.hs.size):
+            for j in range(sc.tp.size):
+                if np.isfinite(grid[i, j]):
+                    ok = grid[i, j] <= st.criterion
+                    ax.text(j, i, f"{grid[i, j]:.2f}", ha="center", va="center", fontsize=7,
+                            color="white" if not ok else "black", fontweight="bold" if ok else "normal")  # fmt: skip
+        ax.set_xticks(range(sc.tp.size), [f"{t:g}" for t in sc.tp])
+        ax.set_yticks(range(sc.hs.size), [f"{v:g}" for v in sc.hs])
+        ax.set_xlabel("Tp [s]")
+        ax.set_ylabel("Hs [m]")
+        ax.set_title(f"{h:g}°: rms e_c [m], {100 * result.operability[h]:.0f} % workable")
+        fig.colorbar(im, ax=ax, label="rms e_c [m]")
+    fig.tight_layout()
+    fig.savefig(out / "heatmap.png", dpi=110)
+    plt.close(fig)
+    return doc
