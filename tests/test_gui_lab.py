@@ -372,10 +372,10 @@ def test_platform_panels_show_and_choose_the_wave_simulators_vessel(qtbot, windo
     win.tabs.setCurrentWidget(tab)
     qtbot.waitUntil(lambda: tab.desc is not None, timeout=GUI_WAIT)
     em8000, em1500 = tab.platforms["em8000"].vessel, tab.platforms["em1500"].vessel
-    assert "supply: " in em8000.label.text() and em1500.combo.currentText() == "supply"
+    assert "supply: " in em8000.label.toolTip() and em1500.combo.currentText() == "supply"
     em8000.combo.setCurrentIndex(1)
     em8000.combo.activated.emit(1)
-    qtbot.waitUntil(lambda: "supply-closed-form" in em1500.label.text(), timeout=GUI_WAIT)  # one for the scene
+    qtbot.waitUntil(lambda: "supply-closed-form" in em1500.label.toolTip(), timeout=GUI_WAIT)  # one for the scene
     qtbot.waitUntil(
         lambda: "wave simulator vessel: supply-closed-form" in win.status.log_view.toPlainText(), timeout=GUI_WAIT
     )

@@ -344,7 +344,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         # three columns the page's full height: controls over the workspace hull, the scene, the plots.  (The
         # views above the plots left the scene 130 px tall in a 1280×800 window.)
         controls.setMaximumWidth(340)
-        self.hull_plot.setMinimumHeight(140)
+        self.hull_plot.setMinimumHeight(128)  # with the vessel row the column fits a 1280 × 800 window
         left = QSplitter(Qt.Vertical)
         left.addWidget(controls)
         left.addWidget(self.hull_plot)

@@ -151,8 +151,6 @@ def _natural_frequency(m: float, c: float, omegas: NDArray, added: NDArray) -> f
 
 def compute_raos(inputs: BemInputs | None = None, progress: Callable[[int, int], None] | None = None) -> BemResult:
     """Solve the radiation and diffraction problems and return Bosun's RAO table (see the module)."""
-    cpt = capytaine()
-    cpt.set_logging("ERROR")  # its mesh-resolution warnings are the user's choice of panels (info: panels)
     inp = inputs or BemInputs()
     v = inp.vessel
     t0 = time.perf_counter()
@@ -161,6 +159,8 @@ def compute_raos(inputs: BemInputs | None = None, progress: Callable[[int, int],
     else:
         form = HullForm(v.lpp, v.beam, v.draft, v.cb, inp.cwp)
     verts, faces = hull_panels(form, inp.nx, inp.nz)
+    cpt = capytaine()  # after the particulars are checked: a bad hull is said also without the solver
+    cpt.set_logging("ERROR")  # its mesh-resolution warnings are the user's choice of panels (info: panels)
     half = cpt.Mesh(verts, faces, name="half hull")
     mesh = cpt.ReflectionSymmetricMesh(half, plane="xOz", name="hull")
     lid = mesh.generate_lid(z=-0.01 * v.draft)  # removes the irregular frequencies of the interior

@@ -6,10 +6,11 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 
-from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
+from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QWidget
 
 from ui.widgets.files import choose_file
+from ui.widgets.labels import ElidedLabel
 
 FILE_ITEM = "RAO file…"
 PART_CHARS = 55_000  # a part of the table's CSV (ASCII): within a client message's 64 KiB
@@ -46,17 +47,13 @@ class VesselRow(QWidget):
             "(MSS .mat or Bosun's CSV, e.g. from bosun vessel rao)"
         )
         self.combo.activated.connect(self._chosen)
-        self.label = QLabel("vessel: –")
-        self.label.setWordWrap(True)
-        self.label.setTextFormat(Qt.PlainText)
+        self.label = ElidedLabel("–")  # the engine's vessel model, whole in the tool tip
         self.label.setStyleSheet("color: #555")
-        col = QVBoxLayout(self)
-        col.setContentsMargins(0, 0, 0, 0)
-        col.setSpacing(2)
-        row = QHBoxLayout()
-        row.addWidget(self.combo, 1)
-        col.addLayout(row)
-        col.addWidget(self.label)
+        row = QHBoxLayout(self)  # one row: the column must fit a 1280 × 800 screen
+        row.setContentsMargins(0, 0, 0, 0)
+        row.setSpacing(6)
+        row.addWidget(self.combo)
+        row.addWidget(self.label, 1)
         self._dialog = None
 
     def set_engine(self, current: str, names: list[str]) -> None:
@@ -71,8 +68,8 @@ class VesselRow(QWidget):
         self.combo.blockSignals(True)
         self.combo.setCurrentText(name if name in names else FILE_ITEM)
         self.combo.blockSignals(False)
-        self.label.setText(f"vessel: {current}")
-        self.label.setToolTip(current)
+        self.label.setText(current.split(": ", 1)[1] if name in names and ": " in current else current)
+        self.label.setToolTip(f"vessel: {current}")
 
     def _chosen(self, index: int) -> None:
         text = self.combo.itemText(index)
