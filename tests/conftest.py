@@ -41,6 +41,17 @@ def shared_data() -> Path:
     return SHARED_DATA
 
 
+@pytest.fixture(scope="module")
+def mss_table():
+    """The MSS supply vessel's ShipX/VERES RAO table (``../shared/data/supply_mss.mat``: test data only)."""
+    from app.marine.vessel import load_rao
+
+    path = SHARED_DATA / "supply_mss.mat"
+    if not path.is_file():
+        pytest.skip("../shared/data/supply_mss.mat is not present")
+    return path, load_rao(path)
+
+
 @pytest.fixture
 def serve():
     """Start engines on 127.0.0.1 (free port) in threads: ``serve(session, token=None, rate=200, **server_kw)``

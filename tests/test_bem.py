@@ -169,14 +169,3 @@ def test_bem_vessel_within_15_percent_of_the_shipx_table(mss_table, dof, heading
         assert mine < 1e-3
     else:
         assert 0.85 <= mine / ref <= 1.15, f"BEM {mine:.4f} vs table {ref:.4f} (ratio {mine / ref:.3f})"
-
-
-@pytest.fixture(scope="module")
-def mss_table():
-    from app.marine.vessel import load_rao
-    from tests.conftest import SHARED_DATA
-
-    path = SHARED_DATA / "supply_mss.mat"
-    if not path.is_file():
-        pytest.skip("../shared/data/supply_mss.mat is not present")
-    return path, load_rao(path)

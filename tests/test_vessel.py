@@ -25,16 +25,6 @@ HEAVE, ROLL, PITCH = 2, 3, 4
 
 
 # ----------------------------------------------------------------------------- reference data
-@pytest.fixture(scope="module")
-def mss_table():
-    from tests.conftest import SHARED_DATA
-
-    path = SHARED_DATA / "supply_mss.mat"
-    if not path.is_file():
-        pytest.skip("../shared/data/supply_mss.mat is not present")
-    return path, load_rao(path)
-
-
 def test_mss_loader_reproduces_the_table_at_its_grid_points(mss_table):
     import scipy.io
 
