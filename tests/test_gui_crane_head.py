@@ -212,8 +212,12 @@ def test_set_vessel_parts_in_order_or_refused():
     before = ses.sim
     text = rao_to_csv(parametric_rao(w=np.linspace(0.1, 3.0, 30), headings_deg=np.arange(0, 360, 10)))
     a, b = text[: len(text) // 2], text[len(text) // 2 :]
-    with pytest.raises(CommandError, match="part 1 out of order"):
+    with pytest.raises(CommandError, match=r"part 1 of 2 \(x.csv\) is not the next"):
         ses.set_vessel(csv=b, part=1, parts=2, label="x.csv")
+    ses.set_vessel(csv=a, part=0, parts=3, label="x.csv")
+    with pytest.raises(CommandError, match="not the next of the table being sent"):  # a part of another upload
+        ses.set_vessel(csv=b, part=1, parts=2, label="x.csv")
+    assert ses.sim is before
     ses.set_vessel(csv=a, part=0, parts=2, label="x.csv")
     assert ses.sim is before  # not until the last part
     ses.set_vessel(csv=b, part=1, parts=2, label="x.csv")

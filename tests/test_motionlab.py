@@ -800,6 +800,14 @@ def test_antisway_is_refused_without_vvmc_dropped_by_estop_and_vvmc_off_reset_ne
     assert ses.snapshot().swing.estimate == [0.0, 0.0, 0.0, 0.0]
     ses.lab_vvmc(True)
     ses.lab_antisway("activate")
+    ses.lab_vvmc(False)  # off and on again within one tick: the law is off at once, and stays off
+    ses.lab_vvmc(True)
+    assert not ses.snapshot().swing.active and ses.snapshot().swing.reason == "VVMC off"
+    ses.lab_antisway("activate")
+    ses.lab_comau_mode("remote")  # the Comau out of MOTION_COMP: off at once too
+    assert not ses.snapshot().swing.active and "REMOTE" in ses.snapshot().swing.reason
+    ses.lab_vvmc(True)
+    ses.lab_antisway("activate")
     ses.estop("test")
     snap = ses.snapshot()
     assert not snap.swing.active and snap.swing.reason == "E-STOP"

@@ -43,6 +43,8 @@ def test_scatter_loader_normalises_and_refuses_bad_files_in_one_line(tmp_path, s
         load_scatter(bad)
     with pytest.raises(OperabilityError, match="no such scatter diagram"):
         load_scatter(tmp_path / "none.csv")
+    with pytest.raises(OperabilityError, match="headings repeated: 90, 90"):
+        OperabilityStudy(headings=(90.0, 90.0))
 
 
 @pytest.mark.slow

@@ -108,17 +108,26 @@ class OperabilityStudy:
             raise OperabilityError(f"mode must be off, tac or cooperative, got {self.mode!r}")
         if not self.headings:
             raise OperabilityError("at least one heading is needed")
+        if len(set(self.headings)) != len(self.headings):
+            raise OperabilityError(f"headings repeated: {', '.join(f'{h:g}' for h in self.headings)}")
         if self.seeds < 1:
             raise OperabilityError(f"seeds must be ≥ 1, got {self.seeds}")
         if not (self.duration > 0 and self.criterion > 0):
             raise OperabilityError("duration and criterion must be positive")
 
 
-def cell_params(study: OperabilityStudy, hs: float, tp: float, heading: float, seed: int) -> dict[str, Any]:
-    """Everything one cell's simulation depends on (its cache key is the hash of this)."""
-    vessel = study.vessel
-    if vessel is not None and Path(vessel).is_file():  # a file: its content, not its path, is the input
-        vessel = f"{Path(vessel).resolve()}#{hashlib.sha256(Path(vessel).read_bytes()).hexdigest()[:16]}"
+def vessel_id(vessel: str | None) -> str | None:
+    """What the results depend on: a vessel's name, or a file's content (its hash; moving the file keeps the cache)."""
+    if vessel is not None and Path(vessel).is_file():
+        return f"file:{hashlib.sha256(Path(vessel).read_bytes()).hexdigest()[:16]}"
+    return vessel
+
+
+def cell_params(
+    study: OperabilityStudy, hs: float, tp: float, heading: float, seed: int, vessel: str | None = None
+) -> dict[str, Any]:
+    """Everything one cell's simulation depends on (its cache key is the hash of this); ``vessel`` is
+    :func:`vessel_id` of the study's vessel."""
     return {
         "v": CELL_VERSION, "mode": study.mode, "hs": float(hs), "tp": float(tp), "heading": float(heading),
         "seed": int(seed), "duration": float(study.duration), "dt": float(study.dt), "spectrum": study.spectrum,
@@ -130,13 +139,10 @@ def cell_key(params: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(params, sort_keys=True).encode()).hexdigest()[:20]
 
 
-def run_cell(params: dict[str, Any]) -> dict[str, Any]:
-    """One simulation (a Dask task: a module-level function of plain data)."""
+def run_cell(params: dict[str, Any], vessel: str | None = None) -> dict[str, Any]:
+    """One simulation (a Dask task: a module-level function of plain data); ``vessel`` the name or file."""
     from app.scenarios.tac import TacScenario, simulate
 
-    vessel = params["vessel"]
-    if vessel is not None and "#" in vessel:
-        vessel = vessel.split("#", 1)[0]
     sc = TacScenario(
         hs=params["hs"], tp=params["tp"], heading=params["heading"], duration=params["duration"], dt=params["dt"],
         seed=params["seed"], mode=params["mode"], spectrum=params["spectrum"], rao=vessel,
@@ -179,7 +185,11 @@ def _client(scheduler: str | None, workers: int | None):
         n_workers=workers or max(1, (os.cpu_count() or 1)), threads_per_worker=1, processes=True,
         dashboard_address=None,
     )  # fmt: skip
-    return Client(cluster), cluster
+    try:
+        return Client(cluster), cluster
+    except Exception:
+        cluster.close()
+        raise
 
 
 def run_study(
@@ -195,13 +205,14 @@ def run_study(
     cache = out / "cells"
     cache.mkdir(parents=True, exist_ok=True)
     todo, done = [], []
+    vid = vessel_id(study.vessel)  # the file read and hashed once
     for i, hs in enumerate(scatter.hs):
         for j, tp in enumerate(scatter.tp):
             if scatter.prob[i, j] <= 0:
                 continue
             for heading in study.headings:
                 for seed in range(1, study.seeds + 1):
-                    p = cell_params(study, hs, tp, heading, seed)
+                    p = cell_params(study, hs, tp, heading, seed, vid)
                     f = cache / f"{cell_key(p)}.json"
                     if f.is_file():
                         try:
@@ -223,10 +234,11 @@ def run_study(
         try:
             n_workers = len(client.scheduler_info().get("workers", {}))
             address = client.scheduler.address
-            futures = client.map(run_cell, todo, pure=False)
+            futures = client.map(run_cell, todo, vessel=study.vessel, pure=False)
+            keys = {fut.key: cell_key(p) for fut, p in zip(futures, todo, strict=True)}
             for fut in as_completed(futures):
                 res = fut.result()
-                key = cell_key({k: res[k] for k in todo[0]})
+                key = keys[fut.key]
                 tmp = cache / f".{key}.partial"
                 tmp.write_text(json.dumps(res), encoding="utf-8")
                 tmp.replace(cache / f"{key}.json")

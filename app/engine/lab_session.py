@@ -187,6 +187,8 @@ class LabSession(Scene):
         if mode == "remote":
             self.input.disarm("Comau REMOTE selected")
         self._plant(self.plant.comau_mode, mode)
+        if mode != "motion_comp":
+            self._swing_off(f"Comau {mode.upper()}")
         self.note("info", f"Comau: {mode.upper()}")
 
     def lab_winch(self, mode: str | None = None, speed: float | None = None) -> None:
@@ -208,6 +210,8 @@ class LabSession(Scene):
         self.input.disarm("VVMC switched")  # off puts the Comau in REMOTE: a held stick must not drive it
         self._plant(self.plant.vvmc, on)
         self.vvmc = on
+        if not on:
+            self._swing_off("VVMC off")  # at once, not at the next step (an off and on in one tick)
         self.note("info", f"VVMC {'ON: Comau and winch MOTION_COMP' if on else 'OFF: Comau REMOTE, winch LOCAL'}")
 
     def lab_plc_ack(self, platform: str | None = None) -> None:
@@ -280,7 +284,7 @@ class LabSession(Scene):
                 self.note("info", "anti-swing ON: the law's offset is added to the Comau's work point")
             sw.active, self._swing_reason = True, ""
         elif action == "reset":
-            if sw.active or float(np.max(np.abs(sw.law.p))) > 1e-3:
+            if sw.active or float(np.max(np.abs(sw.law.p))) > 1e-3 or float(np.max(np.abs(sw.law.v))) > 1e-3:
                 raise CommandError("anti-swing reset: deactivate first and let the tool return to the work point")
             sw.reset()
             self.note("info", "swing estimator reset (no swing, initial covariance)")

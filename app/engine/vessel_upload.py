@@ -22,6 +22,7 @@ class VesselChoice:
     table: RAOTable | None = None
     label: str = field(default="")
     _parts: list[str] = field(default_factory=list)
+    _upload: tuple[int, str] = (0, "")  # the upload in progress: its number of parts and label (fixed by part 0)
 
     def __post_init__(self) -> None:
         self.label = self.label or vessel_label(self.name)
@@ -48,10 +49,13 @@ class VesselChoice:
         if not (1 <= parts <= MAX_PARTS and 0 <= part < parts):
             raise CommandError(f"set_vessel: part {part} of {parts} (1 to {MAX_PARTS} parts, numbered from 0)")
         if part == 0:
-            self._parts = []
-        if part != len(self._parts):
+            self._parts, self._upload = [], (parts, label)
+        if part != len(self._parts) or (parts, label) != self._upload:
             expected, self._parts = len(self._parts), []
-            raise CommandError(f"set_vessel: part {part} out of order (expected {expected}); send the table again")
+            raise CommandError(
+                f"set_vessel: part {part} of {parts} ({label or 'no label'}) is not the next of the table being sent "
+                f"(expected part {expected} of {self._upload[0]}); send the table again"
+            )
         self._parts.append(csv or "")
         if len(self._parts) < parts:
             return False

@@ -11,6 +11,7 @@ path to an RAO file (MSS ``.mat`` or Bosun's CSV, :func:`load_rao`).
 
 from __future__ import annotations
 
+import functools
 import importlib.resources
 from pathlib import Path
 
@@ -32,16 +33,22 @@ def shipped_table_path() -> Path:
         return Path(__file__).resolve().parent / "data" / SHIPPED_TABLE
 
 
+@functools.lru_cache(maxsize=1)
+def _shipped_table() -> RAOTable:
+    """The shipped table, read once (an engine asks for it at every new sea); RAOTable is immutable."""
+    path = shipped_table_path()
+    if not path.is_file():
+        raise VesselError(f"the shipped RAO table {path} is missing (reinstall Bosun)")
+    table = load_rao_csv(path.read_text(encoding="utf-8"), where=str(path))
+    return RAOTable(table.w, table.headings, table.amp, table.phase, source=VESSELS["supply"])
+
+
 def vessel_rao(spec: str | None = None, roll_damping: float = 0.15) -> RAOTable:
     """The RAO table of a named vessel (``supply``, ``supply-closed-form``) or of an RAO file; None is the
     default vessel.  ``roll_damping`` (ζ44) applies to the closed-form model only."""
     name = DEFAULT_VESSEL if spec is None else spec
     if name == "supply":
-        path = shipped_table_path()
-        if not path.is_file():
-            raise VesselError(f"the shipped RAO table {path} is missing (reinstall Bosun)")
-        table = load_rao_csv(path.read_text(encoding="utf-8"), where=str(path))
-        return RAOTable(table.w, table.headings, table.amp, table.phase, source=VESSELS["supply"])
+        return _shipped_table()
     if name == "supply-closed-form":
         return parametric_rao(VesselParticulars(roll_damping=roll_damping))
     looks_like_a_file = Path(name).suffix.lower() in (".mat", ".csv") or "/" in name or "\\" in name
