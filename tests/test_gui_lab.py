@@ -50,6 +50,28 @@ def window(qtbot, tmp_path):
         srv.close()
 
 
+@pytest.fixture
+def lab_alone(qtbot):
+    """A Motion-Lab tab of its own against a lab engine in this process: (session, server, thread, tab, notices)."""
+    from ui.lab_tab import MotionLabTab
+
+    ses = LabSession()
+    srv, th = _serve(ses, 50)
+    notices: list[str] = []
+    tab = MotionLabTab(link_factory=lambda: EngineLink(srv.url, name="gui-lab"), use_gl=False)
+    qtbot.addWidget(tab)
+    tab.notice.connect(lambda lvl, text: notices.append(text))
+    tab.resize(1200, 800)
+    tab.show()
+    assert tab.connect_engine()
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
+    yield ses, srv, th, tab, notices
+    tab.close_link()
+    srv.stop()
+    th.join(timeout=5)
+    srv.close()
+
+
 def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
     win, made = window
     tab = win.motion_lab
@@ -272,18 +294,9 @@ def test_lab_csv_logger_writes_every_state_for_its_duration(qtbot, window, tmp_p
     assert "CSV logger duration reached: 51 samples in lab.csv" in win.status.log_view.toPlainText()
 
 
-def test_lab_csv_logger_stops_cleanly_when_the_engine_goes(qtbot, tmp_path):
+def test_lab_csv_logger_stops_cleanly_when_the_engine_goes(qtbot, tmp_path, lab_alone):
     """Item 5: an engine that goes away ends the log with a complete file and says so; so does closing."""
-    from ui.lab_tab import MotionLabTab
-
-    srv, th = _serve(LabSession(), 50)
-    notices = []
-    tab = MotionLabTab(link_factory=lambda: EngineLink(srv.url, name="gui-lab"), use_gl=False)
-    qtbot.addWidget(tab)
-    tab.notice.connect(lambda lvl, text: notices.append(text))
-    tab.show()
-    assert tab.connect_engine()
-    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
+    _, srv, th, tab, notices = lab_alone
     path = tmp_path / "lost.csv"
     tab.log_path.setText(str(path))
     tab.log_duration.setValue(600)
@@ -297,72 +310,55 @@ def test_lab_csv_logger_stops_cleanly_when_the_engine_goes(qtbot, tmp_path):
     assert all(light.state == "unknown" for light in tab.machine_lights.values())  # nothing known any more
     lines = path.read_text().splitlines()
     assert len(lines) > 11 and all(len(line.split(",")) == len(lines[0].split(",")) for line in lines)
-    tab.close_link()
 
 
-def test_load_swing_tab_activates_anti_swing_and_shows_estimate_beside_the_true_swing(qtbot):
+def test_load_swing_tab_activates_anti_swing_and_shows_estimate_beside_the_true_swing(qtbot, lab_alone):
     """Issue 16, item 4 (the lab HMI's "Pendel Estimator" tab): Activate is refused-by-design without VVMC
     (disabled, and the engine's refusal shown if sent); with VVMC on, a 4° swing given to the load, Reset
     then Activate: the swing is damped below 0.5°, the estimate curve follows the true one and the error
     plot carries the ±2σ band; Deactivate turns it off."""
     import math
 
-    from ui.lab_tab import MotionLabTab
+    ses, _, _, tab, notices = lab_alone
+    tab.tabs.setCurrentIndex(tab.tabs.count() - 1)
+    assert tab.tabs.tabText(tab.tabs.currentIndex()) == "Load swing"
+    qtbot.waitUntil(lambda: tab.state is not None and tab.state.swing is not None, timeout=GUI_WAIT)
+    buttons = tab.swing_buttons
+    assert not buttons["activate"].isEnabled() and "needs VVMC on" in tab.swing_label.text()
+    buttons["activate"].setEnabled(True)  # sent anyway: the engine refuses, the GUI says why
+    buttons["activate"].click()
+    qtbot.waitUntil(lambda: any("turn VVMC on first" in n for n in notices), timeout=GUI_WAIT)
+    tab.vvmc.click()
+    qtbot.waitUntil(lambda: tab.state.vvmc and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
+    qtbot.wait(1500)  # the Comau settles on the work point
+    kick, tick = [], ses.tick
 
-    ses = LabSession()
-    srv, th = _serve(ses, 50)
-    notices = []
-    tab = MotionLabTab(link_factory=lambda: EngineLink(srv.url, name="gui-lab"), use_gl=False)
-    qtbot.addWidget(tab)
-    tab.notice.connect(lambda lvl, text: notices.append(text))
-    tab.resize(1200, 800)
-    tab.show()
-    try:
-        assert tab.connect_engine()
-        tab.tabs.setCurrentIndex(tab.tabs.count() - 1)
-        assert tab.tabs.tabText(tab.tabs.currentIndex()) == "Load swing"
-        qtbot.waitUntil(lambda: tab.state is not None and tab.state.swing is not None, timeout=GUI_WAIT)
-        buttons = tab.swing_buttons
-        assert not buttons["activate"].isEnabled() and "needs VVMC on" in tab.swing_label.text()
-        buttons["activate"].setEnabled(True)  # sent anyway: the engine refuses, the GUI says why
-        buttons["activate"].click()
-        qtbot.waitUntil(lambda: any("turn VVMC on first" in n for n in notices), timeout=GUI_WAIT)
-        tab.vvmc.click()
-        qtbot.waitUntil(lambda: tab.state.vvmc and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
-        qtbot.wait(1500)  # the Comau settles on the work point
-        kick, tick = [], ses.tick
+    def kicked_tick(*args, **kw):  # the kick lands between two steps, in the engine's own thread
+        if kick:
+            kick.pop()
+            pd = ses.lab.pendulum
+            pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = math.radians(4.0), 0.0, 0.0, 0.0
+        return tick(*args, **kw)
 
-        def kicked_tick(*args, **kw):  # the kick lands between two steps, in the engine's own thread
-            if kick:
-                kick.pop()
-                pd = ses.lab.pendulum
-                pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = math.radians(4.0), 0.0, 0.0, 0.0
-            return tick(*args, **kw)
-
-        ses.tick = kicked_tick
-        kick.append(True)
-        qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) > 3.0, timeout=GUI_WAIT)
-        buttons["reset"].click()
-        buttons["activate"].click()
-        qtbot.waitUntil(lambda: tab.state.swing.active and "ACTIVE" in tab.swing_label.text(), timeout=GUI_WAIT)
-        t_active = tab.state.t
-        qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) < 0.5, timeout=GUI_WAIT)
-        qtbot.waitUntil(lambda: tab.state.t > t_active + 3.0, timeout=GUI_WAIT)
-        ts, true = tab.swing_state_curves[0].getData()
-        est = tab.swing_state_curves[1].getData()[1]
-        assert np.nanmax(true) > 3.0  # the swing was seen …
-        late = ts > t_active + 1.0  # … and, a second after its reset, the estimate follows it
-        assert late.sum() >= 10 and np.nanmax(np.abs(est[late] - true[late])) < 0.5
-        band = tab.swing_err_curves[2].getData()[1]
-        assert np.all(band[late] > 0) and np.all(tab.swing_err_curves[3].getData()[1][late] < 0)
-        assert np.nanmax(np.abs(tab.swing_off_curves[0].getData()[1])) > 5.0  # the law moved the tool [mm]
-        buttons["deactivate"].click()
-        qtbot.waitUntil(lambda: not tab.state.swing.active and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
-    finally:
-        tab.close_link()
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
+    ses.tick = kicked_tick
+    kick.append(True)
+    qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) > 3.0, timeout=GUI_WAIT)
+    buttons["reset"].click()
+    buttons["activate"].click()
+    qtbot.waitUntil(lambda: tab.state.swing.active and "ACTIVE" in tab.swing_label.text(), timeout=GUI_WAIT)
+    t_active = tab.state.t
+    qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) < 0.5, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.t > t_active + 3.0, timeout=GUI_WAIT)
+    ts, true = tab.swing_state_curves[0].getData()
+    est = tab.swing_state_curves[1].getData()[1]
+    assert np.nanmax(true) > 3.0  # the swing was seen …
+    late = ts > t_active + 1.0  # … and, a second after its reset, the estimate follows it
+    assert late.sum() >= 10 and np.nanmax(np.abs(est[late] - true[late])) < 0.5
+    band = tab.swing_err_curves[2].getData()[1]
+    assert np.all(band[late] > 0) and np.all(tab.swing_err_curves[3].getData()[1][late] < 0)
+    assert np.nanmax(np.abs(tab.swing_off_curves[0].getData()[1])) > 5.0  # the law moved the tool [mm]
+    buttons["deactivate"].click()
+    qtbot.waitUntil(lambda: not tab.state.swing.active and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
 
 
 def test_platform_panels_show_and_choose_the_wave_simulators_vessel(qtbot, window):
