@@ -232,3 +232,28 @@ def test_set_vessel_parts_in_order_or_refused():
     assert ses.sim is now
     ses.set_vessel(vessel="supply")
     assert ses.vessel.table is None and ses.describe().vessel.startswith("supply: ")
+
+
+def test_the_rao_file_dialog_leaves_stop_live(qtbot, window):
+    """Issue 17, item 2 (safety): the vessel's RAO-file chooser is not modal; Space in it is STOP for the
+    crane-head engine, which confirms the stop, and the STOP button works with it open."""
+    from PyQt5.QtCore import Qt
+    from PyQt5.QtTest import QTest
+    from PyQt5.QtWidgets import QApplication
+
+    win, _ = window
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.desc is not None and tab.state is not None, timeout=GUI_WAIT)
+    tab.vessel._chosen(tab.vessel.combo.count() - 1)  # "RAO file…"
+    dlg = tab.vessel._dialog
+    qtbot.waitUntil(dlg.isVisible, timeout=GUI_WAIT)
+    assert not dlg.isModal() and QApplication.activeModalWidget() is None
+    QTest.keyClick(dlg.focusWidget() or dlg, Qt.Key_Space)
+    qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
+    win.reset()
+    qtbot.waitUntil(lambda: not tab.state.estop, timeout=GUI_WAIT)
+    win.status.stop.click()
+    qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
+    assert dlg.isVisible()
+    dlg.close()

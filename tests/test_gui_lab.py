@@ -375,3 +375,31 @@ def test_platform_panels_show_and_choose_the_wave_simulators_vessel(qtbot, windo
     qtbot.waitUntil(
         lambda: "wave simulator vessel: supply-closed-form" in win.status.log_view.toPlainText(), timeout=GUI_WAIT
     )
+
+
+def test_a_held_jog_stops_when_its_page_or_the_tab_is_left(qtbot, window):
+    """Safety (H62): a jog button held while the operator switches to another Motion-Lab page, or to another
+    tab, never gets its release; the GUI stops resending the jog and the engine halts the joint."""
+    from PyQt5.QtCore import Qt
+
+    win, _ = window
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    tab.tabs.setCurrentIndex(2)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.state.comau.mode == "remote", timeout=GUI_WAIT)
+    qtbot.wait(300)
+    for leave in (lambda: tab.tabs.setCurrentIndex(3), lambda: win.tabs.setCurrentIndex(0)):
+        win.tabs.setCurrentWidget(tab)
+        tab.tabs.setCurrentIndex(2)
+        tab.stick.key(Qt.Key_Shift, False)  # the stick let its keys go when its page was left: enable anew
+        qtbot.wait(300)
+        tab.stick.key(Qt.Key_Shift, True)
+        qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
+        plus = tab.jog_buttons[(1, 1)]
+        qtbot.mousePress(plus, Qt.LeftButton)
+        qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 1, timeout=GUI_WAIT)
+        leave()  # no release reaches the button
+        qtbot.waitUntil(lambda: tab._jogging is None, timeout=GUI_WAIT)  # the GUI stopped resending
+        win.tabs.setCurrentWidget(tab)
+        qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and tab.state.comau.qd == [0, 0, 0], timeout=GUI_WAIT)
+    tab.stick.key(Qt.Key_Shift, False)

@@ -18,6 +18,7 @@ import numpy as np
 import pyqtgraph as pg
 from PyQt5.QtCore import Qt, QTimer, pyqtSignal
 from PyQt5.QtWidgets import (
+    QApplication,
     QCheckBox,
     QComboBox,
     QDoubleSpinBox,
@@ -842,10 +843,17 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self._jog_timer.start()
 
     def _jog_resend(self) -> None:
-        """While the button is held its speed is refreshed (the engine drops a jog 0.3 s after the last)."""
-        if self._jogging is not None and self.jog_buttons[self._jogging].isDown():
+        """While the button is held its speed is refreshed (the engine drops a jog 0.3 s after the last).  A
+        button that is no longer on screen (its page or tab left while held, H62) never gets its release: the
+        jog ends, as it does when the application loses the focus."""
+        b = None if self._jogging is None else self.jog_buttons[self._jogging]
+        app = QApplication.instance()
+        active = app is None or app.applicationState() == Qt.ApplicationActive or self._headless
+        if b is not None and b.isDown() and b.isVisible() and active:
             self._jog_send()
         else:
+            if b is not None:
+                b.setDown(False)
             self._jog_release()
 
     def _jog_release(self) -> None:
@@ -892,6 +900,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.jog_buttons: dict[tuple[int, int], QPushButton] = {}  # (joint 1-3, sign) -> button
         self._jogging: tuple[int, int] | None = None  # the held button
         self._jog_told = False  # a refusal of this press was shown
+        # offscreen (tests, screenshots) the application is never "active": the focus rule is for a real display
+        self._headless = QApplication.platformName() in ("offscreen", "minimal")
         self._jog_timer = QTimer(self)
         self._jog_timer.setInterval(JOG_RESEND_MS)
         self._jog_timer.timeout.connect(self._jog_resend)
