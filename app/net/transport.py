@@ -129,9 +129,16 @@ class Client:
         if secret is not None:
             hello["secret"] = secret
         self.hello_fields = hello  # what a reconnecting link says again
-        self.send("hello", **hello)
         self.description: Description | None = None
         try:
+            # a DEALER without a pipe to the engine refuses a non-blocking send (zmq.Again): the pipe can be gone
+            # already when a CURVE handshake was refused at once; wait for one as for the welcome
+            try:
+                if not self.dealer.poll(int(1000 * timeout), zmq.POLLOUT):
+                    raise zmq.Again()
+                self.send("hello", **hello)
+            except zmq.Again:
+                raise TransportError(f"no answer from the engine at {self.url} within {timeout:g} s") from None
             welcome = self._wait_for(("welcome", "reply"))
         except TransportError as err:
             self.close()
