@@ -572,10 +572,18 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
         _print_json({**doc, "out": str(out)})
         return 0
     where = "cache" if not result.computed else f"{result.workers} workers at {result.scheduler}"
+    n_cells = len(result.table) // len(study.headings)
     print(
-        f"operability, {study.mode}, rms(e_c) ≤ {study.criterion:g} m: {len(result.table)} cells × seeds, "
+        f"operability of {study.mode} over {scatter.source} ({study.spectrum} spectrum), rms(e_c) ≤ "
+        f"{study.criterion:g} m: {n_cells} cells × {len(study.headings)} headings × {study.seeds} seeds, "
         f"{result.computed} simulated ({where}), {result.cached} from the cache, {result.wall_s:.0f} s"
     )
+    if result.unsimulated > 0:
+        n_broken = sum(1 for row in result.table if row["tp"] is None) // len(study.headings)
+        print(
+            f"  {n_broken} cells ({100 * result.unsimulated:.2f} % of the time) are breaking seas for this spectrum "
+            "(DNV-RP-C205 §3.5.5.4): not simulated, counted as not workable"
+        )
     for h, v in result.operability.items():
         print(f"  heading {h:5g}°: {100 * v:5.1f} % workable")
     if doc["cells_per_minute"]:
@@ -1273,7 +1281,10 @@ def build_parser() -> argparse.ArgumentParser:
         "operability", help="crane-head compensation over a wave scatter diagram: one simulation per cell (Dask)"
     )
     b.add_argument("--mode", choices=["off", "tac", "cooperative"], default="tac", help="compensation (default tac)")
-    b.add_argument("--scatter", required=True, metavar="FILE", help="scatter diagram CSV: hs\\tp,TP1,… then HS,p1,…")
+    b.add_argument(
+        "--scatter", required=True, metavar="NAME|FILE",
+        help="north-atlantic (IACS Rec. 34, Hs × Tz) or a CSV: hs\\tp,TP1,… (or hs\\tz,TZ1,…) then HS,p1,…",
+    )  # fmt: skip
     b.add_argument("--headings", type=float, nargs="+", default=[90.0, 135.0, 180.0], help="[deg] (90 135 180)")
     b.add_argument("--seeds", type=int, default=2, help="wave seeds per cell and heading (default 2)")
     b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time per run [s] (300)")

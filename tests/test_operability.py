@@ -32,7 +32,7 @@ def _rows(out: Path) -> list[str]:
 
 
 def test_scatter_loader_normalises_and_refuses_bad_files_in_one_line(tmp_path, scatter):
-    assert scatter.hs.tolist() == [1.5, 3.0] and scatter.tp.tolist() == [7.0, 9.0]
+    assert scatter.hs.tolist() == [1.5, 3.0] and scatter.t.tolist() == [7.0, 9.0] and scatter.period == "tp"
     assert scatter.prob.sum() == pytest.approx(1.0) and scatter.prob[1, 1] == 0.0  # an empty field is 0
     bad = tmp_path / "bad.csv"
     bad.write_text("hs\\tp,7,9\n1.5,0.1,x\n", encoding="utf-8")

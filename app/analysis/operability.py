@@ -8,9 +8,16 @@ cell and heading the seeds are averaged (rms e_c, the saturated share) or maximi
 probability-weighted share of workable cells, Σ p(Hs, Tp) · workable / Σ p (DNV-RP-H103's and DNV-ST-N001's
 workability: the share of time a limiting criterion is met).
 
-Scatter diagram CSV (``load_scatter``): a header row ``hs\\tp,TP1,TP2,…`` (peak periods [s]) and one row per
-significant wave height ``HS,p1,p2,…`` (probabilities or counts of occurrence; normalised here; empty = 0),
-``#`` lines are comments.
+Scatter diagram CSV (``load_scatter``): a header row ``hs\\tp,TP1,TP2,…`` (peak periods [s]) or
+``hs\\tz,TZ1,TZ2,…`` (zero up-crossing periods [s]) and one row per significant wave height ``HS,p1,p2,…``
+(probabilities or counts of occurrence; normalised here; empty = 0), ``#`` lines are comments.  A Tz
+diagram's cells are simulated at the peak period whose spectrum has that Tz
+(:func:`app.marine.waves.tp_from_tz`); a cell whose sea would break (DNV-RP-C205 §3.5.5.4) cannot be simulated
+and counts as not workable, its probability reported (``unsimulated``).
+
+Shipped diagrams, by name (``SCATTERS``): ``north-atlantic`` — IACS Recommendation No. 34 (Rev. 1, 2001),
+Table 1, the North Atlantic (Global Wave Statistics areas 8, 9, 15, 16), Hs × Tz, per 100 000 observations
+(``app/marine/data/scatter_north_atlantic.csv``; Rec. 34 pairs it with the Pierson–Moskowitz spectrum).
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ import csv
 import hashlib
 import io
 import json
+import logging
 import math
 import os
 import time
@@ -42,16 +50,36 @@ class OperabilityError(BosunError):
 @dataclass(frozen=True, eq=False)
 class Scatter:
     hs: NDArray[np.float64]  # (n_hs,) [m]
-    tp: NDArray[np.float64]  # (n_tp,) [s]
-    prob: NDArray[np.float64]  # (n_hs, n_tp), sums to 1
+    t: NDArray[np.float64]  # (n_t,) [s]: peak periods Tp, or zero up-crossing periods Tz (``period``)
+    prob: NDArray[np.float64]  # (n_hs, n_t), sums to 1
     source: str = "scatter"
+    period: str = "tp"  # "tp" or "tz"
+
+    @property
+    def period_label(self) -> str:
+        return "Tp" if self.period == "tp" else "Tz"
+
+
+#: shipped scatter diagrams (module docstring): name → file in app/marine/data
+SCATTERS = {"north-atlantic": "scatter_north_atlantic.csv"}
+
+
+def scatter_path(name_or_file: str | Path) -> Path:
+    """A shipped diagram's file by name, else the path given."""
+    if str(name_or_file) in SCATTERS:
+        import importlib.resources
+
+        return Path(str(importlib.resources.files("app.marine") / "data" / SCATTERS[str(name_or_file)]))
+    return Path(name_or_file)
 
 
 def load_scatter(path: str | Path) -> Scatter:
-    """A scatter diagram from CSV (module docstring); one-line errors with file, line and field."""
-    path = Path(path)
+    """A scatter diagram from CSV or by name (module docstring); one-line errors with file, line and field."""
+    name = str(path) if str(path) in SCATTERS else None
+    path = scatter_path(path)
     if not path.is_file():
-        raise OperabilityError(f"{path}: no such scatter diagram")
+        names = ", ".join(SCATTERS)
+        raise OperabilityError(f"{path}: no such scatter diagram (a CSV file, or a shipped one: {names})")
     lines = [
         (n, line) for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
         if line.strip() and not line.lstrip().startswith("#")
@@ -73,23 +101,56 @@ def load_scatter(path: str | Path) -> Scatter:
 
     n0, head = lines[0]
     cells = next(csv.reader(io.StringIO(head)))
-    tp = np.array([number(c, n0, f"peak period (column {k + 2})") for k, c in enumerate(cells[1:])])
+    corner = cells[0].strip().lower().replace(" ", "").replace("/", "\\")
+    if corner not in ("hs\\tp", "hs\\tz"):
+        raise OperabilityError(
+            f"{path}:{n0}: the first field names the periods: hs\\tp (peak) or hs\\tz (zero up-crossing), "
+            f"got {cells[0]!r}"
+        )
+    period = corner[-2:]
+    what = "peak period" if period == "tp" else "zero up-crossing period"
+    tp = np.array([number(c, n0, f"{what} (column {k + 2})") for k, c in enumerate(cells[1:])])
     if tp.size == 0 or np.any(tp <= 0) or np.any(np.diff(tp) <= 0):
-        raise OperabilityError(f"{path}:{n0}: peak periods must be positive and increasing")
+        raise OperabilityError(f"{path}:{n0}: {what}s must be positive and increasing")
     hs, rows = [], []
     for n, line in lines[1:]:
         row = next(csv.reader(io.StringIO(line)))
         if len(row) != tp.size + 1:
             raise OperabilityError(f"{path}:{n}: expected {tp.size + 1} fields, got {len(row)}")
         hs.append(number(row[0], n, "Hs"))
-        rows.append([number(c, n, f"Tp {t:g} s", empty=0.0) for c, t in zip(row[1:], tp, strict=True)])
+        rows.append(
+            [number(c, n, f"{period.capitalize()} {t:g} s", empty=0.0) for c, t in zip(row[1:], tp, strict=True)]
+        )
     h = np.array(hs)
     if np.any(h <= 0) or np.any(np.diff(h) <= 0):
         raise OperabilityError(f"{path}: significant wave heights must be positive and increasing")
     p = np.array(rows)
     if p.sum() <= 0:
         raise OperabilityError(f"{path}: no cell has a probability above zero")
-    return Scatter(h, tp, p / p.sum(), source=str(path))
+    return Scatter(h, tp, p / p.sum(), source=name or str(path), period=period)
+
+
+def cell_periods(scatter: Scatter, spectrum: str) -> tuple[NDArray[np.float64], dict[tuple[int, int], str]]:
+    """The peak period each cell is simulated at (NaN where it cannot be: the reason in the dict)."""
+    from app.marine.waves import SeaStateError, check_sea, tp_from_tz
+
+    tp = np.full(scatter.prob.shape, np.nan)
+    why: dict[tuple[int, int], str] = {}
+    for i, hs in enumerate(scatter.hs):
+        for j, t in enumerate(scatter.t):
+            if scatter.prob[i, j] <= 0:
+                continue
+            try:
+                if scatter.period == "tz":
+                    tp[i, j] = round(tp_from_tz(spectrum, float(hs), float(t)), 4)
+                else:
+                    check_sea(float(hs), float(t))
+                    tp[i, j] = float(t)
+            except SeaStateError as err:
+                if scatter.period == "tz" and spectrum not in ("pm", "jonswap"):
+                    raise OperabilityError(str(err)) from None
+                why[(i, j)] = str(err)
+    return tp, why
 
 
 @dataclass(frozen=True)
@@ -169,6 +230,7 @@ class StudyResult:
     workers: int = 0
     scheduler: str = ""
     cells: list[dict[str, Any]] = field(default_factory=list)  # every simulation
+    unsimulated: float = 0.0  # probability of the cells that cannot be simulated (breaking seas): not workable
 
 
 def _client(scheduler: str | None, workers: int | None):
@@ -183,7 +245,8 @@ def _client(scheduler: str | None, workers: int | None):
             raise OperabilityError(f"no Dask scheduler at {scheduler}: {err}") from None
     cluster = LocalCluster(
         n_workers=workers or max(1, (os.cpu_count() or 1)), threads_per_worker=1, processes=True,
-        dashboard_address=None,
+        dashboard_address=None, silence_logs=logging.CRITICAL,  # a worker's heartbeat racing the shutdown
+        # logged a traceback after a finished study; a task's own error still reaches fut.result()
     )  # fmt: skip
     try:
         return Client(cluster), cluster
@@ -201,14 +264,16 @@ def run_study(
     progress: Callable[[int, int], None] | None = None,
 ) -> StudyResult:
     """Run (or resume) the study; every finished cell is in ``out/cells`` at once."""
+    tps, why = cell_periods(scatter, study.spectrum)  # a study that cannot be made is refused before any file
     out = Path(out)
     cache = out / "cells"
     cache.mkdir(parents=True, exist_ok=True)
     todo, done = [], []
     vid = vessel_id(study.vessel)  # the file read and hashed once
     for i, hs in enumerate(scatter.hs):
-        for j, tp in enumerate(scatter.tp):
-            if scatter.prob[i, j] <= 0:
+        for j in range(scatter.t.size):
+            tp = tps[i, j]
+            if scatter.prob[i, j] <= 0 or (i, j) in why:
                 continue
             for heading in study.headings:
                 for seed in range(1, study.seeds + 1):
@@ -250,13 +315,22 @@ def run_study(
             if cluster is not None:
                 cluster.close()
     wall = time.perf_counter() - t0
-    table, oper = aggregate(study, scatter, done)
-    return StudyResult(study, scatter, table, oper, len(todo), cached, wall, n_workers, address, done)
+    table, oper = aggregate(study, scatter, done, tps, why)
+    unsim = float(sum(scatter.prob[ij] for ij in why))
+    return StudyResult(study, scatter, table, oper, len(todo), cached, wall, n_workers, address, done, unsim)
 
 
 def aggregate(
-    study: OperabilityStudy, scatter: Scatter, cells: list[dict[str, Any]]
+    study: OperabilityStudy,
+    scatter: Scatter,
+    cells: list[dict[str, Any]],
+    tps: NDArray[np.float64] | None = None,
+    why: dict[tuple[int, int], str] | None = None,
 ) -> tuple[list[dict[str, Any]], dict[float, float]]:
+    """Per cell and heading the seeds' mean rms(e_c), max e_c, ratio and saturated share; the operability
+    per heading.  A cell that cannot be simulated (``why``) is in the table, not workable, with its reason."""
+    if tps is None or why is None:
+        tps, why = cell_periods(scatter, study.spectrum)
     by: dict[tuple[float, float, float], list[dict[str, Any]]] = {}
     for c in cells:
         by.setdefault((c["hs"], c["tp"], c["heading"]), []).append(c)
@@ -265,25 +339,39 @@ def aggregate(
     for heading in study.headings:
         good = 0.0
         for i, hs in enumerate(scatter.hs):
-            for j, tp in enumerate(scatter.tp):
+            for j, t in enumerate(scatter.t):
                 p = float(scatter.prob[i, j])
                 if p <= 0:
                     continue
-                runs = sorted(by.get((float(hs), float(tp), float(heading)), []), key=lambda c: c["seed"])
+                row: dict[str, Any] = {"hs": float(hs)}
+                if scatter.period == "tz":
+                    row["tz"] = float(t)
+                if (i, j) in why:
+                    row.update({
+                        "tp": None, "heading": float(heading), "probability": p, "rms_e_c_m": None,
+                        "max_e_c_m": None, "ratio": None, "saturated_percent": None, "workable": False,
+                        "note": why[(i, j)],
+                    })  # fmt: skip
+                    table.append(row)
+                    continue
+                tp = float(tps[i, j])
+                runs = sorted(by.get((float(hs), tp, float(heading)), []), key=lambda c: c["seed"])
                 if len(runs) != study.seeds:
                     raise OperabilityError(
-                        f"cell Hs {hs:g} m, Tp {tp:g} s, {heading:g}°: {len(runs)} of {study.seeds} runs"
+                        f"cell Hs {hs:g} m, {scatter.period_label} {t:g} s, {heading:g}°: {len(runs)} of "
+                        f"{study.seeds} runs"
                     )
                 rms = float(np.mean([r["rms_e_c_m"] for r in runs]))
                 ok = rms <= study.criterion
                 good += p * ok
-                table.append({
-                    "hs": float(hs), "tp": float(tp), "heading": float(heading), "probability": p,
+                row.update({
+                    "tp": tp, "heading": float(heading), "probability": p,
                     "rms_e_c_m": rms, "max_e_c_m": float(max(r["max_e_c_m"] for r in runs)),
                     "ratio": float(np.mean([r["ratio"] for r in runs])),
                     "saturated_percent": float(np.mean([r["saturated_percent"] for r in runs])),
-                    "workable": bool(ok),
+                    "workable": bool(ok), "note": "",
                 })  # fmt: skip
+                table.append(row)
         oper[float(heading)] = good
     return table, oper
 
@@ -294,19 +382,29 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.colors import TwoSlopeNorm
 
     out = Path(out)
     st, sc = result.study, result.scatter
-    cols = ("hs", "tp", "heading", "probability", "rms_e_c_m", "max_e_c_m", "ratio", "saturated_percent", "workable")
+    cols = ("hs",) + (("tz",) if sc.period == "tz" else ()) + (
+        "tp", "heading", "probability", "rms_e_c_m", "max_e_c_m", "ratio", "saturated_percent", "workable", "note",
+    )  # fmt: skip
+
+    def field_text(v: Any) -> Any:
+        return "" if v is None else f"{v:.6g}" if isinstance(v, float) else v
+
     with open(out / "table.csv", "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(cols)
         for row in result.table:
-            w.writerow([row[c] if not isinstance(row[c], float) else f"{row[c]:.6g}" for c in cols])
+            w.writerow([field_text(row[c]) for c in cols])
     doc = {
-        "study": asdict(st), "scatter": sc.source, "criterion_rms_e_c_m": st.criterion,
+        "study": asdict(st), "scatter": sc.source, "scatter_period": sc.period_label,
+        "criterion_rms_e_c_m": st.criterion,
         "operability": {f"{h:g}": v for h, v in result.operability.items()},
-        "cells": len(result.table), "simulations": len(result.cells), "computed": result.computed,
+        "unsimulated_probability": result.unsimulated,
+        "cells": len(result.table) // max(1, len(st.headings)), "table_rows": len(result.table),
+        "simulations": len(result.cells), "computed": result.computed,
         "cached": result.cached, "wall_s": result.wall_s, "workers": result.workers, "scheduler": result.scheduler,
         "cells_per_minute": 60.0 * result.computed / result.wall_s if result.computed and result.wall_s > 0 else None,
     }  # fmt: skip
@@ -316,33 +414,77 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
     ax = fig.add_subplot(projection="polar")
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
-    th = np.radians(heads + [heads[0]]) if len(heads) > 1 else np.radians(heads)
-    r = [100 * result.operability[h] for h in heads]
-    ax.plot(th, r + [r[0]] if len(heads) > 1 else r, "o-", color="tab:blue")
-    ax.set_ylim(0, 100)
-    ax.set_title(f"operability [%], {st.mode}, rms(e_c) ≤ {st.criterion:g} m\n(heading: 0 following, 180 head sea)")
+    order = sorted(heads, key=lambda h: h % 360)
+    r = [100 * result.operability[h] for h in order]
+    th = list(np.radians(order))
+    # a closed polygon only when the headings go round (no gap over 90°); else a chord would cross headings
+    # that were not computed
+    gaps = np.diff([h % 360 for h in order] + [order[0] % 360 + 360]) if len(order) > 1 else [360.0]
+    if max(gaps) <= 90.0:
+        th, r = th + th[:1], r + r[:1]
+    ax.plot(th, r, "o-", color="tab:blue")
+    for h in order:
+        ax.annotate(f"{100 * result.operability[h]:.0f} %", (np.radians(h), 100 * result.operability[h]),
+                    textcoords="offset points", xytext=(0, 8), ha="center", fontsize=8)  # fmt: skip
+    ax.set_ylim(0, 110)
+    ax.set_yticks([20, 40, 60, 80, 100])
+    ax.set_title(
+        f"operability [%], {st.mode}, rms(e_c) ≤ {st.criterion:g} m\n{sc.source}, {st.spectrum}"
+        " (heading: 0 following, 180 head sea)",
+        fontsize=9,
+    )
     fig.tight_layout()
     fig.savefig(out / "operability_polar.png", dpi=110)
     plt.close(fig)
-    fig, axes = plt.subplots(1, len(heads), figsize=(4.2 * len(heads), 3.8), squeeze=False)
-    for ax, h in zip(axes[0], heads, strict=True):
-        grid = np.full((sc.hs.size, sc.tp.size), np.nan)
+    # only the rows and columns that hold probability (a published diagram has empty margins)
+    rows_used = np.flatnonzero(sc.prob.sum(axis=1) > 0)
+    cols_used = np.flatnonzero(sc.prob.sum(axis=0) > 0)
+    hs_v, t_v = sc.hs[rows_used], sc.t[cols_used]
+    big = hs_v.size * t_v.size > 120  # a full published diagram: a panel a row, values in cm
+    scale, unit = (100.0, "cm") if big else (1.0, "m")
+    if big:
+        fig, axes = plt.subplots(len(heads), 1, figsize=(8.5, 4.6 * len(heads)), squeeze=False)
+        panels = axes[:, 0]
+    else:
+        fig, axes = plt.subplots(1, len(heads), figsize=(4.2 * len(heads), 3.8), squeeze=False)
+        panels = axes[0]
+    key_t = "tz" if sc.period == "tz" else "tp"
+    for ax, h in zip(panels, heads, strict=True):
+        grid = np.full((hs_v.size, t_v.size), np.nan)
+        broken = np.zeros_like(grid, dtype=bool)
         for row in result.table:
-            if row["heading"] == h:
-                grid[np.searchsorted(sc.hs, row["hs"]), np.searchsorted(sc.tp, row["tp"])] = row["rms_e_c_m"]
-        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
-        for i in range(sc.hs.size):
-            for j in range(sc.tp.size):
-                if np.isfinite(grid[i, j]):
-                    ok = grid[i, j] <= st.criterion
-                    ax.text(j, i, f"{grid[i, j]:.2f}", ha="center", va="center", fontsize=7,
-                            color="white" if not ok else "black", fontweight="bold" if ok else "normal")  # fmt: skip
-        ax.set_xticks(range(sc.tp.size), [f"{t:g}" for t in sc.tp])
-        ax.set_yticks(range(sc.hs.size), [f"{v:g}" for v in sc.hs])
-        ax.set_xlabel("Tp [s]")
+            if row["heading"] != h:
+                continue
+            i, j = np.searchsorted(hs_v, row["hs"]), np.searchsorted(t_v, row[key_t])
+            if row["rms_e_c_m"] is None:
+                broken[i, j] = True
+            else:
+                grid[i, j] = row["rms_e_c_m"] * scale
+        # green up to the criterion, red beyond it: the workable region is seen at a glance
+        crit = st.criterion * scale
+        top = max(float(np.nanmax(grid)) if np.isfinite(grid).any() else crit, 1.01 * crit)
+        norm = TwoSlopeNorm(vmin=0.0, vcenter=crit, vmax=top)
+        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="RdYlGn_r", norm=norm)
+        for i in range(hs_v.size):
+            for j in range(t_v.size):
+                v = grid[i, j]
+                if broken[i, j]:
+                    ax.text(j, i, "×", ha="center", va="center", fontsize=7, color="0.3")
+                elif np.isfinite(v):
+                    text = f"{v:.0f}" if big and v >= 0.95 else f"{v:.1f}" if big else f"{v:.2f}"
+                    ax.text(j, i, text, ha="center", va="center", fontsize=6.5 if big else 7)
+        ax.set_xticks(range(t_v.size), [f"{t:g}" for t in t_v], fontsize=7 if big else None)
+        ax.set_yticks(range(hs_v.size), [f"{v:g}" for v in hs_v], fontsize=7 if big else None)
+        ax.set_xlabel(f"{sc.period_label} [s]")
         ax.set_ylabel("Hs [m]")
-        ax.set_title(f"{h:g}°: rms e_c [m], {100 * result.operability[h]:.0f} % workable")
-        fig.colorbar(im, ax=ax, label="rms e_c [m]")
+        ax.set_title(
+            f"heading {h:g}°: {100 * result.operability[h]:.1f} % workable (probability-weighted)"
+            + ("; × breaking sea" if broken.any() else ""),
+            fontsize=9,
+        )
+        cb = fig.colorbar(im, ax=ax, label=f"rms e_c [{unit}], workable ≤ {crit:g}")
+        cb.set_ticks([0.0, crit / 2, crit, *np.linspace(crit, top, 5)[1:]])
+    fig.suptitle(f"{st.mode}, {sc.source}, {st.spectrum}, rms(e_c) ≤ {st.criterion:g} m", fontsize=10)
     fig.tight_layout()
     fig.savefig(out / "heatmap.png", dpi=110)
     plt.close(fig)

@@ -1,0 +1,133 @@
+"""Issue 17, item 3: the shipped scatter diagram (IACS Rec. 34, North Atlantic, Hs × Tz) and the Tz → Tp
+conversion that lets a Tz diagram drive spectra parametrised by Tp.
+
+The table is a transcription of a published one; two checks that could each catch a mistyped cell or row:
+its counts sum to 100 000 observations (the published total), and it agrees with the North Atlantic joint
+model of DNV-RP-C205 §3.6 — 3-parameter Weibull Hs (α 3.041, β 1.484, γ 0.661) and lognormal Tz given Hs
+(μ = 0.70 + 1.27 Hs^0.131, σ = 0.1334 + 0.0264 exp(−0.1906 Hs)) — the model fitted to the same data."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from app.analysis.operability import (
+    SCATTERS,
+    OperabilityError,
+    OperabilityStudy,
+    aggregate,
+    cell_periods,
+    load_scatter,
+    scatter_path,
+)
+from app.marine.waves import SeaStateError, dnv_gamma, tp_from_tz, zero_crossing_period
+
+
+def _counts() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    lines = [ln for ln in scatter_path("north-atlantic").read_text(encoding="utf-8").splitlines() if ln[:1] != "#"]
+    tz = np.array([float(c) for c in lines[0].split(",")[1:]])
+    rows = np.array([[float(c) for c in ln.split(",")] for ln in lines[1:]])
+    return rows[:, 0], tz, rows[:, 1:]
+
+
+def test_north_atlantic_is_shipped_whole_and_loads_by_name():
+    sc = load_scatter("north-atlantic")
+    assert set(SCATTERS) == {"north-atlantic"} and sc.source == "north-atlantic" and sc.period == "tz"
+    assert sc.hs.tolist() == [0.5 + k for k in range(17)] and sc.t.tolist() == [1.5 + k for k in range(18)]
+    assert sc.prob.sum() == pytest.approx(1.0)
+    _, _, n = _counts()
+    assert n.sum() == pytest.approx(100_000, abs=1.0)  # the published total, to the table's rounding (0.1)
+
+
+def test_north_atlantic_agrees_with_dnv_joint_model_fitted_to_the_same_data():
+    hs, tz, n = _counts()
+    a, b, c = 3.041, 1.484, 0.661
+    model = np.zeros_like(n)
+    for i, h in enumerate(hs):
+        hh = np.linspace(h - 0.5, h + 0.5, 401)[1:-1]
+        f_hs = stats.weibull_min.pdf(hh, b, loc=c, scale=a)
+        mu, sig = 0.70 + 1.27 * hh**0.131, 0.1334 + 0.0264 * np.exp(-0.1906 * hh)
+        for j, t in enumerate(tz):
+            p_t = stats.norm.cdf((math.log(t + 0.5) - mu) / sig) - stats.norm.cdf((math.log(t - 0.5) - mu) / sig)
+            model[i, j] = np.trapezoid(f_hs * p_t, hh) * 1e5
+    # Hs marginal: every class from 1 m up holding over 10 per 100 000 within 5 % (the 0–1 m class is below the
+    # Weibull's 0.661 m location; the rarest, 7.7, 2.6 and 0.9, are sums of cells rounded to 0.1)
+    rows = n.sum(axis=1)
+    used = (hs > 1) & (rows > 10)
+    assert used.sum() == 13 and np.all(np.abs(model.sum(axis=1)[used] / rows[used] - 1) < 0.05)
+    # the cells that carry the table (26 over 1 000 per 100 000: 85 % of the time) within 20 %, median within 2 %
+    big = n > 1000
+    ratio = model[big] / n[big]
+    assert big.sum() >= 20 and np.all(np.abs(ratio - 1) < 0.2) and abs(np.median(ratio) - 1) < 0.02
+    # the two most likely sea states are the same two cells (Hs 1.5 m / Tz 7.5 s and 2.5 m / 8.5 s)
+    assert set(np.argsort(n, axis=None)[-2:]) == set(np.argsort(model, axis=None)[-2:])
+
+
+@pytest.mark.parametrize("hs,tp", [(3.0, 10.0), (4.0, 8.0), (4.0, 9.0), (2.0, 5.2), (6.0, 11.0)])
+def test_zero_crossing_period_matches_dnv_fit_for_jonswap_and_pm_theory(hs, tp):
+    g = dnv_gamma(hs, tp)
+    fit = 0.6673 + 0.05037 * g - 0.006230 * g**2 + 0.0003341 * g**3  # DNV-RP-C205 §3.5.5
+    assert zero_crossing_period("jonswap", hs, tp) / tp == pytest.approx(fit, rel=0.005)
+    # Pierson–Moskowitz in closed form: m_n ∝ Γ(1 − n/4), so Tz/Tp = (5π/4)^(−1/4) = 0.7104
+    assert zero_crossing_period("pm", hs, tp) / tp == pytest.approx((5 * math.pi / 4) ** -0.25, rel=1e-3)
+
+
+def test_tp_from_tz_inverts_and_refuses_breaking_seas_and_double_peaks():
+    for spec in ("pm", "jonswap"):
+        for hs, tz in [(0.5, 3.5), (2.5, 7.5), (8.5, 9.5), (0.5, 18.5)]:
+            tp = tp_from_tz(spec, hs, tz)
+            assert 1.2 * tz < tp < 1.45 * tz and zero_crossing_period(spec, hs, tp) == pytest.approx(tz, rel=1e-5)
+    with pytest.raises(SeaStateError, match="steeper than a sea can be"):
+        tp_from_tz("jonswap", 3.5, 4.5)
+    with pytest.raises(SeaStateError, match="single-peaked spectrum"):
+        tp_from_tz("torsethaugen", 2.0, 6.0)
+
+
+def test_a_tz_study_simulates_convertible_cells_and_counts_breaking_ones_as_not_workable(tmp_path):
+    sc = load_scatter("north-atlantic")
+    tps, why = cell_periods(sc, "jonswap")
+    nonzero = int((sc.prob > 0).sum())
+    assert 0 < len(why) < nonzero and all("steeper than a sea can be" in w for w in why.values())
+    broken = sum(sc.prob[ij] for ij in why)
+    assert 0 < broken < 0.01  # steep corners of the table: rare, yet there
+    assert all(np.isfinite(tps[i, j]) == ((i, j) not in why) for i, j in zip(*np.nonzero(sc.prob > 0), strict=True))
+    # aggregate with every simulable cell at rms 0 (workable): operability is 1 − the breaking share
+    st = OperabilityStudy(headings=(90.0,), seeds=1, criterion=0.1)
+    cells = [
+        {"hs": float(sc.hs[i]), "tp": float(tps[i, j]), "heading": 90.0, "seed": 1, "rms_e_c_m": 0.0,
+         "max_e_c_m": 0.0, "ratio": 0.0, "saturated_percent": 0.0}
+        for i, j in zip(*np.nonzero(sc.prob > 0), strict=True) if (i, j) not in why
+    ]  # fmt: skip
+    table, oper = aggregate(st, sc, cells, tps, why)
+    assert len(table) == nonzero and oper[90.0] == pytest.approx(1.0 - broken)
+    assert sum(1 for r in table if r["tp"] is None and not r["workable"] and r["note"]) == len(why)
+    # a Torsethaugen study of a Tz diagram is refused in one line
+    with pytest.raises(OperabilityError, match="single-peaked"):
+        cell_periods(sc, "torsethaugen")
+
+
+def test_scatter_loader_needs_the_period_named(tmp_path):
+    bad = tmp_path / "s.csv"
+    bad.write_text("hs,7,9\n1.5,1,2\n", encoding="utf-8")
+    with pytest.raises(OperabilityError, match=r"s.csv:1: the first field names the periods"):
+        load_scatter(bad)
+    bad.write_text("Hs / Tz,5,6\n1.5,1,2\n", encoding="utf-8")
+    assert load_scatter(bad).period == "tz"
+    with pytest.raises(OperabilityError, match="shipped one: north-atlantic"):
+        load_scatter("north-sea")
+
+
+def test_cli_refuses_a_double_peaked_spectrum_for_a_tz_diagram_in_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    res = subprocess.run(
+        [sys.executable, "-m", "app", "study", "operability", "--scatter", "north-atlantic", "--spectrum",
+         "torsethaugen", "--out", str(tmp_path / "o")],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert res.returncode == 2 and res.stderr.count("\n") == 1 and "single-peaked spectrum" in res.stderr
+    assert not (tmp_path / "o").exists()  # refused before any file is made
