@@ -553,11 +553,14 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
     from app.analysis.operability import OperabilityError, OperabilityStudy, load_scatter, run_study, save
 
     try:
+        scatter = load_scatter(args.scatter)
+        # by default the spectrum a diagram's kind is stated with: Pierson–Moskowitz for a Tz diagram (IACS
+        # Rec. 34 pairs its table with it), JONSWAP for a Tp one
+        spectrum = args.spectrum or ("pm" if scatter.period == "tz" else "jonswap")
         study = OperabilityStudy(
             mode=args.mode, headings=tuple(args.headings), seeds=args.seeds, duration=args.duration,
-            criterion=args.criterion, vessel=args.vessel, spectrum=args.spectrum,
+            criterion=args.criterion, vessel=args.vessel, spectrum=spectrum,
         )  # fmt: skip
-        scatter = load_scatter(args.scatter)
         out = Path(args.out)
         if out.exists() and not out.is_dir():
             raise BosunError(f"output folder {out} is a file")
@@ -579,7 +582,7 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
         f"{result.computed} simulated ({where}), {result.cached} from the cache, {result.wall_s:.0f} s"
     )
     if result.unsimulated > 0:
-        n_broken = sum(1 for row in result.table if row["tp"] is None) // len(study.headings)
+        n_broken = sum(1 for row in result.table if row["rms_e_c_m"] is None) // len(study.headings)
         print(
             f"  {n_broken} cells ({100 * result.unsimulated:.2f} % of the time) are breaking seas for this spectrum "
             "(DNV-RP-C205 §3.5.5.4): not simulated, counted as not workable"
@@ -1290,7 +1293,10 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time per run [s] (300)")
     b.add_argument("--criterion", type=_positive_float, default=0.1, help="workable: rms(e_c) ≤ this [m] (0.1)")
     b.add_argument("--vessel", default=None, metavar="NAME|FILE", help="vessel (default supply); bosun vessel list")
-    b.add_argument("--spectrum", choices=["jonswap", "pm", "torsethaugen"], default="jonswap", help="default jonswap")
+    b.add_argument(
+        "--spectrum", choices=["jonswap", "pm", "torsethaugen"], default=None,
+        help="default: pm for a Tz diagram (as IACS Rec. 34 states it), jonswap for a Tp one",
+    )  # fmt: skip
     b.add_argument("--scheduler", default=None, metavar="tcp://HOST:8786", help="a Dask scheduler (default: local)")
     b.add_argument("--workers", type=int, default=None, help="local cluster's worker processes (default: cores)")
     b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")

@@ -113,3 +113,15 @@ def test_cli_study_refuses_a_missing_scatter_in_one_line(tmp_path):
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "no such scatter diagram" in res.stderr
+
+
+@pytest.mark.slow
+def test_two_columns_that_name_the_same_sea_run_it_once(tmp_path):
+    """Review finding: Tz columns closer than the 0.1 ms Tp rounding gave one cache key twice; the study queued
+    the simulation twice and its table refused "2 of 1 runs"."""
+    path = tmp_path / "tz.csv"
+    path.write_text("hs\\tz,7.5,7.500001\n2,1,1\n", encoding="utf-8")
+    st = OperabilityStudy(mode="tac", headings=(180.0,), seeds=1, duration=2.0, spectrum="pm")
+    res = run_study(st, load_scatter(path), tmp_path / "out", workers=1)
+    assert res.computed == 1 and len(res.table) == 2 and res.table[0]["tp"] == res.table[1]["tp"]
+    assert res.table[0]["rms_e_c_m"] == res.table[1]["rms_e_c_m"]

@@ -131,3 +131,78 @@ def test_cli_refuses_a_double_peaked_spectrum_for_a_tz_diagram_in_one_line(tmp_p
     )  # fmt: skip
     assert res.returncode == 2 and res.stderr.count("\n") == 1 and "single-peaked spectrum" in res.stderr
     assert not (tmp_path / "o").exists()  # refused before any file is made
+
+
+def test_a_breaking_cell_is_one_whose_own_peak_period_breaks_and_no_other():
+    """Review finding: the root was searched only between grid points where the sea did not break, so cells
+    next to the limit were called breaking (Hs 11.5 m, Tz 8.5 s with Pierson–Moskowitz: Tp 11.97 s is a sea)."""
+    from scipy.optimize import brentq
+
+    from app.marine.waves import BreakingSeaError, _dnv_gamma, _grid, _jonswap, _pm, _tz, check_sea
+
+    assert tp_from_tz("pm", 11.5, 8.5) == pytest.approx(11.966, abs=1e-3)
+    assert tp_from_tz("pm", 1.0, 28.2) == pytest.approx(39.70, abs=0.01)  # near the top of the Tp range
+    with pytest.raises(SeaStateError, match=r"Tp must be .* \[1, 40\]") as err:
+        tp_from_tz("pm", 0.01, 0.7)  # Tp below 1 s: out of range, not "breaking"
+    assert not isinstance(err.value, BreakingSeaError)
+    sc = load_scatter("north-atlantic")
+    for spec in ("pm", "jonswap"):
+        _, why = cell_periods(sc, spec)
+        for i, j in zip(*np.nonzero(sc.prob > 0), strict=True):
+            hs, tz = float(sc.hs[i]), float(sc.t[j])
+
+            def f(tp, hs=hs, tz=tz, spec=spec):
+                w = _grid(tp)
+                s = _pm(w, hs, tp) if spec == "pm" else _jonswap(w, hs, tp, _dnv_gamma(hs, tp))
+                return _tz(w, s) - tz
+
+            root = brentq(f, tz, 1.5 * tz, xtol=1e-9)  # the sea this cell names, breaking or not
+            try:
+                check_sea(hs, root)
+                breaks = False
+            except BreakingSeaError:
+                breaks = True
+            assert ((i, j) in why) == breaks, (spec, hs, tz, root)
+
+
+def test_save_places_unsimulated_cells_of_tp_and_tz_diagrams(tmp_path):
+    from app.analysis.operability import StudyResult, save
+
+    tp_file = tmp_path / "tp.csv"
+    tp_file.write_text("hs\\tp,3,9\n3,1,2\n", encoding="utf-8")  # Hs 3 m at Tp 3 s breaks
+    tz_file = tmp_path / "tz.csv"
+    tz_file.write_text("hs\\tz,4.5,7.5\n3.5,1,2\n", encoding="utf-8")  # Hs 3.5 m at Tz 4.5 s breaks (JONSWAP)
+    for path in (tp_file, tz_file):
+        sc = load_scatter(path)
+        st = OperabilityStudy(headings=(90.0, 180.0), seeds=1, spectrum="jonswap")
+        tps, why = cell_periods(sc, "jonswap")
+        assert list(why) == [(0, 0)]
+        cells = [
+            {"hs": float(sc.hs[0]), "tp": float(tps[0, 1]), "heading": h, "seed": 1, "rms_e_c_m": 0.05,
+             "max_e_c_m": 0.1, "ratio": 0.02, "saturated_percent": 0.0}
+            for h in (90.0, 180.0)
+        ]  # fmt: skip
+        table, oper = aggregate(st, sc, cells, tps, why)
+        assert oper == {90.0: pytest.approx(2 / 3), 180.0: pytest.approx(2 / 3)}
+        out = tmp_path / path.stem
+        out.mkdir()
+        doc = save(StudyResult(st, sc, table, oper, 2, 0, 1.0, 1, "test", cells, 1 / 3), out)
+        rows = (out / "table.csv").read_text(encoding="utf-8").splitlines()
+        assert len(rows) == 5 and doc["unsimulated_probability"] == pytest.approx(1 / 3) and doc["cells"] == 2
+        broken = [r for r in rows[1:] if "steeper than a sea can be" in r]
+        assert len(broken) == 2 and all(",False," in r for r in broken)
+        if sc.period == "tp":  # the cell keeps its Tp in the table
+            assert all(r.startswith("3,3,") for r in broken)
+        assert (out / "heatmap.png").stat().st_size > 0 and (out / "operability_polar.png").stat().st_size > 0
+
+
+def test_a_cell_out_of_range_refuses_the_study_and_a_bom_file_loads(tmp_path):
+    f = tmp_path / "s.csv"
+    f.write_text("hs\\tp,9,50\n2,1,1\n", encoding="utf-8")  # Tp 50 s: no spectrum here goes there
+    with pytest.raises(OperabilityError, match=r"cell Hs 2 m, Tp 50 s: Tp must be"):
+        cell_periods(load_scatter(f), "jonswap")
+    f.write_bytes("\ufeffhs\\tp,9\n2,1\n".encode())  # a spreadsheet's CSV UTF-8
+    assert load_scatter(f).period == "tp"
+    f.write_bytes(b"# caf\xe9\nhs\\tp,9\n2,1\n")  # Latin-1
+    with pytest.raises(OperabilityError, match="not UTF-8 text"):
+        load_scatter(f)

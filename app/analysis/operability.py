@@ -80,8 +80,14 @@ def load_scatter(path: str | Path) -> Scatter:
     if not path.is_file():
         names = ", ".join(SCATTERS)
         raise OperabilityError(f"{path}: no such scatter diagram (a CSV file, or a shipped one: {names})")
+    try:
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's "CSV UTF-8" starts with a BOM
+    except UnicodeDecodeError as err:
+        raise OperabilityError(f"{path}: not UTF-8 text (byte {err.start}): save it as CSV UTF-8") from None
+    except OSError as err:
+        raise OperabilityError(f"{path}: cannot be read: {err.strerror or err}") from None
     lines = [
-        (n, line) for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        (n, line) for n, line in enumerate(text.splitlines(), 1)
         if line.strip() and not line.lstrip().startswith("#")
     ]  # fmt: skip
     if len(lines) < 2:
@@ -131,8 +137,10 @@ def load_scatter(path: str | Path) -> Scatter:
 
 
 def cell_periods(scatter: Scatter, spectrum: str) -> tuple[NDArray[np.float64], dict[tuple[int, int], str]]:
-    """The peak period each cell is simulated at (NaN where it cannot be: the reason in the dict)."""
-    from app.marine.waves import SeaStateError, check_sea, tp_from_tz
+    """The peak period each cell is simulated at; NaN where the sea would break (the reason in the dict: such a
+    cell is not simulated and counts as not workable).  A cell out of the simulated range (Hs, Tp) refuses the
+    study in one line: it is a wrong diagram, not a sea that breaks."""
+    from app.marine.waves import BreakingSeaError, SeaStateError, check_sea, tp_from_tz
 
     tp = np.full(scatter.prob.shape, np.nan)
     why: dict[tuple[int, int], str] = {}
@@ -146,10 +154,12 @@ def cell_periods(scatter: Scatter, spectrum: str) -> tuple[NDArray[np.float64], 
                 else:
                     check_sea(float(hs), float(t))
                     tp[i, j] = float(t)
-            except SeaStateError as err:
-                if scatter.period == "tz" and spectrum not in ("pm", "jonswap"):
-                    raise OperabilityError(str(err)) from None
+            except BreakingSeaError as err:
                 why[(i, j)] = str(err)
+            except SeaStateError as err:
+                raise OperabilityError(
+                    f"{scatter.source}: cell Hs {hs:g} m, {scatter.period_label} {t:g} s: {err}"
+                ) from None
     return tp, why
 
 
@@ -269,6 +279,7 @@ def run_study(
     cache = out / "cells"
     cache.mkdir(parents=True, exist_ok=True)
     todo, done = [], []
+    seen: set[str] = set()
     vid = vessel_id(study.vessel)  # the file read and hashed once
     for i, hs in enumerate(scatter.hs):
         for j in range(scatter.t.size):
@@ -278,6 +289,9 @@ def run_study(
             for heading in study.headings:
                 for seed in range(1, study.seeds + 1):
                     p = cell_params(study, hs, tp, heading, seed, vid)
+                    if cell_key(p) in seen:  # two columns of one Hs that give the same Tp: one simulation
+                        continue
+                    seen.add(cell_key(p))
                     f = cache / f"{cell_key(p)}.json"
                     if f.is_file():
                         try:
@@ -348,9 +362,9 @@ def aggregate(
                     row["tz"] = float(t)
                 if (i, j) in why:
                     row.update({
-                        "tp": None, "heading": float(heading), "probability": p, "rms_e_c_m": None,
-                        "max_e_c_m": None, "ratio": None, "saturated_percent": None, "workable": False,
-                        "note": why[(i, j)],
+                        "tp": float(t) if scatter.period == "tp" else None, "heading": float(heading),
+                        "probability": p, "rms_e_c_m": None, "max_e_c_m": None, "ratio": None,
+                        "saturated_percent": None, "workable": False, "note": why[(i, j)],
                     })  # fmt: skip
                     table.append(row)
                     continue
@@ -383,6 +397,7 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import TwoSlopeNorm
+    from matplotlib.ticker import MaxNLocator
 
     out = Path(out)
     st, sc = result.study, result.scatter
@@ -483,7 +498,8 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
             fontsize=9,
         )
         cb = fig.colorbar(im, ax=ax, label=f"rms e_c [{unit}], workable ≤ {crit:g}")
-        cb.set_ticks([0.0, crit / 2, crit, *np.linspace(crit, top, 5)[1:]])
+        above = [v for v in MaxNLocator(4).tick_values(crit, top) if crit * 1.5 < v <= top]
+        cb.set_ticks([0.0, crit / 2, crit, *above])
     fig.suptitle(f"{st.mode}, {sc.source}, {st.spectrum}, rms(e_c) ≤ {st.criterion:g} m", fontsize=10)
     fig.tight_layout()
     fig.savefig(out / "heatmap.png", dpi=110)

@@ -47,6 +47,10 @@ class SeaStateError(BosunError):
     """Sea-state parameters that cannot be used."""
 
 
+class BreakingSeaError(SeaStateError):
+    """A sea steeper than a sea can be (DNV-RP-C205 §3.5.5.4): in range, yet it would break."""
+
+
 #: the sea states Bosun simulates: Hs [m] and Tp [s] (WMO 0–9 seas; beyond them no spectrum here applies,
 #: and a vanishing Hs or Tp would only underflow the formulas below)
 HS_RANGE = (0.01, 30.0)
@@ -64,7 +68,7 @@ def check_sea(hs: float, tp: float) -> None:
     sp = 2 * math.pi * hs / (G * tp**2)
     limit = 1 / 15 - (1 / 15 - 1 / 25) * min(1.0, max(0.0, (tp - 8.0) / 7.0))
     if sp > limit:
-        raise SeaStateError(
+        raise BreakingSeaError(
             f"Hs {hs:g} m with Tp {tp:g} s is steeper than a sea can be "
             f"(2πHs/(gTp²) = {sp:.3f} > {limit:.3f}, DNV-RP-C205 §3.5.5.4)"
         )
@@ -85,6 +89,10 @@ def wmo_sea_state(hs: float) -> tuple[int, str]:
 def pierson_moskowitz(w: ArrayLike, hs: float, tp: float) -> NDArray[np.float64]:
     """Modified Pierson–Moskowitz spectrum S(ω) [m² s]."""
     check_sea(hs, tp)
+    return _pm(w, hs, tp)
+
+
+def _pm(w: ArrayLike, hs: float, tp: float) -> NDArray[np.float64]:
     w = np.asarray(w, dtype=float)
     wp = 2 * np.pi / tp
     out = np.zeros_like(w)
@@ -96,6 +104,10 @@ def pierson_moskowitz(w: ArrayLike, hs: float, tp: float) -> NDArray[np.float64]
 def dnv_gamma(hs: float, tp: float) -> float:
     """JONSWAP peak enhancement γ from DNV-RP-C205 §3.5.5.5."""
     check_sea(hs, tp)
+    return _dnv_gamma(hs, tp)
+
+
+def _dnv_gamma(hs: float, tp: float) -> float:
     r = tp / math.sqrt(hs)
     if r <= 3.6:
         return 5.0
@@ -106,14 +118,19 @@ def dnv_gamma(hs: float, tp: float) -> float:
 
 def jonswap(w: ArrayLike, hs: float, tp: float, gamma: float | None = None) -> NDArray[np.float64]:
     """JONSWAP spectrum S(ω) [m² s]; γ from the DNV rule when not given."""
-    g = dnv_gamma(hs, tp) if gamma is None else float(gamma)
+    check_sea(hs, tp)
+    g = _dnv_gamma(hs, tp) if gamma is None else float(gamma)
     if not 1.0 <= g <= 10.0:
         raise SeaStateError(f"JONSWAP gamma must be in [1, 10], got {g}")
+    return _jonswap(w, hs, tp, g)
+
+
+def _jonswap(w: ArrayLike, hs: float, tp: float, g: float) -> NDArray[np.float64]:
     w = np.asarray(w, dtype=float)
     wp = 2 * np.pi / tp
     sigma = np.where(w <= wp, 0.07, 0.09)
     peak = g ** np.exp(-((w - wp) ** 2) / (2 * sigma**2 * wp**2))
-    return (1.0 - 0.287 * math.log(g)) * pierson_moskowitz(w, hs, tp) * peak
+    return (1.0 - 0.287 * math.log(g)) * _pm(w, hs, tp) * peak
 
 
 # ----------------------------------------------------------------------------- Torsethaugen
@@ -190,6 +207,18 @@ def spectrum(name: str, w: ArrayLike, hs: float, tp: float) -> NDArray[np.float6
 
 
 # ----------------------------------------------------------------------------- periods
+def _tz(w: NDArray[np.float64], s: NDArray[np.float64]) -> float:
+    """Tz = 2π √(m0/m2) from S on ``w`` (0.2 ωp … 12 ωp), with the ω⁻⁵ tail beyond the grid."""
+    tail = s[-1] * w[-1] ** 5
+    m0 = np.trapezoid(s, w) + tail / (4 * w[-1] ** 4)
+    m2 = np.trapezoid(w**2 * s, w) + tail / (2 * w[-1] ** 2)
+    return float(2 * np.pi * math.sqrt(m0 / m2))
+
+
+def _grid(tp: float) -> NDArray[np.float64]:
+    return (2 * np.pi / tp) * np.geomspace(0.2, 12.0, 4000)
+
+
 def zero_crossing_period(name: str, hs: float, tp: float) -> float:
     """Mean zero up-crossing period Tz = 2π √(m0/m2) [s] of a spectrum (DNV-RP-C205 §3.5.2.3), m_n = ∫ωⁿ S dω.
 
@@ -197,23 +226,19 @@ def zero_crossing_period(name: str, hs: float, tp: float) -> float:
     m0 gets A/(4 ω_h⁴), m2 gets A/(2 ω_h²)); below 0.2 ωp every spectrum here is below 1e-100 of its peak
     (exp(−5/4 · 625)).  For Pierson–Moskowitz Tz = 0.710 Tp; for JONSWAP it matches DNV-RP-C205's fit
     Tz/Tp = 0.6673 + 0.05037 γ − 0.006230 γ² + 0.0003341 γ³ to 0.5 % (tests/test_scatter.py)."""
-    wp = 2 * np.pi / tp
-    w = wp * np.geomspace(0.2, 12.0, 4000)
-    s = spectrum(name, w, hs, tp)
-    tail = s[-1] * w[-1] ** 5
-    m0 = np.trapezoid(s, w) + tail / (4 * w[-1] ** 4)
-    m2 = np.trapezoid(w**2 * s, w) + tail / (2 * w[-1] ** 2)
-    return float(2 * np.pi * math.sqrt(m0 / m2))
+    w = _grid(tp)
+    return _tz(w, spectrum(name, w, hs, tp))
 
 
 def tp_from_tz(name: str, hs: float, tz: float) -> float:
     """The peak period Tp [s] whose ``name`` spectrum of height ``hs`` has the zero-crossing period ``tz``.
 
     Scatter diagrams of observed seas (IACS Rec. 34, Global Wave Statistics) give Tz; the spectra here are
-    parametrised by Tp.  Solved by bracketing Tp in [Tz, 1.5 Tz] (Tp/Tz is 1.24–1.41 for JONSWAP γ 5…1) and
-    Brent's method.  Single-peaked spectra only: Torsethaugen's Tz/Tp falls from 0.75 to below 0.2 as its swell
-    grows (Hs 0.5 m, Tp 3–28 s), so one Tz stands for very different seas and is refused.  A cell whose sea
-    would be steeper than a sea can be (``check_sea``) raises SeaStateError."""
+    parametrised by Tp.  Single-peaked spectra only: Torsethaugen's Tz/Tp falls from 0.75 to below 0.2 as its
+    swell grows (Hs 0.5 m, Tp 3–28 s), so one Tz stands for very different seas and is refused.  Tz/Tp of
+    Pierson–Moskowitz and JONSWAP depends on the shape alone (γ from Tp/√Hs), so the root is found over the
+    whole bracket Tp ∈ [Tz, 1.5 Tz] (Tp/Tz is 1.24–1.41 for γ 5…1; Tz rises with Tp) with Brent's method
+    before the sea is checked: a result out of range raises SeaStateError, a breaking one BreakingSeaError."""
     from scipy.optimize import brentq
 
     if name not in ("pm", "jonswap"):
@@ -223,27 +248,27 @@ def tp_from_tz(name: str, hs: float, tz: float) -> float:
         )
     if not (math.isfinite(hs) and math.isfinite(tz) and hs > 0 and tz > 0):
         raise SeaStateError(f"Hs and Tz must be positive numbers, got Hs {hs}, Tz {tz}")
-    grid = tz * np.linspace(1.0, 1.5, 21)
-    vals: list[float | None] = []
-    for tp in grid:
-        try:
-            vals.append(zero_crossing_period(name, hs, float(tp)) - tz)
-        except SeaStateError:
-            vals.append(None)  # too steep (or out of range) at this Tp
-    for k in range(len(grid) - 1):
-        a, b = vals[k], vals[k + 1]
-        if a is not None and b is not None and a <= 0.0 <= b:
-            if a == 0.0:
-                return float(grid[k])
-            return float(brentq(lambda t: zero_crossing_period(name, hs, t) - tz, grid[k], grid[k + 1], xtol=1e-6))
-    valid = [v for v in vals if v is not None]
-    if not valid:
-        check_sea(hs, float(grid[-1]))  # says why: out of range, or steeper than a sea can be
-    if vals[0] is None and valid and min(valid) > 0:  # the Tp that would give this Tz is a breaking sea
-        raise SeaStateError(
-            f"Hs {hs:g} m with Tz {tz:g} s is steeper than a sea can be for the {name} spectrum (DNV-RP-C205 §3.5.5.4)"
-        )
-    raise SeaStateError(f"no {name} sea of Hs {hs:g} m has Tz {tz:g} s (Tp searched in {grid[0]:.3g}–{grid[-1]:.3g} s)")
+
+    def tz_of(tp: float) -> float:
+        w = _grid(tp)
+        s = _pm(w, hs, tp) if name == "pm" else _jonswap(w, hs, tp, _dnv_gamma(hs, tp))
+        return _tz(w, s) - tz
+
+    lo, hi = tz, 1.5 * tz
+    f_lo, f_hi = tz_of(lo), tz_of(hi)
+    if f_lo > 0 or f_hi < 0:  # cannot happen for γ in [1, 5]; said rather than guessed
+        raise SeaStateError(f"no {name} sea of Hs {hs:g} m has Tz {tz:g} s (Tp searched in {lo:.3g}–{hi:.3g} s)")
+    tp = lo if f_lo == 0 else hi if f_hi == 0 else float(brentq(tz_of, lo, hi, xtol=1e-7))
+    try:
+        check_sea(hs, tp)
+    except BreakingSeaError:
+        raise BreakingSeaError(
+            f"Hs {hs:g} m with Tz {tz:g} s is steeper than a sea can be for the {name} spectrum "
+            f"(its Tp would be {tp:.3g} s; DNV-RP-C205 §3.5.5.4)"
+        ) from None
+    except SeaStateError as err:
+        raise SeaStateError(f"Tz {tz:g} s with Hs {hs:g} m: {err}") from None
+    return tp
 
 
 # ----------------------------------------------------------------------------- time series
