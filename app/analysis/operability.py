@@ -443,6 +443,7 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
                     textcoords="offset points", xytext=(0, 8), ha="center", fontsize=8)  # fmt: skip
     ax.set_ylim(0, 110)
     ax.set_yticks([20, 40, 60, 80, 100])
+    ax.set_rlabel_position(247.5)  # the percent scale between 225° and 270°, off the usual 0–180° headings
     ax.set_title(
         f"operability [%], {st.mode}, rms(e_c) ≤ {st.criterion:g} m\n{sc.source}, {st.spectrum}"
         " (heading: 0 following, 180 head sea)",
