@@ -67,9 +67,9 @@ SCATTERS = {"north-atlantic": "scatter_north_atlantic.csv"}
 def scatter_path(name_or_file: str | Path) -> Path:
     """A shipped diagram's file by name, else the path given."""
     if str(name_or_file) in SCATTERS:
-        import importlib.resources
+        from app.resources import marine_data
 
-        return Path(str(importlib.resources.files("app.marine") / "data" / SCATTERS[str(name_or_file)]))
+        return marine_data() / SCATTERS[str(name_or_file)]
     return Path(name_or_file)
 
 
@@ -91,7 +91,7 @@ def load_scatter(path: str | Path) -> Scatter:
         if line.strip() and not line.lstrip().startswith("#")
     ]  # fmt: skip
     if len(lines) < 2:
-        raise OperabilityError(f"{path}: a header row of peak periods and at least one row of Hs are needed")
+        raise OperabilityError(f"{path}: a header row of periods and at least one row of Hs are needed")
 
     def number(text: str, n: int, what: str, empty: float | None = None) -> float:
         text = text.strip()
@@ -115,17 +115,17 @@ def load_scatter(path: str | Path) -> Scatter:
         )
     period = corner[-2:]
     what = "peak period" if period == "tp" else "zero up-crossing period"
-    tp = np.array([number(c, n0, f"{what} (column {k + 2})") for k, c in enumerate(cells[1:])])
-    if tp.size == 0 or np.any(tp <= 0) or np.any(np.diff(tp) <= 0):
+    periods = np.array([number(c, n0, f"{what} (column {k + 2})") for k, c in enumerate(cells[1:])])
+    if periods.size == 0 or np.any(periods <= 0) or np.any(np.diff(periods) <= 0):
         raise OperabilityError(f"{path}:{n0}: {what}s must be positive and increasing")
     hs, rows = [], []
     for n, line in lines[1:]:
         row = next(csv.reader(io.StringIO(line)))
-        if len(row) != tp.size + 1:
-            raise OperabilityError(f"{path}:{n}: expected {tp.size + 1} fields, got {len(row)}")
+        if len(row) != periods.size + 1:
+            raise OperabilityError(f"{path}:{n}: expected {periods.size + 1} fields, got {len(row)}")
         hs.append(number(row[0], n, "Hs"))
         rows.append(
-            [number(c, n, f"{period.capitalize()} {t:g} s", empty=0.0) for c, t in zip(row[1:], tp, strict=True)]
+            [number(c, n, f"{period.capitalize()} {t:g} s", empty=0.0) for c, t in zip(row[1:], periods, strict=True)]
         )
     h = np.array(hs)
     if np.any(h <= 0) or np.any(np.diff(h) <= 0):
@@ -133,7 +133,7 @@ def load_scatter(path: str | Path) -> Scatter:
     p = np.array(rows)
     if p.sum() <= 0:
         raise OperabilityError(f"{path}: no cell has a probability above zero")
-    return Scatter(h, tp, p / p.sum(), source=name or str(path), period=period)
+    return Scatter(h, periods, p / p.sum(), source=name or str(path), period=period)
 
 
 def cell_periods(scatter: Scatter, spectrum: str) -> tuple[NDArray[np.float64], dict[tuple[int, int], str]]:
@@ -289,17 +289,18 @@ def run_study(
             for heading in study.headings:
                 for seed in range(1, study.seeds + 1):
                     p = cell_params(study, hs, tp, heading, seed, vid)
-                    if cell_key(p) in seen:  # two columns of one Hs that give the same Tp: one simulation
+                    key = cell_key(p)
+                    if key in seen:  # two columns of one Hs that give the same Tp: one simulation
                         continue
-                    seen.add(cell_key(p))
-                    f = cache / f"{cell_key(p)}.json"
+                    seen.add(key)
+                    f = cache / f"{key}.json"
                     if f.is_file():
                         try:
                             done.append(json.loads(f.read_text(encoding="utf-8")))
                             continue
                         except (OSError, ValueError):
                             pass  # a torn file: run the cell again
-                    todo.append(p)
+                    todo.append((key, p))
     total = len(todo) + len(done)
     cached = len(done)
     if progress is not None:
@@ -313,8 +314,8 @@ def run_study(
         try:
             n_workers = len(client.scheduler_info().get("workers", {}))
             address = client.scheduler.address
-            futures = client.map(run_cell, todo, vessel=study.vessel, pure=False)
-            keys = {fut.key: cell_key(p) for fut, p in zip(futures, todo, strict=True)}
+            futures = client.map(run_cell, [p for _, p in todo], vessel=study.vessel, pure=False)
+            keys = {fut.key: key for fut, (key, _) in zip(futures, todo, strict=True)}
             for fut in as_completed(futures):
                 res = fut.result()
                 key = keys[fut.key]

@@ -12,10 +12,10 @@ path to an RAO file (MSS ``.mat`` or Bosun's CSV, :func:`load_rao`).
 from __future__ import annotations
 
 import functools
-import importlib.resources
 from pathlib import Path
 
 from app.marine.vessel import RAOTable, VesselError, VesselParticulars, load_rao, load_rao_csv, parametric_rao
+from app.resources import marine_data
 
 DEFAULT_VESSEL = "supply"
 VESSELS = {
@@ -27,10 +27,7 @@ SHIPPED_TABLE = "supply_bem.csv"
 
 def shipped_table_path() -> Path:
     """The shipped BEM table of the default vessel (package data of ``app.marine``)."""
-    try:
-        return Path(str(importlib.resources.files("app.marine") / "data" / SHIPPED_TABLE))
-    except ModuleNotFoundError:  # pragma: no cover - app.marine is always importable here
-        return Path(__file__).resolve().parent / "data" / SHIPPED_TABLE
+    return marine_data() / SHIPPED_TABLE
 
 
 @functools.lru_cache(maxsize=1)
