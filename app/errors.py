@@ -16,6 +16,17 @@ def printable(text: str, limit: int) -> str:
     return "".join(ch if ch.isprintable() else "?" for ch in str(text))[:limit]
 
 
+def printable_path(text: str, limit: int) -> str:
+    """:func:`printable` for a path: a long one loses its middle ("…"), never its end, so the line still
+    names the file (a refusal that ended ".../outside/s" said nothing of which file it refused, and its
+    length depended on the machine's temporary folder: issue 28)."""
+    s = printable(text, len(str(text)))
+    if len(s) <= limit:
+        return s
+    head = max(1, (limit - 1) // 3)
+    return s[:head] + "…" + s[len(s) - (limit - 1 - head) :]
+
+
 class BosunError(Exception):
     """Base class of user-facing errors: the CLI prints ``str(err)`` and exits 2."""
 

@@ -54,8 +54,9 @@ def test_velocity_mode_moves_tool_along_the_stick():
 def test_velocity_release_stops_and_holds():
     ses = Session(mode="velocity")
     t = run(ses, 0.5, sample(x=1.0), t0=arm(ses))
+    t = run(ses, DT, sample(), t0=t)  # stick released: the reference is where the joints can stop
     q_ref = np.array(ses.snapshot().q_ref)
-    t = run(ses, 0.5, sample(), t0=t)  # stick released: the reference no longer moves
+    t = run(ses, 0.5, sample(), t0=t)  # and no longer moves
     np.testing.assert_array_equal(ses.snapshot().q_ref, q_ref)
     p_a = np.array(ses.snapshot().tool)
     run(ses, 0.5, sample(), t0=t)

@@ -120,6 +120,7 @@ class Session(Scene):
         self.stale = True
         self.signal = np.zeros(3)
         self.command_point = None  # the operator's command as a point (eq. 1, or eq. 7 integrated)
+        self._position_answered = False  # position mode: the solver reached the resting stick's point
         self.solver_cost = math.nan
         self.solver_time = 0.0
         self.solver_ok = True
@@ -286,8 +287,13 @@ class Session(Scene):
         self.input.feed(sample, now, released)
 
     # ------------------------------------------------------------------ control tick
-    def _hold(self) -> None:
-        self.q_ref = self.actuators.q.copy()
+    def _hold(self, dt: float) -> None:
+        """Hold: the reference is where the joints come to rest braking now (issue 26, item 1).
+
+        Nearer (the joints where they are) asks the servo for a stop it cannot make without
+        overshooting; farther (the last commanded reference, which leads the joints while they
+        accelerate) moves the machine on after the operator stopped commanding."""
+        self.q_ref = self.actuators.stopping_point(dt)
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
         """One control step of length dt [s] at engine time ``now`` [s]."""
@@ -304,7 +310,7 @@ class Session(Scene):
         self.signal = inp.raw_signal[:3].copy()
         if self.estop_latched:
             self.actuators.stop()
-            self._hold()
+            self._hold(dt)
             self.command_point = None
             self._check_alarms(None, dt)
             return
@@ -312,7 +318,7 @@ class Session(Scene):
             self.set_mode("position" if self.mode == "velocity" else "velocity")
             self.enabled = False
         if not self.enabled:
-            self._hold()
+            self._hold(dt)
             self.command_point = None
             self.actuators.step(self.q_ref, dt)
             self._check_alarms(None, dt)
@@ -322,10 +328,10 @@ class Session(Scene):
         budget = DEFAULT if solve_budget is None else solve_budget
         xdot = None
         if self.mode == "position":
-            self.command_point = position_target(s, self.scaling.k_p, self.scaling.x_w)  # eq. (1)
-            res = self.solver.solve_position(self.command_point, self.q_ref, time_budget=budget)
-            self.q_ref = res.q
-            self.target = np.asarray(self.command_point, dtype=float)
+            point = position_target(s, self.scaling.k_p, self.scaling.x_w)  # eq. (1)
+            res = self._solve_position(point, budget)
+            self.command_point = point
+            self.target = np.asarray(point, dtype=float)
         else:
             xdot = velocity_command(s, self.scaling.k_v)  # eq. (2)
             x_ref = self.robot.position(self.q_ref)
@@ -337,13 +343,35 @@ class Session(Scene):
                 self.target = x_ref + xdot * dt  # eq. (7): the solver's target this tick
                 self.q_ref = res.q
             else:
-                res = None  # released stick: stop and keep the last position
+                res = None  # centred stick: brake to the nearest stop and hold there
+                if self.command_point is not None:
+                    self._hold(dt)
                 self.command_point = None
-                self.target = x_ref
+                self.target = self.robot.position(self.q_ref)
         if res is not None:
             self.solver_cost, self.solver_time, self.solver_ok = res.error, res.time_s, res.success
         self.actuators.step(self.q_ref, dt)
         self._check_alarms(xdot, dt, q_ref_before)
+
+    def _solve_position(self, point: np.ndarray, budget):
+        """Eq. (3) for the stick's point, as a hold where the stick rests (issue 26, item 1).
+
+        A command that has not moved (within 1 µm) is a hold: once answered, the reference stays; while
+        unanswered (out of reach, or the budget spent), a new answer is taken only when it brings the tool
+        nearer the point by at least a millimetre.  Re-solving a resting stick's point every tick let a
+        solver's restarts and a GA's population move the arm with nobody touching the stick."""
+        still = self.command_point is not None and float(np.max(np.abs(point - self.command_point))) <= 1e-6
+        if still and self._position_answered:
+            return None
+        res = self.solver.solve_position(point, self.q_ref, time_budget=budget)
+        if still:
+            now_error = float(np.linalg.norm(self.robot.position(self.q_ref) - point))
+            if not res.error < now_error - 1e-3:
+                self._position_answered = self._position_answered or res.success
+                return res
+        self.q_ref = res.q
+        self._position_answered = bool(res.success)
+        return res
 
     # ------------------------------------------------------------------ alarms
     def _check_alarms(self, xdot, dt: float, q_before=None) -> None:

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from app.errors import RobotNotFoundError, RobotTypeError, printable
+from app.errors import RobotNotFoundError, RobotTypeError, printable_path
 from app.models.delta import DeltaHead
 from app.models.serial import SerialRobot
 from app.models.spec import RobotSpec
@@ -112,7 +112,7 @@ def resolve_allowed(name_or_path: str, folders: Sequence[Path]) -> Path:
 
 
 def _quoted(text: str) -> str:
-    return repr(printable(text, 80))
+    return repr(printable_path(text, 120))
 
 
 def load_spec(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> RobotSpec:

@@ -29,8 +29,37 @@ def braking_speed(distance: ArrayLike, accel: ArrayLike, dt: float) -> NDArray[n
     return np.where(finite, v, d / dt)
 
 
+def braking_distance(speed: ArrayLike, accel: ArrayLike, dt: float) -> NDArray[np.float64]:
+    """Distance an axis moving at ``speed`` covers while braking at ``accel``, step by step, from the next
+    step on: dt·Σ_{i=1..m} (|v| − i·a·dt), m = ⌊|v|/(a·dt)⌋ (signed as the speed; 0 with no acceleration
+    limit).  The stopping point q + braking_distance(q̇) is where a hold can keep the axis: a nearer
+    reference cannot be reached without overshooting it, a farther one moves the axis after the command
+    to stop."""
+    v = np.asarray(speed, dtype=float)
+    a = np.asarray(accel, dtype=float)
+    finite = np.isfinite(a) & (a > 0)
+    h = np.where(finite, a, 1.0) * dt
+    s = np.abs(v)
+    m = np.floor(s / h)
+    d = dt * (m * s - 0.5 * h * m * (m + 1.0))
+    return np.where(finite, np.sign(v) * np.maximum(d, 0.0), 0.0)
+
+
+def approach_speed(e: ArrayLike, v_brake: ArrayLike, tau: float) -> NDArray[np.float64]:
+    """A servo's speed towards a reference ``e`` ahead [rad or m]: e/τ, bounded by ``v_brake``, the speed
+    from which the axis still stops at the reference (:func:`braking_speed` of |e|).
+
+    The proportional law alone asks for speeds an acceleration-limited axis cannot brake from, overshoots,
+    and answers its overshoot the same way: a bang-bang oscillation that keeps its energy (issue 26,
+    item 1).  With the bound, the approach is time-optimal near the reference and ends there.
+    """
+    e = np.asarray(e, dtype=float)
+    return np.clip(e / tau, -np.asarray(v_brake, dtype=float), v_brake)
+
+
 class JointActuators:
-    """Per-joint first-order servo: q̇_des = (q_ref − q)/τ, then limited.
+    """Per-joint servo: q̇_des = (q_ref − q)/τ, bounded by the braking speed towards q_ref
+    (:func:`approach_speed`), then limited.
 
     Each step the desired speed is clipped to the intersection of the speed limit, the change
     the acceleration limit allows in one step and the exact discrete braking speed towards each
@@ -91,8 +120,9 @@ class JointActuators:
 
     def _step_reference(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
         q_ref = np.clip(np.asarray(q_ref, dtype=float), self.lower, self.upper)
-        gap = np.abs(q_ref - self.q) / dt
-        v_des = np.clip((q_ref - self.q) / self.tau, -gap, gap)  # never past the reference in one step
+        e = q_ref - self.q
+        gap = np.abs(e) / dt
+        v_des = np.clip(approach_speed(e, self._braking_speed(np.abs(e), dt), self.tau), -gap, gap)
         # the admissible speeds: acceleration, speed and exact braking towards each limit (as MotionFilter)
         dv = self.accel * dt
         hi = np.minimum(np.minimum(self.qdot + dv, self.speed), self._braking_speed(self.upper - self.q, dt))
@@ -103,6 +133,10 @@ class JointActuators:
         self.qddot = (v - self.qdot) / dt
         self.q, self.qdot = q_new, v
         return self.q
+
+    def stopping_point(self, dt: float) -> NDArray[np.float64]:
+        """Where the joints come to rest braking at their acceleration limits from now (within the limits)."""
+        return np.clip(self.q + braking_distance(self.qdot, self.accel, dt), self.lower, self.upper)
 
     def stop(self) -> None:
         """E-STOP: speed zero now."""

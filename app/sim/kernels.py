@@ -32,6 +32,7 @@ from app.models.kernels import ENABLED, _jit
 __all__ = [
     "ENABLED",
     "actuator_step",
+    "approach_speed",
     "braking_speed",
     "clamp_to_legs",
     "comau_ik",
@@ -67,14 +68,37 @@ def braking_speed(d, a, dt):
 
 
 @_jit
+def approach_speed(e, v_brake, tau):
+    """The servo's speed towards a reference ``e`` ahead: e/τ, but never above ``v_brake``, the speed from
+    which the joint can still stop at the reference (:func:`braking_speed` of |e|).
+
+    A proportional law alone asks for |e|/τ, far more than an acceleration-limited joint can brake from
+    (τ = 50 ms against a crane's seconds of braking): it overshoots, and the overshoot is answered the same
+    way, a bang-bang oscillation that keeps its energy, x'' = −a·sign(x) (issue 26, item 1: a centred
+    stick moved the crane back and forth for seconds).  Bounded by the braking speed it is the
+    time-optimal approach of a bang-bang servo near the reference ("square-root" law), and stops there.
+    """
+    p = e / tau
+    if p > v_brake:
+        return v_brake
+    if p < -v_brake:
+        return -v_brake
+    return p
+
+
+@_jit
 def motion_filter_update(x, v, a, x_ref, v_ref, use_v_ref, lower, upper, speed, accel, brake, tau, dt, speed_scale):
     """One :meth:`MotionFilter.step` in place: x, v, a become x⁺, v⁺, a (x_ref may be x itself); ``brake``
     (≤ accel) is the deceleration of the velocity bound at the position limits."""
     n = x.shape[0]
     up = braking_speed(upper - x, brake, dt)
     down = braking_speed(x - lower, brake, dt)
+    gap = np.empty(n)
     for i in range(n):
-        v_des = (x_ref[i] - x[i]) / max(tau, dt)
+        gap[i] = abs(x_ref[i] - x[i])
+    toward = braking_speed(gap, accel, dt)
+    for i in range(n):
+        v_des = approach_speed(x_ref[i] - x[i], toward[i], max(tau, dt))
         if use_v_ref:
             v_des = v_des + v_ref[i]
         vmax = speed[i] * speed_scale
@@ -105,11 +129,14 @@ def actuator_step(q, qdot, q_ref, lower, upper, speed, accel, tau, dt):
     n = q.shape[0]
     up = braking_speed(upper - q, accel, dt)
     down = braking_speed(q - lower, accel, dt)
+    e = np.empty(n)
+    for i in range(n):
+        e[i] = min(max(q_ref[i], lower[i]), upper[i]) - q[i]
+    toward = braking_speed(np.abs(e), accel, dt)
     q_new, v_new, a_new = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
-        r = min(max(q_ref[i], lower[i]), upper[i])
-        gap = abs(r - q[i]) / dt
-        v_des = min(max((r - q[i]) / tau, -gap), gap)  # never past the reference in one step
+        gap = abs(e[i]) / dt
+        v_des = min(max(approach_speed(e[i], toward[i], tau), -gap), gap)  # never past the reference in one step
         dv = accel[i] * dt
         hi = min(min(qdot[i] + dv, speed[i]), up[i])
         lo = max(max(qdot[i] - dv, -speed[i]), -down[i])

@@ -43,7 +43,7 @@ from app.marine.waves import spectrum as sea_spectrum
 from app.marine.waves import wave_components
 from app.models.stewart import StewartPlatform
 from app.sim import kernels as sim_kernels
-from app.sim.actuators import braking_speed
+from app.sim.actuators import approach_speed, braking_speed
 
 MODES = ("settled", "neutral", "engaged")
 SOURCES = ("simulation", "generator", "remote", "timeseries")
@@ -61,8 +61,9 @@ class PlatformError(BosunError):
 class MotionFilter:
     """Per-DOF limiter: position, velocity and acceleration never pass their limits.
 
-    Each step the new velocity v⁺ is the desired one (feed-forward v_ref + (x_ref − x)/τ) clipped
-    to the intersection of
+    Each step the new velocity v⁺ is the desired one (feed-forward v_ref + (x_ref − x)/τ, the
+    correction bounded by the braking speed towards x_ref: :func:`~app.sim.actuators.approach_speed`)
+    clipped to the intersection of
     [v − a·dt, v + a·dt] (acceleration), [−v_max, v_max] (speed) and the braking speed towards
     each position limit (:meth:`_braking`, exact for the discrete steps, last partial step
     included); then x⁺ = x + v⁺ dt.  Because the braking speed is exact, by induction the
@@ -145,8 +146,8 @@ class MotionFilter:
     def _step_reference(
         self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
     ) -> NDArray[np.float64]:
-        x_ref = np.asarray(x_ref, dtype=float)
-        v_des = (x_ref - self.x) / max(self.tau, dt)
+        e = np.asarray(x_ref, dtype=float) - self.x
+        v_des = approach_speed(e, braking_speed(np.abs(e), self.accel, dt), max(self.tau, dt))
         if v_ref is not None:
             v_des = v_des + np.asarray(v_ref, dtype=float)
         vmax = self.speed * speed_scale

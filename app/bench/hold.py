@@ -1,0 +1,135 @@
+"""Hold means hold: seeded random stick sequences that end at rest, and how far the tool moves after.
+
+Issue 26, item 1.  A sequence arms the input, then drives the teleop scene (:class:`~app.engine.session.Session`)
+through random stick segments with the deadman held, and ends with the stick *still*: centred in
+velocity mode, resting at its last deflection in position mode.  From that moment the machine must
+come to rest within its braking distance and stay there.  Measured per sequence:
+
+* ``overrun`` [m]: velocity mode, how far the rest point lies from where the joints stop when each
+  brakes at its acceleration limit from the moment the stick is centred
+  (:meth:`~app.sim.actuators.JointActuators.stopping_point`), as tool positions; position mode, how far
+  the rest point lies from the solver's answer for the resting stick (the machine goes there and no
+  farther);
+* ``drift`` [m]: once at rest, the largest tool displacement over the rest of the hold window;
+* ``settle_s`` [s]: from the last stick change to rest (joints below 0.1 % of their speed limits), or
+  ``inf`` when the machine never came to rest (a limit cycle).
+
+The worst of ``overrun`` and ``drift`` is the sequence's figure of merit; the property holds when it is
+below 1 cm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.engine.session import Session
+from app.teleop.devices import InputSample
+
+#: the property's bound on overrun and drift [m] (issue 26: 1 cm)
+HOLD_TOLERANCE = 0.01
+
+
+@dataclass(frozen=True)
+class HoldRun:
+    """One sequence's outcome (lengths in metres, times in seconds)."""
+
+    seed: int
+    overrun: float
+    drift: float
+    settle_s: float
+    travel: float  # tool path length while the stick moved (a sequence that never moved tests nothing)
+
+    @property
+    def worst(self) -> float:
+        return max(self.overrun, self.drift) if math.isfinite(self.settle_s) else math.inf
+
+
+def stick_sequence(rng: np.random.Generator, mode: str, segments: int = 4) -> list[tuple[np.ndarray, float]]:
+    """Random (stick, seconds) segments: deflections uniform in [−1, 1]³ (some axes centred, some at full
+    deflection), 0.05–1.5 s each, some of them brief taps; the last one is the hold: centred in velocity
+    mode, a random deflection in position mode (the stick resting there)."""
+    out = []
+    for _ in range(segments):
+        s = rng.uniform(-1.0, 1.0, 3)
+        s[rng.random(3) < 0.25] = 0.0
+        full = rng.random(3) < 0.15
+        s[full] = np.sign(s[full] + 1e-9)
+        length = rng.choice([rng.uniform(0.05, 0.25), rng.uniform(0.25, 1.5)])
+        out.append((s, float(length)))
+    last = np.zeros(3) if mode == "velocity" else rng.uniform(-1.0, 1.0, 3)
+    out.append((last, -1.0))
+    return out
+
+
+def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 2.0):
+    """Drive ``session`` through ``seq`` (from :func:`stick_sequence`) at ``rate`` Hz; a :class:`HoldRun`.
+
+    The solver gets the engine's per-tick budget (40 % of the tick).  The hold segment runs until the
+    joints are at rest, then ``hold_s`` more.  A machine not at rest after crossing its slowest joint's
+    whole range, braking twice and 5 s more did not settle.
+    """
+    dt = 1.0 / rate
+    budget = 0.4 * dt
+    t = 0.0
+    robot = session.robot
+    brake = np.where(np.isfinite(robot.accel), robot.speed / robot.accel, 0.0)
+    settle_limit_s = float(np.max((robot.upper - robot.lower) / robot.speed + 2.0 * brake)) + 5.0
+    rest_speed = 1e-3 * robot.speed
+
+    def step(stick, enable=True):
+        nonlocal t
+        t += dt
+        session.feed(InputSample(tuple(float(v) for v in stick), (enable,), "hold-study"), t)
+        session.tick(t, dt, solve_budget=budget)
+
+    for enable in (False, True):  # arm: centred with the deadman released, then pressed
+        for _ in range(3):
+            step((0.0, 0.0, 0.0), enable)
+    travel = 0.0
+    p_prev = robot.position(session.actuators.q)
+    for stick, seconds in seq[:-1]:
+        for _ in range(max(1, round(seconds / dt))):
+            step(stick)
+            p = robot.position(session.actuators.q)
+            travel += float(np.linalg.norm(p - p_prev))
+            p_prev = p
+    stick = seq[-1][0]
+    step(stick)  # the stick comes to rest: from here the machine must stop within its braking distance
+    if session.mode == "velocity":
+        expected = robot.position(session.actuators.stopping_point(dt))
+    t0 = t
+    settled = math.inf
+    while t - t0 < settle_limit_s:
+        step(stick)
+        if np.all(np.abs(session.actuators.qdot) <= rest_speed):
+            settled = t - t0
+            break
+    p_rest = robot.position(session.actuators.q)
+    if session.mode == "position":
+        expected = robot.position(session.q_ref)
+    drift = 0.0
+    n_hold = round(hold_s / dt) if math.isfinite(settled) else 0
+    for _ in range(n_hold):
+        step(stick)
+        drift = max(drift, float(np.linalg.norm(robot.position(session.actuators.q) - p_rest)))
+    if not math.isfinite(settled):
+        drift = float(np.linalg.norm(robot.position(session.actuators.q) - p_rest))
+    overrun = float(np.linalg.norm(p_rest - expected))
+    return HoldRun(seed=seed, overrun=overrun, drift=drift, settle_s=settled, travel=travel)
+
+
+def hold_study(
+    robot: str, solver: str, mode: str, sequences: int, seed: int = 0, rate: float = 1000.0, progress=None
+) -> list[HoldRun]:
+    """``sequences`` seeded sequences on one robot × solver × mode, each on a fresh scene."""
+    runs = []
+    for k in range(sequences):
+        rng = np.random.default_rng([seed, k])
+        ses = Session(robot_name=robot, solver_name=solver, mode=mode, seed=seed + k)
+        runs.append(run_sequence(ses, stick_sequence(rng, mode), seed=k, rate=rate))
+        if progress is not None:
+            progress(k + 1, sequences)
+    return runs
