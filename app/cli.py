@@ -54,6 +54,16 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"'{text}' must be positive")
+    return value
+
+
 # ---------------------------------------------------------------------------- output
 def _print_json(obj: Any) -> None:
     print(json.dumps(obj, indent=2, allow_nan=False))
@@ -1077,6 +1087,63 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench_hold(args: argparse.Namespace) -> int:
+    from app.bench.hold import HOLD_TOLERANCE, bench_hold
+    from app.models.registry import list_robots, load_spec
+
+    robots = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
+    if not 1.0 <= args.rate <= 1000.0:
+        raise BosunError(f"--rate must be between 1 and 1000 Hz, got {args.rate:g}")
+    rows = bench_hold(
+        robots, tuple(args.modes), args.sequences, seed=args.seed, rate=args.rate, workers=args.workers,
+        progress=_progress_bar("hold", unit="sequence"),
+    )  # fmt: skip
+    if args.json:
+        _print_json({"benchmark": "hold", "machine": _machine(), "rate": args.rate, "results": rows})
+        return 0
+    print(f"bosun bench hold: {args.sequences} seeded stick sequences per case ending still, {args.rate:g} Hz")
+    print(f"held: overrun past the braking stop and drift once at rest both < {HOLD_TOLERANCE * 100:g} cm")
+    print(
+        _table(
+            ["robot", "solver", "mode", "held", "max overrun [mm]", "max drift [mm]", "slowest settle [s]"],
+            [
+                [
+                    r["robot"],
+                    r["solver"],
+                    r["mode"],
+                    f"{r['held']}/{r['sequences']}",
+                    f"{r['max_overrun_m'] * 1e3:.3f}",
+                    f"{r['max_drift_m'] * 1e3:.3f}",
+                    f"{r['max_settle_s']:.2f}",
+                ]
+                for r in rows
+            ],
+        )
+    )
+    return 0 if all(r["held"] == r["sequences"] for r in rows) else 1
+
+
+def cmd_alarms(args: argparse.Namespace) -> int:
+    from dataclasses import asdict
+
+    from app.engine.alarm_catalog import CATALOG, SOURCES, reference_markdown
+
+    if args.markdown:
+        sys.stdout.write(reference_markdown())
+        return 0
+    if args.json:
+        _print_json({"alarms": [asdict(a) for a in CATALOG]})
+        return 0
+    print(
+        _table(
+            ["key", "priority", "source", "alarm", "operator action"],
+            [[a.key, a.priority, ", ".join(SOURCES[s] for s in a.sources), a.title, a.action] for a in CATALOG],
+            last_col_max=70,
+        )
+    )
+    return 0
+
+
 def cmd_bench_loop(args: argparse.Namespace) -> int:
     from app.bench.loop import bench_loop
 
@@ -1275,6 +1342,21 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated time [s] (default 20)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_sim)
+    b = bench.add_parser(
+        "hold", help="hold means hold: seeded stick sequences ending still, tool drift after braking (issue 26)"
+    )
+    b.add_argument("--sequences", type=_positive_int, default=1000, help="sequences per robot × solver × mode")
+    b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
+    b.add_argument("--modes", nargs="+", choices=["velocity", "position"], default=["velocity", "position"])
+    b.add_argument("--rate", type=float, default=1000.0, help="engine rate [Hz] (default 1000, as the engine runs)")
+    b.add_argument("--seed", type=int, default=0, help="seed of the stick sequences (default 0)")
+    b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_hold)
+    p = sub.add_parser("alarms", help="the alarm reference: every alarm, its cause, consequence and action")
+    p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_alarms)
 
     p = sub.add_parser(
         "study", help="studies on a Dask cluster: study operability (scatter diagram × headings × seeds)"

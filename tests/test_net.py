@@ -36,6 +36,7 @@ def test_round_trip_every_client_message():
         "set_scaling": {"k_p": [1.0, 1.0, 1.0], "x_w": [0.0, 1.0, 2.0], "k_v": [0.1, 0.1, 0.1]},
         "estop": {"reason": "test", "token": "t"},
         "ack_alarm": {"key": "estop"},
+        "shelve_alarm": {"key": "plc_symbols", "minutes": 10.0},
         "reset": {},
         "release_operator": {},
         "set_sea": {"spectrum": "torsethaugen", "hs": 3.0, "tp": 9.0, "heading": 135.0},

@@ -122,14 +122,88 @@ def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 
 
 
 def hold_study(
-    robot: str, solver: str, mode: str, sequences: int, seed: int = 0, rate: float = 1000.0, progress=None
+    robot: str,
+    solver: str,
+    mode: str,
+    sequences: int,
+    seed: int = 0,
+    rate: float = 1000.0,
+    progress=None,
+    first: int = 0,
 ) -> list[HoldRun]:
-    """``sequences`` seeded sequences on one robot × solver × mode, each on a fresh scene."""
+    """``sequences`` seeded sequences (numbers ``first`` … ``first + sequences − 1``) on one robot × solver ×
+    mode, each on a fresh scene."""
     runs = []
-    for k in range(sequences):
+    for k in range(first, first + sequences):
         rng = np.random.default_rng([seed, k])
         ses = Session(robot_name=robot, solver_name=solver, mode=mode, seed=seed + k)
         runs.append(run_sequence(ses, stick_sequence(rng, mode), seed=k, rate=rate))
         if progress is not None:
-            progress(k + 1, sequences)
+            progress(k + 1 - first, sequences)
     return runs
+
+
+CHUNK = 20  # sequences per worker task
+
+
+def _chunk(task) -> tuple[tuple, list[HoldRun]]:
+    case, first, n, seed, rate = task
+    return case, hold_study(*case, sequences=n, seed=seed, rate=rate, first=first)
+
+
+def summarise(case: tuple, runs: list[HoldRun]) -> dict:
+    """One case's row: how many sequences held, the largest overrun and drift, the slowest settle."""
+    worst = max(runs, key=lambda r: r.worst)
+    settled = [r.settle_s for r in runs if math.isfinite(r.settle_s)]
+    return {
+        "robot": case[0],
+        "solver": case[1],
+        "mode": case[2],
+        "sequences": len(runs),
+        "held": sum(r.worst < HOLD_TOLERANCE for r in runs),
+        "max_overrun_m": max(r.overrun for r in runs),
+        "max_drift_m": max(r.drift for r in runs),
+        "worst_m": worst.worst,
+        "worst_sequence": worst.seed,
+        "never_settled": len(runs) - len(settled),
+        "max_settle_s": max(settled, default=math.inf),
+    }
+
+
+def bench_hold(
+    robots: list[str],
+    modes: tuple[str, ...],
+    sequences: int,
+    seed: int = 0,
+    rate: float = 1000.0,
+    workers: int = 1,
+    progress=None,
+) -> list[dict]:
+    """Every robot × solver × mode, ``sequences`` seeded sequences each, on ``workers`` processes; one row a
+    case (:func:`summarise`).  ``progress(done, total)`` counts sequences."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    from app.ik import solvers_for
+    from app.models.registry import load_robot
+
+    cases = [(r, s, m) for r in robots for s in solvers_for(load_robot(r)) for m in modes]
+    tasks = [(c, k, min(CHUNK, sequences - k), seed, rate) for c in cases for k in range(0, sequences, CHUNK)]
+    runs: dict[tuple, list[HoldRun]] = {c: [] for c in cases}
+    total, done = len(cases) * sequences, 0
+
+    def take(case, chunk):
+        nonlocal done
+        runs[case] += chunk
+        done += len(chunk)
+        if progress is not None:
+            progress(done, total)
+
+    if workers <= 1:
+        for t in tasks:
+            take(*_chunk(t))
+    else:
+        with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+            for case, chunk in pool.map(_chunk, tasks):
+                take(case, chunk)
+    return [summarise(c, runs[c]) for c in cases]

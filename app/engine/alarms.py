@@ -1,20 +1,32 @@
-"""Engine alarms: conditions an operator must notice, with raise / clear / acknowledge and first-out.
+"""Engine alarms, managed as ANSI/ISA-18.2 describes: rationalised, delayed against chatter, shelvable.
 
 Each engine scene keeps one :class:`AlarmList`.  Every control tick it states each condition
-(``set(key, active, ...)``); an alarm is *raised* when its condition becomes true, *cleared*
-when it becomes false, and stays in the list until it is both cleared and acknowledged (the
-usual ISA-18.2 life cycle: an alarm that came and went unseen still asks to be acknowledged).
-The first alarm raised while no other was active is marked *first-out*: in a cascade (E-STOP,
-then every machine at rest reporting its limits) it names the cause.
+(``set(key, active)``, or ``set(key, value=…)`` for an analog one); an alarm is *raised* when its
+condition has held for the definition's on-delay, *cleared* when it has been gone for the off-delay
+(analog alarms clear only below ``limit − deadband``), and stays in the list until it is both cleared
+and acknowledged (the ISA-18.2 life cycle: an alarm that came and went unseen still asks to be
+acknowledged).  Priority, delays and deadbands come from the rationalisation table
+(:mod:`app.engine.alarm_catalog`), never from the call site.
+
+*First-out*: the first **trip** alarm (one that stops or holds the machine) raised while no other trip
+alarm was active; in a cascade (E-STOP, then inputs going stale and machines reporting limits) it
+names the cause.  Warnings that stop nothing never take the mark.
+
+*Shelving* (ISA-18.2 §12.3): the operator may shelve a shelvable alarm for a limited time
+(:data:`~app.engine.alarm_catalog.SHELVE_MAX_S`); it stays tracked but does not annunciate, and it
+returns by itself when the time is up.  Both are log lines.
 
 Published in every snapshot as ``alarms``: a list of dicts (see :meth:`AlarmList.snapshot`).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+
+from app.engine.alarm_catalog import SHELVE_MAX_S, AlarmDef, definition
 
 SEVERITIES = ("info", "warning", "critical")
 
@@ -31,6 +43,7 @@ class Alarm:
     t_cleared: float | None
     first_out: bool
     count: int = 1
+    shelved_until: float | None = None  # wall-clock time the shelving ends (None: not shelved)
 
 
 class AlarmList:
@@ -39,9 +52,10 @@ class AlarmList:
     Parameters
     ----------
     source : str
-        Default source shown with each alarm (e.g. "teleop", "crane head", "Motion-Lab").
+        Source shown with each alarm: the engine, as the operator names it ("Teleop", "Crane head",
+        "Motion-Lab", "GUI").
     note : callable(level, text), optional
-        Receives a log line when an alarm is raised or cleared.
+        Receives a log line when an alarm is raised, cleared, shelved or unshelved.
     clock : callable, optional
         Wall-clock seconds for the time stamps (default ``time.time``).
     """
@@ -51,50 +65,90 @@ class AlarmList:
         self._note = note or (lambda level, text: None)
         self._clock = clock
         self.items: dict[str, Alarm] = {}
-        self._streak: dict[str, tuple[bool, int]] = {}
+        self._since: dict[str, tuple[bool, float]] = {}  # key -> (condition, engine time it became so)
+        self._now: float | None = None
+        self._shelf_end: dict[str, float] = {}  # key -> engine time its shelving ends
+        self.raised = 0  # alarms raised since start (the rate benchmarks count them)
 
+    # ------------------------------------------------------------------ time
+    def at(self, now: float) -> None:
+        """The engine's (monotonic) time of this tick: on- and off-delays count in it, and shelving ends."""
+        self._now = now
+        self._expire_shelving()
+
+    def _time(self) -> float:
+        return time.monotonic() if self._now is None else self._now
+
+    # ------------------------------------------------------------------ conditions
     def set(
         self,
         key: str,
-        active: bool,
-        severity: str = "warning",
+        active: bool | None = None,
+        severity: str | None = None,
         text: str = "",
         source: str | None = None,
-        debounce: int = 1,
+        *,
+        value: float | None = None,
     ) -> None:
         """State a condition; raises, updates or clears the alarm ``key``.
 
-        ``debounce``: the condition must hold (or be gone) on this many consecutive calls before the
-        alarm is raised (or cleared), so a condition that flickers tick by tick is one alarm, not many.
+        ``value``: an analog alarm's measure (``active`` then follows from the definition's limit and
+        deadband).  ``severity`` is taken only for a key the rationalisation table does not know (it
+        should know every key: a test holds it so).
         """
+        d = definition(key)
+        a = self.items.get(key)
+        is_on = a is not None and a.active
+        if value is not None and d is not None and d.analog:
+            v = float(value)
+            active = math.isfinite(v) and (v > d.limit if not is_on else v > d.limit - d.deadband)
+        active = bool(active)
+        if severity is None or d is not None:
+            severity = d.priority if d is not None else "warning"
         if severity not in SEVERITIES:
             raise ValueError(f"severity must be one of {SEVERITIES}, got {severity!r}")
-        if debounce > 1:
-            last, n = self._streak.get(key, (active, 0))
-            n = n + 1 if last == active else 1
-            self._streak[key] = (active, n)
-            current = self.items.get(key)
-            if n < debounce and (current is not None and current.active) != active:
-                return
-        a = self.items.get(key)
-        if active:
-            if a is None or not a.active:
-                first = not any(x.active for x in self.items.values())
-                if a is None:
-                    a = Alarm(key, severity, source or self.source, text, True, False, self._clock(), None, first)
-                    self.items[key] = a
-                else:  # raised again before it was acknowledged: one entry, counted
-                    a.active, a.acked, a.t_cleared, a.first_out = True, False, None, first
-                    a.t_raised, a.count = self._clock(), a.count + 1
-                    a.severity, a.text = severity, text or a.text
-                self._note("error" if severity == "critical" else "warning", f"ALARM {a.source}: {a.text}")
-            elif text and text != a.text:
+        if not self._delayed(key, active, is_on, d):
+            if is_on and text and text != a.text:
                 a.text = text  # a live figure (e.g. % of time saturated)
-        elif a is not None and a.active:
+            return
+        if active:
+            self._raise(key, d, severity, text, source)
+        elif is_on:
             a.active, a.t_cleared = False, self._clock()
-            self._note("info", f"alarm cleared {a.source}: {a.text}")
+            self._note("info", f"alarm cleared, {a.source}: {a.text}")
             self._drop_done()
 
+    def _delayed(self, key: str, active: bool, is_on: bool, d: AlarmDef | None) -> bool:
+        """Whether a change of the condition has lasted its delay (True: act on it now)."""
+        now = self._time()
+        last, since = self._since.get(key, (active, now))
+        if last != active:
+            since = now
+        self._since[key] = (active, since)
+        if active == is_on:
+            return active  # no change: an active alarm may still take a new text
+        delay = 0.0 if d is None else (d.on_delay if active else d.off_delay)
+        return now - since >= delay - 1e-9
+
+    def _raise(self, key: str, d: AlarmDef | None, severity: str, text: str, source: str | None) -> None:
+        a = self.items.get(key)
+        if a is not None and a.active:
+            return
+        trip = d is not None and d.trip
+        first = trip and not any(x.active and _is_trip(x.key) for x in self.items.values())
+        text = text or (d.title if d is not None else key)
+        if a is None:
+            a = Alarm(key, severity, source or self.source, text, True, False, self._clock(), None, first)
+            self.items[key] = a
+        else:  # raised again before it was acknowledged: one entry, counted
+            a.active, a.acked, a.t_cleared, a.first_out = True, False, None, first
+            a.t_raised, a.count = self._clock(), a.count + 1
+            a.severity, a.text = severity, text
+        self.raised += 1
+        if a.shelved_until is None:
+            self._note("error" if severity == "critical" else "warning", f"ALARM {a.source}: {a.text}")
+
+    # ------------------------------------------------------------------ operator actions
     def ack(self, key: str | None = None) -> int:
         """Acknowledge one alarm (by key) or all (None); returns how many were newly acknowledged."""
         n = 0
@@ -105,14 +159,57 @@ class AlarmList:
         self._drop_done()
         return n
 
+    def shelve(self, key: str, seconds: float, who: str = "the operator") -> str:
+        """Shelve ``key`` for ``seconds`` (≤ SHELVE_MAX_S); returns the log line.  Raises ValueError for an
+        alarm that is not shown, not shelvable, or a time out of range."""
+        d = definition(key)
+        if d is None or not d.shelvable:
+            raise ValueError(f"{d.title if d else key}: this alarm may not be shelved")
+        a = self.items.get(key)
+        if a is None:
+            raise ValueError(f"no alarm {key!r} to shelve")
+        if not (math.isfinite(seconds) and 0 < seconds <= SHELVE_MAX_S):
+            raise ValueError(f"shelving time must be between 0 and {SHELVE_MAX_S / 60:g} minutes, got {seconds:g} s")
+        a.shelved_until = self._clock() + seconds
+        self._shelf_end[key] = self._time() + seconds
+        line = f"alarm shelved by {who} for {seconds / 60:g} min, {a.source}: {a.text}"
+        self._note("warning", line)
+        return line
+
+    def unshelve(self, key: str, why: str = "by the operator") -> None:
+        a = self.items.get(key)
+        if a is None or a.shelved_until is None:
+            return
+        a.shelved_until = None
+        self._shelf_end.pop(key, None)
+        self._note("warning", f"alarm unshelved {why}, {a.source}: {a.text}" + (" (active)" if a.active else ""))
+        self._drop_done()
+
+    def _expire_shelving(self) -> None:
+        if not self._shelf_end:
+            return
+        now = self._time()
+        for key in [k for k, t in self._shelf_end.items() if now >= t]:
+            self.unshelve(key, "when its time was up")
+
     def _drop_done(self) -> None:
-        for k in [k for k, a in self.items.items() if a.acked and not a.active]:
+        for k in [k for k, a in self.items.items() if a.acked and not a.active and a.shelved_until is None]:
             del self.items[k]
 
+    # ------------------------------------------------------------------ reading
     def active(self, key: str) -> bool:
         a = self.items.get(key)
         return a is not None and a.active
 
+    def annunciating(self) -> list[Alarm]:
+        """Active, not shelved: what the operator must see now."""
+        return [a for a in self.items.values() if a.active and a.shelved_until is None]
+
     def snapshot(self) -> list[dict]:
-        """Alarms still to be shown: active, or cleared but not acknowledged; newest first."""
+        """Alarms still to be shown: active, shelved, or cleared but not acknowledged; newest first."""
         return [asdict(a) for a in sorted(self.items.values(), key=lambda a: -a.t_raised)]
+
+
+def _is_trip(key: str) -> bool:
+    d = definition(key)
+    return d is not None and d.trip

@@ -23,6 +23,7 @@ backends alike.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -370,37 +371,46 @@ class LabSession(Scene):
         if self.lab.winch.mode == "local" and time.monotonic() - self._local_speed_time > LOCAL_SPEED_TIMEOUT:
             self.plant.winch_speed(0.0)  # the spring-return slider is not being held (or the GUI is gone)
 
-    def _check_alarms(self) -> None:
+    def _check_alarms(self, now: float) -> None:
         al, lab = self.alarms, self.lab
-        al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
+        al.at(now)
+        al.set("estop", self.estop_latched, text="E-STOP latched: reset to continue")
         fl = self.input.flags()
         remote = lab.comau_mode == "remote" or lab.winch.mode == "remote"
-        al.set(
-            "device_lost",
-            remote and self.input.lost,
-            "warning",
-            "input device lost: Comau and winch hold",
-        )
-        al.set("stale_input", remote and fl["device"] and fl["stale_input"], "warning", "stale input: holding")
+        al.set("device_lost", remote and self.input.lost, text="Input device lost: Comau and winch hold")
+        al.set("stale_input", remote and fl["device"] and fl["stale_input"], text="Input stale: Comau and winch hold")
         w = self.layout.winch
         wire = lab.winch.length
         top = wire <= w["min_length"] + 1e-3
-        end = top or wire >= w["max_length"] - 1e-3
+        bottom = wire >= w["max_length"] - 1e-3
+        push = float(getattr(lab.winch, "speed_command", 0.0))
+        driven = lab.winch.mode == "motion_comp" or (top and push < 0.0) or (bottom and push > 0.0)
         al.set(
             "winch_end_stop",
-            end,
-            "warning",
-            f"winch at its {'upper' if top else 'lower'} end stop (wire {wire:.2f} m)",
+            (top or bottom) and driven,  # at rest at a stop nobody drives into, it is only where the wire is
+            text=f"Winch driven into its {'upper' if top else 'lower'} end stop (wire {wire:.2f} m)",
         )
         for k, name in enumerate(self.names):
             al.set(
-                f"leg_limit_{name}",
+                f"leg_limit:{name}",
                 lab.platforms[k].leg_clamped,
-                "warning",
-                f"{name}: target beyond an actuator stroke, scaled back (leg limit)",
+                text=f"{name}: target beyond an actuator stroke, scaled back (leg limit)",
             )
-        al.set("payload_below_deck", self._payload_below_deck(), "critical", "payload below the EM1500 deck")
+        al.set("payload_below_deck", self._payload_below_deck(), text="Load below the EM1500 deck")
+        amp = self._swing_amplitude()
+        al.set("load_swing", value=math.degrees(amp), text=f"Load swinging {math.degrees(amp):.1f}° from the vertical")
         self._check_link()
+
+    def _swing_amplitude(self) -> float:
+        """The load's swing amplitude [rad]: the angle from the vertical at which its swing energy (relative
+        to the tool, eqs. 26–27) would be all potential, acos(1 − E/(g L)).  Unlike the angle itself it
+        does not pass through zero twice a period, so an alarm on it does not chatter."""
+        pend = getattr(self.lab, "pendulum", None)
+        if pend is None:
+            return 0.0
+        L = max(self.lab.winch.length, 1e-3)
+        e = pend.energy(L) / (pend.g * L)
+        return math.acos(max(-1.0, min(1.0, 1.0 - e)))
 
     def _check_link(self) -> None:
         """Alarms of the plant's link (the plc backend): lost or stale link, the PLC's error, unusable symbols."""
@@ -408,12 +418,10 @@ class LabSession(Scene):
         al = self.alarms
         down = link.link in ("connecting", "lost")
         stop = "; STOP latched here, written on reconnect" if self.estop_latched else ""
-        al.set(
-            "plc_link", down, "critical", f"PLC link {link.link.upper()}: {link.last_error or 'no answer yet'}{stop}"
-        )
-        al.set("plc_stale", link.link == "stale", "warning", f"PLC data {link.data_age:.1f} s old: holding the last")
-        al.set("plc_error", bool(link.plc_error), "critical", f"PLC error: {link.plc_error} (acknowledge: lab_plc_ack)")
-        al.set("plc_symbols", bool(link.problems), "warning", f"{len(link.problems)} PLC symbol(s) not usable")
+        al.set("plc_link", down, text=f"PLC link {link.link.upper()}: {link.last_error or 'no answer yet'}{stop}")
+        al.set("plc_stale", link.link == "stale", text=f"PLC data {link.data_age:.1f} s old: holding the last")
+        al.set("plc_error", bool(link.plc_error), text=f"PLC error: {link.plc_error} (acknowledge: lab_plc_ack)")
+        al.set("plc_symbols", bool(link.problems), text=f"{len(link.problems)} PLC symbol(s) not usable")
 
     def _payload_below_deck(self) -> bool:
         """The load inside EM1500's footprint and below its top plate (z-down body frame: z > 0)."""
@@ -441,7 +449,7 @@ class LabSession(Scene):
         self._carry -= n * STEP
         self._apply_input(now)
         self.plant.step(STEP, min(n, 50))  # never more than 0.5 s of catch-up in one tick
-        self._check_alarms()
+        self._check_alarms(now)
 
     def close(self) -> None:
         """The plant backend's thread and connection (the PLC's)."""

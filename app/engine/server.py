@@ -26,8 +26,8 @@ the displaced holder is then told so in a refusal of what it sends.  E-STOP is a
 every client, also one that has not said ``hello`` (an engine restarted under a client must still
 stop); where a token is set the ``estop`` must carry it.  A non-local bind needs CURVE keys
 (:mod:`app.net.security`).  Failed authentications are counted and throttled.  Once a second the
-loop checks itself: below 95 % of real time or more than 1 % of ticks late raises the
-``engine_slow`` alarm.
+loop checks itself (a diagnostic in every snapshot); below 90 % of real time for 5 s, or input gone
+stale while it lagged, raises the ``engine_slow`` alarm.
 """
 
 from __future__ import annotations
@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 import zmq
 
+from app.engine.alarm_catalog import SHELVE_DEFAULT_S
 from app.engine.scene import CommandError, Scene
 from app.errors import BosunError, printable
 from app.net.codec import ProtocolError, decode, encode
@@ -114,6 +115,8 @@ DEFAULT_RATE = 1000.0  # Hz, the teleop engine's control loop
 RATE_LIMIT = 1000.0  # messages a second per client, sustained; the joystick sends 500 and pings 2
 RATE_BURST = 250  # messages a client may send at once
 INBOX_LIMIT = 1024  # commands and inputs waiting for the loop; past it, refused ("engine busy")
+SLOW_FACTOR = 0.9  # of real time: below it for SLOW_FOR seconds in a row, control suffers (alarm engine_slow)
+SLOW_FOR = 5
 
 
 class RateLimit:
@@ -301,6 +304,8 @@ class EngineServer:
         self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
         self.realtime_factor = 1.0
         self.late_fraction = 0.0
+        self._slow_seconds = 0  # whole seconds in a row below SLOW_FACTOR of real time
+        self._stale_seen = 0  # the session's stale-input count at the last health check
         # the I/O window: the I/O thread runs Python only while the loop sleeps (see the module text)
         self._window = threading.Condition()
         self._window_end = math.inf  # perf_counter time the window closes; open until the loop runs
@@ -664,6 +669,15 @@ class EngineServer:
                 alarms = getattr(self.session, "alarms", None)
                 n = alarms.ack(msg.get("key") or None) if alarms is not None else 0
                 self.session.note("info", f"{name} acknowledged {n} alarm{'s' if n != 1 else ''}")
+            elif mtype == "shelve_alarm":
+                minutes = float(msg.get("minutes", SHELVE_DEFAULT_S / 60))
+                try:
+                    if minutes == 0:
+                        self.session.alarms.unshelve(msg["key"], f"by {name}")
+                    else:
+                        self.session.alarms.shelve(msg["key"], 60.0 * minutes, who=name)
+                except ValueError as err:
+                    raise CommandError(str(err)) from None
             elif mtype == "pause":
                 self.session.pause(bool(msg["on"]))
             elif mtype in SCENE_MESSAGES:
@@ -720,7 +734,10 @@ class EngineServer:
 
     # ------------------------------------------------------------------ loop
     def _health(self, now: float) -> None:
-        """Once a second: real-time factor and late ticks of the last second, as an alarm."""
+        """Once a second: real-time factor and late ticks of the last second (a diagnostic, shown in the
+        engine light's tool tip); the ``engine_slow`` alarm only when control suffers (issue 26): below
+        :data:`SLOW_FACTOR` of real time for :data:`SLOW_FOR` seconds in a row, or a second in which the
+        input went stale while the loop lagged."""
         start, ticks0, missed0 = self._second
         if now - start < 1.0:
             return
@@ -728,18 +745,23 @@ class EngineServer:
         self.realtime_factor = ticks * self.dt / (now - start)
         self.late_fraction = missed / max(1, ticks)
         self._second = (now, self.stats.ticks, self.stats.missed)
+        lagging = self.realtime_factor < SLOW_FACTOR
+        self._slow_seconds = self._slow_seconds + 1 if lagging else 0
+        inp = getattr(self.session, "input", None)
+        stale_count = getattr(inp, "stale_count", 0)
+        went_stale = stale_count > self._stale_seen and (lagging or self.late_fraction > 0.05)
+        self._stale_seen = stale_count
         alarms = getattr(self.session, "alarms", None)
-        if alarms is not None:
-            slow = self.realtime_factor < 0.95 or self.late_fraction > 0.01
-            alarms.set(
-                "engine_slow",
-                slow,
-                "warning",
-                f"engine at {100 * self.realtime_factor:.0f} % of real time, "
-                f"{100 * self.late_fraction:.1f} % of ticks late in the last second",
-                source="engine",
-                debounce=2,  # two seconds in a row: one alarm per episode, not one per second
-            )
+        if alarms is None:
+            return
+        alarms.at(now)
+        suffering = self._slow_seconds >= SLOW_FOR or went_stale
+        alarms.set(
+            "engine_slow",
+            suffering or (alarms.active("engine_slow") and lagging),
+            text=f"{alarms.source} engine too slow: {100 * self.realtime_factor:.0f} % of real time"
+            + (", input went stale" if went_stale else f" for {self._slow_seconds} s"),
+        )
 
     def step(self, now: float) -> None:
         """One tick: E-STOPs, inbox, control, latency bookkeeping, publication."""

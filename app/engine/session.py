@@ -60,7 +60,6 @@ from app.teleop.profiles import DeviceProfile
 
 DEFAULT_ROBOT = "comau_smart5_3dof"
 DEFAULT_SOLVER = "jacobian"
-SINGULARITY_RATIO = 0.01  # σ_min/σ_max of the speed-scaled position Jacobian below this: alarm
 
 
 __all__ = ["CommandError", "LogEntry", "Session", "library_entries"]
@@ -115,12 +114,14 @@ class Session(Scene):
         self._init_scene()
         self.studies = StudyRunner()
         self.input = InputPipeline(self.stale_timeout, note=self.note)
-        self.alarms = AlarmList("teleop", note=self.note)
+        self.alarms = AlarmList("Teleop", note=self.note)
         self.enabled = False
         self.stale = True
         self.signal = np.zeros(3)
         self.command_point = None  # the operator's command as a point (eq. 1, or eq. 7 integrated)
         self._position_answered = False  # position mode: the solver reached the resting stick's point
+        self._hold_deadline: float | None = None  # engine time by which a holding arm must be at rest
+        self._speed_limited = False
         self.solver_cost = math.nan
         self.solver_time = 0.0
         self.solver_ok = True
@@ -312,7 +313,7 @@ class Session(Scene):
             self.actuators.stop()
             self._hold(dt)
             self.command_point = None
-            self._check_alarms(None, dt)
+            self._check_alarms(now, None, dt)
             return
         if inp.mode_toggle:
             self.set_mode("position" if self.mode == "velocity" else "velocity")
@@ -321,7 +322,7 @@ class Session(Scene):
             self._hold(dt)
             self.command_point = None
             self.actuators.step(self.q_ref, dt)
-            self._check_alarms(None, dt)
+            self._check_alarms(now, None, dt)
             return
         s = inp.signal[:3]
         q_ref_before = self.q_ref.copy()
@@ -351,7 +352,7 @@ class Session(Scene):
         if res is not None:
             self.solver_cost, self.solver_time, self.solver_ok = res.error, res.time_s, res.success
         self.actuators.step(self.q_ref, dt)
-        self._check_alarms(xdot, dt, q_ref_before)
+        self._check_alarms(now, xdot, dt, q_ref_before)
 
     def _solve_position(self, point: np.ndarray, budget):
         """Eq. (3) for the stick's point, as a hold where the stick rests (issue 26, item 1).
@@ -374,31 +375,29 @@ class Session(Scene):
         return res
 
     # ------------------------------------------------------------------ alarms
-    def _check_alarms(self, xdot, dt: float, q_before=None) -> None:
-        """Per tick: E-STOP, input, joint limits against the command, speed limiting, singularity.
+    def _check_alarms(self, now: float, xdot, dt: float, q_before=None) -> None:
+        """Per tick: motion without a command, E-STOP, input, joint limits against the command, an unreached
+        position target, singularity (definitions: :mod:`app.engine.alarm_catalog`).
 
         ``q_before``: the joint reference before this tick's solve; the reference's tool step is
         compared with the commanded one (velocity mode)."""
         al = self.alarms
+        al.at(now)
+        self._check_unbidden(now, xdot)
         flags = self.input.flags()
-        al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
-        al.set(
-            "device_lost",
-            self.input.lost,
-            "warning",
-            "input device lost: holding",
-        )
+        al.set("estop", self.estop_latched, text="E-STOP latched: reset to continue")
+        al.set("device_lost", self.input.lost, text="Input device lost: the arm holds")
         al.set(
             "stale_input",
             self.input.connected and flags["stale_input"],
-            "warning",
-            f"stale input (nothing for {self.input.stale_timeout * 1e3:.0f} ms): holding",
+            text=f"Input stale (nothing for {self.input.stale_timeout * 1e3:.0f} ms): the arm holds",
         )
         lo, hi = self.robot.lower, self.robot.upper
         tol = 1e-6 * np.maximum(1.0, hi - lo)
         blocked = ""
         limited = False
-        if xdot is not None and np.any(xdot != 0.0) and q_before is not None:
+        commanded = xdot is not None and np.any(xdot != 0.0) and q_before is not None
+        if commanded:
             v_cmd = float(np.linalg.norm(xdot))
             step = self.robot.position(self.q_ref) - self.robot.position(q_before)
             progress = float(step @ xdot) / (v_cmd * dt * v_cmd) if v_cmd > 0 else 1.0
@@ -407,13 +406,45 @@ class Session(Scene):
                 k = int(np.flatnonzero(at_lo | at_hi)[0])
                 blocked = f"{self.robot.joint_names[k]} at its {'lower' if at_lo[k] else 'upper'} limit"
             limited = not blocked and progress < 0.9
-        n = max(1, round(0.1 / dt))  # 100 ms: one alarm per episode, not one per tick
-        al.set("joint_limit", bool(blocked), "warning", f"{blocked}: commanded direction blocked", debounce=n)
-        al.set("speed_limited", limited, "info", "speed limited: k_v asks for more than the joints allow", debounce=n)
+        al.set("joint_limit", bool(blocked), text=f"{blocked}: the commanded direction is blocked")
+        if limited != self._speed_limited:  # a status, not an alarm: no operator action (rationalisation)
+            self._speed_limited = limited
+            if limited:
+                self.note("info", "speed limited: the joints' speed limits slow the tool below the stick's speed")
+        reach = self.mode == "position" and self.enabled and self.command_point is not None
+        miss = float(np.linalg.norm(self.robot.position(self.q_ref) - self.command_point)) if reach else 0.0
+        al.set(
+            "target_unreachable",
+            reach and not self._position_answered,
+            text=f"Target out of reach: the arm stops {miss:.2f} m short of the stick's point",
+        )
         if self.ticks % 10 == 0:
-            ratio = self._sigma_ratio()
-            text = f"near a singularity (σ ratio {ratio:.3f})"
-            al.set("near_singularity", ratio < SINGULARITY_RATIO, "warning", text)
+            if commanded or (self.mode == "position" and self.enabled):
+                ratio = self._sigma_ratio()
+                cond = 1.0 / ratio if ratio > 0 else math.inf
+                al.set("near_singularity", value=min(cond, 1e12), text=f"Near a singularity (σ ratio {ratio:.3f})")
+            else:
+                al.set("near_singularity", False)  # an arm at rest near one: nothing to do about it
+
+    def _check_unbidden(self, now: float, xdot) -> None:
+        """Motion without a command (issue 26): holding (E-STOP, input not enabled, a centred stick in
+        velocity mode), the joints must be at rest within their braking time and a second; else the
+        alarm, and the E-STOP latches."""
+        holding = self.estop_latched or not self.enabled or (self.mode == "velocity" and not np.any(xdot))
+        if not holding:
+            self._hold_deadline = None
+        elif self._hold_deadline is None:
+            accel = self.robot.accel
+            brake = np.where(np.isfinite(accel) & (accel > 0), np.abs(self.actuators.qdot) / accel, 0.0)
+            self._hold_deadline = now + float(np.max(brake, initial=0.0)) + 10.0 * self.actuator_tau + 1.0
+        unbidden = holding and self._hold_deadline is not None and now > self._hold_deadline and self.moving()
+        self.alarms.set(
+            "motion_without_command",
+            unbidden,
+            text="The arm moves without a command: E-STOP latched",
+        )
+        if unbidden:
+            self.estop(source="the engine (motion without a command)")
 
     def _sigma_ratio(self) -> float:
         """σ_min/σ_max of J·diag(joint speed limits) for the tool position: how evenly the joints, each at

@@ -65,7 +65,7 @@ class TacSession(Scene):
         self._carry = 0.0
         self.holding = False  # after an E-STOP reset: frozen until a mode is commanded
         self.input = InputPipeline(note=self.note)
-        self.alarms = AlarmList("crane head", note=self.note)
+        self.alarms = AlarmList("Crane head", note=self.note)
         self._saturated = deque(maxlen=SATURATION_WINDOW)
         self.last: dict[str, Any] = {}
         self.sea_seq = 0
@@ -154,13 +154,12 @@ class TacSession(Scene):
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms
-        al.set("estop", self.estop_latched, "critical", "E-STOP latched: reset to continue")
-        al.set("holding", self.holding and not self.estop_latched, "info", "head and crane hold: select a mode")
-        al.set(
+        al.at(now)
+        al.set("estop", self.estop_latched, text="E-STOP latched: reset to continue")
+        al.set(  # holding after a reset is a status (the plant light), not an alarm: nothing is wrong
             "saturation",
-            not frozen and share > 0.05,
-            "warning",
-            f"crane head saturated {100 * share:.0f} % of the last {SATURATION_WINDOW * self.scenario.dt:g} s",
+            value=0.0 if frozen else 100.0 * share,
+            text=f"Crane head saturated {100 * share:.0f} % of the last {SATURATION_WINDOW * self.scenario.dt:g} s",
         )
         if c.t.size:
             self.last = {

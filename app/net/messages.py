@@ -54,6 +54,8 @@ CLIENT_MESSAGES: dict[str, dict[str, tuple]] = {
     "set_scaling": {"k_p": ("vec3", False, 1e4), "x_w": ("vec3", False, 1e5), "k_v": ("vec3", False, 1e3)},
     "estop": {"reason": ("str", False, 256), "token": ("str", False, 256)},
     "ack_alarm": {"key": ("str", False, 64)},
+    # shelve one alarm for ``minutes`` (ISA-18.2 §12.3; at most 60, default 10; 0 unshelves it now)
+    "shelve_alarm": {"key": ("str", True, 64), "minutes": ("float", False, 60.0)},
     "reset": {},
     "release_operator": {},
     "describe": {},  # answered by ``description`` on the request socket
@@ -159,4 +161,4 @@ ENGINE_MESSAGES: dict[str, dict[str, tuple]] = {
 }
 
 #: messages only the operator may send (a viewer gets an error reply); E-STOP is anyone's
-OPERATOR_ONLY = frozenset({"input", "device_lost", "reset", "ack_alarm", "pause"} | SCENE_MESSAGES)
+OPERATOR_ONLY = frozenset({"input", "device_lost", "reset", "ack_alarm", "shelve_alarm", "pause"} | SCENE_MESSAGES)

@@ -59,6 +59,7 @@ class Alarm:
     t_cleared: float | None
     first_out: bool
     count: int = 1
+    shelved_until: float | None = None  # wall-clock end of the operator's shelving (None: not shelved)
 
 
 @dataclass(kw_only=True, slots=True)
