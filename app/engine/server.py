@@ -159,6 +159,7 @@ class Inbox:
         self.events: list[tuple] = []
         self.coalesced = 0
         self.refused = 0
+        self.listened = -math.inf  # monotonic time the I/O thread last found the request socket empty
 
     def estop(self, now: float, tick: int, source: str) -> None:
         with self.lock:
@@ -578,6 +579,8 @@ class EngineServer:
         try:
             while not self._stop.is_set():
                 ready = dict(poller.poll(5))
+                if self.router not in ready:
+                    self.inbox.listened = time.monotonic()  # looked: nothing waiting (input age counts)
                 self._wait_window()
                 if self._reply_in in ready:
                     for _ in range(1000):
@@ -596,6 +599,7 @@ class EngineServer:
                             frames = self.router.recv_multipart(zmq.NOBLOCK)
                         except zmq.Again:
                             self._io_backlog = False
+                            self.inbox.listened = time.monotonic()
                             break
                         now = time.monotonic()
                         if len(frames) != 2:
@@ -766,6 +770,9 @@ class EngineServer:
     def step(self, now: float) -> None:
         """One tick: E-STOPs, inbox, control, latency bookkeeping, publication."""
         self._apply_inbox()
+        inp = getattr(self.session, "input", None)
+        if inp is not None:
+            inp.listened = self.inbox.listened  # input ages on the receiver's clock (issue 26, item 9)
         budget = 0.4 * self.dt
         try:
             self.session.tick(now, self.dt, solve_budget=budget)

@@ -15,7 +15,9 @@ the crane head and the Motion-Lab.  One :class:`InputPipeline` per engine does i
    released, and then the enable is pressed while the stick is still at neutral.  A profile
    without an enable button never drives (its stop button still works).
 5. **Stale halt.**  A sample counts for ``stale_timeout`` seconds from the engine's *receive*
-   time (never the sender's clock); older, it commands nothing and disarms.
+   time (never the sender's clock), measured on the receiver's clock: stale once the receiver found
+   nothing new for that long (a receiver starved by its own engine's load does not make input stale,
+   up to ``DEAF_LIMIT``); older, it commands nothing and disarms.
 6. **Unplug.**  ``feed(None)`` (device lost) commands nothing and disarms.
 
 The optional stop button of a profile is reported as a rising edge (``stop``): every scene
@@ -34,6 +36,7 @@ from app.teleop.mapping import shape_input
 from app.teleop.profiles import DeviceProfile, default_profile, profile_for
 
 STALE_TIMEOUT = 0.2  # s from the engine's receive time
+DEAF_LIMIT = 1.0  # s: a receiver that has not looked for this long counts as hearing nothing
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,7 @@ class InputPipeline:
         self.profile_locked = False
         self.sample: InputSample | None = None
         self.sample_time = -math.inf
+        self.listened: float | None = None  # the engine's receiver last found nothing waiting (None: no server)
         self.connected = False
         self.armed = False
         self._seen_neutral_released = False
@@ -189,7 +193,7 @@ class InputPipeline:
         stop, mode_toggle = self._stop_edge, self._mode_edge
         self._stop_edge = self._mode_edge = False
         sample = self.sample
-        stale = sample is None or (now - self.sample_time) > self.stale_timeout
+        stale = sample is None or (self._receive_clock(now) - self.sample_time) > self.stale_timeout
         if stale:
             if not self._was_stale and sample is not None:
                 self.stale_count += 1
@@ -213,6 +217,18 @@ class InputPipeline:
         sig = raw if enabled else np.zeros(4)
         self.last = self._state(sig, raw, enabled, deadman, False, stop, mode_toggle, reason)
         return self.last
+
+    def _receive_clock(self, now: float) -> float:
+        """The time the input's age is measured at: the receiver's, not the tick's (issue 26, item 9).
+
+        The engine's I/O thread stamps :attr:`listened` whenever it finds the request socket empty.  A
+        sample is stale when the receiver *looked* and nothing came for ``stale_timeout``; while the
+        engine's own load keeps the I/O thread from reading, samples wait in the socket and are not old
+        (a steady stick was flagged stale and the Comau stopped mid-move).  A receiver deaf for longer
+        than :data:`DEAF_LIMIT` counts as silence: the input is stale then, whatever the reason."""
+        if self.listened is None or now - self.listened > DEAF_LIMIT:
+            return now
+        return min(now, max(self.listened, self.sample_time))
 
     # ------------------------------------------------------------------ state
     @property
