@@ -92,12 +92,17 @@ def test_a_steady_stick_is_never_stale_through_the_engines_own_stalls():
     try:
         arm(op)
         end = time.monotonic() + 4.0
+        sent = []
         while time.monotonic() < end:  # a steady hold, 50 Hz, as the GUI's link resends it
             op.send_input([0.0, 0.0, 0.0], [True], "stick")
+            sent.append(time.monotonic())
             time.sleep(0.02)
         assert ses.stalls >= 4
-        assert ses.input.stale_count == 0, "a steady stick was flagged stale by the engine's own load"
-        assert ses.input.armed
+        # the only stale episodes allowed are the client's own pauses (a busy machine can starve this test
+        # thread too): with the tick's clock every engine stall was one
+        pauses = sum(1 for a, b in zip(sent, sent[1:], strict=False) if b - a > 0.15)
+        assert ses.input.stale_count <= pauses, (ses.input.stale_count, pauses, ses.stalls)
+        assert ses.input.armed or pauses
         time.sleep(0.6)  # and a client that falls silent is still stale within the timeout (+ a stall)
         assert ses.input.stale_count >= 1 and not ses.input.armed
     finally:
