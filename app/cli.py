@@ -1123,6 +1123,31 @@ def cmd_bench_hold(args: argparse.Namespace) -> int:
     return 0 if all(r["held"] == r["sequences"] for r in rows) else 1
 
 
+def cmd_bench_alarms(args: argparse.Namespace) -> int:
+    from app.bench.alarm_rates import run
+
+    rep = run(args.minutes, progress=_progress_bar("session", unit="s")).report()
+    if args.json:
+        _print_json({"benchmark": "alarms", "machine": _machine(), **rep})
+        return 0
+    print(f"bosun bench alarms: a scripted {args.minutes:g}-minute session, three engines (machine: {_machine()})")
+    print(f"  E-STOPs by the operator (counted apart): {rep['operator_estops']}")
+    print(f"  alarms not caused by the operator: {rep['alarms_not_by_the_operator']}")
+    print(
+        f"  steady operation: {rep['steady_alarms']} in {rep['steady_seconds']:.0f} s = "
+        f"{rep['steady_per_10_min']:.1f} per 10 min (EEMUA 191: at most 1)"
+    )
+    print(f"  after each upset (10 min): {rep['after_each_upset_10_min']} (EEMUA 191: at most 10)")
+    print(f"  chattering (3 or more in a minute): {', '.join(rep['chattering']) or 'none'}")
+    for a in rep["alarms"]:
+        who = " (operator)" if a["operator"] else ""
+        print(f"    {a['t']:7.1f} s  {a['engine']:6s} {a['severity']:8s} {a['key']}{who}: {a['text']}")
+    gaps = ", ".join(f"{k} {v:.2f} s" for k, v in rep["longest_state_gap_s"].items())
+    rt = ", ".join(f"{k} {v:.2f}" for k, v in rep["lowest_realtime_factor"].items())
+    print(f"  longest state gap: {gaps}; lowest real-time factor: {rt}")
+    return 0
+
+
 def cmd_alarms(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
@@ -1353,6 +1378,12 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_hold)
+    b = bench.add_parser(
+        "alarms", help="alarm rates of a scripted session (three engines, a study, VVMC, two STOPs) vs EEMUA 191"
+    )
+    b.add_argument("--minutes", type=_positive_float, default=10.0, help="session length (default 10)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_alarms)
     p = sub.add_parser("alarms", help="the alarm reference: every alarm, its cause, consequence and action")
     p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
     p.add_argument("--json", action="store_true", help="machine-readable output")
