@@ -103,7 +103,7 @@ class _Engine:
         deadline = time.monotonic() + 120
         while True:
             try:
-                self.op = Client(self.url, role="operator", name=f"script-{plant}")
+                self.op = Client(self.url, role="operator", name=f"script-{self.plant}")
                 break
             except TransportError:
                 if time.monotonic() > deadline or self.proc.poll() is not None:
