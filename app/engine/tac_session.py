@@ -2,9 +2,10 @@
 
 Served by the same :class:`~app.engine.server.EngineServer` as the teleop session
 (``bosun server --plant tac``), usually at 50 Hz: each tick advances the simulation by the tick's
-time in steps of ``dt`` (0.01 s).  Commands: ``set_sea`` (spectrum, Hs, Tp, heading; restarts the
-sea), ``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane
-freeze where they are; latched until ``reset``).  After a reset they stay frozen until the operator
+time in steps of ``dt`` (0.01 s).  Commands: ``set_sea`` (spectrum, Hs, Tp, heading: a new sea that the
+vessel's motion fades into over two peak periods while scene time runs on), ``set_vessel`` (likewise),
+``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane freeze where they
+are; latched until ``reset``).  After a reset they stay frozen until the operator
 selects a mode again.  Input runs through the one :class:`~app.teleop.pipeline.InputPipeline` (a
 profile's stop button latches the E-STOP here too).  Teleop commands are refused with a clear message.
 """
@@ -35,7 +36,7 @@ from app.net.snapshots import (
     TacSnapshot,
     WaveField,
 )
-from app.scenarios.tac import MODES, TacScenario, TacSimulator
+from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacScenario, TacSimulator
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
@@ -90,11 +91,13 @@ class TacSession(Scene):
         self.note("info", f"sea: {spectrum} Hs {hs:g} m, Tp {tp:g} s, heading {heading:g}°")
 
     def _rebuild(self) -> None:
-        """A new simulator for the scenario and vessel; the machine stays where it is."""
-        beta, alpha = self.sim.crane_servo.beta.copy(), self.sim.head_servo.alpha.copy()
+        """A new simulator for the scenario and vessel that continues the running one (docs/safety.md H65):
+        scene time runs on, the machine continues where it is, and the vessel's motion fades from the old
+        sea or vessel into the new over two peak periods, so the head's reference never jumps
+        (:meth:`~app.scenarios.tac.TacSimulator.continue_from`)."""
+        old = self.sim
         self.sim = TacSimulator(self.scenario, self.system, rao=self.vessel.rao(self.scenario.roll_damping))
-        self.sim.crane_servo.beta, self.sim.head_servo.alpha = beta, alpha
-        self.sim.continue_from_current = True
+        self.sim.continue_from(old, SEA_BLEND_PERIODS * max(old.scenario.tp, self.scenario.tp))
         self.sea_seq += 1
         self.changed()
 
