@@ -43,9 +43,12 @@ def test_the_speed_limits_come_from_the_robot_files():
 
 # ----------------------------------------------------------------------------- crane head: the engine
 class Recorder:
-    """Ticks a :class:`TacSession` one simulation step at a time and keeps every step's sample."""
+    """Ticks a :class:`TacSession` at the engine's 50 Hz and keeps every simulation step's sample (each chunk
+    the session's simulator computes, also of the simulators that take over on a change)."""
 
-    def __init__(self, ses: TacSession) -> None:
+    TICK = 0.02  # s: the engine's rate (bosun server --plant tac)
+
+    def __init__(self, ses: TacSession, monkeypatch: pytest.MonkeyPatch) -> None:
         self.ses, self.now = ses, 0.0
         self.t: list[float] = []
         self.alpha: list[list[float]] = []
@@ -53,18 +56,26 @@ class Recorder:
         self.e_c: list[float] = []
         self.eta: list[list[float]] = []
         self.snap_t: list[float] = []
+        advance = TacSimulator.advance
+
+        def recorded(sim: TacSimulator, n: int, frozen: bool = False) -> TacChunk:
+            c = advance(sim, n, frozen=frozen)
+            if sim is ses.sim:
+                self.t += c.t.tolist()
+                self.alpha += c.alpha.tolist()
+                self.beta += c.beta.tolist()
+                self.e_c += c.e_c.tolist()
+                self.eta += c.eta.tolist()
+            return c
+
+        monkeypatch.setattr(TacSimulator, "advance", recorded)
 
     def run(self, seconds: float) -> None:
-        for _ in range(round(seconds / DT)):
-            self.now += DT
-            self.ses.tick(self.now, DT)
-            s = self.ses.last
-            self.t.append(s["t"])
-            self.alpha.append(s["alpha"])
-            self.beta.append(s["beta"])
-            self.e_c.append(s["e_c"])
-            self.eta.append(s["eta"])
-            if len(self.t) % 25 == 0:
+        for k in range(round(seconds / self.TICK)):
+            self.now += self.TICK
+            self.ses.tick(self.now, self.TICK)
+            assert self.ses.last["t"] == self.t[-1]  # the engine's sample is the last step's
+            if k % 12 == 0:
                 self.snap_t.append(self.ses.snapshot().t)
 
     def index(self) -> int:
@@ -86,13 +97,13 @@ class Recorder:
         return float(np.degrees(np.abs(np.diff(a, axis=0)).max() / DT))
 
 
-def test_a_sea_and_a_vessel_change_under_compensation_continue_where_the_machine_is():
+def test_a_sea_and_a_vessel_change_under_compensation_continue_where_the_machine_is(monkeypatch):
     """The issue's case: under compensation a new sea, then another vessel, then the first vessel again.  Scene
     time runs on; the arms stay within 90°/s (they moved at up to 287°/s); the compensation error stays at its
     usual centimetres (it spiked to 0.7 and 2.7 m); the vessel's motion is continuous at each change."""
     ses = TacSession()
     ses.set_tac_mode("tac")
-    rec = Recorder(ses)
+    rec = Recorder(ses, monkeypatch)
     rec.run(8.0)
     switches = []
     for change in (
@@ -114,22 +125,23 @@ def test_a_sea_and_a_vessel_change_under_compensation_continue_where_the_machine
     assert ses.describe().vessel.startswith("supply: ") and ses.sea_seq == 3
 
 
-def test_a_new_sea_record_in_a_long_session_does_not_restart_the_scene():
-    """A session outlives its sea record (``sim.done``): the next record continues the clock and the machine."""
-    ses = TacSession(scenario=TacScenario(duration=3.0))
-    rec = Recorder(ses)
+def test_a_new_sea_record_in_a_long_session_does_not_restart_the_scene(monkeypatch):
+    """A session outlives its sea record (``sim.done``): the next record continues the clock and the machine,
+    also when a record ends in the middle of a tick (2.99 s: 299 steps, two a tick)."""
+    ses = TacSession(scenario=TacScenario(duration=2.99))
+    rec = Recorder(ses, monkeypatch)
     rec.run(10.0)
     rec.check()
-    assert ses.sea_seq == 3 and rec.t[-1] == pytest.approx(10.0)
+    assert ses.sea_seq == 3 and len(rec.t) == 1000 and rec.t[-1] == pytest.approx(10.0)
     assert max(rec.e_c[100:]) < 0.1
 
 
-def test_mode_changes_and_a_stop_keep_every_arm_within_its_speed():
+def test_mode_changes_and_a_stop_keep_every_arm_within_its_speed(monkeypatch):
     """Compensation off drives the head to p_d^t through its servo (it jumped there), on again to the
     reference (it jumped back), the cooperative crane within its joints' speeds; a STOP holds, and after the
     reset the head catches up with the reference at no more than 90°/s."""
     ses = TacSession()
-    rec = Recorder(ses)
+    rec = Recorder(ses, monkeypatch)
     rec.run(5.0)
     for mode, seconds in (("off", 3.0), ("tac", 3.0), ("cooperative", 6.0), ("tac", 3.0)):
         ses.set_tac_mode(mode)
@@ -249,12 +261,12 @@ def test_the_fading_sea_is_smooth_and_keeps_a_seas_variance():
 
 
 # ----------------------------------------------------------------------------- crane head: property
-def _property_run(events: list[tuple[float, str, dict]], seed_vessel: str) -> None:
+def _property_run(events: list[tuple[float, str, dict]], seed_vessel: str, monkeypatch) -> None:
     ses = TacSession()
     if seed_vessel != "supply":
         ses.set_vessel(vessel=seed_vessel)
     ses.set_tac_mode("tac")
-    rec = Recorder(ses)
+    rec = Recorder(ses, monkeypatch)
     rec.run(2.0)
     for wait, kind, p in events:
         if kind == "sea":
@@ -263,16 +275,19 @@ def _property_run(events: list[tuple[float, str, dict]], seed_vessel: str) -> No
             ses.set_vessel(vessel=p["vessel"])
         rec.run(wait)
     # a sea the head compensates: once the fade is over the compensation error is back to centimetres
-    ses.set_sea("jonswap", 1.0, 8.0, 90.0)
-    settle = SEA_BLEND_PERIODS * max(8.0, ses.sim.scenario.tp) + 4.0
-    rec.run(settle)
+    tp = ses.scenario.tp
+    ses.set_sea("jonswap", 1.0, 6.0, 90.0)
+    fade = ses.sim.vessel
+    assert isinstance(fade, SeaTransition) and fade.duration == SEA_BLEND_PERIODS * max(tp, 6.0)
+    rec.run(fade.end - rec.t[-1] + 3.0)  # the outermost fade's end: from there on the new sea alone
+    assert not isinstance(ses.sim.vessel, SeaTransition)
     rec.check()
     assert max(rec.e_c[-200:]) < 0.1, f"e_c {max(rec.e_c[-200:]):.2f} m after the last change"
 
 
 @pytest.mark.slow
-def test_property_vessel_and_sea_switched_at_random_moments_under_compensation():
-    """Switch vessel and sea at random moments and to random seas (Hs 0.5–5 m, Tp 5–13 s, any heading and
+def test_property_vessel_and_sea_switched_at_random_moments_under_compensation(monkeypatch):
+    """Switch vessel and sea at random moments and to random seas (Hs 0.5–5 m, Tp 5–12 s, any heading and
     spectrum) under compensation; every step: arm speeds ≤ 90°/s, crane joints within theirs, scene time runs
     on, no NaN; and the compensation error recovers in a sea the head can compensate."""
     hypothesis = pytest.importorskip("hypothesis")
@@ -284,20 +299,21 @@ def test_property_vessel_and_sea_switched_at_random_moments_under_compensation()
         {
             "spectrum": st.sampled_from(sorted(SPECTRA)),
             "hs": st.floats(0.5, 5.0),
-            "tp": st.floats(5.0, 13.0),
+            "tp": st.floats(5.0, 12.0),
             "heading": st.floats(0.0, 360.0),
         }
     ).filter(lambda p: _sea_ok(check_sea, p))
     event = st.tuples(
-        st.floats(0.05, 6.0),  # seconds to the next change (some inside the running fade)
+        st.floats(0.05, 5.0),  # seconds to the next change (inside the running fade: they nest)
         st.sampled_from(["sea", "vessel"]),
         st.one_of(sea, st.fixed_dictionaries({"vessel": st.sampled_from(sorted(VESSELS))})),
     ).map(lambda e: (e[0], "vessel" if "vessel" in e[2] else "sea", e[2]))
 
-    @hypothesis.settings(max_examples=6, deadline=None, derandomize=True, database=None)
-    @hypothesis.given(st.lists(event, min_size=1, max_size=4), st.sampled_from(sorted(VESSELS)))
+    @hypothesis.settings(max_examples=4, deadline=None, derandomize=True, database=None)
+    @hypothesis.given(st.lists(event, min_size=1, max_size=3), st.sampled_from(sorted(VESSELS)))
     def prop(events, first):
-        _property_run(events, first)
+        with monkeypatch.context() as m:
+            _property_run(events, first, m)
 
     prop()
 
@@ -371,8 +387,7 @@ def _lab_run(ses, seconds: float, last: dict, dt: float = 0.02) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [1, 2])
-def test_lab_rebuilds_keep_every_machine_within_its_speed_and_time_runs_on(seed):
+def test_lab_rebuilds_keep_every_machine_within_its_speed_and_time_runs_on():
     """The Motion-Lab's rebuilds (the wave simulator's vessel, a platform's sea) at random moments with both
     platforms ENGAGED on simulated seas and VVMC on: a source cannot change under an ENGAGED platform (refused,
     nothing changes); the vessel takes effect at the next source, which ENGAGE fades in; every platform DOF,
@@ -380,7 +395,7 @@ def test_lab_rebuilds_keep_every_machine_within_its_speed_and_time_runs_on(seed)
     layout or robot change: both are chosen when the engine starts.)"""
     from app.engine.lab_session import LabSession
 
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(26_4)
     ses = LabSession()
     for p in ses.lab.platforms:
         p.place_at_neutral()  # the scene's start (raising is tested elsewhere)
@@ -396,8 +411,8 @@ def test_lab_rebuilds_keep_every_machine_within_its_speed_and_time_runs_on(seed)
         sea(k)
         ses.lab_platform(ses.names[k], "engage")
     ses.lab_vvmc(True)
-    _lab_run(ses, 6.0, last)
-    for _ in range(3):
+    _lab_run(ses, 3.0, last)
+    for _ in range(2):
         _lab_run(ses, rng.uniform(0.1, 2.0), last)
         ses.set_vessel(vessel=str(rng.choice(["supply", "supply-closed-form"])))
         k = int(rng.integers(2))

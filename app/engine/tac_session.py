@@ -36,7 +36,7 @@ from app.net.snapshots import (
     TacSnapshot,
     WaveField,
 )
-from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacScenario, TacSimulator
+from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacChunk, TacScenario, TacSimulator
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
@@ -150,10 +150,14 @@ class TacSession(Scene):
         self._carry -= n * self.scenario.dt
         if self.input.step(now).stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
-        if self.sim.done:  # a long session: start a fresh sea record, the machine stays put
-            self.set_sea(self.scenario.spectrum, self.scenario.hs, self.scenario.tp, self.scenario.heading)
         frozen = self.estop_latched or self.holding
-        c = self.sim.advance(n, frozen=frozen)
+        chunks = []
+        while n > 0:  # every step of the tick, also across the end of a sea record
+            if self.sim.done:  # a long session: a fresh sea record that continues this one (H65)
+                self.set_sea(self.scenario.spectrum, self.scenario.hs, self.scenario.tp, self.scenario.heading)
+            chunks.append(self.sim.advance(n, frozen=frozen))
+            n -= chunks[-1].t.size
+        c = chunks[0] if len(chunks) == 1 else TacChunk.concat(chunks)
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms
