@@ -147,11 +147,14 @@ def test_head_reference(systems, rng):
     close(one.alpha_ref, reference.head_reference(eta[:1], nu[:1], BETA_EQ60[None], np.zeros((1, 3)), p_d_n).alpha_ref)
 
 
-def test_head_servo(systems, rng):
+@pytest.mark.parametrize("limited", [True, False])
+def test_head_servo(systems, rng, limited):
+    """Both ways alike, with the motors' speed limit (the head file's 90°/s: issue 26, item 4) and without."""
     head = systems[0].head
-    a = HeadServo(PidGains(), head.lower, head.upper, systems[0].alpha_d)
-    b = HeadServo(PidGains(), head.lower, head.upper, systems[0].alpha_d, use_kernels=False)
-    for spread in (0.1, 3.0):  # following, then wild references that saturate the input
+    speed = head.speed if limited else None
+    a = HeadServo(PidGains(), head.lower, head.upper, systems[0].alpha_d, speed)
+    b = HeadServo(PidGains(), head.lower, head.upper, systems[0].alpha_d, speed, use_kernels=False)
+    for spread in (0.1, 3.0):  # following, then wild references that saturate the input (and the motor speed)
         ref = systems[0].alpha_d + rng.normal(0.0, spread, (1000, 3))
         ref_dot = rng.normal(0.0, 10 * spread, (1000, 3))
         for x, y in zip(a.run(ref, ref_dot, 0.01), b.run(ref, ref_dot, 0.01), strict=True):

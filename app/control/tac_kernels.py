@@ -12,7 +12,8 @@ errors of eq. (61), step by step.  Servo states are updated in place.  Every arr
 C-contiguous float64; ``chain``, ``head``, ``hull`` and ``elbow`` are described in
 :mod:`app.models.crane_head_kernels`, and
 
-* ``pid``: (K_p, K_i, K_d, T_DC, K_DC, u_min, u_max, α_min, α_max) of eqs. (57)–(58);
+* ``pid``: (K_p, K_i, K_d, T_DC, K_DC, u_min, u_max, α_min, α_max, ω_max) of eqs. (57)–(58), ω_max the
+  arms' speed limit (the motors saturate in speed);
 * ``crane``: (β_min, β_max, β̇_max, β̈_max, share, k_p) of the cooperative crane servo.
 """
 
@@ -44,7 +45,7 @@ __all__ = [
 ]
 
 CRANE_HOLD, CRANE_COOPERATIVE, CRANE_RETURN = 0, 1, 2  # crane modes of tac_chunk
-HEAD_LOCK, HEAD_SERVO = 0, 1  # head modes of tac_chunk
+HEAD_LOCK, HEAD_SERVO, HEAD_HOLD = 0, 1, 2  # head modes of tac_chunk
 
 
 # ----------------------------------------------------------------------------- crane servo
@@ -79,24 +80,43 @@ def crane_servo(crane, beta_d, beta_c, beta_c_dot, dt, beta, beta_dot):
 
 # ----------------------------------------------------------------------------- head servo
 @_jit
+def _motor_step(alpha, u, a_m, b_m, t_dc, k_dc, w_max, dt):
+    """``app.control.tac.motor_step``: one zero-order-hold step of the DC motor of eq. (58) whose speed
+    saturates at ±w_max (at w_max while |K_DC u − α| > T_DC w_max, then eq. 58's exponential); (α⁺, saturated)."""
+    d = k_dc * u - alpha
+    band = t_dc * w_max
+    if -band <= d <= band:
+        return a_m * alpha + b_m * u, False  # eq. (58), zero-order hold
+    s = 1.0 if d > 0.0 else -1.0
+    t_fast = (abs(d) - band) / w_max
+    if t_fast >= dt:
+        return alpha + s * w_max * dt, True
+    return k_dc * u - s * band * math.exp(-(dt - t_fast) / t_dc), True
+
+
+@_jit
 def _servo_step(pid, a_m, b_m, dt, ref, ref_dot, alpha, integral, u):
-    """PID of eq. (57) solved for u with the motor rate of eq. (58), anti-windup, then the DC motor
-    α⁺ = a α + b u (eq. 58, zero-order hold) inside the mechanical stops (``HeadServo.run``); in place."""
-    kp, ki, kd, t_dc, k_dc, u_lo, u_hi, lo, hi = pid
+    """PID of eq. (57) solved for u with the motor rate of eq. (58), then the DC motor of eq. (58) with its
+    speed limit inside the mechanical stops; anti-windup: no integration while the input is limited or the
+    motor runs at its speed limit (``HeadServo.run``); in place."""
+    kp, ki, kd, t_dc, k_dc, u_lo, u_hi, lo, hi, w_max = pid
     implicit = 1.0 + kd * k_dc / t_dc
     inv_t = 1.0 / t_dc
     for j in range(3):
         err = ref[j] - alpha[j]
         trial = integral[j] + err * dt
         u_new = (kp * err + ki * trial + kd * (ref_dot[j] + alpha[j] * inv_t)) / implicit  # eq. (57)
+        limited = True
         if u_new < u_lo[j]:
             u_new = u_lo[j]
         elif u_new > u_hi[j]:
             u_new = u_hi[j]
         else:
-            integral[j] = trial  # anti-windup: integrate only while the input is free
+            limited = False
         u[j] = u_new
-        a_new = a_m * alpha[j] + b_m * u_new  # eq. (58), zero-order hold
+        a_new, fast = _motor_step(alpha[j], u_new, a_m, b_m, t_dc, k_dc, w_max[j], dt)
+        if not (limited or fast):
+            integral[j] = trial  # anti-windup: integrate only while input and motor are free
         alpha[j] = lo[j] if a_new < lo[j] else hi[j] if a_new > hi[j] else a_new
 
 
@@ -126,8 +146,9 @@ def tac_chunk(
     Crane (``crane_mode``): CRANE_HOLD at ``beta_hold`` at rest, CRANE_COOPERATIVE following a share of
     the elbow IK of eqs. (42)–(44) that keeps the TCP on p_d^n (slew unwrapped from ``beta0_hint``, the
     rate from ``beta_c_prev`` unless ``has_prev`` is False), CRANE_RETURN driving back to β_d of eq. (60).
-    Head: references of eqs. (49)–(56), then (``head_mode``) the PID and DC motors of eqs. (57)–(58) or
-    locked at ``alpha_lock``; p_c^t by eqs. (17)–(25); e_c and e_s of eq. (61).  The crane (β, β̇, β_c
+    Head: references of eqs. (49)–(56), then (``head_mode``) the PID and DC motors of eqs. (57)–(58) on them
+    (HEAD_SERVO), the same servo holding ``alpha_lock`` (HEAD_HOLD: compensation off) or the arms locked at
+    ``alpha_lock`` (HEAD_LOCK: E-STOP); p_c^t by eqs. (17)–(25); e_c and e_s of eq. (61).  The crane (β, β̇, β_c
     of the last step) and head servo (α, ∫α̃, u) states are updated in place.
     Returns (β, p_ref^t, p_c^t, α_ref, α, u, p_c^n, p_s^n (n, 3), e_c, e_s (n,), saturated (n,)).
     """
@@ -190,14 +211,17 @@ def tac_chunk(
             v_ref_t, alpha_ref[k], alpha_dot_ref, c, d,
         )  # fmt: skip
         hold = alpha_ref[k]
-        if head_mode == HEAD_SERVO:
-            _servo_step(pid, a_m, b_m, dt, alpha_ref[k], alpha_dot_ref, alpha, integral, u)
+        if head_mode == HEAD_LOCK:
+            out_alpha[k], out_u[k] = alpha_lock, alpha_lock
+        else:
+            if head_mode == HEAD_SERVO:
+                _servo_step(pid, a_m, b_m, dt, alpha_ref[k], alpha_dot_ref, alpha, integral, u)
+                saturated[k] = limited
+            else:  # HEAD_HOLD: the servo holds α_lock
+                _servo_step(pid, a_m, b_m, dt, alpha_lock, zero, alpha, integral, u)
             out_alpha[k], out_u[k] = alpha, u
-            saturated[k] = limited
             _knees(head, alpha, c, d)
             _raise_fk(_delta_fk_point(head, c, p_tcp))
-        else:
-            out_alpha[k], out_u[k] = alpha_lock, alpha_lock
         p_c_t[k] = p_tcp
         # eq. (61): e_c = |p_d^n − p_c^n|, e_s = |p_d^n − p_s^n|
         if noisy:
@@ -215,9 +239,6 @@ def tac_chunk(
 
 
 # ----------------------------------------------------------------------------- warm-up
-
-
-# ----------------------------------------------------------------------------- warm-up
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) every kernel of this file the crane-head servos and
     simulation call from Python, with the argument types they pass (for :func:`app.warmup.warm_up`)."""
@@ -229,7 +250,7 @@ def warm_up_steps() -> list:
     hull = (np.array([[1.0, 0.0, 0.0, -1.0]]), z3, 1.0)
     elbow = (3.0, 19.2, 16.0, eye)
     crane = (-o3, o3, o3, o3, 0.3, 1.0)
-    pid = (10.0, 60.0, 1.0, 0.2, 1.0, -o3, o3, -o3, o3)
+    pid = (10.0, 60.0, 1.0, 0.2, 1.0, -o3, o3, -o3, o3, o3)
     rows3, rows6 = np.zeros((2, 3)), np.zeros((2, 6))
 
     def chunk(crane_mode: int, head_mode: int) -> None:

@@ -2,9 +2,10 @@
 
 Served by the same :class:`~app.engine.server.EngineServer` as the teleop session
 (``bosun server --plant tac``), usually at 50 Hz: each tick advances the simulation by the tick's
-time in steps of ``dt`` (0.01 s).  Commands: ``set_sea`` (spectrum, Hs, Tp, heading; restarts the
-sea), ``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane
-freeze where they are; latched until ``reset``).  After a reset they stay frozen until the operator
+time in steps of ``dt`` (0.01 s).  Commands: ``set_sea`` (spectrum, Hs, Tp, heading: a new sea that the
+vessel's motion fades into over two peak periods while scene time runs on), ``set_vessel`` (likewise),
+``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane freeze where they
+are; latched until ``reset``).  After a reset they stay frozen until the operator
 selects a mode again.  Input runs through the one :class:`~app.teleop.pipeline.InputPipeline` (a
 profile's stop button latches the E-STOP here too).  Teleop commands are refused with a clear message.
 """
@@ -35,7 +36,7 @@ from app.net.snapshots import (
     TacSnapshot,
     WaveField,
 )
-from app.scenarios.tac import MODES, TacScenario, TacSimulator
+from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacChunk, TacScenario, TacSimulator
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
@@ -90,11 +91,13 @@ class TacSession(Scene):
         self.note("info", f"sea: {spectrum} Hs {hs:g} m, Tp {tp:g} s, heading {heading:g}°")
 
     def _rebuild(self) -> None:
-        """A new simulator for the scenario and vessel; the machine stays where it is."""
-        beta, alpha = self.sim.crane_servo.beta.copy(), self.sim.head_servo.alpha.copy()
+        """A new simulator for the scenario and vessel that continues the running one (docs/safety.md H65):
+        scene time runs on, the machine continues where it is, and the vessel's motion fades from the old
+        sea or vessel into the new over two peak periods, so the head's reference never jumps
+        (:meth:`~app.scenarios.tac.TacSimulator.continue_from`)."""
+        old = self.sim
         self.sim = TacSimulator(self.scenario, self.system, rao=self.vessel.rao(self.scenario.roll_damping))
-        self.sim.crane_servo.beta, self.sim.head_servo.alpha = beta, alpha
-        self.sim.continue_from_current = True
+        self.sim.continue_from(old, SEA_BLEND_PERIODS * max(old.scenario.tp, self.scenario.tp))
         self.sea_seq += 1
         self.changed()
 
@@ -147,10 +150,14 @@ class TacSession(Scene):
         self._carry -= n * self.scenario.dt
         if self.input.step(now).stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
-        if self.sim.done:  # a long session: start a fresh sea record, the machine stays put
-            self.set_sea(self.scenario.spectrum, self.scenario.hs, self.scenario.tp, self.scenario.heading)
         frozen = self.estop_latched or self.holding
-        c = self.sim.advance(n, frozen=frozen)
+        chunks = []
+        while n > 0:  # every step of the tick, also across the end of a sea record
+            if self.sim.done:  # a long session: a fresh sea record that continues this one (H65)
+                self.set_sea(self.scenario.spectrum, self.scenario.hs, self.scenario.tp, self.scenario.heading)
+            chunks.append(self.sim.advance(n, frozen=frozen))
+            n -= chunks[-1].t.size
+        c = chunks[0] if len(chunks) == 1 else TacChunk.concat(chunks)
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms

@@ -9,9 +9,16 @@ With ``use_kernels`` (the default when numba is there) a chunk after the vessel 
 compiled call, :func:`app.control.tac_kernels.tac_chunk`; with ``use_kernels = False`` every part
 runs its NumPy reference (tested equal in ``tests/test_tac_kernels.py``).
 
-Modes: ``off`` (head locked at p_d^t = [x_d, 0, 0]: the uncompensated TCP), ``tac`` (the paper:
+Modes: ``off`` (head held at p_d^t = [x_d, 0, 0] by its servo: the uncompensated TCP), ``tac`` (the paper:
 crane still in the configuration of eq. (60), head compensates), ``cooperative`` (crane joints
-take a share of the motion within their speed and acceleration limits, head the rest).
+take a share of the motion within their speed and acceleration limits, head the rest).  Every arm and
+joint moves within its robot file's speed limit, also when a mode changes (the head's motors saturate in
+speed: :class:`~app.control.tac.HeadServo`).
+
+Live changes (the engine's ``set_sea``, ``set_vessel``): a new simulator takes over from the running one
+(:meth:`TacSimulator.continue_from`): its clock continues, the machine's states carry over, and the vessel's
+motion fades from the old sea (or vessel) into the new over two peak periods (:class:`SeaTransition`), so the
+head's reference stays continuous and the machine continues where it is.
 """
 
 from __future__ import annotations
@@ -21,13 +28,14 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from app.control import tac_kernels
 from app.control.tac import CraneServo, HeadServo, PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
-from app.marine.vessel import MRU, RAOTable, VesselMotion
+from app.marine import kernels as marine_kernels
+from app.marine.vessel import MRU, RAOTable, VesselMotion, VesselState, body_velocities
 from app.marine.vessels import vessel_rao
 from app.marine.waves import SPECTRA, check_sea, wave_components
 from app.models.crane_head import CraneHead
@@ -36,6 +44,7 @@ from app.models.registry import load_robot
 
 MODES = ("off", "tac", "cooperative")
 BETA_EQ60 = np.array([-math.pi / 2, math.pi / 4, -math.pi / 4])  # eq. (60)
+SEA_BLEND_PERIODS = 2.0  # a live sea or vessel change fades the motions over this many peak periods
 
 
 class ScenarioError(BosunError):
@@ -168,6 +177,79 @@ def summarise(data: TacChunk, scenario: TacScenario, wall_time_s: float) -> dict
     }
 
 
+class SeaTransition:
+    """The vessel's motion while a live sea or vessel change takes effect: ``old`` fades into ``new`` over
+    ``duration`` seconds from ``t0``, at constant power,
+
+        η(t) = cos θ η_old(t) + sin θ η_new(t),   θ = (π/2) S((t − t0) / T),
+
+    with S(x) = 6x⁵ − 15x⁴ + 10x³ (zero slope and curvature at both ends), η̇ and η̈ by the product rule, so
+    η, η̇ and η̈ are continuous at both ends; ν and ν̇ follow from them by the kinematics (Fossen 2011, eq. 2.40)
+    as in :class:`~app.marine.vessel.VesselMotion`, so the head's references (TAC paper eqs. 49–56) stay
+    continuous and consistent.  Two independent realisations of one sea keep its variance (cos² + sin² = 1);
+    between two seas it goes from one to the other.  A real sea changes over hours; a simulator's operator
+    wants the new sea within a minute.  Over two peak periods the blend's own terms, θ̇ ≤ 2.95/T times the
+    motion, stay under a quarter of the wave-induced rates (ω_p = 2π/T_p times the motion) at their peak.
+
+    ``old`` and ``new`` give ``eta_derivatives(t)`` and ``sea`` (a :class:`~app.marine.vessel.VesselMotion` or
+    another transition); ``sea`` here is the new one's.
+    """
+
+    def __init__(self, old, new, t0: float, duration: float) -> None:
+        if not (math.isfinite(t0) and math.isfinite(duration) and duration > 0):
+            raise ScenarioError(f"a sea transition needs a finite start and a positive duration, got {t0}, {duration}")
+        self.old, self.new, self.t0, self.duration = old, new, float(t0), float(duration)
+        self.use_kernels = bool(getattr(new, "use_kernels", False))
+
+    @property
+    def sea(self):
+        return self.new.sea
+
+    @property
+    def end(self) -> float:
+        return self.t0 + self.duration
+
+    def settled(self, t: float):
+        """The motion from time ``t`` on: ``new`` once the fade is over (the old ones dropped), else this one."""
+        if t >= self.end:
+            return self.new
+        if isinstance(self.old, SeaTransition):
+            self.old = self.old.settled(t)
+        return self
+
+    def angle(self, t: NDArray[np.float64]) -> tuple[NDArray, NDArray, NDArray]:
+        """θ, θ̇, θ̈ at times ``t`` (each like t)."""
+        T = self.duration
+        x = np.clip((np.asarray(t, dtype=float) - self.t0) / T, 0.0, 1.0)
+        h = 0.5 * math.pi
+        theta = h * x**3 * (10.0 + x * (6.0 * x - 15.0))
+        theta_dot = h * 30.0 * (x * (1.0 - x)) ** 2 / T
+        theta_ddot = h * 60.0 * x * (1.0 - x) * (1.0 - 2.0 * x) / T**2
+        return theta, theta_dot, theta_ddot
+
+    def eta_derivatives(self, t: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
+        """η, η̇, η̈ at times ``t`` (s), each (len(t), 6)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        a0, a1, a2 = self.old.eta_derivatives(t)
+        b0, b1, b2 = self.new.eta_derivatives(t)
+        th, th1, th2 = (x[:, None] for x in self.angle(t))
+        c, s = np.cos(th), np.sin(th)
+        eta = c * a0 + s * b0
+        quad = c * b0 - s * a0  # dη/dθ
+        deta = c * a1 + s * b1 + th1 * quad
+        ddeta = c * a2 + s * b2 + 2.0 * th1 * (c * b1 - s * a1) + th2 * quad - th1**2 * eta
+        return eta, deta, ddeta
+
+    def state(self, t: ArrayLike) -> VesselState:
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        eta, deta, ddeta = self.eta_derivatives(t)
+        if self.use_kernels:
+            nu, nu_dot = marine_kernels.body_velocities(eta, deta, ddeta)
+        else:
+            nu, nu_dot = body_velocities(eta, deta, ddeta)
+        return VesselState(t, eta, nu, nu_dot)
+
+
 class TacSimulator:
     """Stepwise simulation of one scenario (see the module docstring)."""
 
@@ -199,7 +281,7 @@ class TacSimulator:
         self.p_d_n = system.tcp_n(np.zeros(6), self.beta_d, system.p_d_t)  # p_d^n: TCP in calm water
         self.n_steps = round(sc.duration / sc.dt)
         self.k = 0
-        self.head_servo = HeadServo(PidGains(), head.lower, head.upper, system.alpha_d)
+        self.head_servo = HeadServo(PidGains(), head.lower, head.upper, system.alpha_d, head.speed)
         crane = system.crane
         self.crane_servo = CraneServo(
             crane.lower, crane.upper, crane.speed, crane.accel, self.beta_d, sc.crane_share, sc.crane_kp
@@ -210,8 +292,26 @@ class TacSimulator:
         self._beta0_hint = float(self.beta_d[0])
         self._started = False
         self._beta_c_prev: NDArray[np.float64] | None = None
-        self.continue_from_current = False  # set when the machine's state is carried over (live changes)
         self._use_kernels = tac_kernels.ENABLED
+
+    def continue_from(self, old: TacSimulator, blend: float) -> None:
+        """Take over from ``old``, live (a sea or vessel change in the engine): its clock continues (this
+        run's ``duration`` from its time on), the machine's states carry over (head servo α, ∫α̃, u; crane β,
+        β̇ and the cooperative crane's last target), and ``old``'s vessel motion fades into this one's over
+        ``blend`` seconds (:class:`SeaTransition`).  So nothing the machine does jumps: the head's reference is
+        continuous and every arm and joint moves on within its limits."""
+        if old.system is not self.system or old.scenario.dt != self.scenario.dt:
+            raise ScenarioError("a simulator continues another only on the same crane head and time step")
+        self.k = old.k
+        self.n_steps = old.k + round(self.scenario.duration / self.scenario.dt)
+        h, c, oh, oc = self.head_servo, self.crane_servo, old.head_servo, old.crane_servo
+        h.alpha, h.integral, h.u = (np.array(x, dtype=float) for x in (oh.alpha, oh.integral, oh.u))
+        c.beta, c.beta_dot = np.array(oc.beta, dtype=float), np.array(oc.beta_dot, dtype=float)
+        self._beta_c_prev = None if old._beta_c_prev is None else np.array(old._beta_c_prev, dtype=float)
+        self._beta0_hint = old._beta0_hint
+        self._started = old._started
+        self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
+        self.use_kernels = old.use_kernels
 
     @property
     def use_kernels(self) -> bool:
@@ -227,7 +327,8 @@ class TacSimulator:
         self.system.use_kernels = self.head_servo.use_kernels = self.crane_servo.use_kernels = bool(on)
 
     def set_mode(self, mode: str) -> None:
-        """Switch the compensation mode live; the joints continue from where they are."""
+        """Switch the compensation mode live; the joints continue from where they are (the head servo restarts
+        bumpless there and reaches a far reference at its motors' speed limit)."""
         if mode not in MODES:
             raise ScenarioError(f"mode must be one of {', '.join(MODES)}, got '{mode}'")
         self.scenario = replace(self.scenario, mode=mode)
@@ -242,8 +343,6 @@ class TacSimulator:
         """Start the controllers on their references (no artificial transient at t = 0)."""
         sc, sys_ = self.scenario, self.system
         self._started = True
-        if self.continue_from_current:
-            return
         if sc.mode == "cooperative":
             beta_c = sys_.crane_ik_tcp(self._target_b(first_state.eta), self._beta0_hint)[0]
             self.crane_servo.beta = self.beta_d + sc.crane_share * (beta_c - self.beta_d)
@@ -251,7 +350,7 @@ class TacSimulator:
             ref = sys_.head_reference(
                 first_state.eta, first_state.nu, self.crane_servo.beta[None], np.zeros((1, 3)), self.p_d_n
             )
-            self.head_servo.reset(ref.alpha_ref[0])
+            self.head_servo.reset(ref.alpha_ref[0], ref.alpha_dot_ref[0])
 
     def _target_b(self, eta: NDArray[np.float64]) -> NDArray[np.float64]:
         """p_d^n in {b}: where the TCP must be, seen from the vessel."""
@@ -266,6 +365,8 @@ class TacSimulator:
         sc, sys_ = self.scenario, self.system
         n = max(0, min(n, self.n_steps - self.k))
         t = (self.k + 1 + np.arange(n)) * sc.dt
+        if isinstance(self.vessel, SeaTransition) and n:
+            self.vessel = self.vessel.settled(float(t[0]))
         true = self.vessel.state(t)
         meas = self.mru.measure(true) if self.mru is not None else true
         if not self._started and n:
@@ -296,10 +397,12 @@ class TacSimulator:
             beta_dot = np.zeros((n, 3))
         # head
         ref = sys_.head_reference(meas.eta, meas.nu, beta, beta_dot, self.p_d_n)
-        if frozen or sc.mode == "off":  # head locked (E-STOP: where it is; off: at p_d^t)
-            hold = self.head_servo.alpha if frozen else sys_.alpha_d
-            alpha = np.broadcast_to(hold, (n, 3)).copy()
+        if frozen:  # E-STOP: the arms locked where they are
+            alpha = np.broadcast_to(self.head_servo.alpha, (n, 3)).copy()
             u = alpha.copy()
+            saturated = np.zeros(n, dtype=bool)
+        elif sc.mode == "off":  # the servo holds the head at p_d^t
+            alpha, u = self.head_servo.run(np.broadcast_to(sys_.alpha_d, (n, 3)), np.zeros((n, 3)), sc.dt)
             saturated = np.zeros(n, dtype=bool)
         else:
             alpha, u = self.head_servo.run(ref.alpha_ref, ref.alpha_dot_ref, sc.dt)
@@ -328,7 +431,8 @@ class TacSimulator:
             crane_mode = tk.CRANE_RETURN  # after cooperative mode: back to the configuration of eq. (60)
         else:
             crane_mode = tk.CRANE_HOLD
-        lock = frozen or sc.mode == "off"  # head locked (E-STOP: where it is; off: at p_d^t)
+        # head: locked where it is (E-STOP), held at p_d^t by its servo (off), or compensating
+        head_mode = tk.HEAD_LOCK if frozen else tk.HEAD_HOLD if sc.mode == "off" else tk.HEAD_SERVO
         alpha_lock = head.alpha if frozen else sys_.alpha_d
         beta, beta_dot = np.array(crane.beta, dtype=float), np.array(crane.beta_dot, dtype=float)  # fresh: in place
         alpha, integral, u = (np.array(x, dtype=float) for x in (head.alpha, head.integral, head.u))
@@ -337,14 +441,14 @@ class TacSimulator:
         f = c_array
         out = tk.tac_chunk(
             f(true.eta), f(meas.eta), f(meas.nu), meas is not true, float(sc.dt), crane_mode,
-            tk.HEAD_LOCK if lock else tk.HEAD_SERVO, f(beta_hold), f(alpha_lock),
+            head_mode, f(beta_hold), f(alpha_lock),
             self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t, sys_.crane.kernel_args, sys_.head.kernel_args,
             sys_.kernel_hull, sys_.kernel_elbow, self._crane_args, self._pid_args, beta, beta_dot, beta_c_prev,
             self._beta0_hint, has_prev, alpha, integral, u,
         )  # fmt: skip
         n = t.size
         crane.beta, crane.beta_dot = beta, beta_dot
-        if not lock:
+        if not frozen:
             head.alpha, head.integral, head.u = alpha, integral, u
         if crane_mode == tk.CRANE_COOPERATIVE and n:
             self._beta0_hint, self._beta_c_prev = float(beta_c_prev[0]), beta_c_prev

@@ -34,7 +34,12 @@ def rao_file_parts(path: str) -> tuple[list[str], str]:
 class VesselRow(QWidget):
     """A combo of the engine's named vessels and "RAO file…", and the model the engine runs.
 
-    ``send(fields)`` sends one ``set_vessel`` message; ``error`` says in one line why a file was not sent."""
+    Both show the engine's vessel, from its description (issue 26, item 4): the label leads with the vessel's
+    name (the named vessels' descriptions share their first words, so a label that began with them looked the
+    same for every vessel in a narrow column), and a pick only asks the engine: the combo goes back to the
+    engine's vessel at once and shows the new one when the engine describes it (a refused or cancelled pick
+    never looks taken).  ``send(fields)`` sends one ``set_vessel`` message; ``error`` says in one line why a
+    file was not sent."""
 
     error = pyqtSignal(str)
 
@@ -55,6 +60,7 @@ class VesselRow(QWidget):
         row.addWidget(self.combo)
         row.addWidget(self.label, 1)
         self._dialog = None
+        self._engine_item: str | None = None  # the combo item of the engine's vessel (None: not described yet)
 
     def set_engine(self, current: str, names: list[str]) -> None:
         """The engine's vessel model and the vessels it knows by name (from its description)."""
@@ -65,14 +71,21 @@ class VesselRow(QWidget):
             self.combo.addItems(items)
             self.combo.blockSignals(False)
         name = current.split(":", 1)[0]
-        self.combo.blockSignals(True)
-        self.combo.setCurrentText(name if name in names else FILE_ITEM)
-        self.combo.blockSignals(False)
-        self.label.setText(current.split(": ", 1)[1] if name in names and ": " in current else current)
-        self.label.setToolTip(f"vessel: {current}")
+        self._engine_item = name if name in names else FILE_ITEM
+        self._show_engine()
+        self.label.setText(current)  # "supply-closed-form: MSS supply vessel, …" or "RAO file x.csv"
+        self.label.setToolTip(f"the vessel the engine runs: {current}")
+
+    def _show_engine(self) -> None:
+        """The combo on the engine's vessel (not on a pick the engine has not taken)."""
+        if self._engine_item is not None and self.combo.currentText() != self._engine_item:
+            self.combo.blockSignals(True)
+            self.combo.setCurrentText(self._engine_item)
+            self.combo.blockSignals(False)
 
     def _chosen(self, index: int) -> None:
         text = self.combo.itemText(index)
+        self._show_engine()  # until the engine describes the vessel it runs
         if text == FILE_ITEM:
             self._dialog = choose_file(self, "RAO file", os.getcwd(), "RAO tables (*.mat *.csv)", self.send_file)
         elif text:
