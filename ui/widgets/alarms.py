@@ -1,8 +1,10 @@
-"""The alarm list: every engine's alarms and the GUI's own, with acknowledge one / all.
+"""The alarm list: every engine's alarms and the GUI's own, with acknowledge one / all and shelving.
 
-Rows: first-out mark, time raised, severity, source, text, state (ACTIVE / cleared), and whether
-acknowledged.  Active unacknowledged alarms come first (critical before warning), then the rest,
-newest first.  An alarm leaves the list once it is both cleared and acknowledged.
+Rows: first-out mark, time raised, priority, source (the engine), text, state (ACTIVE / cleared /
+shelved), and whether acknowledged.  Active unacknowledged alarms come first (critical before warning),
+then the rest, newest first; shelved alarms last, greyed.  An alarm leaves the list once it is both
+cleared and acknowledged.  Each row's tool tip is its rationalisation (``docs/alarms.md``): cause,
+consequence, what to do.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
+from app.engine.alarm_catalog import SHELVE_DEFAULT_S, definition
 from ui.widgets.labels import ElidedLabel
 
 COLUMNS = ("", "time", "severity", "source", "alarm", "state")
@@ -34,6 +37,7 @@ class AlarmPanel(QWidget):
     """Shows merged alarm lists; ``ack(origin, key)`` asks the owner to acknowledge (key "" = all of origin)."""
 
     ack = pyqtSignal(str, str)
+    shelve = pyqtSignal(str, str, float)  # origin, key, minutes (0: unshelve)
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
@@ -48,7 +52,13 @@ class AlarmPanel(QWidget):
         self.ack_one.clicked.connect(self._ack_selected)
         self.ack_all = QPushButton("Acknowledge all")
         self.ack_all.clicked.connect(self._ack_everything)
-        for b in (self.ack_one, self.ack_all):
+        self.shelve_one = QPushButton(f"Shelve {SHELVE_DEFAULT_S / 60:g} min")
+        self.shelve_one.setToolTip(
+            "shelve the selected alarm: it stays tracked but quiet, and returns by itself when the time is up "
+            "(critical and trip alarms cannot be shelved); again on a shelved alarm: unshelve it"
+        )
+        self.shelve_one.clicked.connect(self._shelve_selected)
+        for b in (self.ack_one, self.ack_all, self.shelve_one):
             b.setFocusPolicy(Qt.NoFocus)  # Space is STOP; a focused button would swallow it
             head.addWidget(b)
         lay.addLayout(head)
@@ -75,17 +85,25 @@ class AlarmPanel(QWidget):
     def ordered(alarms: list[dict]) -> list[dict]:
         return sorted(
             alarms,
-            key=lambda a: (not (a["active"] and not a["acked"]), SEVERITY_RANK.get(a["severity"], 3), -a["t_raised"]),
+            key=lambda a: (
+                bool(a.get("shelved_until")),
+                not (a["active"] and not a["acked"]),
+                SEVERITY_RANK.get(a["severity"], 3),
+                -a["t_raised"],
+            ),
         )
 
     def set_alarms(self, alarms: list[dict]) -> None:
         """Each alarm dict as published by an engine, plus ``origin`` (which engine or "gui")."""
         rows = self.ordered(alarms)
         # first-out across every engine: of the alarms their engines marked first, the earliest still shown
-        firsts = [a for a in rows if a["first_out"]]
+        firsts = [a for a in rows if a["first_out"] and not a.get("shelved_until")]
         first = min(firsts, key=lambda a: a["t_raised"]) if firsts else None
         rows = [{**a, "first_out": a is first} for a in rows]
-        key = tuple((a["origin"], a["key"], a["active"], a["acked"], a["text"], a["first_out"]) for a in rows)
+        key = tuple(
+            (a["origin"], a["key"], a["active"], a["acked"], a["text"], a["first_out"], a.get("shelved_until"))
+            for a in rows
+        )
         if key == self._shown:
             return
         self._shown = key
@@ -94,11 +112,19 @@ class AlarmPanel(QWidget):
         self.table.setRowCount(len(rows))
         for r, a in enumerate(rows):
             stamp = time.strftime("%H:%M:%S", time.gmtime(a["t_raised"]))
+            shelved = a.get("shelved_until")
             state = ("ACTIVE" if a["active"] else "cleared") + ("" if a["acked"] else ", unacknowledged")
+            if shelved:
+                state = f"shelved until {time.strftime('%H:%M', time.gmtime(shelved))}, " + state.lower()
             cells = ("1st" if a["first_out"] else "", stamp, a["severity"].upper(), a["source"], a["text"], state)
+            tip = _rationale(a["key"])
             for c, text in enumerate(cells):
                 item = QTableWidgetItem(text)
-                if a["active"] and not a["acked"]:
+                if tip:
+                    item.setToolTip(tip)
+                if shelved:
+                    item.setForeground(QBrush(QColor("#888")))
+                elif a["active"] and not a["acked"]:
                     item.setBackground(QBrush(QColor(ROW_COLOR.get(a["severity"], "#333"))))
                     item.setForeground(QBrush(QColor("white")))
                 elif not a["active"]:
@@ -108,10 +134,13 @@ class AlarmPanel(QWidget):
                 self.table.setItem(r, c, item)
             if (a["origin"], a["key"]) == selected:
                 self.table.selectRow(r)
-        n_active = sum(a["active"] for a in rows)
-        n_new = sum(not a["acked"] for a in rows)
-        self.title.setText(f"Alarms: {n_active} active, {n_new} unacknowledged" if rows else "Alarms: none")
-        crit = any(a["active"] and not a["acked"] and a["severity"] == "critical" for a in rows)
+        shown = [a for a in rows if not a.get("shelved_until")]
+        n_active = sum(a["active"] for a in shown)
+        n_new = sum(not a["acked"] for a in shown)
+        n_shelved = len(rows) - len(shown)
+        text = f"Alarms: {n_active} active, {n_new} unacknowledged" if shown else "Alarms: none"
+        self.title.setText(text + (f", {n_shelved} shelved" if n_shelved else ""))
+        crit = any(a["active"] and not a["acked"] and a["severity"] == "critical" for a in shown)
         self.title.setStyleSheet(f"font-weight: bold; color: {'#d9534f' if crit else 'palette(text)'};")
 
     def _selected_key(self) -> tuple[str, str] | None:
@@ -127,6 +156,21 @@ class AlarmPanel(QWidget):
         if sel is not None:
             self.ack.emit(*sel)
 
+    def _shelve_selected(self) -> None:
+        sel = self._selected_key()
+        if sel is None:
+            return  # shelving is deliberate: only the alarm the operator selected
+        row = next(a for a in self.rows if (a["origin"], a["key"]) == sel)
+        self.shelve.emit(*sel, 0.0 if row.get("shelved_until") else SHELVE_DEFAULT_S / 60)
+
     def _ack_everything(self) -> None:
         for origin in sorted({a["origin"] for a in self.rows}):
             self.ack.emit(origin, "")
+
+
+def _rationale(key: str) -> str:
+    """The alarm's rationalisation as a tool tip: what it means and what to do."""
+    d = definition(key)
+    if d is None:
+        return ""
+    return f"{d.title}\nCause: {d.cause}\nIf nobody acts: {d.consequence}\nDo: {d.action}"
