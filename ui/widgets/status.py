@@ -182,10 +182,11 @@ def lab_plant_light(state) -> Light:
     held = [p.name.upper() for p in state.platforms if p.status == "holding"]
     if state.comau is not None and state.comau.mode == "hold":
         held.append("Comau")
+    waiting = f"; holding: {', '.join(held)}" if held else ""  # the others still wait for the operator
     if state.vvmc:
-        light = Light("ok", "compensating: " + ", ".join(["VVMC", *doing]))
+        light = Light("ok", "compensating: " + ", ".join(["VVMC", *doing]) + waiting)
     elif doing:
-        light = Light("ok", "moving: " + ", ".join(doing))
+        light = Light("ok", "moving: " + ", ".join(doing) + waiting)
     elif held:
         light = Light("warn", f"holding: {', '.join(held)}: choose a mode")
     else:
@@ -246,7 +247,7 @@ def scene_lights(state) -> dict[str, Light]:
     return RULES[state.kind](state)
 
 
-ROOM = {"input": 2, "plant": 3}  # the lights with the longest details get the most of a row's width
+ROOM = {"engine": 2, "input": 3, "plant": 4, "plc": 2}  # the longest details get the most of a row's width
 
 
 class SceneLights(QWidget):
