@@ -670,7 +670,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.start = QLabel("The Motion-Lab engine starts when this tab is first opened.")
         self.plc_bar = self._plc_bar()
         self.logger: LabCsvLogger | None = None
-        self.lights = SceneLights("Motion-Lab", LAB_LIGHTS)  # this engine's lights, on every page (issue 26)
+        self.lights = SceneLights("Motion-Lab", LAB_LIGHTS, padding="1px 6px")  # its engine's lights (issue 26)
         self._enable_look = ""
         lay = QVBoxLayout(self)
         lay.addWidget(self.lights)

@@ -353,7 +353,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         # three columns the page's full height: controls over the workspace hull, the scene, the plots.  (The
         # views above the plots left the scene 130 px tall in a 1280×800 window.)
         controls.setMaximumWidth(340)
-        self.hull_plot.setMinimumHeight(128)  # with the vessel row the column fits a 1280 × 800 window
+        self.hull_plot.setMinimumHeight(122)  # with the vessel row and the lights the page fits 1280 × 800
         left = QSplitter(Qt.Vertical)
         left.addWidget(controls)
         left.addWidget(self.hull_plot)
@@ -370,8 +370,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         main.setStretchFactor(2, 3)
         main.setSizes([320, 400, 560])
         self.splitter = main
-        self.lights = SceneLights("Crane head (simulated plant)", TAC_LIGHTS)
+        self.lights = SceneLights("Crane head (simulated plant)", TAC_LIGHTS, padding="1px 6px")
         lay = QGridLayout(self)
+        lay.setContentsMargins(6, 2, 6, 0)  # with the lights' row the page still fits a 1280 × 800 window
+        lay.setVerticalSpacing(2)
         lay.addWidget(self.lights, 0, 0)
         lay.addWidget(main, 1, 0)
         lay.setRowStretch(1, 1)

@@ -35,9 +35,10 @@ class StatusLight(ElidedLabel):
     """A light: "● name: detail"; a detail too long for its room ends in "…" (whole in the tool tip),
     it never widens the window."""
 
-    def __init__(self, name: str, tooltip: str, parent=None) -> None:
+    def __init__(self, name: str, tooltip: str, parent=None, padding: str = "2px 6px") -> None:
         super().__init__("", parent)
         self.name = name
+        self.padding = padding  # CSS padding around the text (a page's row of lights: less height)
         self.setToolTip(tooltip)
         self.setMinimumWidth(120)
         self.state = "off"
@@ -49,7 +50,7 @@ class StatusLight(ElidedLabel):
         self._shown = (state, detail)
         self.state = state
         self.setText(f"● {self.name}{': ' + detail if detail else ''}")
-        self.setStyleSheet(f"color: {LIGHT[state]}; font-weight: bold; padding: 2px 6px;")
+        self.setStyleSheet(f"color: {LIGHT[state]}; font-weight: bold; padding: {self.padding};")
 
 
 # ---------------------------------------------------------------------------------------------- rules
@@ -252,9 +253,12 @@ ROOM = {"engine": 2, "input": 3, "plant": 4, "plc": 2}  # the longest details ge
 
 class SceneLights(QWidget):
     """One engine's lights in a row, headed by the engine's name; fed by its states (:meth:`show_state`) and
-    its link (:meth:`show_lost`).  ``lights``: (key, shown name, tool tip) of each light."""
+    its link (:meth:`show_lost`).  ``lights``: (key, shown name, tool tip) of each light; ``padding``: the
+    lights' CSS padding (a page's row: "1px 6px", as low as a line of text)."""
 
-    def __init__(self, title: str, lights: tuple[tuple[str, str, str], ...], parent=None) -> None:
+    def __init__(
+        self, title: str, lights: tuple[tuple[str, str, str], ...], parent=None, padding: str = "2px 6px"
+    ) -> None:
         super().__init__(parent)
         row = QHBoxLayout(self)
         row.setContentsMargins(0, 0, 0, 0)
@@ -262,7 +266,7 @@ class SceneLights(QWidget):
         if not title:
             self.title.hide()
         row.addWidget(self.title)
-        self.lights = {key: StatusLight(name, tip) for key, name, tip in lights}
+        self.lights = {key: StatusLight(name, tip, padding=padding) for key, name, tip in lights}
         for key, w in self.lights.items():
             w.setMinimumWidth(90)
             row.addWidget(w, ROOM.get(key, 1))
