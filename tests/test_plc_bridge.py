@@ -666,7 +666,8 @@ def test_lab_tab_shows_the_plc_link_and_its_error_with_acknowledge(qtbot):
     tab.on_description(ses.describe())
     snap = ses.snapshot()
     tab.on_state(snap)
-    assert lights[-1] == ("off", "simulated") and tab.plc_bar.isHidden()
+    # no PLC: the plant is simulated (it read "PLC: simulated", as if a PLC were simulated; issue 26, item 6)
+    assert lights[-1] == ("off", "none: simulated plant") and tab.plc_bar.isHidden()
     err = PlantLink(backend="plc", link="ok", connected=True, plc_state="STOP", plc_error="PLC in STOP; em1500 ERROR")
     tab.on_state(dataclasses.replace(snap, plant=err))
     assert lights[-1][0] == "error" and "em1500 ERROR" in lights[-1][1]
@@ -679,5 +680,7 @@ def test_lab_tab_shows_the_plc_link_and_its_error_with_acknowledge(qtbot):
     lost = PlantLink(backend="plc", link="lost", last_error="the PLC did not answer within the ADS timeout")
     tab.on_state(dataclasses.replace(snap, plant=lost))
     assert lights[-1] == ("error", "LOST: the PLC did not answer within the ADS timeout") and tab.plc_bar.isHidden()
+    page = tab.lights.lights  # the page's own row: the PLC light, and a plant nothing is known of
+    assert page["plc"].state == "error" and page["plant"].text() == "● plant: unknown: PLC link lost"
     winch = dataclasses.replace(snap.winch, mode="settled")  # a PLC mode Bosun does not offer: shown, no crash
     tab.on_state(dataclasses.replace(snap, plant=err, winch=winch))

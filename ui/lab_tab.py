@@ -46,7 +46,7 @@ from ui.widgets.columns import scroll_column
 from ui.widgets.files import choose_file
 from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, axis_label, legend, refit, refit_on_show
-from ui.widgets.status import StatusLight
+from ui.widgets.status import MOVING, SceneLights, StatusLight, lab_plc_light
 from ui.widgets.stick import VirtualStick
 from ui.widgets.vessel import VesselRow
 
@@ -77,6 +77,26 @@ MACHINE_LIGHT = {
     "unknown": ("unknown", "?"),
 }
 MOTION_COLOR = {"SYSTEM_OK": "#3c9", "WARNING": "#fa3", "ERROR": "#e33"}
+# a platform's mode as its page shows it; red only for a latched E-STOP (issue 26, item 5)
+STATUS_COLOR = {"ENGAGED": "#3c9", "NEUTRAL": "#39f", "SETTLED": "#999", "HOLDING": "#fa3"}
+STOP_COLOR = "#e33"
+# the Motion-Lab engine's lights on its page (issue 26, item 6): key, shown name, tool tip
+LAB_LIGHTS = (
+    ("engine", "engine", "the Motion-Lab engine: connection and loop"),
+    ("input", "input", "the input that drives a lab machine now: a joint jog, the stick (REMOTE) or none"),
+    ("plant", "plant", "the lab's machines as the engine reports them: moving, compensating, holding, at rest, E-STOP"),
+    ("plc", "PLC", "the lab's PLC link (bosun server --plant lab --plc): none (simulated plant), ok, lost, error"),
+)
+# the stick's ENABLE as the engine takes it: (text, style sheet) for enabled, held but refused, armed, not armed
+ENABLE_LOOK = {
+    "enabled": ("ENABLED", "QPushButton { background: #3c9d3c; color: white; font-weight: bold; }"),
+    "refused": (
+        "NOT ARMED\n(release)",
+        "QPushButton, QPushButton:pressed { background: #e0a020; color: black; font-weight: bold; }",
+    ),
+    "armed": ("ENABLE\n(armed)", "QPushButton { border: 2px solid #3c9d3c; }"),
+    "idle": ("ENABLE\n(hold)", ""),
+}
 JOG_RESEND_MS = 100  # a held jog button resends its speed this often (the engine stops a jog after 0.3 s)
 
 
@@ -403,25 +423,26 @@ class PlatformPanel(QWidget):
                 f.setValue(g.frequency[i])
                 ph.setValue(math.degrees(g.phase[i]))
 
-    def update_state(self, p, t: float) -> None:
-        status = p.status.upper()
-        color = {"ENGAGED": "#3c9", "NEUTRAL": "#39f", "SETTLED": "#999", "HOLDING": "#e33"}.get(status, "#fa3")
+    def update_state(self, p, t: float, estop: bool = False) -> None:
+        """The platform as the engine reports it; ``estop``: the lab's E-STOP is latched (the engine refuses
+        every mode command until reset, the platform brakes to rest and holds)."""
         info = p.source_info
         extra = ""
         if p.source == "simulation" and "hs" in info:
             extra = f" (Hs {info['hs']:g} m, Tp {info['tp']:g} s, scale {', '.join(f'{v:.2f}' for v in info['scale'])})"
         self.status.setText(
-            f"<b style='color:{color}'>{status}</b> &nbsp; source <b>{p.source.upper()}</b>{extra}"
+            f"{_platform_status(p, estop)} &nbsp; source <b>{p.source.upper()}</b>{extra}"
             f" &nbsp; ramp {100 * p.ramp:.0f} %"
             + (" &nbsp; <b style='color:#f80'>LEG LIMIT</b>" if p.leg_clamped else "")
         )
         self._show_motion(getattr(p, "motion", None))
         engaged = p.mode == "engaged"
-        self.buttons["neutral"].setEnabled(p.status in ("settled", "holding"))
-        self.buttons["settle"].setEnabled(p.status in ("neutral", "holding"))
-        self.buttons["engage"].setEnabled(p.status == "neutral")
-        self.buttons["disengage"].setEnabled(engaged and p.status != "disengaging")
-        self.apply.setEnabled(not engaged)
+        ok = not estop
+        self.buttons["neutral"].setEnabled(ok and p.status in ("settled", "holding"))
+        self.buttons["settle"].setEnabled(ok and p.status in ("neutral", "holding"))
+        self.buttons["engage"].setEnabled(ok and p.status == "neutral")
+        self.buttons["disengage"].setEnabled(ok and engaged and p.status != "disengaging")
+        self.apply.setEnabled(not engaged)  # the engine takes a source out of ENGAGED, also under an E-STOP
         if self.info is not None:
             lo, hi = self.info.leg_range
             for k, (bar, L) in enumerate(zip(self.leg_bars, p.legs, strict=True)):
@@ -453,6 +474,17 @@ class PlatformPanel(QWidget):
             c.setData(t, r[dof])
         for dof, c in zip(DOFS[3:], self.att_curves, strict=True):
             c.setData(t, r[dof])
+
+
+def _platform_status(p, estop: bool) -> str:
+    """A platform's mode in its colour; under a latched E-STOP in the stop colour with what it does (braking or
+    stopped, from its speed): never a green ENGAGED while it is stopped."""
+    status = p.status.upper()
+    if estop:
+        moving = max(map(abs, p.eta_dot), default=0.0) > MOVING
+        return f"<b style='color:{STOP_COLOR}'>{status} — E-STOP latched: {'braking' if moving else 'stopped'}</b>"
+    text = f"<b style='color:{STATUS_COLOR.get(status, '#fa3')}'>{status}</b>"
+    return text + (" (choose NEUTRAL or SETTLE)" if p.status == "holding" else "")
 
 
 class SpringSlider(QSlider):
@@ -638,7 +670,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.start = QLabel("The Motion-Lab engine starts when this tab is first opened.")
         self.plc_bar = self._plc_bar()
         self.logger: LabCsvLogger | None = None
+        self.lights = SceneLights("Motion-Lab", LAB_LIGHTS, padding="1px 6px")  # its engine's lights (issue 26)
+        self._enable_look = ""
         lay = QVBoxLayout(self)
+        lay.addWidget(self.lights)
         lay.addWidget(self.start)
         lay.addWidget(self.plc_bar)
         lay.addWidget(self.tabs)
@@ -664,24 +699,14 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         return bar
 
     def _show_plant(self, state) -> None:
-        """The plant backend's link: a status light (simulated, PLC ok / stale / lost / connecting / error)
-        and, while the PLC reports an error, the bar above the tabs."""
+        """The plant backend's link: the PLC light (:func:`~ui.widgets.status.lab_plc_light`, on this page's
+        row and as ``plc_link``) and, while the PLC reports an error, the bar above the tabs."""
+        light = lab_plc_light(state)
+        self.plc_link.emit(light.look, light.detail)
         pl = getattr(state, "plant", None)
         if pl is None or pl.backend != "plc":
-            self.plc_link.emit("off", "simulated")
             self.plc_bar.hide()
             return
-        if pl.link == "lost":
-            light = ("error", f"LOST: {pl.last_error}")
-        elif pl.link == "connecting":
-            light = ("warn", f"connecting: {pl.last_error or pl.target}")
-        elif pl.plc_error:
-            light = ("error", f"ERROR: {pl.plc_error}")
-        elif pl.link == "stale":
-            light = ("warn", f"no data for {pl.data_age:.1f} s")
-        else:
-            light = ("ok", pl.plc_state or "connected")
-        self.plc_link.emit(*light)
         show = bool(pl.plc_error) and pl.connected
         if show:
             self.plc_text.setText(f"<b>PLC error</b>: {pl.plc_error}")
@@ -796,6 +821,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         if not ok:  # the engine is gone: nothing more to log, nothing known about the machines
             self.stop_logger(f"stopped: engine lost ({message})" if message else "stopped: engine lost")
             self._show_machines(None)
+            self.lights.show_lost()
 
     def _linked(self, make) -> bool:
         done = super()._linked(make)
@@ -878,6 +904,28 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             text = "hold enable (Shift or ENABLE), then press and hold a joint's button"
         if text != self.jog_label.text():
             self.jog_label.setText(text)
+
+    def _show_enable(self, state) -> None:
+        """The stick's ENABLE shows what the engine made of it (issue 26): green only while the engine says
+        the input is enabled (armed, deadman held, fresh), amber while held here but refused (not armed:
+        release, centre, press again), outlined while armed, plain otherwise."""
+        f = state.flags
+        if f.enabled:
+            look = "enabled"
+        elif self.stick.enabled:
+            look = "refused"
+        else:
+            look = "armed" if f.armed and not state.estop else "idle"
+        if look != self._enable_look:
+            self._enable_look = look
+            text, css = ENABLE_LOOK[look]
+            self.stick.enable.setText(text)
+            self.stick.enable.setStyleSheet(css)
+        tip = f"the engine: {'enabled' if f.enabled else 'armed' if f.armed else 'not armed'}"
+        if f.input_reason and not f.enabled:
+            tip += f" ({f.input_reason})"
+        if self.stick.enable.toolTip() != tip:
+            self.stick.enable.setToolTip(tip)
 
     def _control(self) -> QWidget:
         w = QWidget()
@@ -1181,13 +1229,15 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         if getattr(state, "kind", None) != "lab":
             return
         self.state = state
+        self.lights.show_state(state)
         self._show_plant(state)
         self._show_machines(state)
         self._show_jog(state)
         self._show_swing(state)
+        self._show_enable(state)
         t = state.t
         for p in state.platforms:
-            self.platforms[p.name].update_state(p, t)
+            self.platforms[p.name].update_state(p, t, state.estop)
         c, w, d = state.comau, state.winch, self.desc
         if d is not None:
             for k in range(3):
@@ -1201,16 +1251,23 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self.comau_mode.setCurrentIndex(COMAU_MODES.index(c.mode))
         if w.mode in ("local", "remote", "motion_comp"):
             self.winch_mode.setCurrentIndex(("local", "remote", "motion_comp").index(w.mode))
-        self.winch_slider.setEnabled(w.mode == "local")
+        free = not state.estop  # the engine refuses every mode, winch and VVMC command until reset
+        for widget in (self.comau_mode, self.winch_mode, self.vvmc):
+            widget.setEnabled(free)
+        self.winch_slider.setEnabled(free and w.mode == "local")
         self.vvmc.blockSignals(True)
         self.vvmc.setChecked(state.vvmc)
         self.vvmc.blockSignals(False)
         self.vvmc.setText("VVMC ON" if state.vvmc else "VVMC OFF")
         e = 1000 * np.linalg.norm(state.tool_error_b2)
         pend = state.pendulum
+        stop = ""
+        if state.estop:
+            moving = max(map(abs, c.qd), default=0.0) > MOVING or abs(w.speed) > MOVING
+            what = "braking" if moving else "stopped"
+            stop = f"<b style='color:{STOP_COLOR}'>E-STOP latched: Comau and winch {what}</b><br>"
         self.readout.setText(
-            f"{'<b style=color:#f44>E-STOP</b> &nbsp; ' if state.estop else ''}"
-            f"tool − work point {e:.1f} mm &nbsp; swing {math.degrees(pend.swing):.2f}° &nbsp; t {t:.1f} s"
+            f"{stop}tool − work point {e:.1f} mm &nbsp; swing {math.degrees(pend.swing):.2f}° &nbsp; t {t:.1f} s"
         )
         if t - self._t_last >= 1.0 / SAMPLE_HZ - 1e-9:
             self._t_last = t

@@ -30,6 +30,7 @@ from ui.scene_tab import SceneEngineMixin
 from ui.widgets.fields import EngineFields
 from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
+from ui.widgets.status import SceneLights
 from ui.widgets.vessel import VesselRow
 
 HISTORY_S = 60.0
@@ -53,6 +54,13 @@ def _up(p) -> np.ndarray:
     p = np.asarray(p, dtype=float)
     return np.stack([p[..., 0], -p[..., 1], -p[..., 2]], axis=-1)
 
+
+# the crane-head engine's lights on its page (issue 26, item 6): no PLC here, the scene is simulated
+TAC_LIGHTS = (
+    ("engine", "engine", "the crane-head engine: connection and loop"),
+    ("input", "input", "no stick drives this scene: the head compensates by itself"),
+    ("plant", "plant", "simulated plant: vessel, crane and Delta head: compensating, head locked, holding, E-STOP"),
+)
 
 SCENE_TIP = (
     "Vessel (red hull, grey deck) on the sea (blue), offshore crane (orange), Delta crane head (cyan, "
@@ -228,6 +236,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.state = None  # the newest TacSnapshot
         self._sea_seq = -1
         self._t_last = -math.inf
+        self._controls = False  # the operator's controls are on (a linked operator; a viewer never)
         self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), COLUMNS)
         self._build()
         refit_on_show(self, self._shown)
@@ -344,7 +353,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         # three columns the page's full height: controls over the workspace hull, the scene, the plots.  (The
         # views above the plots left the scene 130 px tall in a 1280×800 window.)
         controls.setMaximumWidth(340)
-        self.hull_plot.setMinimumHeight(128)  # with the vessel row the column fits a 1280 × 800 window
+        self.hull_plot.setMinimumHeight(122)  # with the vessel row and the lights the page fits 1280 × 800
         left = QSplitter(Qt.Vertical)
         left.addWidget(controls)
         left.addWidget(self.hull_plot)
@@ -361,14 +370,30 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         main.setStretchFactor(2, 3)
         main.setSizes([320, 400, 560])
         self.splitter = main
+        self.lights = SceneLights("Crane head (simulated plant)", TAC_LIGHTS, padding="1px 6px")
         lay = QGridLayout(self)
-        lay.addWidget(main, 0, 0)
+        lay.setContentsMargins(6, 2, 6, 0)  # with the lights' row the page still fits a 1280 × 800 window
+        lay.setVerticalSpacing(2)
+        lay.addWidget(self.lights, 0, 0)
+        lay.addWidget(main, 1, 0)
+        lay.setRowStretch(1, 1)
         self._set_enabled(False)
 
     def _set_enabled(self, on: bool) -> None:
+        self._controls = on
         for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode, self.vessel):
             w.setEnabled(on)
         self.start.setVisible(not on)
+
+    def _linked(self, make) -> bool:
+        done = super()._linked(make)
+        if done and hasattr(self.link, "connection"):
+            self.link.connection.connect(self._connection)
+        return done
+
+    def _connection(self, ok: bool, message: str) -> None:
+        if not ok:  # the engine is gone: nothing is known of its machines
+            self.lights.show_lost()
 
     # ------------------------------------------------------------------ engine
     def _engine_failed(self, err: Exception) -> None:
@@ -405,6 +430,9 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         if getattr(state, "kind", None) != "tac":
             return
         self.state = state
+        self.lights.show_state(state)
+        # the engine refuses a mode under a latched E-STOP; after the reset a mode (also the same) resumes
+        self.mode.setEnabled(self._controls and not state.estop)
         sea = state.sea
         if sea is not None:
             if sea.seq != self._sea_seq:
@@ -433,7 +461,11 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         rms_s = float(np.sqrt(np.nanmean(r["e_s"] ** 2)))
         ratio = f"{rms_c / rms_s:.1%}" if rms_s > 1e-9 else "—"
         flag = "<span style='color:#e08020'><b>SATURATED</b></span>" if s.saturated else "inside workspace"
-        stop = "<span style='color:#e03030'><b>E-STOP latched</b></span><br>" if state.estop else ""
+        stop = (
+            "<span style='color:#e03030'><b>E-STOP latched</b>: head and crane stopped</span><br>"
+            if state.estop
+            else ""
+        )
         if state.holding and not state.estop:
             stop = "<span style='color:#e08020'><b>HOLDING</b>: choose a mode to resume</span><br>"
         paused = "<span style='color:#8a8aa0'><b>paused</b> (tab hidden)</span><br>" if state.engine.paused else ""

@@ -1,8 +1,17 @@
-"""Status area as in the lab's HMI: a light per subsystem, the alarm list, a timestamped log, a big STOP."""
+"""Status area as in the lab's HMI: a light per subsystem, the alarm list, a timestamped log, a big STOP.
+
+Every light is made from what an engine's state reports about its machines, never from what was asked
+of them ("a light never contradicts the machine", docs/safety.md H71-H74).  The rules are small pure
+functions of a typed snapshot (:func:`scene_lights`); :class:`SceneLights` shows one engine's lights in a
+row named after it.  The status area's own row is the teleop engine's (the main window feeds it); the
+crane-head and Motion-Lab pages carry their own engine's row, so no light speaks for another engine.
+"""
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QFont
@@ -26,9 +35,10 @@ class StatusLight(ElidedLabel):
     """A light: "● name: detail"; a detail too long for its room ends in "…" (whole in the tool tip),
     it never widens the window."""
 
-    def __init__(self, name: str, tooltip: str, parent=None) -> None:
+    def __init__(self, name: str, tooltip: str, parent=None, padding: str = "2px 6px") -> None:
         super().__init__("", parent)
         self.name = name
+        self.padding = padding  # CSS padding around the text (a page's row of lights: less height)
         self.setToolTip(tooltip)
         self.setMinimumWidth(120)
         self.state = "off"
@@ -40,7 +50,245 @@ class StatusLight(ElidedLabel):
         self._shown = (state, detail)
         self.state = state
         self.setText(f"● {self.name}{': ' + detail if detail else ''}")
-        self.setStyleSheet(f"color: {LIGHT[state]}; font-weight: bold; padding: 2px 6px;")
+        self.setStyleSheet(f"color: {LIGHT[state]}; font-weight: bold; padding: {self.padding};")
+
+
+# ---------------------------------------------------------------------------------------------- rules
+MOVING = 1e-4  # a speed above this is motion [m/s, rad/s] (snapshots round speeds to 1e-6)
+
+
+@dataclass(frozen=True)
+class Light:
+    """What a light shows: ``look`` (a key of :data:`LIGHT`) and one line of ``detail``."""
+
+    look: str
+    detail: str = ""
+
+
+LOST = {"engine": Light("error", "LOST"), "input": Light("unknown", "unknown"), "plant": Light("unknown", "unknown")}
+
+
+def engine_light(state) -> Light:
+    """The engine's loop as its state reports it: slow (below 95 % real time or > 1 % late ticks), paused (no
+    client shows its scene) or connected."""
+    e = state.engine
+    if e.realtime_factor < 0.95 or e.late_fraction > 0.01:
+        return Light("warn", f"slow: {100 * e.realtime_factor:.0f} % real time, {100 * e.late_fraction:.0f} % late")
+    if e.paused:
+        return Light("off", "paused (its tab is not shown)")
+    return Light("ok", "connected")
+
+
+def _stick_light(flags, takers: list[str]) -> Light:
+    """The operator's stick (pipeline flags) for the machines in ``takers`` that take it."""
+    dev = flags.device_name[:32] or "input"
+    if not flags.device:
+        return Light("warn", "no input device")
+    if flags.stale_input:
+        return Light("warn", f"no fresh input: {dev}")
+    if flags.enabled:
+        return Light("ok", f"enabled: {dev} drives {' and '.join(takers)}" if takers else f"enabled: {dev}")
+    return Light("warn", f"not armed: {flags.input_reason or dev}"[:80])
+
+
+def _braking(moving: list[str]) -> Light:
+    """Under a latched E-STOP: what still brakes, else stopped."""
+    return Light("error", f"E-STOP: braking {', '.join(moving)}" if moving else "E-STOP: stopped")
+
+
+# teleop ----------------------------------------------------------------------------------------------------
+def teleop_lights(state) -> dict[str, Light]:
+    """The teleoperated arm: it moves while a joint speed is not zero (also braking after enable was let go);
+    at rest it is ready while the input is enabled, else holding."""
+    moving = any(abs(v) > 1e-6 for v in state.qdot)
+    f = state.flags
+    if state.estop:
+        plant = _braking(["the arm"] if moving else [])
+    elif moving:
+        plant = Light("ok", "moving")
+    elif f.enabled and not f.stale_input:
+        plant = Light("ok", "ready")
+    else:
+        plant = Light("warn", "holding")
+    return {"engine": engine_light(state), "input": _stick_light(f, []), "plant": plant}
+
+
+# crane head ------------------------------------------------------------------------------------------------
+def tac_lights(state) -> dict[str, Light]:
+    """Vessel, crane and Delta head: the head compensates in ``tac`` and ``cooperative`` unless an E-STOP or a
+    reset froze it (the engine's ``holding``); ``off`` locks it.  No stick drives this scene."""
+    if state.estop:
+        plant = Light("error", "E-STOP: head and crane stopped")
+    elif state.holding:
+        plant = Light("warn", "holding: choose a compensation mode")
+    elif state.sample is None:
+        plant = Light("unknown", "no state yet")
+    elif state.tac_mode == "off":
+        plant = Light("off", "head locked (mode off): not compensating")
+    else:
+        how = "crane and head" if state.tac_mode == "cooperative" else "head"
+        sat = state.sample.saturated
+        detail = f"compensating: {how} ({state.tac_mode})" + (", SATURATED" if sat else "")
+        plant = Light("warn" if sat else "ok", detail)
+    f = state.flags
+    if f.device and not f.stale_input:
+        inp = Light("off", f"not used by the head (stop button read): {f.device_name[:32]}")
+    else:
+        inp = Light("off", "not used: the head compensates by itself")
+    return {"engine": engine_light(state), "input": inp, "plant": plant}
+
+
+# Motion-Lab ------------------------------------------------------------------------------------------------
+def _lab_moving(state) -> list[str]:
+    """The lab's machines moving now, by name (speeds above :data:`MOVING`)."""
+    out = [p.name.upper() for p in state.platforms if max(map(abs, p.eta_dot), default=0.0) > MOVING]
+    if state.comau is not None and max(map(abs, state.comau.qd), default=0.0) > MOVING:
+        out.append("Comau")
+    if state.winch is not None and abs(state.winch.speed) > MOVING:
+        out.append("winch")
+    return out
+
+
+def _lab_activity(state) -> list[str]:
+    """What each machine is doing, one short phrase each (engaged platforms, transits, jog, moving arm)."""
+    out = []
+    moving = _lab_moving(state)
+    for p in state.platforms:
+        name = p.name.upper()
+        if p.mode == "engaged":
+            out.append(f"{name} {p.status}")
+        elif p.status in ("raising", "settling") or name in moving:
+            out.append(f"{name} {p.status if p.status in ('raising', 'settling') else 'moving'}")
+    jog = state.comau_jog
+    if jog is not None and jog.joint:
+        out.append(f"Comau jog q{jog.joint}")
+    elif "Comau" in moving and not state.vvmc:
+        out.append(f"Comau {state.comau.mode.upper()}")
+    if "winch" in moving and not state.vvmc:
+        out.append(f"winch {state.winch.mode.upper()}")
+    return out
+
+
+def lab_plant_light(state) -> Light:
+    """The Motion-Lab's machines: E-STOP (braking, then stopped), compensating (VVMC on: the Comau and winch
+    track the work point), moving (a platform engaged or in transit, a jog, any machine in motion), holding
+    (a platform HOLDING or the Comau in HOLD after a reset: waiting for the operator) or at rest; unknown while
+    the PLC link is down."""
+    pl = state.plant
+    if pl is not None and pl.backend == "plc" and pl.link in ("lost", "connecting"):
+        return Light("unknown", f"unknown: PLC link {pl.link}")
+    if state.estop:
+        return _braking(_lab_moving(state))
+    doing = _lab_activity(state)
+    held = [p.name.upper() for p in state.platforms if p.status == "holding"]
+    if state.comau is not None and state.comau.mode == "hold":
+        held.append("Comau")
+    waiting = f"; holding: {', '.join(held)}" if held else ""  # the others still wait for the operator
+    if state.vvmc:
+        light = Light("ok", "compensating: " + ", ".join(["VVMC", *doing]) + waiting)
+    elif doing:
+        light = Light("ok", "moving: " + ", ".join(doing) + waiting)
+    elif held:
+        light = Light("warn", f"holding: {', '.join(held)}: choose a mode")
+    else:
+        light = Light("off", "at rest")
+    if any(p.leg_clamped for p in state.platforms):
+        light = Light("warn", light.detail + ", LEG LIMIT")
+    if pl is not None and pl.link == "stale":
+        light = Light("warn", f"{light.detail} (PLC data {pl.data_age:.1f} s old)")
+    return light
+
+
+def lab_input_light(state) -> Light:
+    """The input that drives a lab machine: a joint jog, the stick (Comau or winch REMOTE), or none (VVMC,
+    LOCAL, HOLD: no machine takes it)."""
+    if state.estop:
+        return Light("off", "not taken: E-STOP latched")
+    jog = state.comau_jog
+    if jog is not None and jog.joint:
+        return Light("ok", f"jog q{jog.joint} {100 * jog.speed:+.0f} % ({state.flags.device_name[:32] or 'GUI'})")
+    modes = [(n, m.mode if m is not None else "?") for n, m in (("Comau", state.comau), ("winch", state.winch))]
+    takers = [n for n, m in modes if m == "remote"]
+    if not takers:
+        return Light("off", "not used (" + ", ".join(f"{n} {m.upper()}" for n, m in modes) + ")")
+    return _stick_light(state.flags, [f"{n} REMOTE" for n in takers])
+
+
+def lab_plc_light(state) -> Light:
+    """The lab's PLC link: none (the plant is simulated), connecting, lost, stale, the PLC's error, or its state."""
+    pl = state.plant
+    if pl is None or pl.backend != "plc":
+        return Light("off", "none: simulated plant")
+    if pl.link == "lost":
+        return Light("error", f"LOST: {pl.last_error}")
+    if pl.link == "connecting":
+        return Light("warn", f"connecting: {pl.last_error or pl.target}")
+    if pl.plc_error:
+        return Light("error", f"ERROR: {pl.plc_error}")
+    if pl.link == "stale":
+        return Light("warn", f"no data for {pl.data_age:.1f} s")
+    return Light("ok", pl.plc_state or "connected")
+
+
+def lab_lights(state) -> dict[str, Light]:
+    return {
+        "engine": engine_light(state),
+        "input": lab_input_light(state),
+        "plant": lab_plant_light(state),
+        "plc": lab_plc_light(state),
+    }
+
+
+#: the lights of each scene (``Snapshot.kind``)
+RULES: dict[str, Callable[[object], dict[str, Light]]] = {"teleop": teleop_lights, "tac": tac_lights, "lab": lab_lights}
+
+
+def scene_lights(state) -> dict[str, Light]:
+    """Every light of the scene ``state`` comes from (a typed snapshot): name -> :class:`Light`."""
+    return RULES[state.kind](state)
+
+
+ROOM = {"engine": 2, "input": 3, "plant": 4, "plc": 2}  # the longest details get the most of a row's width
+
+
+class SceneLights(QWidget):
+    """One engine's lights in a row, headed by the engine's name; fed by its states (:meth:`show_state`) and
+    its link (:meth:`show_lost`).  ``lights``: (key, shown name, tool tip) of each light; ``padding``: the
+    lights' CSS padding (a page's row: "1px 6px", as low as a line of text)."""
+
+    def __init__(
+        self, title: str, lights: tuple[tuple[str, str, str], ...], parent=None, padding: str = "2px 6px"
+    ) -> None:
+        super().__init__(parent)
+        row = QHBoxLayout(self)
+        row.setContentsMargins(0, 0, 0, 0)
+        self.title = QLabel(f"<b>{title}</b>")
+        if not title:
+            self.title.hide()
+        row.addWidget(self.title)
+        self.lights = {key: StatusLight(name, tip, padding=padding) for key, name, tip in lights}
+        for key, w in self.lights.items():
+            w.setMinimumWidth(90)
+            row.addWidget(w, ROOM.get(key, 1))
+
+    def set_lights(self, lights: dict[str, Light]) -> None:
+        for key, light in lights.items():
+            if key in self.lights:
+                self.lights[key].set(light.look, light.detail)
+
+    def show_state(self, state) -> None:
+        self.set_lights(scene_lights(state))
+
+    def show_lost(self) -> None:
+        """The engine is out of reach: nothing is known of its input or machines."""
+        self.set_lights({**LOST, "plc": Light("unknown", "unknown")})
+
+
+TELEOP_LIGHTS = (
+    ("engine", "teleop engine", "the teleop engine: connection and loop"),
+    ("input", "teleop input", "the teleop arm's input: joystick, on-screen stick or keyboard"),
+    ("plant", "teleop arm", "the teleoperated arm: moving, ready, holding, E-STOP (braking, stopped)"),
+)
 
 
 class StatusPanel(QWidget):
@@ -54,18 +302,16 @@ class StatusPanel(QWidget):
         lay.setContentsMargins(4, 2, 4, 2)
         self.setMaximumHeight(230)  # the machines stay in view on a 800-px screen
         left = QVBoxLayout()
-        lights = QHBoxLayout()
-        self.lights = {
-            "engine": StatusLight("engine", "engine connection and loop"),
-            "input": StatusLight("input", "input device: joystick, on-screen stick or keyboard"),
-            "plant": StatusLight("plant", "simulated manipulator: moving, holding, E-STOP"),
-            "plc": StatusLight(
-                "PLC", "the Motion-Lab's PLC link (bosun server --plant lab --plc): simulated, ok, lost, error"
-            ),
-        }
-        for w in self.lights.values():
-            lights.addWidget(w, 1)
-        left.addLayout(lights)
+        # the teleop engine's lights, named so (the crane-head and Motion-Lab pages show their own engine's):
+        # a light here never speaks for a machine on another tab (issue 26, item 6)
+        self.row = SceneLights("", TELEOP_LIGHTS)
+        self.lights = dict(self.row.lights)
+        # the lab's PLC light is on the Motion-Lab page; this one is kept, never shown, for callers that still
+        # set it (it said "PLC: simulated" on the crane-head tab)
+        self.lights["plc"] = StatusLight("PLC", "the Motion-Lab's PLC link: on the Motion-Lab page")
+        self.lights["plc"].setParent(self)
+        self.lights["plc"].hide()
+        left.addWidget(self.row)
         split = QSplitter(Qt.Horizontal)
         self.alarms = AlarmPanel()
         split.addWidget(self.alarms)
@@ -153,8 +399,10 @@ class StatusPanel(QWidget):
         free = any(role != "operator" and not op for _, role, op in rows)
         self.role_button.setEnabled(mine or free)
 
+    def show_teleop(self, state) -> None:
+        """The teleop engine's lights from its state (:func:`teleop_lights`)."""
+        self.row.show_state(state)
+
     def set_lost(self) -> None:
         """The engine is out of reach: nothing is known about input or plant."""
-        self.lights["engine"].set("error", "LOST")
-        self.lights["input"].set("unknown", "unknown")
-        self.lights["plant"].set("unknown", "unknown")
+        self.row.show_lost()
