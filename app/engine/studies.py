@@ -9,7 +9,9 @@ the server as a ``study`` message.  One study at a time; ``cancel`` keeps the ta
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
+import os
 import queue
 import time
 from typing import Any
@@ -18,6 +20,7 @@ from app.errors import BosunError, one_line
 
 STUDIES = ("distribution", "tracking")
 PROGRESS_EVERY = 0.1  # s: the worker reports progress at most this often
+STUDY_NICE = 10  # the worker's scheduling priority below the engines' (background work)
 
 
 class StudyError(BosunError):
@@ -25,7 +28,14 @@ class StudyError(BosunError):
 
 
 def _work(kind: str, xml: str, label: str, solver: str, grid: int, out, cancel) -> None:
-    """The worker process: parse the robot, run the study, put progress and the result on ``out``."""
+    """The worker process: parse the robot, run the study, put progress and the result on ``out``.
+
+    It runs at a lower scheduling priority (nice +10): a study is background work, and on a machine with
+    fewer cores than busy processes it took the CPU from the engines' control loops and state streams
+    (issue 26, item 9: a teleop study held the crane-head and lab engines' states back for up to a second,
+    and the GUI called the engines lost)."""
+    with contextlib.suppress(OSError, AttributeError):
+        os.nice(STUDY_NICE)
     try:
         from app.analysis.ik_studies import error_distribution, track
         from app.models.registry import load_robot_text
