@@ -267,3 +267,19 @@ def test_a_swinging_load_raises_the_alarm_and_names_the_angle():
         ses.tick(t, dt)
     a = ses.alarms.items["load_swing"]
     assert a.active and a.source == "Motion-Lab" and re.search(r"swinging (9|10)\.\d°", a.text), a.text
+
+
+def test_stale_input_is_an_alarm_only_for_an_operator_who_was_driving():
+    """Item 10's alarm flood: a file chooser opened (the GUI paused its sends) raised 'stale input' twice,
+    with nobody driving.  Not armed, a quiet device is no alarm; armed, it is."""
+    ses = Session()
+    t = drive(ses, (0.0, 0.0, 0.0), 0.2, 0.0, enable=False)  # connected, not armed
+    for _ in range(100):  # silence for 0.4 s
+        t += 0.004
+        ses.tick(t, 0.004)
+    assert ses.input.stale_count == 1 and not ses.alarms.active("stale_input")
+    t = drive(ses, (0.3, 0.0, 0.0), 0.5, arm(ses, t))  # driving, then silence
+    for _ in range(100):
+        t += 0.004
+        ses.tick(t, 0.004)
+    assert ses.alarms.active("stale_input")

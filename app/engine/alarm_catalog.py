@@ -115,7 +115,8 @@ CATALOG: tuple[AlarmDef, ...] = (
         title="Input stale",
         sources=("teleop", "lab"),
         priority="warning",
-        cause="the connected input device sent nothing for 200 ms (a frozen client, a congested link)",
+        cause="the input device driving the machine (armed) sent nothing for 200 ms (a frozen client, a congested "
+        "link); a device nobody drives with going quiet is no alarm",
         consequence="the machine holds where it is; the input is disarmed",
         action="check the input client and the network; centre the stick and press ENABLE to drive again",
         trip=True,

@@ -378,7 +378,8 @@ class LabSession(Scene):
         fl = self.input.flags()
         remote = lab.comau_mode == "remote" or lab.winch.mode == "remote"
         al.set("device_lost", remote and self.input.lost, text="Input device lost: Comau and winch hold")
-        al.set("stale_input", remote and fl["device"] and fl["stale_input"], text="Input stale: Comau and winch hold")
+        stale = remote and fl["device"] and fl["stale_input"] and self.input.stale_while_driving
+        al.set("stale_input", stale, text="Input stale: Comau and winch hold")
         w = self.layout.winch
         wire = lab.winch.length
         top = wire <= w["min_length"] + 1e-3

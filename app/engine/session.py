@@ -389,7 +389,7 @@ class Session(Scene):
         al.set("device_lost", self.input.lost, text="Input device lost: the arm holds")
         al.set(
             "stale_input",
-            self.input.connected and flags["stale_input"],
+            self.input.connected and flags["stale_input"] and self.input.stale_while_driving,
             text=f"Input stale (nothing for {self.input.stale_timeout * 1e3:.0f} ms): the arm holds",
         )
         lo, hi = self.robot.lower, self.robot.upper

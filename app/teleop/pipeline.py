@@ -107,6 +107,7 @@ class InputPipeline:
         self.released = False
         self.disarm_reason = "start-up"
         self.stale_count = 0
+        self.stale_while_driving = False  # the input went stale while armed (the alarm's condition)
         self._was_stale = True
         self.last: InputState = self._state(np.zeros(4), np.zeros(4), False, False, True, False, False, "no input")
 
@@ -151,6 +152,7 @@ class InputPipeline:
                 self.profile = profile_for(sample.device, len(sample.axes))
             self.disarm("new device")
         if self._was_stale:  # back after silence: enable must be pressed anew (buttons held through stay held)
+            self.stale_while_driving = False
             self._deadman_prev = False
             self._was_stale = False
         self.connected = True
@@ -197,6 +199,7 @@ class InputPipeline:
         if stale:
             if not self._was_stale and sample is not None:
                 self.stale_count += 1
+                self.stale_while_driving = self.armed  # stale input matters to an operator who was driving
                 self._note("warning", f"input stale (nothing for {self.stale_timeout * 1e3:.0f} ms): holding")
             self._was_stale = True
             if self.armed or self._seen_neutral_released:
