@@ -202,7 +202,11 @@ class KeysOverlay(QFrame):
         p = self.parentWidget()
         w = min(760, max(300, p.width() - 24))
         self.setFixedWidth(w)
-        self.adjustSize()
+        h = self.heightForWidth(w)  # the wrapped text's height at this width (adjustSize guessed another width)
+        if h > 0:
+            self.setFixedHeight(h)
+        else:
+            self.adjustSize()
         self.move(p.width() - w - 12, top)
         self.raise_()
 

@@ -14,7 +14,7 @@ ENABLE_LOOK = {
     "idle": ("ENABLE\n(hold)", ""),
     "not_armed": ("NOT ARMED\nre-press", "background: #e0a020; color: black; font-weight: bold;"),
     "armed": ("ARMED\nnot driving", "background: #f3d58a; color: black; font-weight: bold;"),
-    "enabled": ("ENABLED\ndriving", "background: #3c9d3c; color: white; font-weight: bold;"),
+    "enabled": ("ENABLED\nlive", "background: #3c9d3c; color: white; font-weight: bold;"),
     "estop": ("E-STOP\nlatched", "background: #5a1f1d; color: #ffb0a8; font-weight: bold;"),
 }
 
