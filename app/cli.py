@@ -1651,11 +1651,19 @@ def _commands(parser: argparse.ArgumentParser) -> set[str]:
     return set()
 
 
+TOP_LEVEL_OPTIONS = ("-h", "--help", "--version")  # the options ``bosun`` itself takes before a command
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``bosun`` and ``python -m app``; returns the exit status."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0].startswith("-") and argv[0] not in TOP_LEVEL_OPTIONS and "gui" in _commands(parser):
+        # the README's synopsis, ``bosun [gui] [--connect URL] ... [--robot R]``: options without a command are
+        # the GUI's (``bosun --robot knuckle_boom_crane`` was "invalid choice" for COMMAND, issue 26, item 10)
+        argv = ["gui", *argv]
     args = parser.parse_args(argv)
-    args.argv = list(sys.argv[1:] if argv is None else argv)  # what made an output (vessel rao writes it)
+    args.argv = argv  # what made an output (vessel rao writes it)
     if args.command is None:
         # the GUI when it is installed, else the robot library
         args = parser.parse_args(["gui"] if "gui" in _commands(parser) else ["robots"])

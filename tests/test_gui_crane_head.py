@@ -235,11 +235,12 @@ def test_set_vessel_parts_in_order_or_refused():
 
 
 def test_the_rao_file_dialog_leaves_stop_live(qtbot, window):
-    """Issue 17, item 2 (safety): the vessel's RAO-file chooser is not modal; Space in it is STOP for the
-    crane-head engine, which confirms the stop, and the STOP button works with it open."""
+    """Issue 17, item 2 (safety): the vessel's RAO-file chooser is not modal; Ctrl+Space in its file-name field
+    (where Space types a space, issue 26 item 10) and Space in its list of files are STOP for the crane-head
+    engine, which confirms the stop, and the STOP button works with it open."""
     from PyQt5.QtCore import Qt
     from PyQt5.QtTest import QTest
-    from PyQt5.QtWidgets import QApplication
+    from PyQt5.QtWidgets import QApplication, QListView
 
     win, _ = window
     tab = win.crane_head
@@ -249,7 +250,13 @@ def test_the_rao_file_dialog_leaves_stop_live(qtbot, window):
     dlg = tab.vessel._dialog
     qtbot.waitUntil(dlg.isVisible, timeout=GUI_WAIT)
     assert not dlg.isModal() and QApplication.activeModalWidget() is None
-    QTest.keyClick(dlg.focusWidget() or dlg, Qt.Key_Space)
+    QTest.keyClick(dlg.focusWidget() or dlg, Qt.Key_Space, Qt.ControlModifier)
+    qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
+    win.reset()
+    qtbot.waitUntil(lambda: not tab.state.estop, timeout=GUI_WAIT)
+    files = dlg.findChild(QListView, "listView")
+    files.setFocus()
+    QTest.keyClick(files, Qt.Key_Space)
     qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
     win.reset()
     qtbot.waitUntil(lambda: not tab.state.estop, timeout=GUI_WAIT)

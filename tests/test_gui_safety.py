@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from PyQt5.QtCore import QEvent, QSettings, Qt
 from PyQt5.QtGui import QKeyEvent
-from PyQt5.QtWidgets import QApplication
+from PyQt5.QtWidgets import QApplication, QLineEdit, QListView
 
 from app.engine.server import EngineServer
 from app.engine.session import Session
@@ -120,8 +120,8 @@ def arm(qtbot, win, stick=None, flags=lambda w: w.teleop.state.flags):
         raise AssertionError(f"not armed: engine flags {flags(win)}, GUI stick {stick.values()}") from None
 
 
-def key(widget, k, press=True, autorep=False):
-    ev = QKeyEvent(QEvent.KeyPress if press else QEvent.KeyRelease, k, Qt.NoModifier, "", autorep)
+def key(widget, k, press=True, autorep=False, mods=Qt.NoModifier):
+    ev = QKeyEvent(QEvent.KeyPress if press else QEvent.KeyRelease, k, mods, "", autorep)
     QApplication.sendEvent(widget, ev)
 
 
@@ -172,8 +172,18 @@ def test_item2_error_and_file_dialog_leave_stop_live(qtbot, rig, tmp_path):
     dlg = win.teleop.file_dialog
     qtbot.waitUntil(dlg.isVisible, timeout=GUI_WAIT)
     assert not dlg.isModal() and QApplication.activeModalWidget() is None
-    focus = dlg.focusWidget() or dlg
-    key(focus, Qt.Key_Space)  # Space in the dialog is STOP, not a button press
+    # the chooser opens with the keyboard in its file-name field: Space types there (issue 26, item 10: no
+    # file name with a space could be typed), Ctrl+Space is STOP
+    name_field = dlg.focusWidget()
+    assert isinstance(name_field, QLineEdit)
+    key(name_field, Qt.Key_Space, mods=Qt.ControlModifier)
+    qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
+    assert dlg.isVisible()
+    win.reset()
+    qtbot.waitUntil(lambda: not state(win).estop, timeout=GUI_WAIT)
+    files = dlg.findChild(QListView, "listView")  # anywhere else in the dialog Space is STOP, not a button press
+    files.setFocus()
+    key(files, Qt.Key_Space)
     qtbot.waitUntil(lambda: state(win).estop, timeout=GUI_WAIT)
     assert dlg.isVisible()
     win.reset()

@@ -2,20 +2,28 @@
 
 Safety rules the window keeps (docs/safety.md lists each with its test):
 
-* STOP (the button, Space from any tab or dialog, a joystick's stop button) sends ``estop`` to
-  every engine; the window says "E-STOP confirmed" only when an engine's state shows it latched,
-  and raises the alarm "E-STOP NOT CONFIRMED" (resending every 100 ms) if that takes longer than
-  100 ms.  Esc is not STOP (it closes drop-downs).
-* No modal dialogs: errors go to a message bar and the log; the file chooser is non-modal.
+* STOP (the button, Space from any tab or dialog, Ctrl+Space also in a text field, a joystick's stop
+  button) sends ``estop`` to every engine; the window says "E-STOP confirmed" only when an engine's
+  state shows it latched, and raises the alarm "E-STOP NOT CONFIRMED" (resending every 100 ms) if
+  that takes longer than 100 ms.  Esc is not STOP (it closes drop-downs).  In a text field that has
+  the keyboard (a file name, a log path) Space types a space; everywhere else it is STOP.
+* No modal dialogs: errors go to the message bar and the log; the file chooser is non-modal.
+* The page stays put (ui/notices.py): the banner and the message bar sit beside the tab bar, in room
+  of their own, so no control ever moves when one appears or goes; each message is tied to its
+  condition and cleared when that is gone.  The wheel changes a set-point only in the field that has
+  the keyboard (ui/input_guard.py).
+* ENABLE shows the engine's view of the input (enabled, armed, E-STOP) from its snapshots.
 * While a tab with an on-screen stick is shown, the stick owns the arrow keys, Page Up/Down and
   Shift (enable): they never reach other widgets.  A tab change, focus moving to a text field, or
   the window losing focus releases every key.
 * Lost engine: every light says LOST/unknown, plots grey out, and the link reconnects by itself.
-* The window opens within the screen (1280×800 at most) and never grows past it.
+* The window opens within the screen's free area (1280×800 at most), its frame included: the frame's
+  top at the free area's top on a first opening, never past its edges.
 """
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 from dataclasses import asdict
@@ -27,33 +35,42 @@ from PyQt5.QtWidgets import (
     QAbstractSpinBox,
     QAction,
     QApplication,
+    QComboBox,
     QDockWidget,
     QFrame,
     QGraphicsOpacityEffect,
-    QHBoxLayout,
-    QLabel,
     QLineEdit,
     QMainWindow,
     QPlainTextEdit,
-    QPushButton,
     QScrollArea,
     QShortcut,
-    QSizePolicy,
     QTabWidget,
+    QTextEdit,
     QVBoxLayout,
     QWidget,
 )
 
 from app.engine.alarms import AlarmList
 from ui.analysis_tab import AnalysisTab
+from ui.input_guard import WheelGuard
 from ui.lab_tab import MotionLabTab
 from ui.marine_tab import CraneHeadTab
+from ui.notices import KeysOverlay, NoticeStrip
 from ui.teleop_tab import TeleopTab
 from ui.widgets.status import StatusPanel
 
 ESTOP_CONFIRM_S = 0.1  # the engine's state must show the latch within this, else an alarm
 MAX_SIZE = (1280, 800)
-MESSAGE_COLORS = {"error": "#7a2421", "info": "#1f4e79"}
+FRAME_FIT_MS = (0, 150, 500, 1200, 2500, 5000)  # the window manager frames the window some time after show()
+FRAME_FIT_S = 10.0  # moves and resizes this soon after the first show are the window manager's: fitted
+# an error from a tab, by its title: (engine, what it refused) keys the message, cleared by that command's success
+TITLE_KEYS = {
+    "Robot not loaded": "teleop:set_robot",
+    "Solver not changed": "teleop:set_solver",
+    "Command refused": "teleop:command",
+    "Logger not started": "teleop:logger",
+}
+SCENE_REFUSAL = re.compile(r"^(?P<origin>Motion-Lab|crane head): (?:(?P<re>\w+) )?refused: (?P<error>.*)$", re.S)
 
 
 class FitTabs(QTabWidget):
@@ -84,34 +101,6 @@ class FitTabs(QTabWidget):
         self.setCurrentIndex(self.pages.index(w))
 
 
-class MessageBar(QFrame):
-    """A non-blocking error line above the tabs (no modal dialog ever takes STOP away)."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        lay = QHBoxLayout(self)
-        lay.setContentsMargins(8, 2, 4, 2)
-        self.text = QLabel("")
-        self.text.setWordWrap(True)
-        lay.addWidget(self.text, 1)
-        close = QPushButton("×")
-        close.setFocusPolicy(Qt.NoFocus)
-        close.setFixedWidth(28)
-        close.setToolTip("dismiss (the message stays in the log)")
-        close.clicked.connect(self.hide)
-        lay.addWidget(close)
-        self.hide()
-
-    def show_message(self, title: str, message: str, level: str = "error") -> None:
-        self.setStyleSheet(
-            f"MessageBar {{ background: {MESSAGE_COLORS[level]}; border-radius: 4px; }} QLabel {{ color: white; }}"
-        )
-        first = message.strip().splitlines()[0] if message.strip() else ""
-        self.text.setText(f"<b>{title}</b>: {first}")
-        self.text.setToolTip(message)
-        self.show()
-
-
 class MainWindow(QMainWindow):
     def __init__(
         self,
@@ -140,20 +129,18 @@ class MainWindow(QMainWindow):
         self.motion_lab = MotionLabTab(lab_link_factory, use_gl=use_gl)
         self.tabs.add(self.motion_lab, "Motion-Lab")
         self.tabs.currentChanged.connect(self._tab_changed)
-        self.banner = QLabel("")
-        self.banner.setAlignment(Qt.AlignCenter)
-        self.banner.setWordWrap(True)
-        self.banner.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)  # text never widens the window
-        self.banner.hide()
-        self.message_bar = MessageBar()
+        # banner and messages in the room beside the tab bar: they never move a control (ui/notices.py)
+        self.notices = NoticeStrip(self.tabs)
+        self.tabs.setCornerWidget(self.notices, Qt.TopRightCorner)
+        self.banner = self.notices.banner
+        self.message_bar = self.notices.message_bar
         central = QWidget()
         cl = QVBoxLayout(central)
         cl.setContentsMargins(2, 2, 2, 2)
         cl.setSpacing(2)
-        cl.addWidget(self.banner)
-        cl.addWidget(self.message_bar)
         cl.addWidget(self.tabs, 1)
         self.setCentralWidget(central)
+        self.keys_overlay = KeysOverlay(central, KEYS_HTML)
         self.status = StatusPanel()
         dock = QDockWidget("Status")
         dock.setObjectName("status-dock")
@@ -166,13 +153,13 @@ class MainWindow(QMainWindow):
         self.status.role_clicked.connect(self.toggle_role)
         QShortcut(QKeySequence("Ctrl+1"), self, activated=lambda: self.teleop.set_mode("position"))
         QShortcut(QKeySequence("Ctrl+2"), self, activated=lambda: self.teleop.set_mode("velocity"))
-        QShortcut(QKeySequence("F1"), self, activated=self.show_keys)
         menu = self.menuBar().addMenu("&File")
         act = QAction("Open robot XML…", self, triggered=self.teleop.choose_xml)
         act.setShortcut("Ctrl+O")
         menu.addAction(act)
         menu.addAction(QAction("Quit", self, triggered=self.close, shortcut="Ctrl+Q"))
         help_menu = self.menuBar().addMenu("&Help")
+        # F1 only here: a QShortcut for F1 beside it made the key ambiguous, and neither ever fired
         help_menu.addAction(QAction("Keys and STOP…", self, triggered=self.show_keys, shortcut="F1"))
 
         link.state.connect(self.on_state)
@@ -190,6 +177,9 @@ class MainWindow(QMainWindow):
         self.motion_lab.plc_link.connect(lambda state, detail: self.status.lights["plc"].set(state, detail))
         self.status.alarms.ack.connect(self.acknowledge)
         self.gui_alarms = AlarmList("GUI", note=lambda lvl, text: None)
+        # the room of "E-STOP LATCHED" under STOP is kept while it is empty (else Reset moves when it shows)
+        latched = self.status.latched
+        latched.setMinimumHeight(latched.fontMetrics().height() + latched.contentsMargins().top() * 2)
         self.status.lights["engine"].set("ok", "connected")
         self.status.add_log("info", f"connected to the engine at {link.client.url} as {link.role}")
         if link.note:
@@ -205,16 +195,24 @@ class MainWindow(QMainWindow):
         self._alarm_timer.setInterval(200)
         self._alarm_timer.timeout.connect(self._refresh_alarms)
         self._alarm_timer.start()
+        self._look_timer = QTimer(self)  # ENABLE's look and the messages' conditions, from the engines' states
+        self._look_timer.setInterval(100)
+        self._look_timer.timeout.connect(self._refresh_looks)
+        self._look_timer.start()
         self.child_engines: list = []  # scene engine processes started by the GUI (the teleop one is ``engine``)
         self._restart_errors: list[str] = []
         self._watchdog = QTimer(self)
         self._watchdog.setInterval(1000)
         self._watchdog.timeout.connect(self.watch_engines)
         self._watchdog.start()
+        self._frame_fitted = False
+        self._fit_until = 0.0
         self.restore()
         self.teleop.inputs.route(link, self.teleop.stick)
         app = QApplication.instance()
         app.installEventFilter(self)
+        self.wheel_guard = WheelGuard(lambda text: self.status.add_log("info", f"set-point {text}"), self)
+        self.wheel_guard.install(app)
         app.focusChanged.connect(self._focus_changed)
         app.applicationStateChanged.connect(self._app_state)
 
@@ -234,7 +232,11 @@ class MainWindow(QMainWindow):
         if not self.isVisible():
             return
         while self._restart_errors:
-            self.show_error("Engine not restarted", self._restart_errors.pop(0))
+            err = self._restart_errors.pop(0)
+            if err:
+                self.show_error("Engine not restarted", err, key="restart")
+            else:
+                self.notices.clear("restart")
         for proc in ([self.engine] if self.engine is not None else []) + list(self.child_engines):
             code = proc.exited()
             if code is None or getattr(proc, "restarting", False):
@@ -249,6 +251,8 @@ class MainWindow(QMainWindow):
             proc.restart()
         except Exception as err:  # it does not come back: the next watchdog tick tries again
             self._restart_errors.append(str(err))
+        else:
+            self._restart_errors.append("")  # back: its "not restarted" message goes
         finally:
             proc.restarting = False
 
@@ -269,18 +273,44 @@ class MainWindow(QMainWindow):
     @staticmethod
     def _typing() -> bool:
         w = QApplication.focusWidget()
-        if isinstance(w, QPlainTextEdit):
+        if isinstance(w, QPlainTextEdit | QTextEdit):
             return not w.isReadOnly()
         return isinstance(w, QLineEdit | QAbstractSpinBox)
 
+    @staticmethod
+    def _text_field(obj) -> bool:
+        """``obj``, the receiver of a key event, is a text field that has the keyboard: Space types a space.
+
+        A line edit (not read-only; a spin box's own is a number, not text), an editable text edit or an
+        editable combo box.  A key sent to anything else (a button, a list, a spin box, a native GL view,
+        a dialog's list of files) is not typed text."""
+        if not isinstance(obj, QWidget):
+            # a platform key event reaches the window (QWidgetWindow) before its focus widget: look ahead at
+            # that widget; a native child window (a GL view) is no text field
+            fw = QApplication.focusWidget()
+            if fw is None or fw.window().windowHandle() is not obj:
+                return False
+            obj = fw
+        if not obj.hasFocus():
+            return False
+        if isinstance(obj, QLineEdit):
+            return not obj.isReadOnly() and not isinstance(obj.parentWidget(), QAbstractSpinBox)
+        if isinstance(obj, QPlainTextEdit | QTextEdit):
+            return not obj.isReadOnly()
+        return isinstance(obj, QComboBox) and obj.isEditable()
+
     def eventFilter(self, obj, ev) -> bool:
-        """Space is STOP everywhere; the stick of the tab on screen owns its keys (see the module doc)."""
+        """Space is STOP everywhere but in a text field that has the keyboard, Ctrl+Space everywhere; the stick
+        of the tab on screen owns its keys (see the module doc)."""
         t = ev.type()
         if t in (QEvent.KeyPress, QEvent.KeyRelease):
             key = ev.key()
             if key == Qt.Key_Space:
+                ctrl = bool(ev.modifiers() & Qt.ControlModifier)
+                if not ctrl and self._text_field(obj):
+                    return False  # typed: a file name may hold a space (Ctrl+Space and STOP still stop)
                 if t == QEvent.KeyPress and not ev.isAutoRepeat():
-                    self.estop("Space")
+                    self.estop("Ctrl+Space" if ctrl else "Space")
                 return True  # never reaches a button or dialog
             stick = self._stick_of_current_tab()
             if stick is not None and key in stick.KEYS and self.isActiveWindow() and not self._typing():
@@ -322,8 +352,10 @@ class MainWindow(QMainWindow):
         self._route_input()
 
     def _watch_link(self, origin: str, link) -> None:
-        """A scene link however it was made (first view, the tab's Start button): lost engine, input."""
+        """A scene link however it was made (first view, the tab's Start button): lost engine, input, and the
+        messages its commands' refusals left (cleared when the command is taken)."""
         link.connection.connect(lambda ok, msg, o=origin: self.on_connection(ok, msg, o))
+        link.reply.connect(lambda re_, ok, _err, o=origin: self.notices.clear(f"{o}:{re_}") if ok else None)
         self._route_input()
 
     def _route_input(self) -> None:
@@ -339,10 +371,15 @@ class MainWindow(QMainWindow):
             self.teleop.inputs.route(None, None)
 
     def show_keys(self) -> None:
-        """The shortcut overlay, in the message area (non-blocking)."""
-        self.status.add_log("info", KEYS_HELP.replace("\n", " "))
-        self.message_bar.show_message("Keys", KEYS_HELP, level="info")
-        self.message_bar.text.setText(KEYS_HTML)
+        """The shortcut overlay (F1 opens and closes it): floats over the top of the pages, non-blocking."""
+        if not self.keys_overlay.isVisible():
+            self.status.add_log("info", KEYS_HELP.replace("\n", " "))
+        self.keys_overlay.toggle(self.tabs.geometry().top() + self.tabs.tabBar().height() + 6)
+
+    def resizeEvent(self, ev) -> None:
+        super().resizeEvent(ev)
+        if self.keys_overlay.isVisible():
+            self.keys_overlay.place(self.tabs.geometry().top() + self.tabs.tabBar().height() + 6)
 
     # ------------------------------------------------------------------ STOP and reset
     def estop(self, why: str = "STOP button") -> None:
@@ -410,23 +447,16 @@ class MainWindow(QMainWindow):
         self.status.show_estop(bool(latched))
         late = [o for o, (t0, *_) in self.estop_pending.items() if time.monotonic() - t0 > ESTOP_CONFIRM_S]
         if late:
-            text, color = f"E-STOP NOT CONFIRMED ({', '.join(late)}): the engine did not answer", "#b00000"
+            text, color = f"E-STOP NOT CONFIRMED ({', '.join(late)}): no answer", "#b00000"
         elif latched:
-            text, color = f"E-STOP LATCHED ({', '.join(latched)}): machines stopped; Reset to continue", "#c9302c"
+            text, color = f"E-STOP LATCHED ({', '.join(latched)}): Reset to continue", "#c9302c"
         elif self.estop_pending:
             text, color = "STOP sent: awaiting the engine's confirmation", "#c9302c"
         elif self.lost:
             text, color = f"ENGINE LOST ({', '.join(sorted(self.lost))}): reconnecting…", "#b07000"
         else:
             text, color = "", ""
-        if (text, color) == getattr(self, "_banner_shown", None):
-            return
-        self._banner_shown = (text, color)
-        self.banner.setVisible(bool(text))
-        self.banner.setText(text)
-        self.banner.setStyleSheet(
-            f"background: {color}; color: white; font-weight: bold; font-size: 14pt; padding: 4px; border-radius: 4px;"
-        )
+        self.notices.set_banner(text, color)
 
     # ------------------------------------------------------------------ alarms
     def toggle_role(self) -> None:
@@ -474,13 +504,47 @@ class MainWindow(QMainWindow):
     def on_marine_notice(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
         if level == "error" and any(w in text for w in ("refused", "not started", "not sent", "engine:")):
-            self.show_error("Motion-Lab" if text.startswith("Motion-Lab") else "Crane head", text)
+            origin = "Motion-Lab" if text.startswith("Motion-Lab") else "crane head"
+            m = SCENE_REFUSAL.match(text)
+            if m is not None:  # "<scene>: <command> refused: why": cleared when that command is taken
+                key = f"{origin}:{m['re'] or 'refused'}"
+            elif "engine:" in text:
+                key = f"{origin}:engine"
+            else:
+                key = f"{origin}:{text.split(':')[1].strip()[:40] if ':' in text else text[:40]}"
+            gone = None
+            if key.endswith(":engine"):  # the engine did not start or failed: gone once it is linked and up
+                tab = self.crane_head if origin == "crane head" else self.motion_lab
+                gone = lambda t=tab, o=origin: t.link is not None and o not in self.lost  # noqa: E731
+            self.show_error("Motion-Lab" if origin == "Motion-Lab" else "Crane head", text, key=key, gone=gone)
 
-    def show_error(self, title: str, message: str) -> None:
-        """Non-blocking: the message bar and the log (STOP stays live)."""
+    def show_error(self, title: str, message: str, key: str | None = None, gone=None, origin: str = "") -> None:
+        """Non-blocking: the message bar and the log (STOP stays live).
+
+        The message is tied to its condition (issue 26, item 7): ``key`` names it (one message per key:
+        a newer replaces it, the command's success clears it); ``gone()`` true clears it.  A refusal
+        because the E-STOP is latched goes once the engine that refused it is reset."""
         self.messages.append((title, message))
         self.status.add_log("error", f"{title}: {message}")
-        self.message_bar.show_message(title, message)
+        key = key or TITLE_KEYS.get(title) or f"gui:{title}"
+        origin = origin or ("teleop" if key.startswith("teleop:") else key.split(":")[0])
+        if gone is None and "E-STOP" in message and origin in ("teleop", "crane head", "Motion-Lab"):
+            gone = lambda o=origin: self._state_known(o) and not self._latched(o)  # noqa: E731
+        self.notices.post(key, title, message, "error", gone)
+
+    def _state_known(self, origin: str) -> bool:
+        link = self.links().get(origin)
+        return link is not None and getattr(link, "latest", None) is not None and origin not in self.lost
+
+    def _refresh_looks(self) -> None:
+        """ENABLE from the engines' newest states; messages whose condition is gone are cleared."""
+        for origin, stick in (("teleop", self.teleop.stick), ("Motion-Lab", self.motion_lab.stick)):
+            link = self.links().get(origin)
+            st = getattr(link, "latest", None) if link is not None and origin not in self.lost else None
+            stick.show_engine(st if st is not None and hasattr(st, "flags") else None)
+        if self.teleop.logger is not None:
+            self.notices.clear("teleop:logger")
+        self.notices.sweep()
 
     # ------------------------------------------------------------------ engine events
     def on_state(self, state) -> None:
@@ -525,22 +589,38 @@ class MainWindow(QMainWindow):
             self.show_error(
                 "Engine connection lost" if origin == "teleop" else f"{origin} engine lost",
                 f"{message}. The engine holds its machines when input stops; reconnecting.",
+                key=f"lost:{origin}",
+                gone=lambda o=origin: o not in self.lost,  # cleared once the connection is restored
             )
+        self.notices.sweep()
         self._update_banner()
 
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if ok and re in ("set_robot", "set_solver", "set_mode", "reset", "estop"):
             self.status.add_log("info", f"{re}: done")
+        if ok:  # the command was taken: its earlier refusal is history
+            self.notices.clear(f"teleop:{re}")
+            if re in ("set_mode", "set_scaling"):
+                self.notices.clear("teleop:command")
         if not ok and "no longer the operator" in error:  # the engine gave the role away: say it, loudly
             self.gui_alarms.set("role_lost", True, "critical", f"Operator role lost: {error}", source="engine link")
-            self.show_error("Operator role lost", error)
+            self.show_error(
+                "Operator role lost",
+                error,
+                key="teleop:role",
+                gone=lambda: getattr(self.link, "role", "") == "operator",
+            )
 
     def on_input_event(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
         lost = level == "warning" and "unplugged" in text
         self.gui_alarms.set("device_lost", lost, "warning", text, source="input")
-        if level == "warning":
-            self.statusBar().showMessage(text, 10_000)
+        # the message bar, not a status bar (one created at the first warning shrank the window's pages)
+        device = text.removeprefix("joystick ").split(" unplugged")[0].split(" plugged in")[0]
+        if lost:
+            self.notices.post(f"device:{device}", "Input", text, "warning")
+        elif "plugged in" in text:
+            self.notices.clear(f"device:{device}")
 
     # ------------------------------------------------------------------ size and settings
     def fit_to_screen(self, first: bool = False) -> None:
@@ -557,7 +637,50 @@ class MainWindow(QMainWindow):
         state = self.settings.value("windowState")
         if state is not None:
             self.restoreState(state)
+        self._first_open = geom is None
         self.fit_to_screen(first=geom is None)
+
+    def showEvent(self, ev) -> None:
+        super().showEvent(ev)
+        if not self._frame_fitted:  # once the window manager has framed the window: fit the frame too
+            self._frame_fitted = True
+            self._fit_until = time.monotonic() + FRAME_FIT_S
+            for ms in FRAME_FIT_MS:
+                QTimer.singleShot(ms, self.fit_frame)
+
+    def event(self, ev) -> bool:
+        # a window manager frames the window when it maps it (a move, a resize, an activation follow): fit then,
+        # during the first seconds after the first show (later moves and resizes are the operator's)
+        fitting = time.monotonic() < getattr(self, "_fit_until", 0.0)
+        if fitting and ev.type() in (QEvent.Move, QEvent.Resize, QEvent.WindowActivate):
+            QTimer.singleShot(0, self.fit_frame)
+        return super().event(ev)
+
+    def fit_frame(self) -> None:
+        """The window's frame (title bar and borders included) inside the screen's free area: the client
+        shrinks by the frame's size where needed, and on a first opening the frame's top-left is the free
+        area's top-left (issue 26, item 10: a 1280×800 client under a 20-px title bar opened 20 px down
+        with its bottom, the status panel's, off an 800-px screen)."""
+        if not self.isVisible() or self.windowState() & (Qt.WindowMaximized | Qt.WindowFullScreen):
+            return
+        if time.monotonic() >= self._fit_until:
+            return  # fitted, or long opened: the window's place is the operator's
+        avail = (self.screen() or QGuiApplication.primaryScreen()).availableGeometry()
+        fg, g = self.frameGeometry(), self.geometry()
+        dw, dh = fg.width() - g.width(), fg.height() - g.height()
+        w, h = min(g.width(), avail.width() - dw), min(g.height(), avail.height() - dh)
+        if (w, h) != (g.width(), g.height()):
+            self.resize(w, h)
+        fw, fh = w + dw, h + dh
+        if self._first_open:
+            x, y = avail.x(), avail.y()
+        else:
+            x = min(max(fg.x(), avail.x()), avail.x() + avail.width() - fw)
+            y = min(max(fg.y(), avail.y()), avail.y() + avail.height() - fh)
+        if (x, y) != (fg.x(), fg.y()):
+            self.move(x, y)
+        elif (w, h) == (g.width(), g.height()) and (dw or dh):
+            self._fit_until = 0.0  # framed and fitted: from now on the window's place is the operator's
 
     def closeEvent(self, ev) -> None:
         self.settings.setValue("geometry", self.saveGeometry())
@@ -565,6 +688,7 @@ class MainWindow(QMainWindow):
         self._watchdog.stop()
         app = QApplication.instance()
         app.removeEventFilter(self)
+        self.wheel_guard.remove(app)
         self.teleop.stop_logger()
         self.teleop.inputs.timer.stop()
         self.crane_head.close_link()
@@ -586,15 +710,22 @@ def grey(page: QWidget, on: bool) -> None:
             view.setGraphicsEffect(None)
 
 
-KEYS_HELP = """STOP: Space (any tab, any dialog), the STOP button, or the joystick's stop button. Esc is not STOP.
+KEYS_HELP = """STOP: Space (any tab, any dialog; in a text field you are typing in, Ctrl+Space), the STOP button,
+or the joystick's stop button. Ctrl+Space stops everywhere. Esc is not STOP.
 Reset E-STOP: the Reset button; machines keep holding until you command them anew.
 Drive (Teleop and Motion-Lab tabs): hold Shift (or the ENABLE button) as the deadman, then arrows for x/y and
 Page Up/Down for z. After a reset, a mode or robot change: stick at neutral, release and press enable again.
+Mouse wheel: scrolls the page; it changes a field only after you click into it (the change is logged).
 Ctrl+1 / Ctrl+2: position / velocity mode. Ctrl+O: open a robot file. F1: this help."""
 
 KEYS_HTML = (
-    "<b>STOP</b>: Space (any tab, any dialog) · STOP button · joystick stop button &nbsp;|&nbsp; Esc is <i>not</i> STOP"
-    " &nbsp;|&nbsp; <b>Enable</b>: hold Shift or ENABLE &nbsp;|&nbsp; <b>Drive</b>: arrows x/y, PgUp/PgDn z"
-    " &nbsp;|&nbsp; after reset / mode / robot change: neutral, then press enable again"
-    " &nbsp;|&nbsp; Ctrl+1/2 mode · Ctrl+O robot file · F1 help"
+    "<p><b>STOP</b>: <b>Space</b> (any tab, any dialog) · <b>Ctrl+Space</b> (everywhere, also while you type in a"
+    " text field, where Space types a space) · the STOP button · the joystick's stop button."
+    " Esc is <i>not</i> STOP.</p>"
+    "<p><b>Reset E-STOP</b>: the Reset button; machines keep holding until you command them anew.</p>"
+    "<p><b>Enable</b>: hold Shift or ENABLE (it shows the engine's view: ENABLED, NOT ARMED, E-STOP)."
+    " <b>Drive</b>: arrows x/y, Page Up/Down z. After a reset, a mode or robot change: stick at neutral,"
+    " release and press enable again.</p>"
+    "<p><b>Mouse wheel</b>: scrolls the page; it changes a field only after you click into it (logged).</p>"
+    "<p>Ctrl+1 / Ctrl+2 position / velocity mode · Ctrl+O robot file · F1 this help</p>"
 )

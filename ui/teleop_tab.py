@@ -244,8 +244,8 @@ class TeleopTab(QWidget):
         self.apply_scaling.setToolTip("send k_p, x_w and k_v to the engine (Esc in a field reverts it)")
         self.apply_scaling.clicked.connect(self.send_scaling)
         grid.addWidget(self.apply_scaling, 3, 2, 1, 2)
-        self.scaling_note = QLabel("")
-        self.scaling_note.setWordWrap(True)
+        self.scaling_note = ElidedLabel("")  # one line, its room kept while empty: the logger below never moves
+        self.scaling_note.setFixedHeight(self.scaling_note.fontMetrics().height() + 4)
         self.scaling_note.setStyleSheet("color: #b08000;")
         grid.addWidget(self.scaling_note, 4, 0, 1, 4)
         self.scaling_fields.dirty_changed.connect(

@@ -24,6 +24,9 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
+from ui.input_guard import WheelGuard
+from ui.widgets.labels import ElidedLabel
+
 ESTOP_CONFIRM_S = 0.1
 
 
@@ -46,6 +49,14 @@ class ViewerWindow(QMainWindow):
         self.info = QLabel("waiting for the engine's description…")
         self.info.setWordWrap(True)
         top.addWidget(self.info, 1)
+        # the banner keeps its room in the top row, shown or not: the view below never moves (issue 26, item 2)
+        self.banner = ElidedLabel("")
+        self.banner.setAlignment(Qt.AlignCenter)
+        pol = self.banner.sizePolicy()
+        pol.setRetainSizeWhenHidden(True)
+        self.banner.setSizePolicy(pol)
+        self.banner.hide()
+        top.addWidget(self.banner, 1)
         self.stop = QPushButton("STOP")
         self.stop.setFocusPolicy(Qt.NoFocus)
         self.stop.setMinimumSize(120, 48)
@@ -56,14 +67,11 @@ class ViewerWindow(QMainWindow):
         self.stop.pressed.connect(self.estop)
         top.addWidget(self.stop)
         lay.addLayout(top)
-        self.banner = QLabel("")
-        self.banner.setAlignment(Qt.AlignCenter)
-        self.banner.hide()
-        lay.addWidget(self.banner)
         self.body = QVBoxLayout()
         lay.addLayout(self.body, 1)
         self.setCentralWidget(central)
         QShortcut(QKeySequence(Qt.Key_Space), self, activated=self.estop)
+        QShortcut(QKeySequence("Ctrl+Space"), self, activated=self.estop)  # as in the operator's window
         link.described.connect(self.on_description)
         link.state.connect(self.on_state)
         link.connection.connect(lambda ok, msg: self.info.setText(msg if not ok else self.info.text()))
@@ -74,6 +82,9 @@ class ViewerWindow(QMainWindow):
         self._timer.timeout.connect(self._check_estop)
         self._timer.start()
         self.resize(1200, 760)
+        # the wheel scrolls; it changes no field without the keyboard (ui/input_guard.py)
+        self.wheel_guard = WheelGuard(lambda text: None, self)
+        self.wheel_guard.install()
 
     # ------------------------------------------------------------------ content
     def on_description(self, desc) -> None:
@@ -161,12 +172,16 @@ class ViewerWindow(QMainWindow):
             text, color = "E-STOP LATCHED: the operator resets", "#c9302c"
         else:
             text, color = "", ""
+        if (text, color) == getattr(self, "_banner_shown", None):
+            return
+        self._banner_shown = (text, color)
         self.banner.setVisible(bool(text))
         self.banner.setText(text)
         self.banner.setStyleSheet(f"background: {color}; color: white; font-weight: bold; padding: 4px;")
 
     def closeEvent(self, ev) -> None:
         self._timer.stop()
+        self.wheel_guard.remove()
         self.link.close()
         super().closeEvent(ev)
 

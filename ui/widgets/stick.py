@@ -5,8 +5,26 @@ from __future__ import annotations
 from typing import ClassVar
 
 from PyQt5.QtCore import QPointF, Qt, pyqtSignal
-from PyQt5.QtGui import QBrush, QColor, QPainter, QPen
+from PyQt5.QtGui import QBrush, QColor, QFont, QFontMetrics, QPainter, QPen
 from PyQt5.QtWidgets import QHBoxLayout, QLabel, QPushButton, QSlider, QVBoxLayout, QWidget
+
+# ENABLE's look per engine state (flags of the engine's newest snapshot): text, style
+ENABLE_LOOK = {
+    "none": ("ENABLE\nno engine", "color: #777;"),
+    "idle": ("ENABLE\n(hold)", ""),
+    "not_armed": ("NOT ARMED\nre-press", "background: #e0a020; color: black; font-weight: bold;"),
+    "armed": ("ARMED\nnot driving", "background: #f3d58a; color: black; font-weight: bold;"),
+    "enabled": ("ENABLED\nlive", "background: #3c9d3c; color: white; font-weight: bold;"),
+    "estop": ("E-STOP\nlatched", "background: #5a1f1d; color: #ffb0a8; font-weight: bold;"),
+}
+
+
+class StickSlider(QSlider):
+    """A stick axis: a deflection only while the handle is held (or the stick's keys); a wheel notch is no
+    deflection (the page scrolls instead)."""
+
+    def wheelEvent(self, ev) -> None:
+        ev.ignore()
 
 
 class StickPad(QWidget):
@@ -93,13 +111,15 @@ class VirtualStick(QWidget):
         self.w = (
             self._slider(lay, aux_axis, f"{aux_axis} in [−1, 1]; springs back to 0 when released") if aux_axis else None
         )
-        self.enable = QPushButton("ENABLE\n(hold)")
-        self.enable.setToolTip(
-            "deadman: motion only while held (or hold Shift). After a reset, a mode or robot change the engine "
-            "waits for the stick at neutral and a fresh press of enable"
-        )
-        self.enable.setMinimumWidth(70)
-        self.enable.setStyleSheet("QPushButton:pressed { background: #3c9d3c; color: white; }")
+        self.enable = QPushButton()
+        self.enable.setFocusPolicy(Qt.NoFocus)  # Space stays STOP; Shift stays the stick's
+        bold = QFont(self.enable.font())
+        bold.setBold(True)
+        fm = QFontMetrics(bold)
+        widest = max(fm.horizontalAdvance(line) for text, _ in ENABLE_LOOK.values() for line in text.split("\n"))
+        self.enable.setFixedSize(widest + 18, 2 * fm.height() + 16)  # the same size in every state: nothing moves
+        self.engine_state = ""
+        self.show_engine(None)
         self.enable.pressed.connect(self._changed)
         self.enable.released.connect(self._changed)
         lay.addWidget(self.enable)
@@ -109,14 +129,44 @@ class VirtualStick(QWidget):
     def _slider(self, lay, label: str, tip: str) -> QSlider:
         col = QVBoxLayout()
         col.addWidget(QLabel(label.split()[0]))
-        sl = QSlider(Qt.Vertical)
+        sl = StickSlider(Qt.Vertical)
         sl.setRange(-100, 100)
         sl.setToolTip(tip)
         sl.sliderReleased.connect(lambda: sl.setValue(0))
+        sl.setFocusPolicy(Qt.NoFocus)  # a deflection: only the held handle (or the stick's keys) moves it
         sl.valueChanged.connect(lambda _v: self._changed())
         col.addWidget(sl, 1)
         lay.addLayout(col)
         return sl
+
+    def show_engine(self, state) -> None:
+        """ENABLE shows what the engine's newest snapshot says of the input (``flags.enabled``, ``armed``,
+        ``deadman``, the E-STOP latch), never only that the button is held: held while the engine is latched
+        or not armed, it says so.  ``state`` None: no engine (lost, not started)."""
+        if state is None:
+            key, why = "none", "no engine state: the machine holds"
+        else:
+            f = state.flags
+            if state.estop:
+                key, why = "estop", "the E-STOP is latched: Reset first, then neutral and a fresh press of enable"
+            elif f.enabled:
+                key, why = "enabled", "the engine takes this input: the stick moves the machine"
+            elif f.armed:
+                key, why = "armed", f.input_reason or "armed; hold enable to drive"
+            elif f.deadman:
+                key, why = "not_armed", f.input_reason or "not armed: stick to neutral, release enable, press again"
+            else:
+                key, why = "idle", f.input_reason or "hold to drive (or hold Shift)"
+        if key == self.engine_state:
+            return
+        self.engine_state = key
+        text, style = ENABLE_LOOK[key]
+        self.enable.setText(text)
+        self.enable.setStyleSheet(f"QPushButton {{ {style} }} QPushButton:pressed {{ border: 3px solid #9fd89f; }}")
+        self.enable.setToolTip(
+            f"engine: {why}.\nDeadman: motion only while held (or hold Shift). After a reset, a mode or robot "
+            "change the engine waits for the stick at neutral and a fresh press of enable"
+        )
 
     @property
     def enabled(self) -> bool:
