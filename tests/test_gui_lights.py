@@ -141,7 +141,10 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     tab.stick.key(Qt.Key_Right, True)  # the stick deflected: enable pressed now is refused (arming needs neutral)
     qtbot.mousePress(enable, Qt.LeftButton)
     qtbot.waitUntil(lambda: enable.text().startswith("NOT ARMED"), timeout=GUI_WAIT)
-    assert not tab.state.flags.enabled and _px(enable, LIGHT["ok"]) == 0 and _has(win, "● input: not armed")
+    # the engine has seen the enable held (deadman) and refused it: the light says so (before that state came,
+    # the input was idle: enable released)
+    qtbot.waitUntil(lambda: tab.state.flags.deadman and _has(win, "● input: not armed"), timeout=GUI_WAIT)
+    assert not tab.state.flags.enabled and _px(enable, LIGHT["ok"]) == 0
     qtbot.mouseRelease(enable, Qt.LeftButton)
     tab.stick.key(Qt.Key_Right, False)
     qtbot.wait(300)  # the stick seen at neutral with enable released

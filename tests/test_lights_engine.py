@@ -79,7 +79,7 @@ def test_lab_input_light_names_the_jog_the_stick_and_none():
     ses = LabSession()
     t = _run(ses, 0.0, 0.1, enable=False)
     light = lab_input_light(_wire(ses))
-    assert light.look == "warn" and light.detail.startswith("not armed")
+    assert light.look == "off" and light.detail.startswith("idle")  # nothing to act on: grey, not amber
     t = _run(ses, t, 0.1, enable=True)  # enable pressed at neutral: armed
     light = lab_input_light(_wire(ses))
     assert light.look == "ok" and light.detail == "enabled: test stick drives Comau REMOTE"
@@ -92,7 +92,7 @@ def test_lab_input_light_names_the_jog_the_stick_and_none():
     ses.lab_comau_jog(2, 0.0)
     t = _run(ses, t, 0.1, enable=False)
     light = lab_input_light(_wire(ses))
-    assert light.look == "warn" and light.detail == "not armed: enable released"  # a released deadman disarms
+    assert light.look == "off" and light.detail == "idle: test stick (enable released)"  # released: disarmed
     ses.lab_vvmc(True)
     t = _run(ses, t, 0.1, enable=False)
     assert lab_input_light(_wire(ses)).detail == "not used (Comau MOTION_COMP, winch MOTION_COMP)"
@@ -135,14 +135,15 @@ def test_crane_head_lights_compensating_estop_holding_and_off():
 
 def test_teleop_arm_light_follows_the_joint_speeds():
     """The teleop arm's light (the status area's row): E-STOP red, braking then stopped; a held arm
-    "holding"; no PLC light for this engine either."""
+    "at rest (holding)", grey (the idle state is not abnormal); no PLC light for this engine either."""
     ses = Session(robot_name="comau_smart5_3dof")
     t = 0.0
     for _ in range(5):
         t += DT
         ses.tick(t, DT)
     lights = scene_lights(_wire(ses))
-    assert set(lights) == {"engine", "input", "plant"} and lights["plant"].detail == "holding"
+    assert set(lights) == {"engine", "input", "plant"}
+    assert (lights["plant"].look, lights["plant"].detail) == ("off", "at rest (holding)")
     ses.estop()
     ses.tick(t + DT, DT)
     plant = scene_lights(_wire(ses))["plant"]

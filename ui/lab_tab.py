@@ -44,6 +44,7 @@ from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.columns import scroll_column
 from ui.widgets.files import choose_file
+from ui.widgets.labels import ElidedLabel
 from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, axis_label, legend, refit, refit_on_show
 from ui.widgets.status import MOVING, SceneLights, StatusLight, lab_plc_light
@@ -667,15 +668,26 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         self.tabs.addTab(self._control(), "Comau && winch")
         self.tabs.addTab(self._scene_tab(), "Scene && load")
         self.tabs.addTab(self._swing_tab(), "Load swing")
-        self.start = QLabel("The Motion-Lab engine starts when this tab is first opened.")
+        self.start = ElidedLabel("The Motion-Lab engine starts when this tab is first opened.")
         self.plc_bar = self._plc_bar()
         self.logger: LabCsvLogger | None = None
         self.lights = SceneLights("Motion-Lab", LAB_LIGHTS, padding="1px 6px")  # its engine's lights (issue 26)
         self._enable_look = ""
         lay = QVBoxLayout(self)
         lay.addWidget(self.lights)
-        lay.addWidget(self.start)
-        lay.addWidget(self.plc_bar)
+        # the engine's start note and the PLC's error live in the room beside the sub-tabs (the tab widget's
+        # corner, the tab bar's height whatever it shows): nothing moves when one comes or goes (issue 26,
+        # item 2: a page that stays put; as the main window's notices)
+        notes = QWidget()
+        row = QHBoxLayout(notes)
+        row.setContentsMargins(8, 0, 0, 0)
+        row.setSpacing(0)
+        row.addWidget(self.start, 1)
+        row.addWidget(self.plc_bar, 1)
+        notes.setFixedHeight(self.tabs.tabBar().sizeHint().height())
+        notes.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Fixed)
+        self.notes = notes
+        self.tabs.setCornerWidget(notes, Qt.TopRightCorner)
         lay.addWidget(self.tabs)
         lay.addWidget(self._status_strip())  # the lab HMI's bottom: machine and sensor states, CSV logger
         self._set_enabled(False)
@@ -685,10 +697,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         """The PLC's error, as the lab HMI shows it, with Acknowledge; never a modal box (STOP stays live)."""
         bar = QWidget()
         bar.setStyleSheet("background: #5a1f1d; color: white;")
+        bar.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
         row = QHBoxLayout(bar)
-        row.setContentsMargins(6, 3, 6, 3)
-        self.plc_text = QLabel("")
-        self.plc_text.setWordWrap(True)
+        row.setContentsMargins(6, 0, 2, 0)
+        self.plc_text = ElidedLabel("")  # one line in the row's kept room ("…" and the whole in the tool tip)
         row.addWidget(self.plc_text, 1)
         self.plc_ack = QPushButton("Acknowledge")
         self.plc_ack.setFocusPolicy(Qt.NoFocus)  # Space stays STOP
@@ -709,8 +721,9 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             return
         show = bool(pl.plc_error) and pl.connected
         if show:
-            self.plc_text.setText(f"<b>PLC error</b>: {pl.plc_error}")
+            self.plc_text.setText(f"PLC error: {pl.plc_error}")  # one line: "…" and the whole in its tool tip
             self.plc_ack.setEnabled(not state.estop)  # the E-STOP's reset resets the PLC: acknowledge after it
+            self.start.hide()
         self.plc_bar.setVisible(show)
 
     # ------------------------------------------------------------------ the lab HMI's bottom (issue 16, item 5)
@@ -991,9 +1004,14 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             "hold Shift or the ENABLE button (deadman); a joystick works the same way"
         )
         rl.addWidget(self.stick)
+        # not a toggle: a click asks the engine for the other state, and the button shows the engine's state
+        # only (a checkable button showed the request, also one the engine refused)
         self.vvmc = QPushButton("VVMC OFF")
-        self.vvmc.setCheckable(True)
-        self.vvmc.toggled.connect(lambda on: self._send("lab_vvmc", on=bool(on)))
+        self.vvmc.setToolTip(
+            "vessel-to-vessel motion compensation: the Comau and winch in MOTION_COMP (the state shown is the "
+            "engine's); click to switch it"
+        )
+        self.vvmc.clicked.connect(lambda: self._send("lab_vvmc", on=not (self.state is not None and self.state.vvmc)))
         self.vvmc.setMinimumHeight(36)
         self.readout = QLabel("–")
         self.readout.setTextFormat(Qt.RichText)
@@ -1167,11 +1185,11 @@ class MotionLabTab(SceneEngineMixin, QWidget):
 
     def _set_enabled(self, on: bool) -> None:
         self.tabs.setEnabled(on)
-        self.start.setVisible(not on)
+        self.start.setVisible(not on and not self.plc_bar.isVisibleTo(self))
 
     # ------------------------------------------------------------------ engine
     def _engine_failed(self, err: Exception) -> None:
-        self.start.setText(f"<b>engine not started</b>: {err}")
+        self.start.setText(f"engine not started: {err}")
 
     def _on_panel(self, mtype: str, fields: dict) -> None:
         if mtype == "_error":
@@ -1255,10 +1273,10 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         for widget in (self.comau_mode, self.winch_mode, self.vvmc):
             widget.setEnabled(free)
         self.winch_slider.setEnabled(free and w.mode == "local")
-        self.vvmc.blockSignals(True)
-        self.vvmc.setChecked(state.vvmc)
-        self.vvmc.blockSignals(False)
-        self.vvmc.setText("VVMC ON" if state.vvmc else "VVMC OFF")
+        look = "VVMC ON" if state.vvmc else "VVMC OFF"
+        if self.vvmc.text() != look:
+            self.vvmc.setText(look)
+            self.vvmc.setStyleSheet("QPushButton { background: #2f6f2f; color: white; }" if state.vvmc else "")
         e = 1000 * np.linalg.norm(state.tool_error_b2)
         pend = state.pendulum
         stop = ""

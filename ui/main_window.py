@@ -174,8 +174,8 @@ class MainWindow(QMainWindow):
         self.motion_lab.on_link = lambda lk: self._watch_link("Motion-Lab", lk)
         self.crane_head.notice.connect(self.on_marine_notice)
         self.motion_lab.notice.connect(self.on_marine_notice)
-        self.motion_lab.plc_link.connect(lambda state, detail: self.status.lights["plc"].set(state, detail))
         self.status.alarms.ack.connect(self.acknowledge)
+        self.status.alarms.shelve.connect(self.shelve_alarm)
         self.gui_alarms = AlarmList("GUI", note=lambda lvl, text: None)
         # the room of "E-STOP LATCHED" under STOP is kept while it is empty (else Reset moves when it shows)
         latched = self.status.latched
@@ -423,13 +423,8 @@ class MainWindow(QMainWindow):
                 self.status.add_log("info", f"E-STOP confirmed by the {origin} engine ({1e3 * (now - t_sent):.0f} ms)")
                 continue
             if now - t_sent > ESTOP_CONFIRM_S:
-                self.gui_alarms.set(
-                    f"estop_unconfirmed:{origin}",
-                    True,
-                    "critical",
-                    f"E-STOP NOT CONFIRMED by the {origin} engine: still trying",
-                    source=origin,
-                )
+                text = f"E-STOP NOT CONFIRMED by the {origin} engine: still trying"
+                self.gui_alarms.set(f"estop_unconfirmed:{origin}", True, text=text)
                 if now - t_last >= ESTOP_CONFIRM_S:
                     link.send("estop", reason="STOP (resent: not confirmed)")
                     self.estop_pending[origin][1] = now
@@ -500,6 +495,23 @@ class MainWindow(QMainWindow):
                 link.send("ack_alarm", **({"key": key} if key else {}))
         self._refresh_alarms()
 
+    def shelve_alarm(self, origin: str, key: str, minutes: float) -> None:
+        """Shelve (or, with 0 minutes, unshelve) one alarm in the engine that raised it (ISA-18.2 §12.3)."""
+        try:
+            if origin == "gui":
+                if minutes:
+                    self.gui_alarms.shelve(key, 60.0 * minutes, who="the operator")
+                else:
+                    self.gui_alarms.unshelve(key)
+            else:
+                link = self.links().get(origin)
+                if link is not None:
+                    link.send("shelve_alarm", key=key, minutes=float(minutes))
+        except ValueError as err:  # not shelvable: said in the log and the message bar, nothing changes
+            self.status.add_log("warning", str(err))
+            self.show_error("Alarm not shelved", str(err))
+        self._refresh_alarms()
+
     # ------------------------------------------------------------------ messages
     def on_marine_notice(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
@@ -548,23 +560,7 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ engine events
     def on_state(self, state) -> None:
-        f = state.flags
-        if state.estop:
-            self.status.lights["plant"].set("error", "E-STOP")
-        elif f.enabled and not f.stale_input:
-            self.status.lights["plant"].set("ok", "moving" if any(abs(v) > 1e-6 for v in state.qdot) else "ready")
-        else:
-            self.status.lights["plant"].set("warn", "holding")
-        if f.device and not f.stale_input:
-            detail = ("" if f.armed else "not armed: ") + f.device_name[:32]
-            self.status.lights["input"].set("ok" if f.armed else "warn", detail)
-        else:
-            self.status.lights["input"].set("warn", "no input")
-        rt, late = state.engine.realtime_factor, state.engine.late_fraction
-        if rt < 0.95 or late > 0.01:
-            self.status.lights["engine"].set("warn", f"slow: {100 * rt:.0f} % real time, {100 * late:.0f} % late")
-        elif self.link.connected:
-            self.status.lights["engine"].set("ok", "connected")
+        self.status.show_teleop(state)  # every light from what the engine reports (ui/widgets/status.py)
         choice = (state.robot, state.solver, state.mode)
         if choice != getattr(self, "_choice", None):
             self._choice = choice
@@ -572,7 +568,7 @@ class MainWindow(QMainWindow):
                 self.settings.setValue(key, value)
 
     def on_connection(self, ok: bool, message: str, origin: str = "teleop") -> None:
-        self.gui_alarms.set(f"lost:{origin}", not ok, "critical", f"{origin} engine lost: reconnecting", source=origin)
+        self.gui_alarms.set(f"lost:{origin}", not ok, text=f"Connection to the {origin} engine lost: reconnecting")
         page = {"teleop": self.teleop, "crane head": self.crane_head, "Motion-Lab": self.motion_lab}[origin]
         grey(page, not ok)
         if ok:
@@ -584,8 +580,6 @@ class MainWindow(QMainWindow):
             self.lost.add(origin)
             if origin == "teleop":
                 self.status.set_lost()
-            if origin == "Motion-Lab":  # its engine is gone: nothing is known of the PLC link
-                self.status.lights["plc"].set("unknown", "unknown")
             self.show_error(
                 "Engine connection lost" if origin == "teleop" else f"{origin} engine lost",
                 f"{message}. The engine holds its machines when input stops; reconnecting.",
@@ -603,7 +597,7 @@ class MainWindow(QMainWindow):
             if re in ("set_mode", "set_scaling"):
                 self.notices.clear("teleop:command")
         if not ok and "no longer the operator" in error:  # the engine gave the role away: say it, loudly
-            self.gui_alarms.set("role_lost", True, "critical", f"Operator role lost: {error}", source="engine link")
+            self.gui_alarms.set("role_lost", True, text=f"Operator role lost: {error}")
             self.show_error(
                 "Operator role lost",
                 error,
@@ -614,7 +608,7 @@ class MainWindow(QMainWindow):
     def on_input_event(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
         lost = level == "warning" and "unplugged" in text
-        self.gui_alarms.set("device_lost", lost, "warning", text, source="input")
+        self.gui_alarms.set("device_lost", lost, text=f"Input device lost: {text}")
         # the message bar, not a status bar (one created at the first warning shrank the window's pages)
         device = text.removeprefix("joystick ").split(" unplugged")[0].split(" plugged in")[0]
         if lost:

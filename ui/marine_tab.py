@@ -264,7 +264,6 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.mode.activated.connect(lambda i: self._send("set_tac_mode", mode=self.mode.itemText(i)))
         self.start = QPushButton("Start crane-head engine")
         self.start.clicked.connect(self.connect_engine)
-        form.addRow(self.start)
         form.addRow("spectrum", self.spectrum)
         form.addRow("Hs", self.hs)
         form.addRow("Tp", self.tp)
@@ -279,6 +278,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.readout.setWordWrap(True)  # long lines wrap, never cut at the column's edge
         self.readout.setMinimumWidth(220)
         form.addRow(self.readout)
+        form.addRow(self.start)  # last: when it goes (the engine started), no field or button moves (issue 26)
         # the sea fields show the engine's sea; an edit stays (highlighted) until Apply takes it or Esc
         self.sea_fields = EngineFields(self)
         for w in (self.spectrum, self.hs, self.tp, self.heading):

@@ -39,12 +39,16 @@ class StatusLight(ElidedLabel):
         super().__init__("", parent)
         self.name = name
         self.padding = padding  # CSS padding around the text (a page's row of lights: less height)
+        self.tooltip = tooltip
         self.setToolTip(tooltip)
         self.setMinimumWidth(120)
         self.state = "off"
         self.set("off")
 
-    def set(self, state: str, detail: str = "") -> None:
+    def set(self, state: str, detail: str = "", tip: str = "") -> None:
+        if tip != getattr(self, "_tip", ""):
+            self._tip = tip
+            self.setToolTip(f"{self.tooltip}\n{tip}" if tip else self.tooltip)
         if (state, detail) == getattr(self, "_shown", None):
             return  # restyling a label relayouts the window: only on change
         self._shown = (state, detail)
@@ -63,31 +67,38 @@ class Light:
 
     look: str
     detail: str = ""
+    tip: str = ""  # a diagnostic for the tool tip (added to the light's own)
 
 
 LOST = {"engine": Light("error", "LOST"), "input": Light("unknown", "unknown"), "plant": Light("unknown", "unknown")}
 
 
 def engine_light(state) -> Light:
-    """The engine's loop as its state reports it: slow (below 95 % real time or > 1 % late ticks), paused (no
-    client shows its scene) or connected."""
+    """The engine's loop as its state reports it.  Its timing is a diagnostic, in the tool tip (issue 26): the
+    light turns amber only when the engine raises ``engine_slow`` (control suffers: below 90 % of real time
+    for 5 s, or input gone stale while it lagged); paused (no client shows its scene) or connected."""
     e = state.engine
-    if e.realtime_factor < 0.95 or e.late_fraction > 0.01:
-        return Light("warn", f"slow: {100 * e.realtime_factor:.0f} % real time, {100 * e.late_fraction:.0f} % late")
+    tip = f"loop: {100 * e.realtime_factor:.0f} % of real time, {100 * e.late_fraction:.1f} % of ticks late (1 s)"
+    if any(a.key == "engine_slow" and a.active for a in state.alarms):
+        return Light("warn", f"too slow: {100 * e.realtime_factor:.0f} % of real time", tip)
     if e.paused:
-        return Light("off", "paused (its tab is not shown)")
-    return Light("ok", "connected")
+        return Light("off", "paused (its tab is not shown)", tip)
+    return Light("ok", "connected", tip)
 
 
 def _stick_light(flags, takers: list[str]) -> Light:
     """The operator's stick (pipeline flags) for the machines in ``takers`` that take it."""
     dev = flags.device_name[:32] or "input"
+    # amber only where the operator must act; idle (no device, enable let go) is grey: not an abnormal state
+    # (a lost device that was driving is the device_lost alarm)
     if not flags.device:
-        return Light("warn", "no input device")
+        return Light("off", "no input device")
     if flags.stale_input:
-        return Light("warn", f"no fresh input: {dev}")
+        return Light("warn" if flags.armed else "off", f"no fresh input: {dev}")
     if flags.enabled:
         return Light("ok", f"enabled: {dev} drives {' and '.join(takers)}" if takers else f"enabled: {dev}")
+    if not flags.deadman:
+        return Light("off", f"idle: {dev} (enable released)")
     return Light("warn", f"not armed: {flags.input_reason or dev}"[:80])
 
 
@@ -109,7 +120,7 @@ def teleop_lights(state) -> dict[str, Light]:
     elif f.enabled and not f.stale_input:
         plant = Light("ok", "ready")
     else:
-        plant = Light("warn", "holding")
+        plant = Light("off", "at rest (holding)")  # the normal idle state: grey, not amber
     return {"engine": engine_light(state), "input": _stick_light(f, []), "plant": plant}
 
 
@@ -274,7 +285,7 @@ class SceneLights(QWidget):
     def set_lights(self, lights: dict[str, Light]) -> None:
         for key, light in lights.items():
             if key in self.lights:
-                self.lights[key].set(light.look, light.detail)
+                self.lights[key].set(light.look, light.detail, light.tip)
 
     def show_state(self, state) -> None:
         self.set_lights(scene_lights(state))
@@ -306,11 +317,7 @@ class StatusPanel(QWidget):
         # a light here never speaks for a machine on another tab (issue 26, item 6)
         self.row = SceneLights("", TELEOP_LIGHTS)
         self.lights = dict(self.row.lights)
-        # the lab's PLC light is on the Motion-Lab page; this one is kept, never shown, for callers that still
-        # set it (it said "PLC: simulated" on the crane-head tab)
-        self.lights["plc"] = StatusLight("PLC", "the Motion-Lab's PLC link: on the Motion-Lab page")
-        self.lights["plc"].setParent(self)
-        self.lights["plc"].hide()
+        # the lab's PLC light is on the Motion-Lab page (here it said "PLC: simulated" on the crane-head tab)
         left.addWidget(self.row)
         split = QSplitter(Qt.Horizontal)
         self.alarms = AlarmPanel()
@@ -337,8 +344,9 @@ class StatusPanel(QWidget):
             "QPushButton:pressed { background: #8b1e1b; }"
         )
         self.stop.setToolTip(
-            "E-STOP: stops every machine within one engine tick and latches (Space, from any tab or dialog, "
-            "or the joystick's stop button)"
+            "E-STOP: stops every machine within one engine tick and latches (Space from any tab or dialog, except "
+            "in a text field that has the keyboard, where Space types; Ctrl+Space everywhere; the joystick's stop "
+            "button)"
         )
         self.stop.pressed.connect(self.stop_clicked)  # on press: a press that slides off still stops
         right.addWidget(self.stop)
@@ -356,7 +364,10 @@ class StatusPanel(QWidget):
         right.addWidget(self.reset)
         self.role = QLabel("role: –")
         self.role.setWordWrap(True)
-        self.role.setMaximumWidth(190)
+        # a fixed room for three engines' lines: the STOP column never widens or grows when an engine connects
+        self.role.setFixedWidth(190)
+        self.role.setFixedHeight(3 * self.role.fontMetrics().lineSpacing() + 4)
+        self.role.setAlignment(Qt.AlignLeft | Qt.AlignTop)
         self.role.setToolTip("who holds the operator role of each engine; viewers see everything and may STOP")
         right.addWidget(self.role)
         self.role_button = QPushButton("Release operator role")
