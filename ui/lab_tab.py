@@ -1184,7 +1184,8 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self.swing_label.setText(text)
 
     def _set_enabled(self, on: bool) -> None:
-        self.tabs.setEnabled(on)
+        for i in range(self.tabs.count()):  # the pages, not the tab widget: its corner (the notes) stays live
+            self.tabs.widget(i).setEnabled(on)
         self.start.setVisible(not on and not self.plc_bar.isVisibleTo(self))
 
     # ------------------------------------------------------------------ engine

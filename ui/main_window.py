@@ -560,7 +560,8 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ engine events
     def on_state(self, state) -> None:
-        self.status.show_teleop(state)  # every light from what the engine reports (ui/widgets/status.py)
+        if "teleop" not in self.lost and self.link.connected:  # a late state never turns LOST green again
+            self.status.show_teleop(state)  # every light from what the engine reports (ui/widgets/status.py)
         choice = (state.robot, state.solver, state.mode)
         if choice != getattr(self, "_choice", None):
             self._choice = choice
