@@ -22,7 +22,7 @@ CASES = [(r, s, m) for r in ARMS for s in solvers_for(load_robot(r)) for m in ("
 def test_a_still_stick_holds_the_machine(robot, solver, mode):
     """Seeded random stick sequences ending still: overrun past the braking stop (or the resting target) and
     drift once at rest both under 1 cm; on the old servo the knuckle-boom crane swung for seconds."""
-    runs = hold_study(robot, solver, mode, sequences=2, seed=26, rate=250.0)
+    runs = hold_study(robot, solver, mode, sequences=1, seed=26, rate=250.0)
     assert all(r.travel > 1e-3 for r in runs), "a sequence that never moved tests nothing"
     for r in runs:
         assert np.isfinite(r.settle_s), f"sequence {r.seed}: never came to rest"
