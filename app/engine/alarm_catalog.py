@@ -181,9 +181,9 @@ CATALOG: tuple[AlarmDef, ...] = (
         consequence="the tool point moves with the vessel; the compensation error grows",
         action="hold the lift and wait for calmer sea, or change heading to reduce the motion",
         on_delay=2.0,
-        off_delay=2.0,
+        off_delay=60.0,  # a sea state, not an event: between wave groups the share falls to 0 and rises again
         limit=5.0,
-        deadband=3.0,
+        deadband=4.0,
         unit="% of time",
     ),
     AlarmDef(
