@@ -87,3 +87,15 @@ def test_the_lab_pages_notes_come_and_go_without_moving_a_control(qtbot, window)
     assert not tab.plc_bar.isVisible()
     assert moved(base, control_geometry(win)) == []
     assert tab.tabs.cornerWidget(Qt.TopRightCorner) is tab.notes
+
+
+def test_the_guis_own_alarms_clear_after_their_delay_and_are_logged(qtbot, window):  # noqa: F811
+    """Review: the GUI's alarm list was never told the time, so an off-delay cleared only at the next event
+    (a replugged joystick stayed 'lost' for minutes), and nothing of it reached the log."""
+    win = window
+    win._gui_alarm("device_lost", True, "Input device lost: joystick X unplugged")
+    qtbot.waitUntil(lambda: win.gui_alarms.active("device_lost"), timeout=GUI_WAIT)
+    assert "ALARM GUI: Input device lost" in win.status.log_view.toPlainText()
+    win._gui_alarm("device_lost", False)  # plugged back in: no other event follows
+    qtbot.waitUntil(lambda: not win.gui_alarms.active("device_lost"), timeout=GUI_WAIT)  # its 1 s off-delay
+    assert "alarm cleared, GUI" in win.status.log_view.toPlainText()

@@ -67,22 +67,25 @@ def test_without_a_server_input_ages_on_the_tick_as_before():
 
 
 class LongCommandSession(Session):
-    """Every half second the loop is held up for 0.3 s before the control step, as a long command is (an
-    RAO table parsed, a robot loaded, a study's worker started): the interpreter lock is held in one C call
-    (JSON encoding a long list), so the engine's I/O thread cannot read meanwhile."""
+    """Every half second the loop is held up before the control step, as a long command may (an RAO table
+    parsed, a robot loaded, a study's worker started), with the interpreter lock held in one C call (JSON
+    encoding a long list) so the engine's I/O thread cannot read meanwhile: 0.3 s, longer than the stale
+    timeout (0.2 s), shorter than a deaf receiver's limit (DEAF_LIMIT, 0.5 s)."""
 
     def __init__(self, *a, **k):
         super().__init__(*a, **k)
-        self._big = list(range(1_000_000))
+        n = 200_000
+        start = time.perf_counter()
+        json.dumps(list(range(n)))
+        per_item = (time.perf_counter() - start) / n
+        self._big = list(range(int(0.3 / per_item)))  # one call of about 0.3 s on this machine now
         self._next = None
 
     def tick(self, now, dt, solve_budget=None):
         if self._next is None:
             self._next = now + 0.5
         elif now >= self._next:
-            start = time.perf_counter()
-            while time.perf_counter() - start < 0.4:
-                json.dumps(self._big)  # one C call: the lock is not released until it returns
+            json.dumps(self._big)  # one C call: the lock is not released until it returns
             self.note("info", "held up")
             now = time.monotonic()
             self._next = now + 0.5

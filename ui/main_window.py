@@ -176,7 +176,10 @@ class MainWindow(QMainWindow):
         self.motion_lab.notice.connect(self.on_marine_notice)
         self.status.alarms.ack.connect(self.acknowledge)
         self.status.alarms.shelve.connect(self.shelve_alarm)
-        self.gui_alarms = AlarmList("GUI", note=lambda lvl, text: None)
+        # the GUI's own alarms: raised, cleared, shelved and unshelved in the log; their conditions are stated
+        # again at every refresh, so delays and shelving run out on time (review of issue 26)
+        self.gui_alarms = AlarmList("GUI", note=lambda lvl, text: self.status.add_log(lvl, text))
+        self._gui_conditions: dict[str, tuple[bool, str]] = {}
         # the room of "E-STOP LATCHED" under STOP is kept while it is empty (else Reset moves when it shows)
         latched = self.status.latched
         latched.setMinimumHeight(latched.fontMetrics().height() + latched.contentsMargins().top() * 2)
@@ -419,12 +422,12 @@ class MainWindow(QMainWindow):
                 continue
             if self._confirms(origin, before):
                 del self.estop_pending[origin]
-                self.gui_alarms.set(f"estop_unconfirmed:{origin}", False)
+                self._gui_alarm(f"estop_unconfirmed:{origin}", False)
                 self.status.add_log("info", f"E-STOP confirmed by the {origin} engine ({1e3 * (now - t_sent):.0f} ms)")
                 continue
             if now - t_sent > ESTOP_CONFIRM_S:
                 text = f"E-STOP NOT CONFIRMED by the {origin} engine: still trying"
-                self.gui_alarms.set(f"estop_unconfirmed:{origin}", True, text=text)
+                self._gui_alarm(f"estop_unconfirmed:{origin}", True, text)
                 if now - t_last >= ESTOP_CONFIRM_S:
                     link.send("estop", reason="STOP (resent: not confirmed)")
                     self.estop_pending[origin][1] = now
@@ -475,7 +478,18 @@ class MainWindow(QMainWindow):
             rows.append((origin, getattr(lk, "role", "viewer"), st.engine.operator if st is not None else ""))
         self.status.show_roles(rows)
 
+    def _gui_alarm(self, key: str, active: bool, text: str = "") -> None:
+        """State one of the GUI's own alarm conditions (kept, and stated again at every refresh)."""
+        last = self._gui_conditions.get(key, (False, ""))
+        self._gui_conditions[key] = (active, text or last[1])
+        self.gui_alarms.set(key, active, text=text or last[1])
+
     def _refresh_alarms(self) -> None:
+        self.gui_alarms.at(time.monotonic())  # delays and shelving count on the same clock
+        for key, (active, text) in list(self._gui_conditions.items()):
+            self.gui_alarms.set(key, active, text=text)
+        if self.link.role == "operator" and self._gui_conditions.get("role_lost", (False,))[0]:
+            self._gui_alarm("role_lost", False)  # the role is back (the message bar's condition too)
         self._refresh_roles()
         rows = []
         for origin, link in self.links().items():
@@ -569,7 +583,7 @@ class MainWindow(QMainWindow):
                 self.settings.setValue(key, value)
 
     def on_connection(self, ok: bool, message: str, origin: str = "teleop") -> None:
-        self.gui_alarms.set(f"lost:{origin}", not ok, text=f"Connection to the {origin} engine lost: reconnecting")
+        self._gui_alarm(f"lost:{origin}", not ok, f"Connection to the {origin} engine lost: reconnecting")
         page = {"teleop": self.teleop, "crane head": self.crane_head, "Motion-Lab": self.motion_lab}[origin]
         grey(page, not ok)
         if ok:
@@ -598,7 +612,7 @@ class MainWindow(QMainWindow):
             if re in ("set_mode", "set_scaling"):
                 self.notices.clear("teleop:command")
         if not ok and "no longer the operator" in error:  # the engine gave the role away: say it, loudly
-            self.gui_alarms.set("role_lost", True, text=f"Operator role lost: {error}")
+            self._gui_alarm("role_lost", True, f"Operator role lost: {error}")
             self.show_error(
                 "Operator role lost",
                 error,
@@ -609,7 +623,7 @@ class MainWindow(QMainWindow):
     def on_input_event(self, level: str, text: str) -> None:
         self.status.add_log(level, text)
         lost = level == "warning" and "unplugged" in text
-        self.gui_alarms.set("device_lost", lost, text=f"Input device lost: {text}")
+        self._gui_alarm("device_lost", lost, f"Input device lost: {text}")
         # the message bar, not a status bar (one created at the first warning shrank the window's pages)
         device = text.removeprefix("joystick ").split(" unplugged")[0].split(" plugged in")[0]
         if lost:

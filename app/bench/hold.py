@@ -41,6 +41,8 @@ class HoldRun:
     drift: float
     settle_s: float
     travel: float  # tool path length while the stick moved (a sequence that never moved tests nothing)
+    ref_step: float = 0.0  # while the stick rests: the largest change of the joint reference in one tick, as a
+    # fraction of each joint's range (a resting stick's refined answer must stay local)
 
     @property
     def worst(self) -> float:
@@ -102,8 +104,18 @@ def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 
         expected = robot.position(session.actuators.stopping_point(dt))
     t0 = t
     settled = math.inf
+    span = robot.upper - robot.lower
+    q_ref = session.q_ref.copy()
+    ref_step = 0.0
+
+    def watch_reference() -> None:
+        nonlocal q_ref, ref_step
+        ref_step = max(ref_step, float(np.max(np.abs(session.q_ref - q_ref) / span)))
+        q_ref = session.q_ref.copy()
+
     while t - t0 < settle_limit_s:
         step(stick)
+        watch_reference()
         if np.all(np.abs(session.actuators.qdot) <= rest_speed):
             settled = t - t0
             break
@@ -114,11 +126,12 @@ def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 
     n_hold = round(hold_s / dt) if math.isfinite(settled) else 0
     for _ in range(n_hold):
         step(stick)
+        watch_reference()
         drift = max(drift, float(np.linalg.norm(robot.position(session.actuators.q) - p_rest)))
     if not math.isfinite(settled):
         drift = float(np.linalg.norm(robot.position(session.actuators.q) - p_rest))
     overrun = float(np.linalg.norm(p_rest - expected))
-    return HoldRun(seed=seed, overrun=overrun, drift=drift, settle_s=settled, travel=travel)
+    return HoldRun(seed=seed, overrun=overrun, drift=drift, settle_s=settled, travel=travel, ref_step=ref_step)
 
 
 def hold_study(
@@ -163,6 +176,7 @@ def summarise(case: tuple, runs: list[HoldRun]) -> dict:
         "held": sum(r.worst < HOLD_TOLERANCE for r in runs),
         "max_overrun_m": max(r.overrun for r in runs),
         "max_drift_m": max(r.drift for r in runs),
+        "max_reference_step": max(r.ref_step for r in runs),
         "worst_m": worst.worst,
         "worst_sequence": worst.seed,
         "never_settled": len(runs) - len(settled),

@@ -43,7 +43,7 @@ class AlarmDef:
     trip : bool
         The alarm stops or holds the machine: only trip alarms compete for first-out.
     shelvable : bool
-        The operator may shelve it for a limited time (never a trip or a critical alarm).
+        The operator may shelve it for a limited time (never a trip or a critical alarm: a test holds it).
     on_delay, off_delay : float
         Seconds the condition must hold before raising, and be gone before clearing (chatter).
     limit, deadband : float
@@ -90,10 +90,11 @@ CATALOG: tuple[AlarmDef, ...] = (
     AlarmDef(
         key="motion_without_command",
         title="Machine moves without a command",
-        sources=("teleop", "tac", "lab"),
+        sources=("teleop",),
         priority="critical",
-        cause="a joint, platform or the tool kept moving with no enabled operator command for longer than its "
-        "braking time (a fault in the control law, a solver or the plant)",
+        cause="a joint kept moving with no enabled operator command (E-STOP, enable released, a centred stick in "
+        "velocity mode) for longer than its braking time and a second of simulated time (a fault in the control "
+        "law, a solver or the plant)",
         consequence="the engine latches E-STOP at once",
         action="keep clear of the machine; note what was on the screen; reset only once the cause is known",
         trip=True,
@@ -108,6 +109,7 @@ CATALOG: tuple[AlarmDef, ...] = (
         consequence="the machine holds where it is; the input is disarmed",
         action="reconnect the device, centre the stick, press ENABLE to drive again",
         trip=True,
+        shelvable=False,
         off_delay=1.0,
     ),
     AlarmDef(
@@ -120,6 +122,7 @@ CATALOG: tuple[AlarmDef, ...] = (
         consequence="the machine holds where it is; the input is disarmed",
         action="check the input client and the network; centre the stick and press ENABLE to drive again",
         trip=True,
+        shelvable=False,
         off_delay=1.0,
     ),
     AlarmDef(

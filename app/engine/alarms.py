@@ -109,7 +109,7 @@ class AlarmList:
             raise ValueError(f"severity must be one of {SEVERITIES}, got {severity!r}")
         if not self._delayed(key, active, is_on, d):
             if is_on and text and text != a.text:
-                a.text = text  # a live figure (e.g. % of time saturated)
+                a.text = text  # still active during its off-delay: the live figure goes on
             return
         if active:
             self._raise(key, d, severity, text, source)
@@ -133,9 +133,12 @@ class AlarmList:
     def _raise(self, key: str, d: AlarmDef | None, severity: str, text: str, source: str | None) -> None:
         a = self.items.get(key)
         if a is not None and a.active:
+            if text and text != a.text:
+                a.text = text  # a live figure (e.g. % of time saturated)
             return
         trip = d is not None and d.trip
-        first = trip and not any(x.active and _is_trip(x.key) for x in self.items.values())
+        # the first trip of a cascade; a shelved alarm (still tracked) takes no part
+        first = trip and not any(x.active and x.shelved_until is None and _is_trip(x.key) for x in self.items.values())
         text = text or (d.title if d is not None else key)
         if a is None:
             a = Alarm(key, severity, source or self.source, text, True, False, self._clock(), None, first)

@@ -305,7 +305,7 @@ class EngineServer:
         self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
         self.realtime_factor = 1.0
         self.late_fraction = 0.0
-        self._slow_seconds = 0  # whole seconds in a row below SLOW_FACTOR of real time
+        self._slow_seconds = 0.0  # seconds in a row below SLOW_FACTOR of real time
         self._stale_seen = 0  # the session's stale-input count at the last health check
         # the I/O window: the I/O thread runs Python only while the loop sleeps (see the module text)
         self._window = threading.Condition()
@@ -578,9 +578,10 @@ class EngineServer:
         next_house = 0.0
         try:
             while not self._stop.is_set():
+                looked = time.monotonic()  # stamped before looking: a hold-up after it cannot pass as silence
                 ready = dict(poller.poll(5))
                 if self.router not in ready:
-                    self.inbox.listened = time.monotonic()  # looked: nothing waiting (input age counts)
+                    self.inbox.listened = looked  # nothing was waiting then (input age counts)
                 self._wait_window()
                 if self._reply_in in ready:
                     for _ in range(1000):
@@ -595,11 +596,12 @@ class EngineServer:
                             # messages still waiting: the loop leaves a share of the next period
                             self._io_backlog = bool(self.router.getsockopt(zmq.EVENTS) & zmq.POLLIN)
                             self._wait_window()
+                        looked = time.monotonic()
                         try:
                             frames = self.router.recv_multipart(zmq.NOBLOCK)
                         except zmq.Again:
                             self._io_backlog = False
-                            self.inbox.listened = time.monotonic()
+                            self.inbox.listened = looked
                             break
                         now = time.monotonic()
                         if len(frames) != 2:
@@ -612,9 +614,10 @@ class EngineServer:
                     next_house = now + 0.02
                     self._housekeeping(now)
         except zmq.ZMQError as err:  # sockets closed under us at shutdown: nothing left to serve
-            if not self._stop.is_set():
+            if not self._stop.is_set():  # not a shutdown: the engine is deaf from now on, so STOP
                 self._io_error = err
                 log.error("engine I/O thread stopped: %s", err)
+                self.inbox.estop(time.monotonic(), self.stats.ticks, f"the engine's I/O thread (ZMQError: {err})")
         except Exception as err:  # a bug here must not leave a silent engine: STOP, say so, end the loop
             self._io_error = err
             log.exception("engine I/O thread failed")
@@ -750,7 +753,7 @@ class EngineServer:
         self.late_fraction = missed / max(1, ticks)
         self._second = (now, self.stats.ticks, self.stats.missed)
         lagging = self.realtime_factor < SLOW_FACTOR
-        self._slow_seconds = self._slow_seconds + 1 if lagging else 0
+        self._slow_seconds = self._slow_seconds + (now - start) if lagging else 0.0  # a 5 s stall is 5 s
         inp = getattr(self.session, "input", None)
         stale_count = getattr(inp, "stale_count", 0)
         went_stale = stale_count > self._stale_seen and (lagging or self.late_fraction > 0.05)
@@ -764,7 +767,7 @@ class EngineServer:
             "engine_slow",
             suffering or (alarms.active("engine_slow") and lagging),
             text=f"{alarms.source} engine too slow: {100 * self.realtime_factor:.0f} % of real time"
-            + (", input went stale" if went_stale else f" for {self._slow_seconds} s"),
+            + (", input went stale" if went_stale else f" for {self._slow_seconds:.0f} s"),
         )
 
     def step(self, now: float) -> None:

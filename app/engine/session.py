@@ -60,6 +60,7 @@ from app.teleop.profiles import DeviceProfile
 
 DEFAULT_ROBOT = "comau_smart5_3dof"
 DEFAULT_SOLVER = "jacobian"
+REFINE_STEP = 0.02  # of each joint's range: the largest step a resting stick's refined answer may take
 
 
 __all__ = ["CommandError", "LogEntry", "Session", "library_entries"]
@@ -366,9 +367,11 @@ class Session(Scene):
             return None
         res = self.solver.solve_position(point, self.q_ref, time_budget=budget)
         if still:
+            # a refinement for a resting stick: nearer by a millimetre and a local step only (a GA's or a
+            # restart's answer elsewhere in joint space, a little nearer, swung the arm 2.8 rad: review)
             now_error = float(np.linalg.norm(self.robot.position(self.q_ref) - point))
-            if not res.error < now_error - 1e-3:
-                self._position_answered = self._position_answered or res.success
+            local = bool(np.all(np.abs(res.q - self.q_ref) <= REFINE_STEP * (self.robot.upper - self.robot.lower)))
+            if not (res.error < now_error - 1e-3 and local):
                 return res
         self.q_ref = res.q
         self._position_answered = bool(res.success)
@@ -431,13 +434,15 @@ class Session(Scene):
         velocity mode), the joints must be at rest within their braking time and a second; else the
         alarm, and the E-STOP latches."""
         holding = self.estop_latched or not self.enabled or (self.mode == "velocity" and not np.any(xdot))
+        # simulated time: braking advances by dt a tick whatever the wall clock does (a slow engine, a stall)
         if not holding:
             self._hold_deadline = None
         elif self._hold_deadline is None:
             accel = self.robot.accel
             brake = np.where(np.isfinite(accel) & (accel > 0), np.abs(self.actuators.qdot) / accel, 0.0)
-            self._hold_deadline = now + float(np.max(brake, initial=0.0)) + 10.0 * self.actuator_tau + 1.0
-        unbidden = holding and self._hold_deadline is not None and now > self._hold_deadline and self.moving()
+            self._hold_deadline = self.sim_time + float(np.max(brake, initial=0.0)) + 10.0 * self.actuator_tau + 1.0
+        late = self._hold_deadline is not None and self.sim_time > self._hold_deadline
+        unbidden = holding and late and self.moving()
         self.alarms.set(
             "motion_without_command",
             unbidden,

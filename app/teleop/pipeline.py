@@ -36,7 +36,7 @@ from app.teleop.mapping import shape_input
 from app.teleop.profiles import DeviceProfile, default_profile, profile_for
 
 STALE_TIMEOUT = 0.2  # s from the engine's receive time
-DEAF_LIMIT = 1.0  # s: a receiver that has not looked for this long counts as hearing nothing
+DEAF_LIMIT = 0.5  # s: a receiver that has not looked for this long counts as hearing nothing
 
 
 @dataclass(frozen=True)

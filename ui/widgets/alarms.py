@@ -28,7 +28,7 @@ from PyQt5.QtWidgets import (
 from app.engine.alarm_catalog import SHELVE_DEFAULT_S, definition
 from ui.widgets.labels import ElidedLabel
 
-COLUMNS = ("", "time", "severity", "source", "alarm", "state")
+COLUMNS = ("", "time (UTC)", "priority", "source", "alarm", "state")
 SEVERITY_RANK = {"critical": 0, "warning": 1, "info": 2}
 ROW_COLOR = {"critical": "#5a1d1b", "warning": "#5a4a12", "info": "#1f3a52"}
 
