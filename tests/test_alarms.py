@@ -326,3 +326,18 @@ def test_a_single_long_stall_counts_its_seconds():
         assert ses.alarms.active("engine_slow")
     finally:
         srv.close()
+
+
+def test_an_out_of_reach_resting_point_stops_the_search():
+    """A resting stick whose point is out of reach: after REFINE_TRIES solves that find nothing nearer, the
+    engine stops searching (the arm holds, the alarm stays) until the stick moves."""
+    from app.engine.session import REFINE_TRIES
+
+    ses = Session(robot_name="knuckle_boom_crane", mode="position")
+    ses.set_scaling(k_p=[80.0, 80.0, 80.0])
+    t = drive(ses, (0.0, 0.0, 1.0), 1.0, arm(ses))
+    calls = []
+    solve = ses.solver.solve_position
+    ses.solver.solve_position = lambda *a, **k: calls.append(1) or solve(*a, **k)
+    drive(ses, (0.0, 0.0, 1.0), 1.0, t)
+    assert len(calls) <= REFINE_TRIES and ses.alarms.active("target_unreachable")

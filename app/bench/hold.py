@@ -49,10 +49,10 @@ class HoldRun:
         return max(self.overrun, self.drift) if math.isfinite(self.settle_s) else math.inf
 
 
-def stick_sequence(rng: np.random.Generator, mode: str, segments: int = 4) -> list[tuple[np.ndarray, float]]:
+def stick_sequence(rng: np.random.Generator, mode: str, segments: int = 3) -> list[tuple[np.ndarray, float]]:
     """Random (stick, seconds) segments: deflections uniform in [−1, 1]³ (some axes centred, some at full
     deflection), 0.05–1.5 s each, some of them brief taps; the last one is the hold: centred in velocity
-    mode, a random deflection in position mode (the stick resting there)."""
+    mode; in position mode the stick rests, half the time where it was, half the time at a new point."""
     out = []
     for _ in range(segments):
         s = rng.uniform(-1.0, 1.0, 3)
@@ -61,12 +61,12 @@ def stick_sequence(rng: np.random.Generator, mode: str, segments: int = 4) -> li
         s[full] = np.sign(s[full] + 1e-9)
         length = rng.choice([rng.uniform(0.05, 0.25), rng.uniform(0.25, 1.5)])
         out.append((s, float(length)))
-    last = np.zeros(3) if mode == "velocity" else rng.uniform(-1.0, 1.0, 3)
-    out.append((last, -1.0))
+    resting = out[-1][0].copy() if rng.random() < 0.5 else rng.uniform(-1.0, 1.0, 3)
+    out.append((np.zeros(3) if mode == "velocity" else resting, -1.0))
     return out
 
 
-def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 2.0):
+def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 1.0):
     """Drive ``session`` through ``seq`` (from :func:`stick_sequence`) at ``rate`` Hz; a :class:`HoldRun`.
 
     The solver gets the engine's per-tick budget (40 % of the tick).  The hold segment runs until the

@@ -61,6 +61,7 @@ from app.teleop.profiles import DeviceProfile
 DEFAULT_ROBOT = "comau_smart5_3dof"
 DEFAULT_SOLVER = "jacobian"
 REFINE_STEP = 0.02  # of each joint's range: the largest step a resting stick's refined answer may take
+REFINE_TRIES = 50  # solves in a row that find nothing nearer for a resting stick: its point is out of reach
 
 
 __all__ = ["CommandError", "LogEntry", "Session", "library_entries"]
@@ -121,6 +122,7 @@ class Session(Scene):
         self.signal = np.zeros(3)
         self.command_point = None  # the operator's command as a point (eq. 1, or eq. 7 integrated)
         self._position_answered = False  # position mode: the solver reached the resting stick's point
+        self._refine_misses = 0  # position mode: solves in a row that found the resting stick's point no nearer
         self._hold_deadline: float | None = None  # engine time by which a holding arm must be at rest
         self._speed_limited = False
         self.solver_cost = math.nan
@@ -363,16 +365,20 @@ class Session(Scene):
         nearer the point by at least a millimetre.  Re-solving a resting stick's point every tick let a
         solver's restarts and a GA's population move the arm with nobody touching the stick."""
         still = self.command_point is not None and float(np.max(np.abs(point - self.command_point))) <= 1e-6
-        if still and self._position_answered:
-            return None
+        if not still:
+            self._refine_misses = 0
+        if still and (self._position_answered or self._refine_misses >= REFINE_TRIES):
+            return None  # answered, or nothing nearer found in REFINE_TRIES tries: out of reach, hold
         res = self.solver.solve_position(point, self.q_ref, time_budget=budget)
         if still:
+            self._refine_misses += 1
             # a refinement for a resting stick: nearer by a millimetre and a local step only (a GA's or a
             # restart's answer elsewhere in joint space, a little nearer, swung the arm 2.8 rad: review)
             now_error = float(np.linalg.norm(self.robot.position(self.q_ref) - point))
             local = bool(np.all(np.abs(res.q - self.q_ref) <= REFINE_STEP * (self.robot.upper - self.robot.lower)))
             if not (res.error < now_error - 1e-3 and local):
                 return res
+            self._refine_misses = 0
         self.q_ref = res.q
         self._position_answered = bool(res.success)
         return res
