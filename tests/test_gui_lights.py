@@ -147,9 +147,10 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     assert not tab.state.flags.enabled and _px(enable, LIGHT["ok"]) == 0
     qtbot.mouseRelease(enable, Qt.LeftButton)
     tab.stick.key(Qt.Key_Right, False)
-    qtbot.wait(300)  # the stick seen at neutral with enable released
+    # the engine sees the enable released at neutral before the new press (arming takes a fresh press)
+    qtbot.waitUntil(lambda: not tab.state.flags.deadman, timeout=GUI_WAIT)
     tab.stick.key(Qt.Key_Shift, True)
-    qtbot.waitUntil(lambda: tab.state.flags.enabled and enable.text() == "ENABLED", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.flags.enabled and enable.text().startswith("ENABLED"), timeout=GUI_WAIT)
     assert _px(enable, LIGHT["ok"]) > 50 and _has(win, "● input: enabled")
     plus = tab.jog_buttons[(1, 1)]
     qtbot.mousePress(plus, Qt.LeftButton)
@@ -160,7 +161,7 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     qtbot.waitUntil(lambda: "Comau jog q1" in tab.lights.lights["plant"].text(), timeout=GUI_WAIT)
     qtbot.mouseRelease(plus, Qt.LeftButton)
     tab.stick.key(Qt.Key_Shift, False)
-    qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and enable.text() != "ENABLED", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and not enable.text().startswith("ENABLED"), timeout=GUI_WAIT)
 
 
 def test_item6_crane_head_tab_lights_compensating_no_plc_estop_and_holding(qtbot, window):
