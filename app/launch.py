@@ -15,6 +15,10 @@ def main() -> int:
     import faulthandler
     import signal
 
+    def terminated(*_):  # SIGTERM while the modules still load (seconds on a busy machine) is Ctrl-C too: one
+        raise KeyboardInterrupt  # line, 130; a command with its own SIGTERM handling sets it later
+
+    signal.signal(signal.SIGTERM, terminated)
     if hasattr(signal, "SIGUSR1"):  # ``kill -USR1 PID`` prints every thread's stack (a hung process explains itself)
         faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:

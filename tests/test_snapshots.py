@@ -144,7 +144,11 @@ def test_snapshot_classes_are_slotted_dataclasses():
 def _study_messages(client: Client, until: float):
     """``study`` messages from the engine's stream until a final one (done/cancelled/failed)."""
     seen = []
+    alive = 0.0
     while time.monotonic() < until:
+        if time.monotonic() - alive > 1.0:  # an operator's client speaks (a GUI sends input at 50 Hz): on a
+            client.send("ping")  # loaded machine a study can outlast the role's 5 s lease of silence
+            alive = time.monotonic()
         if not client.sub.poll(200):
             continue
         msg = decode_engine(client.sub.recv())
