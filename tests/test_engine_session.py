@@ -223,6 +223,37 @@ def test_set_robot_reads_paths_only_inside_the_allowed_robot_folders(tmp_path, m
     assert ses.robot_name == "scara"
 
 
+def test_set_robot_refusals_name_no_server_path_beyond_the_folder_names(tmp_path, monkeypatch):
+    """Issue 27, item 10: every refusal of an outside path listed the server's absolute robot folders."""
+    monkeypatch.delenv("BOSUN_ROBOTS_DIR", raising=False)
+    from app.models.registry import LIBRARY_DIR
+
+    allowed = tmp_path / "site" / "my_robots"
+    allowed.mkdir(parents=True)
+    (allowed / "broken.xml").write_text("<robot>")
+    ses = Session(robot_name="comau_smart5_3dof", robots_dirs=(str(allowed),))
+    for ref in ("/etc/passwd.xml", str(tmp_path / "elsewhere.xml"), str(allowed / "broken.xml"), "broken.xml"):
+        with pytest.raises(CommandError) as info:
+            ses.set_robot(ref)
+        msg = str(info.value).replace(repr(ref), "")  # the client's own path may be quoted back to it
+        assert str(tmp_path) not in msg and str(LIBRARY_DIR) not in msg, msg
+        assert str(LIBRARY_DIR.parent) not in msg and "/site/" not in msg, msg
+    with pytest.raises(CommandError, match=r"outside the allowed robot folders \(robots, my_robots\)"):
+        ses.set_robot("/etc/passwd.xml")
+    with pytest.raises(CommandError, match=r"^my_robots/broken\.xml:1: XML syntax error"):
+        ses.set_robot("broken.xml")
+
+
+@pytest.mark.parametrize("ref", ["arm\x00.xml", "/tmp/a\x00b.xml", "scara\x00", "../x\x00/y.xml", "\x00"])
+def test_a_nul_in_a_set_robot_path_is_a_one_line_refusal(ref):
+    """Issue 27, item 10: a NUL in a ``set_robot`` path answered "internal error" (ValueError: embedded null byte)."""
+    ses = Session(robot_name="scara")
+    with pytest.raises(CommandError, match="NUL") as info:
+        ses.set_robot(ref)
+    assert "\n" not in str(info.value) and "\x00" not in str(info.value)
+    assert ses.robot_name == "scara"
+
+
 def test_robot_files_are_size_checked_before_reading(tmp_path):
     big = tmp_path / "big.xml"
     with open(big, "wb") as fh:

@@ -136,6 +136,25 @@ def test_invalid_xml_gives_error_and_keeps_robot(qtbot, window, tmp_path):
     assert window.teleop.state.robot == "comau_smart5_3dof"
 
 
+def test_open_xml_reads_a_utf16_or_latin1_file_as_the_engine_does(qtbot, window, tmp_path):
+    """Issue 27, item 9: Open XML read the file as UTF-8 ("Robot not loaded: 'utf-8' codec can't decode")."""
+    from app.models.registry import resolve
+
+    text = resolve("scara").read_text(encoding="utf-8")
+    text = text.replace('name="scara"', 'name="utf16_arm"', 1).replace('encoding="UTF-8"', 'encoding="UTF-16"', 1)
+    path = tmp_path / "utf16_arm.xml"
+    path.write_bytes(text.encode("utf-16"))  # with a byte-order mark
+    window.teleop.load_robot_file(str(path))
+    qtbot.waitUntil(lambda: window.teleop.state.robot == "utf16_arm", timeout=GUI_WAIT)
+    bad = tmp_path / "latin_arm.xml"
+    bad.write_bytes(b'<?xml version="1.0" encoding="UTF-8"?>\n<robot name="caf\xe9"/>')  # says UTF-8, is Latin-1
+    window.teleop.load_robot_file(str(bad))
+    qtbot.waitUntil(lambda: len(window.messages) > 0, timeout=GUI_WAIT)
+    assert window.messages[-1][0] == "Robot not loaded"
+    assert window.messages[-1][1].startswith("latin_arm.xml:2: not valid UTF-8 (byte 0xe9)")
+    assert window.teleop.state.robot == "utf16_arm"
+
+
 def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     path = tmp_path / "log.csv"
     window.teleop.log_path.setText(str(path))

@@ -331,14 +331,21 @@ class TeleopTab(QWidget):
 
     def load_robot_file(self, path: str) -> None:
         """Send the chosen file's text: the engine reads no path outside its robot folders."""
+        from app.errors import RobotXmlError
+        from app.models.xml import decode_robot_xml
+
         name = os.path.basename(path)
         try:
             size = os.path.getsize(path)
             if size > MAX_ROBOT_TEXT:
                 raise ValueError(f"{size} bytes; files over {MAX_ROBOT_TEXT} bytes go in a robot folder")
-            with open(path, encoding="utf-8") as fh:
-                text = fh.read(MAX_ROBOT_TEXT + 1)
-        except (OSError, UnicodeDecodeError, ValueError) as err:
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_ROBOT_TEXT + 1)
+            text = decode_robot_xml(data, name)  # as the engine reads a file: mark, declaration, UTF-8
+        except RobotXmlError as err:
+            self.error.emit("Robot not loaded", str(err))
+            return
+        except (OSError, ValueError) as err:
             self.error.emit("Robot not loaded", f"{name}: {getattr(err, 'strerror', None) or err}")
             return
         self.link.send("set_robot", robot=name, xml=text)

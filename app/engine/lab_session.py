@@ -40,6 +40,7 @@ from app.marine.waves import spectrum as sea_spectrum
 from app.models.lab import load_lab, resolve_lab
 from app.models.registry import resolve
 from app.models.stewart import StewartPlatform
+from app.models.xml import read_robot_file
 from app.net.snapshots import (
     ComauJog,
     ComauState,
@@ -494,7 +495,7 @@ class LabSession(Scene):
             plats.append(
                 PlatformInfo(
                     name=name,
-                    robot_xml=resolve(robot_file).read_text(encoding="utf-8"),
+                    robot_xml=read_robot_file(resolve(robot_file)),
                     leg_range=[m.leg_min, m.leg_max],
                     pose_min=m.pose_min.tolist(),
                     pose_max=m.pose_max.tolist(),
@@ -517,7 +518,7 @@ class LabSession(Scene):
             commands=sorted(self.COMMANDS),
             lab_xml=resolve_lab(self.lab_name).read_text(encoding="utf-8"),
             platforms=plats,
-            comau_xml=resolve(self.layout.crane_robot).read_text(encoding="utf-8"),
+            comau_xml=read_robot_file(resolve(self.layout.crane_robot)),
             comau_lower=lab.joints.lower.tolist(),  # the profile in force
             comau_upper=lab.joints.upper.tolist(),
             comau_speed=lab.joints.speed.tolist(),

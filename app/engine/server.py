@@ -25,9 +25,10 @@ without any message from its holder, with a warning to every client at ``lapse_w
 the displaced holder is then told so in a refusal of what it sends.  E-STOP is accepted from
 every client, also one that has not said ``hello`` (an engine restarted under a client must still
 stop); where a token is set the ``estop`` must carry it.  A non-local bind needs CURVE keys
-(:mod:`app.net.security`).  Failed authentications are counted and throttled.  Once a second the
-loop checks itself (a diagnostic in every snapshot); below 90 % of real time for 5 s, or input gone
-stale while it lagged, raises the ``engine_slow`` alarm.
+(:mod:`app.net.security`).  Failed authentications are counted and throttled per connection (a
+wrong-key handshake per peer address): one client's guessing never holds back another's right key
+or token.  Once a second the loop checks itself (a diagnostic in every snapshot); below 90 % of
+real time for 5 s, or input gone stale while it lagged, raises the ``engine_slow`` alarm.
 """
 
 from __future__ import annotations
@@ -316,6 +317,7 @@ class EngineServer:
         self._io_error: BaseException | None = None
         self._described = -1  # describe_seq of the cached description
         self._description = b""  # the encoded ``description`` (read by the I/O thread, written by the loop)
+        self._frame: zmq.Frame | None = None  # the I/O thread's message in hand (its peer address, its key)
         self._refresh_description()
 
     # ------------------------------------------------------------------ I/O thread: the protocol
@@ -335,25 +337,47 @@ class EngineServer:
         if re is not None:
             self._reply(ident, re, False, reason)
 
-    def _token_ok(self, msg: dict[str, Any]) -> bool:
-        """The hello's or estop's token, where this engine has one."""
-        return self._matches(msg.get("token", ""), self.token)
+    def _source(self, ident: bytes) -> str:
+        """Who a failed token or secret is pinned on: this connection (identity, peer address, CURVE key).
 
-    def _secret_ok(self, msg: dict[str, Any]) -> bool:
-        """Whether a hello may have the operator role under this engine's launch secret."""
-        return self._matches(msg.get("secret", ""), self.operator_secret)
+        The address and key come from the message in hand (ZeroMQ's ``Peer-Address`` and ``User-Id``
+        properties; the key is the one the ZAP handler admitted)."""
+        address = user = ""
+        frame = self._frame
+        if frame is not None:
+            with contextlib.suppress(zmq.ZMQError, AttributeError):
+                address = frame.get("Peer-Address")
+            if self.curve is not None:
+                with contextlib.suppress(zmq.ZMQError, AttributeError):
+                    user = frame.get("User-Id")
+        where = f" at {printable(address, 64)}" if address else ""
+        key = f" with key {user[:8]}…" if user else ""
+        return f"client {ident[:32]!r}{where}{key}"
 
-    def _matches(self, given: Any, expected: str | None) -> bool:
-        """Constant-time comparison on UTF-8 bytes (compare_digest refuses non-ASCII str), throttled:
-        past 10 failures a second further tries are refused unexamined, so guessing cannot run fast."""
+    def _credential(self, ident: bytes, given: Any, expected: str | None, what: str) -> str:
+        """'' when ``given`` is right (or this engine expects nothing), else why not, in a few words.
+
+        Compared in constant time on UTF-8 bytes (compare_digest refuses non-ASCII str).  Failures are
+        throttled per connection (:meth:`_source`): past 10 in a second, that connection's further
+        tries are refused unexamined for a second; anybody else's are still looked at (issue 27, item 3)."""
         if expected is None:
-            return True
-        if not self.auth.allowed():
-            return False
-        ok = secrets.compare_digest(str(given).encode(), expected.encode())
-        if not ok:
-            self.auth.failed()
-        return ok
+            return ""
+        source = f"{what} {self._source(ident)}"
+        if not self.auth.allowed(source):
+            return (
+                f"not checked: {self.auth.burst} wrong {what}s from this client within {self.auth.window:g} s; "
+                "try again in a second"
+            )
+        given = "" if given is None else str(given)
+        if given and secrets.compare_digest(given.encode(), expected.encode()):
+            return ""
+        if self.auth.failed(source) == self.auth.burst:
+            self._log_limited(
+                f"auth:{source}",
+                f"{self.auth.burst} wrong {what}s within {self.auth.window:g} s from {source[len(what) + 1 :]}: "
+                f"its tries are refused unexamined for {self.auth.window:g} s ({self.auth.failures} failures so far)",
+            )
+        return f"with a wrong {what}" if given else f"without a {what} (this engine needs one)"
 
     def _check_operator(self, now: float) -> None:
         """Warn every client when the operator falls silent; lapse the role after operator_timeout."""
@@ -462,8 +486,9 @@ class EngineServer:
         client = self.clients.get(ident)
         if client is None:
             if mtype == "estop":  # STOP must never fail: accepted before or without hello
-                if not self._token_ok(msg):
-                    self._reject(ident, "estop with a wrong or missing token", re="estop")
+                why = self._credential(ident, msg.get("token"), self.token, "token")
+                if why:
+                    self._reject(ident, f"estop {why}", re="estop")
                     return
                 self._estop(ident, f"an unregistered client ({msg.get('reason', 'no reason')})", now)
                 return
@@ -519,13 +544,20 @@ class EngineServer:
             self._reject(ident, f"{mtype}: engine busy ({self.inbox.limit} requests waiting); try again", re=mtype)
 
     def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
-        if not self._token_ok(msg):
-            self._reject(ident, "hello with a wrong or missing token", re="hello")
+        why = self._credential(ident, msg.get("token"), self.token, "token")
+        if why:
+            self._reject(ident, f"hello {why}", re="hello")
             return
         role, note = "viewer", ""
         name = _clean_name(msg["name"])
-        if msg["role"] == "operator" and not self._secret_ok(msg):
-            note = "the operator role of this engine belongs to the program that started it; joined as viewer"
+        why = ""
+        if msg["role"] == "operator":
+            why = self._credential(ident, msg.get("secret"), self.operator_secret, "launch secret")
+        if why:
+            note = (
+                "the operator role of this engine belongs to the program that started it "
+                f"(hello {why}); joined as viewer"
+            )
         elif msg["role"] == "operator":
             if self.operator not in (None, ident) and not self._operator_alive(now):
                 self._lapse(f"the role lapsed after {self.operator_timeout:g} s of silence")
@@ -598,17 +630,21 @@ class EngineServer:
                             self._wait_window()
                         looked = time.monotonic()
                         try:
-                            frames = self.router.recv_multipart(zmq.NOBLOCK)
+                            # as frames: a hello's peer address and CURVE key are read from them (_source)
+                            parts = self.router.recv_multipart(zmq.NOBLOCK, copy=False)
                         except zmq.Again:
                             self._io_backlog = False
                             self.inbox.listened = looked
                             break
                         now = time.monotonic()
+                        frames = [p.bytes for p in parts]
                         if len(frames) != 2:
                             if self.limits.allow(frames[0] if frames else b"?", now):
                                 self._reject(frames[0] if frames else b"?", f"{len(frames)} frames; expected one")
                             continue
+                        self._frame = parts[1]
                         self.handle(frames[0], frames[1], now)
+                        self._frame = None
                 now = time.monotonic()
                 if now >= next_house:
                     next_house = now + 0.02

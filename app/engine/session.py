@@ -32,9 +32,8 @@ from app.models.registry import (
     allowed_dirs,
     list_robots,
     load_robot,
+    load_robot_file,
     load_robot_text,
-    resolve,
-    resolve_allowed,
     robots_dir,
 )
 from app.models.serial import SerialRobot
@@ -135,10 +134,8 @@ class Session(Scene):
 
     # ------------------------------------------------------------------ commands
     def _load(self, robot_ref: str, solver_name: str, robot=None, xml: str | None = None) -> None:
-        if robot is None:
-            robot = load_robot(robot_ref)
-        if xml is None:
-            xml = resolve(robot_ref).read_text(encoding="utf-8")
+        if robot is None or xml is None:  # the file read once, by the reader ``bosun check`` uses
+            robot, xml = load_robot_file(robot_ref)
         if not isinstance(robot, SerialRobot):
             raise CommandError(f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms")
         solver = make_solver(solver_name, robot, seed=self.seed)
@@ -177,8 +174,7 @@ class Session(Scene):
             if xml is not None:
                 model = load_robot_text(xml, _label(robot))
             else:
-                model = load_robot(robot, allowed=self._allowed())
-                xml = resolve_allowed(robot, self._allowed()).read_text(encoding="utf-8")
+                model, xml = load_robot_file(robot, allowed=self._allowed())
             if not isinstance(model, SerialRobot):
                 raise CommandError(
                     f"{model.name} is a {model.kind} mechanism; the teleoperation engine drives serial arms"

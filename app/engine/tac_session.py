@@ -26,6 +26,7 @@ from app.geometry import euler_zyx_to_matrix
 from app.marine.vessels import VESSELS
 from app.marine.waves import SPECTRA
 from app.models.registry import resolve
+from app.models.xml import read_robot_file
 from app.net.snapshots import (
     Hull,
     SeaState,
@@ -213,8 +214,8 @@ class TacSession(Scene):
             seq=self.describe_seq,
             title="Crane head",
             commands=sorted(self.COMMANDS),
-            crane_xml=resolve(sc.crane).read_text(encoding="utf-8"),
-            head_xml=resolve(sc.head).read_text(encoding="utf-8"),
+            crane_xml=read_robot_file(resolve(sc.crane)),
+            head_xml=read_robot_file(resolve(sc.head)),
             vessel=self.vessel.label,
             vessels=list(VESSELS),
             ship=ShipBox(length=SHIP_LENGTH, beam=SHIP_BEAM, deck_z=SHIP_DECK_Z, keel_z=SHIP_KEEL_Z),

@@ -17,7 +17,7 @@ from app.models.delta import DeltaHead
 from app.models.serial import SerialRobot
 from app.models.spec import RobotSpec
 from app.models.stewart import StewartPlatform
-from app.models.xml import MAX_FILE_BYTES, parse_robot_file, parse_robot_xml
+from app.models.xml import MAX_FILE_BYTES, parse_robot_file, parse_robot_xml, read_robot_file
 from app.resources import robot_library
 
 #: mechanism type -> factory building its kinematic model from a spec
@@ -53,6 +53,7 @@ def resolve(name_or_path: str | os.PathLike[str]) -> Path:
     text = os.fspath(name_or_path)
     if not text.strip():
         raise RobotNotFoundError("no robot given; name one from the library or a path to an XML file")
+    _no_nul(text)
     looks_like_path = text.endswith(".xml") or os.sep in text or "/" in text
     if looks_like_path:
         path = Path(text).expanduser()
@@ -85,6 +86,7 @@ def resolve_allowed(name_or_path: str, folders: Sequence[Path]) -> Path:
     says nothing about which files exist; a relative path is looked up in each folder.
     """
     text = os.fspath(name_or_path)
+    _no_nul(text)
     if not (text.endswith(".xml") or os.sep in text or "/" in text):
         return resolve(text)
     if not text.endswith(".xml"):
@@ -99,7 +101,7 @@ def resolve_allowed(name_or_path: str, folders: Sequence[Path]) -> Path:
         if not inside(Path(os.path.normpath(given))) or not inside(given.resolve()):
             raise RobotNotFoundError(
                 f"robot path {_quoted(text)} is outside the allowed robot folders "
-                f"({', '.join(str(d) for d in folders)}); start the engine with --robots-dir to add one"
+                f"({', '.join(d.name or str(d) for d in folders)}); start the engine with --robots-dir to add one"
             )
         if not given.resolve().is_file():
             raise RobotNotFoundError(f"robot file not found: {_quoted(text)}")
@@ -115,10 +117,27 @@ def _quoted(text: str) -> str:
     return repr(printable_path(text, 120))
 
 
+def _no_nul(text: str) -> None:
+    """A NUL names no file (the OS refuses it: ``ValueError: embedded null byte``): one line instead."""
+    if "\0" in text:
+        raise RobotNotFoundError(f"robot name or path {_quoted(text)} holds a NUL character; no file is named so")
+
+
+def shown_path(path: Path, folders: Sequence[Path]) -> str:
+    """``path`` as a remote client is shown it: from its allowed folder's name on (``my_robots/arm.xml``),
+    never the server's absolute path (issue 27, item 10)."""
+    for d in folders:
+        if path.is_relative_to(d):
+            return (Path(d.name) / path.relative_to(d)).as_posix()
+    return path.name
+
+
 def load_spec(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> RobotSpec:
     """Parse and validate the robot file named by ``name_or_path`` (inside ``allowed`` when given)."""
-    path = resolve(name_or_path) if allowed is None else resolve_allowed(os.fspath(name_or_path), allowed)
-    return parse_robot_file(path)
+    if allowed is None:
+        return parse_robot_file(resolve(name_or_path))
+    path = resolve_allowed(os.fspath(name_or_path), allowed)
+    return parse_robot_file(path, shown_path(path.resolve(), allowed))
 
 
 def build_model(spec: RobotSpec) -> Any:
@@ -137,6 +156,21 @@ def load_robot_text(text: str | bytes, label: str) -> Any:
     if size > MAX_FILE_BYTES:
         raise RobotNotFoundError(f"{label}: {size} bytes; a robot file is at most {MAX_FILE_BYTES}")
     return build_model(parse_robot_xml(text, label))
+
+
+def load_robot_file(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> tuple[Any, str]:
+    """The model of a robot and the text it was built from, the file read once (:func:`read_robot_file`).
+
+    With ``allowed`` (a remote ``set_robot``) the path must lie inside those folders, and errors name
+    the file from its folder's name on (:func:`shown_path`)."""
+    if allowed is None:
+        path = resolve(name_or_path)
+        label = str(path)
+    else:
+        path = resolve_allowed(os.fspath(name_or_path), allowed)
+        label = shown_path(path.resolve(), allowed)
+    text = read_robot_file(path, label)
+    return build_model(parse_robot_xml(text, label)), text
 
 
 def load_robot(name_or_path: str | os.PathLike[str], allowed: Sequence[Path] | None = None) -> Any:

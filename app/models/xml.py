@@ -9,6 +9,7 @@ The format is documented in ``robots/README.md``.
 
 from __future__ import annotations
 
+import codecs
 import math
 import re
 import stat
@@ -62,22 +63,126 @@ def _schema() -> etree.XMLSchema:
     return etree.XMLSchema(etree.parse(str(SCHEMA_PATH)))
 
 
-def parse_robot_file(path: str | Path) -> RobotSpec:
-    """Read and parse a robot file; see :func:`parse_robot_xml`."""
+#: byte-order marks, longest first (a UTF-32-LE mark begins like a UTF-16-LE one)
+_BOMS = (
+    (codecs.BOM_UTF32_LE, "utf-32-le"),
+    (codecs.BOM_UTF32_BE, "utf-32-be"),
+    (codecs.BOM_UTF8, "utf-8"),
+    (codecs.BOM_UTF16_LE, "utf-16-le"),
+    (codecs.BOM_UTF16_BE, "utf-16-be"),
+)
+#: the first bytes of '<?' without a mark (XML 1.0, appendix F)
+_NO_BOM = (
+    (b"\x00\x00\x00<", "utf-32-be"),
+    (b"<\x00\x00\x00", "utf-32-le"),
+    (b"\x00<\x00?", "utf-16-be"),
+    (b"<\x00?\x00", "utf-16-le"),
+)
+#: an XML declaration up to its encoding's name (group 4), ASCII in every ASCII-compatible encoding
+_DECLARATION = re.compile(r"""\A(<\?xml\s+version\s*=\s*(["'])[^"']*\2\s+encoding\s*=\s*)(["'])([^"']*)\3""")
+_ASCII = bytes(range(0x20, 0x7F)) + b"\t\n\r"
+
+
+def _codec(name: str, path: str) -> str:
+    """The Python codec of the encoding an XML declaration names, for a file without a byte-order mark."""
+    try:
+        info = codecs.lookup(name)
+        text = info._is_text_encoding and "escape" not in info.name  # type: ignore[attr-defined]
+    except LookupError:
+        text = False
+    if not text:
+        raise RobotXmlError(
+            path, 1, f"unknown encoding {_short(name)!r} in the XML declaration; save the file as UTF-8"
+        )
+    try:  # the declaration was read as ASCII: the encoding must agree with ASCII there
+        ascii_compatible = _ASCII.decode(info.name) == _ASCII.decode("ascii")
+    except ValueError:  # UnicodeDecodeError among them
+        ascii_compatible = False
+    if not ascii_compatible:
+        raise RobotXmlError(
+            path, 1, f"the XML declaration declares {_short(name)} but the file is not in it (no byte-order mark)"
+        )
+    return info.name
+
+
+def decode_robot_xml(data: bytes, path: str = "<string>") -> str:
+    """The text of a robot file's bytes, decoded as an XML parser does; the one reader of robot files.
+
+    The encoding is the byte-order mark's, else the one the XML declaration names, else UTF-8 (XML 1.0,
+    section 4.3.3 and appendix F).  The text comes back without the mark and with the declaration
+    saying ``UTF-8``, so whoever encodes it again as UTF-8 (:func:`parse_robot_xml`, a message to a
+    client) reads the same document.  ``bosun check``, the engine's ``--robot`` and ``set_robot`` all
+    read through here: a file one of them accepts, all do (issue 27, item 9).
+
+    Raises
+    ------
+    RobotXmlError
+        An unknown encoding, a declaration that contradicts the bytes, or bytes that are not in the
+        encoding (naming the line and the byte).
+    """
+    codec = None
+    for bom, name in _BOMS:
+        if data.startswith(bom):
+            codec, data = name, data[len(bom) :]
+            break
+    else:
+        for start, name in _NO_BOM:
+            if data.startswith(start):
+                codec = name
+                break
+    if codec is None:  # ASCII-compatible: the declaration, if any, names the encoding
+        m = _DECLARATION.match(data[:200].decode("latin-1"))
+        codec = _codec(m.group(4), path) if m else "utf-8"
+    try:
+        text = data.decode(codec)
+    except UnicodeDecodeError as err:
+        line = data[: err.start].decode(codec, "replace").count("\n") + 1
+        shown = "UTF-8" if codec == "utf-8" else codec
+        raise RobotXmlError(
+            path,
+            line,
+            f"not valid {shown} (byte 0x{data[err.start]:02x}); save the file as UTF-8 or name its encoding "
+            'in the XML declaration (<?xml version="1.0" encoding="ISO-8859-1"?>)',
+        ) from None
+    return _declared_utf8(text)
+
+
+def _declared_utf8(text: str) -> str:
+    """``text`` without a leading mark, its declaration (if it names an encoding) saying UTF-8."""
+    text = text.removeprefix("\ufeff")
+    m = _DECLARATION.match(text)
+    if m and m.group(4) != "UTF-8":
+        text = f"{m.group(1)}{m.group(3)}UTF-8{m.group(3)}{text[m.end() :]}"
+    return text
+
+
+def read_robot_file(path: str | Path, label: str | None = None) -> str:
+    """The text of a robot file (:func:`decode_robot_xml`), its size checked before reading.
+
+    ``label`` names the file in errors (default: the path)."""
     path = Path(path)
+    label = str(path) if label is None else label
     try:
         info = path.stat()
         if not stat.S_ISREG(info.st_mode):
-            raise RobotXmlError(str(path), None, "not a regular file")
+            raise RobotXmlError(label, None, "not a regular file")
         if info.st_size > MAX_FILE_BYTES:  # checked before reading: a 1 GB file is never read
-            raise RobotXmlError(
-                str(path), None, f"file is {info.st_size} bytes; a robot file is at most {MAX_FILE_BYTES}"
-            )
+            raise RobotXmlError(label, None, f"file is {info.st_size} bytes; a robot file is at most {MAX_FILE_BYTES}")
         with path.open("rb") as fh:
             data = fh.read(MAX_FILE_BYTES + 1)
     except OSError as err:
-        raise RobotXmlError(str(path), None, f"cannot read file: {err.strerror or err}") from None
-    return parse_robot_xml(data, str(path))
+        raise RobotXmlError(label, None, f"cannot read file: {err.strerror or err}") from None
+    if len(data) > MAX_FILE_BYTES:  # grew since the stat
+        raise RobotXmlError(
+            label, None, f"file is over {MAX_FILE_BYTES} bytes; a robot file is at most {MAX_FILE_BYTES}"
+        )
+    return decode_robot_xml(data, label)
+
+
+def parse_robot_file(path: str | Path, label: str | None = None) -> RobotSpec:
+    """Read (:func:`read_robot_file`) and parse (:func:`parse_robot_xml`) a robot file."""
+    label = str(path) if label is None else label
+    return parse_robot_xml(read_robot_file(path, label), label)
 
 
 def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
@@ -86,7 +191,8 @@ def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
     Parameters
     ----------
     text : str or bytes
-        The XML document.
+        The XML document: bytes are decoded by :func:`decode_robot_xml` (mark, declaration, UTF-8);
+        a str is text already, whatever encoding its declaration names.
     path : str
         Name used in error messages and stored as ``RobotSpec.path``.
 
@@ -100,7 +206,15 @@ def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
     RobotXmlError
         For a syntax error, a schema violation or a value that cannot be used.
     """
-    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
+    if not isinstance(text, str):
+        if len(text) > MAX_FILE_BYTES:
+            raise RobotXmlError(path, None, f"file is {len(text)} bytes; a robot file is at most {MAX_FILE_BYTES}")
+        text = decode_robot_xml(bytes(text), path)
+    try:
+        data = _declared_utf8(text).encode("utf-8")
+    except UnicodeEncodeError as err:  # a lone surrogate: no file holds one
+        line = text[: err.start].count("\n") + 1
+        raise RobotXmlError(path, line, f"not text: U+{ord(text[err.start]):04X} is no character") from None
     if len(data) > MAX_FILE_BYTES:
         raise RobotXmlError(path, None, f"file is {len(data)} bytes; a robot file is at most {MAX_FILE_BYTES}")
     parser = etree.XMLParser(resolve_entities=False, no_network=True, remove_comments=True, huge_tree=False)

@@ -5,17 +5,19 @@
   (``NAME.key`` public, ``NAME.key_secret`` secret).  The engine holds its secret key and a folder
   of allowed client public keys; a client holds its own secret key and the engine's public key.
   Required for any non-loopback bind.  Handshakes with a key not in the folder are refused by
-  the ZAP handler below, counted and throttled.
+  the ZAP handler below (the key is always looked at first) and counted per peer address and key.
 * **Launch secret**: an engine a GUI starts gets a random secret in its environment
   (``BOSUN_OPERATOR_SECRET``, never on the command line, where other users could read it); only a
   hello carrying it is granted the operator role.  Anyone else on the host may watch.
-* **Token**: the old shared secret, for loopback testing only; failed checks are throttled.
+* **Token**: the old shared secret, for loopback testing only; failed checks are throttled per
+  client connection, never for everybody (:class:`AuthThrottle`).
 """
 
 from __future__ import annotations
 
-import asyncio
 import collections
+import logging
+import math
 import os
 import threading
 import time
@@ -25,6 +27,7 @@ from pathlib import Path
 import zmq
 import zmq.auth
 from zmq.auth.thread import ThreadAuthenticator
+from zmq.utils import z85
 
 from app.errors import BosunError
 
@@ -118,51 +121,120 @@ class ServerCurve:
 
 
 class AuthThrottle:
-    """Failed authentications counted, and at most ``burst`` per ``window`` seconds checked.
+    """Failed authentications counted per source; a source past ``burst`` failures in ``window`` seconds
+    is refused unexamined until its window has room again.
 
-    Past that, checks are refused unexamined until the window has room again, so guessing runs
-    at ``burst / window`` per second at most (it ran at 9,710/s) and the loop never sleeps."""
+    A *source* is what a failure can be pinned on: a CURVE handshake's peer address, or a client
+    connection (peer address, CURVE key, identity) for tokens and the launch secret.  One source's
+    failures never hold another back: the operator's allowed key or right token is looked at and
+    admitted while someone else guesses (issue 27, item 3: one throttle for everybody locked the
+    operator out).  Guessing from one connection runs at ``burst / window`` a second at most (it ran
+    at 9,710/s before there was a throttle).  At most ``sources`` are remembered (identities are
+    cheap to invent): past that the quiet ones are forgotten, then all."""
 
-    def __init__(self, burst: int = 10, window: float = 1.0) -> None:
-        self.burst, self.window = burst, window
-        self.failures = 0
-        self.throttled = 0
-        self._recent: collections.deque[float] = collections.deque()
+    def __init__(self, burst: int = 10, window: float = 1.0, sources: int = 4096) -> None:
+        self.burst, self.window, self.max_sources = burst, window, sources
+        self.failures = 0  # every failure since the start (``auth_failures`` in the state)
+        self.throttled = 0  # checks refused unexamined
+        self._recent: dict[str, collections.deque[float]] = {}
         self._lock = threading.Lock()
 
-    def allowed(self, now: float | None = None) -> bool:
+    def _trim(self, source: str, now: float) -> collections.deque[float] | None:
+        times = self._recent.get(source)
+        while times and now - times[0] > self.window:
+            times.popleft()
+        return times
+
+    def recent(self, source: str, now: float | None = None) -> int:
+        """Failures of ``source`` within the last window."""
         now = time.monotonic() if now is None else now
         with self._lock:
-            while self._recent and now - self._recent[0] > self.window:
-                self._recent.popleft()
-            if len(self._recent) >= self.burst:
+            times = self._trim(source, now)
+            return len(times) if times else 0
+
+    def allowed(self, source: str, now: float | None = None) -> bool:
+        """Whether ``source`` may be examined now (False: it failed ``burst`` times within the window)."""
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            times = self._trim(source, now)
+            if times is not None and len(times) >= self.burst:
                 self.throttled += 1
                 return False
             return True
 
-    def failed(self, now: float | None = None) -> None:
+    def failed(self, source: str, now: float | None = None, count: bool = True) -> int:
+        """Record a failure of ``source`` (``count``: in :attr:`failures` too; False for a second view of
+        one failure); returns the failures of ``source`` within the last window."""
+        now = time.monotonic() if now is None else now
         with self._lock:
-            self.failures += 1
-            self._recent.append(time.monotonic() if now is None else now)
+            self.failures += count
+            times = self._trim(source, now)
+            if times is None:
+                if len(self._recent) >= self.max_sources:
+                    for key in [k for k, v in self._recent.items() if not v or now - v[-1] > self.window]:
+                        del self._recent[key]
+                    if len(self._recent) >= self.max_sources:
+                        self._recent.clear()
+                times = self._recent[source] = collections.deque(maxlen=self.burst + 1)  # enough to decide
+            times.append(now)
+            return len(times)
+
+    def recent_by_source(self, now: float | None = None) -> dict[str, int]:
+        """Sources with failures within the last window, and how many (for logs and tests)."""
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            return {k: len(t) for k in list(self._recent) if (t := self._trim(k, now))}
 
 
 class CurveAuthenticator(ThreadAuthenticator):
-    """pyzmq's ZAP handler thread allowing the client keys of one folder; failures counted and throttled."""
+    """pyzmq's ZAP handler thread allowing the client keys of one folder.
+
+    The key is always looked at first: an allowed key is admitted whatever else knocks.  A key not in
+    the folder is refused with the reason in the ZAP status text and the log; failures are counted per
+    peer address (the ZAP request's ``address``) and per key, and logged at most once per address and
+    5 s with their count.  The handler never sleeps: one thread answers every handshake in turn, and a
+    pause for one address would hold up the others (issue 27, item 3)."""
+
+    LOG_EVERY = 5.0
 
     def __init__(self, context: zmq.Context, clients_dir: Path, throttle: AuthThrottle) -> None:
-        super().__init__(context)
+        super().__init__(context, log=logging.getLogger("bosun.auth"))
         self.clients_dir = clients_dir
         self.throttle = throttle
+        self._address = ""  # of the ZAP request in hand (one thread, one request at a time)
+        self._logged: dict[str, float] = {}
+        self.refusals: collections.deque[str] = collections.deque(maxlen=100)  # the latest reasons
 
     def start(self) -> None:
         super().start()
         self.configure_curve(domain="*", location=str(self.clients_dir))
 
+    async def handle_zap_message(self, msg: list[bytes]) -> None:
+        # the request's fields: version, request id, domain, address, identity, mechanism, credentials
+        self._address = msg[3].decode("utf-8", "replace")[:64] if len(msg) > 3 else "?"
+        await super().handle_zap_message(msg)
+
     async def _authenticate_curve(self, domain: str, client_key: bytes) -> tuple[bool, bytes]:
-        if not self.throttle.allowed():
-            await asyncio.sleep(0.05)  # this thread only: failed handshakes slow down, the engine loop does not
-            return False, b"too many failed authentications"
         ok, reason = await super()._authenticate_curve(domain, client_key)
-        if not ok:
-            self.throttle.failed()
-        return ok, reason
+        if ok:
+            return ok, reason
+        address = self._address or "?"
+        key = z85.encode(client_key).decode("ascii", "replace") if len(client_key) == 32 else "?"
+        source = f"handshake from {address}"
+        n = self.throttle.failed(source)
+        self.throttle.failed(f"handshake with key {key}", count=False)  # per key too: one stranger, many addresses
+        why = f"client key {key[:8]}… from {address} is not in the allowed folder"
+        if reason and reason != b"Unknown key":
+            why += f" ({reason.decode('utf-8', 'replace')})"
+        if n > self.throttle.burst:
+            why += f"; more than {self.throttle.burst} refused from {address} within {self.throttle.window:g} s"
+        self.refusals.append(why)
+        now = time.monotonic()
+        if now - self._logged.get(address, -math.inf) >= self.LOG_EVERY:
+            if len(self._logged) > 1000:
+                self._logged.clear()
+            self._logged[address] = now
+            self.log.warning(
+                "CURVE handshake refused: %s (authentication failures so far: %d)", why, self.throttle.failures
+            )
+        return False, why.encode("utf-8")[:255]

@@ -79,6 +79,23 @@ def client_view_of(state_endpoint: str, request_url: str) -> str:
     return f"tcp://{req.netloc.rsplit(':', 1)[0]}:{st.port}"
 
 
+def _auth_refusal(monitor: zmq.Socket | None) -> int:
+    """The ZAP status code (400) with which the engine refused this client's key, 0 if it did not."""
+    from zmq.utils.monitor import recv_monitor_message
+
+    status = 0
+    while monitor is not None:
+        try:
+            event = recv_monitor_message(monitor, zmq.NOBLOCK)
+        except (zmq.Again, zmq.ZMQError):
+            break
+        if event["event"] == zmq.EVENT_HANDSHAKE_FAILED_AUTH:
+            status = int(event["value"]) or 400
+        elif event["event"] == zmq.EVENT_HANDSHAKE_SUCCEEDED:
+            status = 0
+    return status
+
+
 class Client:
     """A protocol client: request/reply and input on a DEALER, state on a SUB.
 
@@ -117,8 +134,11 @@ class Client:
         self.dealer = self.ctx.socket(zmq.DEALER)
         self.dealer.setsockopt(zmq.LINGER, 0)
         self.dealer.setsockopt(zmq.IDENTITY, f"{name}-{uuid.uuid4().hex[:8]}".encode())
+        monitor = None
         if curve is not None:
             curve.apply(self.dealer)
+            # the handshake's outcome: a refused key is then told apart from an engine that is not there
+            monitor = self.dealer.get_monitor_socket(zmq.EVENT_HANDSHAKE_FAILED_AUTH | zmq.EVENT_HANDSHAKE_SUCCEEDED)
         self.dealer.connect(self.url)
         self.sub: zmq.Socket | None = None
         self.role = None
@@ -141,13 +161,24 @@ class Client:
                 raise TransportError(f"no answer from the engine at {self.url} within {timeout:g} s") from None
             welcome = self._wait_for(("welcome", "reply"))
         except TransportError as err:
+            refused = _auth_refusal(monitor)
             self.close()
+            if refused:
+                raise TransportError(
+                    f"the engine at {self.url} refused this client's CURVE key (ZAP status {refused}): "
+                    "is its public key in the engine's allowed folder?"
+                ) from None
             if curve is not None:
                 raise TransportError(
                     f"{err} (CURVE: is this client's public key in the engine's allowed folder, "
                     "and is the engine's public key the right one?)"
                 ) from None
             raise
+        finally:
+            if monitor is not None:
+                with contextlib.suppress(zmq.ZMQError):
+                    self.dealer.disable_monitor()
+                monitor.close(0)
         if welcome["type"] == "reply":
             self.close()
             raise TransportError(f"engine refused the connection: {welcome.get('error', 'no reason given')}")
