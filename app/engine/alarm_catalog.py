@@ -137,6 +137,20 @@ CATALOG: tuple[AlarmDef, ...] = (
         off_delay=5.0,
     ),
     AlarmDef(
+        key="loop_stall",
+        title="Control loop stalled",
+        sources=("teleop", "tac", "lab"),
+        priority="warning",
+        cause="one control tick took longer than 10 periods and 0.1 s (the engine's process was held up: the "
+        "computer overloaded or swapping, or work that should run beside the loop ran in it); the log names the "
+        "tick's length",
+        consequence="for that long nothing was controlled: the machine went on with its last command and a STOP "
+        "took effect only after the tick; if it recurs, the machine cannot be stopped promptly",
+        action="check that the machine is where it should be; stop studies and other programs on this computer; "
+        "if it recurs, stop the machine and report it with the log",
+        off_delay=30.0,
+    ),
+    AlarmDef(
         key="joint_limit",
         title="Joint at its limit",
         sources=("teleop",),

@@ -31,9 +31,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from app.engine.alarms import AlarmList
+from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene
-from app.engine.vessel_upload import VesselChoice
+from app.engine.vessel_upload import TableText, VesselChoice
 from app.errors import BosunError
+from app.marine.vessel import RAOTable
 from app.marine.vessels import VESSELS
 from app.marine.waves import SPECTRA
 from app.marine.waves import spectrum as sea_spectrum
@@ -169,13 +171,31 @@ class LabSession(Scene):
 
     def set_vessel(
         self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
-    ) -> None:
+    ) -> Deferred | None:
         """The wave simulator's vessel (issue 17, item 2): by name or an RAO table sent in parts; it makes the
-        platforms' seas from the next SIMULATION source on (a platform's source changes only out of ENGAGED)."""
+        platforms' seas from the next SIMULATION source on (a platform's source changes only out of ENGAGED).
+        Under a server a whole table is parsed off the control loop and taken at a tick boundary (issue 27,
+        item 2; :class:`~app.engine.jobs.Deferred`, the reply follows); a later vessel supersedes it."""
         if self.plc is not None:
             self._plant(self.plant.set_vessel_rao, None)  # refused with the reason
-        if not self.vessel.take(vessel, csv, part, parts, label):
-            return
+        got = self.vessel.take(vessel, csv, part, parts, label)
+        if got is False:
+            return None
+        if isinstance(got, TableText):
+            if self.jobs.background:
+                return self.jobs.start(f"set_vessel {got.where}", got.parse, lambda table: self._use_table(got, table))
+            self._use_table(got, got.parse())
+            return None
+        self.jobs.supersede(f"set_vessel {self.vessel.label}")  # a pending table would undo this choice
+        self._vessel_taken()
+        return None
+
+    def _use_table(self, text: TableText, table: RAOTable) -> None:
+        """A parsed table is the wave simulator's vessel (at a tick boundary when parsed off the loop)."""
+        self.vessel.use(table, text)
+        self._vessel_taken()
+
+    def _vessel_taken(self) -> None:
         self._plant(self.plant.set_vessel_rao, self.vessel.rao())
         self.changed()
         self.note("info", f"wave simulator vessel: {self.vessel.label} (from the next SIMULATION source on)")

@@ -9,7 +9,10 @@ The server owns sockets and time; a scene owns its machines.  A scene has
 * ``tick(now, dt, solve_budget)``, ``snapshot()`` (a typed :class:`~app.net.snapshots.Snapshot`),
   ``estop(source)``, ``reset()``, ``pause(on)``;
 * one log (``note``), one input pipeline (``input``) and one alarm list (``alarms``);
-* ``events``: messages the scene wants published besides its state (study progress and results).
+* ``events``: messages the scene wants published besides its state (study progress and results);
+* ``jobs``: heavy command work off the control loop (:mod:`app.engine.jobs`): under a server, a command
+  that starts one returns a :class:`~app.engine.jobs.Deferred` and its reply follows when the result has
+  been swapped in at a tick boundary (or refused).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+from app.engine.jobs import Jobs
 from app.errors import BosunError
 from app.net.snapshots import Alarm, Description, InputFlags, Snapshot
 
@@ -51,6 +55,7 @@ class Scene(abc.ABC):
         self.describe_seq = 1
         self.paused = False
         self.events: deque = deque(maxlen=256)  # (message type, fields) to publish
+        self.jobs = Jobs()  # work off the loop; the server sets its pace (a scene on its own works in the command)
 
     # ------------------------------------------------------------------ log
     def note(self, level: str, text: str) -> None:
@@ -62,12 +67,13 @@ class Scene(abc.ABC):
         self.describe_seq += 1
 
     # ------------------------------------------------------------------ commands
-    def command(self, mtype: str, **fields: Any) -> None:
-        """Run a scene command from the table; :class:`CommandError` for one of another scene."""
+    def command(self, mtype: str, **fields: Any) -> Any:
+        """Run a scene command from the table; :class:`CommandError` for one of another scene.  Returns what
+        the command returns: a :class:`~app.engine.jobs.Deferred` when its work went off the loop."""
         name = self.COMMANDS.get(mtype)
         if name is None:
             raise CommandError(f"{mtype}: this engine runs {self.TITLE}, not the scene of that command")
-        getattr(self, name)(**fields)
+        return getattr(self, name)(**fields)
 
     def pause(self, on: bool) -> None:
         """Stand time still (no client shows this scene) or let it run again.  Pausing and resuming

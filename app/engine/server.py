@@ -25,10 +25,22 @@ without any message from its holder, with a warning to every client at ``lapse_w
 the displaced holder is then told so in a refusal of what it sends.  E-STOP is accepted from
 every client, also one that has not said ``hello`` (an engine restarted under a client must still
 stop); where a token is set the ``estop`` must carry it.  A non-local bind needs CURVE keys
+<<<<<<< HEAD
 (:mod:`app.net.security`).  Failed authentications are counted and throttled per connection (a
 wrong-key handshake per peer address): one client's guessing never holds back another's right key
 or token.  Once a second the loop checks itself (a diagnostic in every snapshot); below 90 % of
 real time for 5 s, or input gone stale while it lagged, raises the ``engine_slow`` alarm.
+=======
+(:mod:`app.net.security`).  Failed authentications are counted and throttled.  Once a second the
+loop checks itself (a diagnostic in every snapshot: real-time factor, late ticks, the longest tick); below
+90 % of real time for 5 s, or input gone stale while it lagged, raises the ``engine_slow`` alarm, and a tick
+longer than :data:`STALL_PERIODS` periods (at least :data:`STALL_MIN_S`) the ``loop_stall`` alarm.
+
+Heavy command work (a megabyte RAO table's parse and the scene rebuilt on it) never runs in a tick (issue 27,
+item 2): the scene's :mod:`jobs <app.engine.jobs>` do it in a thread paced by the I/O window (it works only
+while the loop sleeps), the loop swaps the result in at the start of a tick, after that tick's E-STOPs and
+commands, and the command's reply goes out then.
+>>>>>>> i27-upload
 """
 
 from __future__ import annotations
@@ -48,6 +60,7 @@ import numpy as np
 import zmq
 
 from app.engine.alarm_catalog import SHELVE_DEFAULT_S
+from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene
 from app.errors import BosunError, printable
 from app.net.codec import ProtocolError, decode, encode
@@ -111,6 +124,7 @@ class LoopStats:
 # the I/O window shuts IO_MARGIN before the deadline, so the I/O thread waits (lock free) by then
 SPIN = 0.0002
 IO_MARGIN = 0.0003
+JOB_MARGIN = 0.001  # s: a job takes no step with less than this (or a quarter period) left in the I/O window
 IO_SHARE = 0.1  # of a period the I/O thread is given when messages wait, even after a long tick
 DEFAULT_RATE = 1000.0  # Hz, the teleop engine's control loop
 RATE_LIMIT = 1000.0  # messages a second per client, sustained; the joystick sends 500 and pings 2
@@ -118,6 +132,8 @@ RATE_BURST = 250  # messages a client may send at once
 INBOX_LIMIT = 1024  # commands and inputs waiting for the loop; past it, refused ("engine busy")
 SLOW_FACTOR = 0.9  # of real time: below it for SLOW_FOR seconds in a row, control suffers (alarm engine_slow)
 SLOW_FOR = 5
+STALL_PERIODS = 10  # a tick longer than this many periods (and STALL_MIN_S) raises loop_stall (issue 27, item 2)
+STALL_MIN_S = 0.1  # s: at 1 kHz ten periods are 10 ms, a scheduler's hiccup on a busy computer, not a stall
 
 
 class RateLimit:
@@ -306,6 +322,9 @@ class EngineServer:
         self._second = (time.monotonic(), 0, 0)  # (start, ticks, missed) of the current health window
         self.realtime_factor = 1.0
         self.late_fraction = 0.0
+        self.max_tick = 0.0  # s: the longest tick of the last health window (start to the next tick's start)
+        self._longest = 0.0  # the longest tick of the health window in progress
+        self._deferred: dict[int, tuple[bytes, str]] = {}  # a Deferred command's ticket -> (client, message type)
         self._slow_seconds = 0.0  # seconds in a row below SLOW_FACTOR of real time
         self._stale_seen = 0  # the session's stale-input count at the last health check
         # the I/O window: the I/O thread runs Python only while the loop sleeps (see the module text)
@@ -315,6 +334,9 @@ class EngineServer:
         self._io_backlog = False  # the I/O thread's window closed on waiting messages
         self.io_deferred = 0  # ticks started late to give the I/O thread its share
         self._io_error: BaseException | None = None
+        jobs = getattr(session, "jobs", None)
+        if jobs is not None:  # heavy command work off the loop, in the loop's idle time (issue 27, item 2)
+            jobs.pace = self._job_pace
         self._described = -1  # describe_seq of the cached description
         self._description = b""  # the encoded ``description`` (read by the I/O thread, written by the loop)
         self._frame: zmq.Frame | None = None  # the I/O thread's message in hand (its peer address, its key)
@@ -602,6 +624,16 @@ class EngineServer:
                     return
                 self._window.wait(0.001)
 
+    def _job_pace(self) -> None:
+        """A step of a scene's job (:mod:`app.engine.jobs`) waits for the loop's idle time: the I/O window, with
+        :data:`JOB_MARGIN` (at most a quarter period) to spare so that a step started in it ends before the
+        tick.  Unlike the I/O thread it never carries on while the loop is in a tick, however long: nothing of a
+        job is urgent, and a thread that shares the interpreter lock with the loop stretches the loop's tick."""
+        margin = min(JOB_MARGIN, 0.25 * self.dt)
+        with self._window:
+            while not self._stop.is_set() and time.perf_counter() >= self._window_end - margin:
+                self._window.wait(0.005)
+
     def _io_run(self) -> None:
         """The I/O thread: requests in, replies out, the client book kept; Python only in I/O windows."""
         poller = zmq.Poller()
@@ -724,7 +756,10 @@ class EngineServer:
             elif mtype == "pause":
                 self.session.pause(bool(msg["on"]))
             elif mtype in SCENE_MESSAGES:
-                self.session.command(mtype, **{k: v for k, v in msg.items() if k not in ("v", "type")})
+                done = self.session.command(mtype, **{k: v for k, v in msg.items() if k not in ("v", "type")})
+                if isinstance(done, Deferred):  # its work runs off the loop: the reply when it is swapped in
+                    self._deferred[done.ticket] = (ident, mtype)
+                    return
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")
             self._send_reply(ident, mtype, False, str(err))
@@ -735,6 +770,23 @@ class EngineServer:
             return
         self._refresh_description()  # a client that asks ``describe`` after this reply sees the change
         self._send_reply(ident, mtype, True)
+
+    def _jobs(self) -> None:
+        """At the start of a tick (after its E-STOPs and commands): a job's result swapped in, and the replies of
+        deferred commands (done, refused, or superseded) sent."""
+        jobs = getattr(self.session, "jobs", None)
+        if jobs is None:
+            return
+        jobs.poll()
+        while jobs.answers:
+            ticket, error = jobs.answers.popleft()
+            ident, mtype = self._deferred.pop(ticket, (b"", "job"))
+            if error:
+                self.session.note("warning", f"{mtype} refused: {error}")
+            else:
+                self._refresh_description()  # a client that asks ``describe`` after this reply sees the change
+            if ident:
+                self._send_reply(ident, mtype, not error, error)
 
     def _refresh_description(self) -> None:
         """Encode the scene's description when it changed (the I/O thread answers ``describe`` with it)."""
@@ -763,6 +815,7 @@ class EngineServer:
             rate=self.rate,
             realtime_factor=self.realtime_factor,
             late_fraction=self.late_fraction,
+            max_tick_ms=round(1e3 * self.max_tick, 1),
             paused=self.session.paused,
         )
         self.pub.send(encode("state", state=to_wire(snap)), zmq.NOBLOCK)
@@ -780,13 +833,17 @@ class EngineServer:
         """Once a second: real-time factor and late ticks of the last second (a diagnostic, shown in the
         engine light's tool tip); the ``engine_slow`` alarm only when control suffers (issue 26): below
         :data:`SLOW_FACTOR` of real time for :data:`SLOW_FOR` seconds in a row, or a second in which the
-        input went stale while the loop lagged."""
+        input went stale while the loop lagged.  The longest tick of the second (``max_tick``: from a tick's
+        start to the next's; a 0.6 s tick is one late tick of fifty in ``late_fraction``) beside them, and the
+        ``loop_stall`` alarm when it exceeded :data:`STALL_PERIODS` periods and :data:`STALL_MIN_S` (issue 27,
+        item 2)."""
         start, ticks0, missed0 = self._second
         if now - start < 1.0:
             return
         ticks, missed = self.stats.ticks - ticks0, self.stats.missed - missed0
         self.realtime_factor = ticks * self.dt / (now - start)
         self.late_fraction = missed / max(1, ticks)
+        self.max_tick, self._longest = self._longest, 0.0  # one long tick counts once in late_fraction: here whole
         self._second = (now, self.stats.ticks, self.stats.missed)
         lagging = self.realtime_factor < SLOW_FACTOR
         self._slow_seconds = self._slow_seconds + (now - start) if lagging else 0.0  # a 5 s stall is 5 s
@@ -798,6 +855,15 @@ class EngineServer:
         if alarms is None:
             return
         alarms.at(now)
+        stalled = self.max_tick > max(STALL_PERIODS * self.dt, STALL_MIN_S)
+        alarms.set(
+            "loop_stall",
+            stalled,
+            text=f"{alarms.source} control loop stalled: a tick took {1e3 * self.max_tick:.0f} ms "
+            f"({self.max_tick / self.dt:.0f} periods)"
+            if stalled
+            else "",  # cleared after its off-delay; the text keeps the stall's figure
+        )
         suffering = self._slow_seconds >= SLOW_FOR or went_stale
         alarms.set(
             "engine_slow",
@@ -807,8 +873,9 @@ class EngineServer:
         )
 
     def step(self, now: float) -> None:
-        """One tick: E-STOPs, inbox, control, latency bookkeeping, publication."""
+        """One tick: E-STOPs, inbox, a job's result swapped in, control, latency bookkeeping, publication."""
         self._apply_inbox()
+        self._jobs()
         inp = getattr(self.session, "input", None)
         if inp is not None:
             inp.listened = self.inbox.listened  # input ages on the receiver's clock (issue 26, item 9)
@@ -828,7 +895,7 @@ class EngineServer:
     def _open_window(self, until: float) -> None:
         with self._window:
             self._window_end = until
-            self._window.notify()
+            self._window.notify_all()  # the I/O thread and a job's thread
 
     def run(self, duration: float | None = None) -> LoopStats:
         """Run until :meth:`stop` (or for ``duration`` seconds); the I/O thread lives as long."""
@@ -846,6 +913,7 @@ class EngineServer:
                 start = time.perf_counter()
                 if last_start is not None:
                     self.stats.periods.append(start - last_start)
+                    self._longest = max(self._longest, start - last_start)
                 last_start = start
                 now = time.monotonic()
                 self.step(now)
@@ -883,6 +951,9 @@ class EngineServer:
     def close(self) -> None:
         if hasattr(self, "_stop"):
             self._stop.set()
+        jobs = getattr(getattr(self, "session", None), "jobs", None)
+        if jobs is not None:
+            jobs.close()  # a pending job's thread stops at its next step
         closer = getattr(getattr(self, "session", None), "close", None)
         if closer is not None:
             closer()  # the scene's worker processes

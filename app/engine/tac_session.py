@@ -19,10 +19,12 @@ from typing import Any, ClassVar
 import numpy as np
 
 from app.engine.alarms import AlarmList
+from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene
-from app.engine.vessel_upload import VesselChoice
+from app.engine.vessel_upload import TableText, VesselChoice
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
+from app.marine.vessel import RAOTable
 from app.marine.vessels import VESSELS
 from app.marine.waves import SPECTRA
 from app.models.registry import resolve
@@ -91,26 +93,67 @@ class TacSession(Scene):
         self._rebuild()
         self.note("info", f"sea: {spectrum} Hs {hs:g} m, Tp {tp:g} s, heading {heading:g}°")
 
-    def _rebuild(self) -> None:
+    def _rebuild(self, built: TacSimulator | None = None) -> None:
         """A new simulator for the scenario and vessel that continues the running one (docs/safety.md H65):
         scene time runs on, the machine continues where it is, and the vessel's motion fades from the old
         sea or vessel into the new over two peak periods, so the head's reference never jumps
-        (:meth:`~app.scenarios.tac.TacSimulator.continue_from`)."""
+        (:meth:`~app.scenarios.tac.TacSimulator.continue_from`).  ``built``: that simulator, made off the loop
+        for this scenario and vessel (:meth:`set_vessel`)."""
         old = self.sim
-        self.sim = TacSimulator(self.scenario, self.system, rao=self.vessel.rao(self.scenario.roll_damping))
-        self.sim.continue_from(old, SEA_BLEND_PERIODS * max(old.scenario.tp, self.scenario.tp))
+        new = built or TacSimulator(self.scenario, self.system, rao=self.vessel.rao(self.scenario.roll_damping))
+        new.continue_from(old, SEA_BLEND_PERIODS * max(old.scenario.tp, self.scenario.tp))
+        self.sim = new
         self.sea_seq += 1
         self.changed()
 
     def set_vessel(
         self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
-    ) -> None:
+    ) -> Deferred | None:
         """The vessel by name (``supply``, ``supply-closed-form``) or an RAO table in Bosun's CSV, sent in
         ``parts`` parts (issue 17, item 2).  A table that does not parse is refused with its file, line and
-        field; nothing changes until the last part has arrived and parsed."""
-        if not self.vessel.take(vessel, csv, part, parts, label):
-            return
+        field; nothing changes until the last part has arrived and parsed.
+
+        Under a server a whole table is parsed, and the simulator built on it, off the control loop (issue 27,
+        item 2): this returns a :class:`~app.engine.jobs.Deferred`, the new simulator takes over at a tick
+        boundary (:meth:`_vessel_built`) and the reply follows.  A later vessel (a name or another table)
+        supersedes it; a STOP or reset meanwhile stands (the swap touches neither)."""
+        got = self.vessel.take(vessel, csv, part, parts, label)
+        if got is False:
+            return None
+        if isinstance(got, TableText):
+            if self.jobs.background:
+                scenario, system = self.scenario, self.system
+
+                def work(step) -> tuple[RAOTable, TacScenario, TacSimulator]:
+                    table = got.parse(step)
+                    step()
+                    return table, scenario, TacSimulator(scenario, system, rao=table)
+
+                return self.jobs.start(f"set_vessel {got.where}", work, lambda r: self._vessel_built(got, *r))
+            self.vessel.use(got.parse(), got)
+        self.jobs.supersede(f"set_vessel {self.vessel.label}")  # a pending table would undo this choice
         self._rebuild()
+        self._vessel_note()
+
+    def _vessel_built(self, text: TableText, table: RAOTable, scenario: TacScenario, built: TacSimulator) -> None:
+        """At a tick boundary: the table parsed and the simulator built off the loop take over.  Built for the
+        scenario of its command: a mode switched since is the running one's (the machine's states carry over in
+        any case); a sea changed since (``set_sea``, a new sea record) makes it stale: rebuilt here on the
+        parsed table, as ``set_sea`` does (milliseconds; the parse was the long part)."""
+        before = (self.vessel.name, self.vessel.table, self.vessel.label)
+        self.vessel.use(table, text)
+        try:
+            if replace(scenario, mode=self.scenario.mode) != self.scenario:
+                built = None
+            elif built.scenario.mode != self.scenario.mode:
+                built.set_mode(self.scenario.mode)
+            self._rebuild(built)
+        except Exception:  # refused (the job's reply): the scene keeps the vessel it runs
+            self.vessel.name, self.vessel.table, self.vessel.label = before
+            raise
+        self._vessel_note()
+
+    def _vessel_note(self) -> None:
         t = self.sim.vessel_rao
         self.note("info", f"vessel: {self.vessel.label} ({t.w.size} frequencies × {t.headings.size} headings)")
 

@@ -1,9 +1,12 @@
 """``set_vessel`` of the scenes with a vessel (issue 17, item 2): a vessel by name, or an RAO table in Bosun's
 CSV sent in parts (a client message is at most 64 KiB).  :class:`VesselChoice` checks the message and puts
-the parts together; the scene applies what it returns."""
+the parts together; the scene applies what it returns.  A whole table comes back as a :class:`TableText`
+unparsed: a table of megabytes takes a second to parse, which an engine does off its control loop
+(:mod:`app.engine.jobs`, issue 27 item 2) and a scene on its own in the command."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from app.engine.scene import CommandError
@@ -12,6 +15,26 @@ from app.marine.vessel import RAOTable, load_rao_csv
 from app.marine.vessels import VESSELS, vessel_label, vessel_rao
 
 MAX_PARTS = 64
+
+
+@dataclass(frozen=True)
+class TableText:
+    """The parts of a whole RAO table as sent, and its label (the file's name); :meth:`parse` makes the table."""
+
+    parts: tuple[str, ...]
+    label: str = ""
+
+    @property
+    def where(self) -> str:
+        return self.label or "RAO table"
+
+    def parse(self, pace: Callable[[], None] | None = None) -> RAOTable:
+        """The table (:func:`~app.marine.vessel.load_rao_csv`, ``pace`` between small steps);
+        :class:`CommandError` with its file, line and field when it does not parse."""
+        try:
+            return load_rao_csv("".join(self.parts), where=self.where, pace=pace)
+        except BosunError as err:
+            raise CommandError(str(err)) from None
 
 
 @dataclass
@@ -32,9 +55,10 @@ class VesselChoice:
 
     def take(
         self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
-    ) -> bool:
-        """One ``set_vessel`` message.  True when the vessel changed (a name, or the last part of a table that
-        parsed); False while parts are still coming.  :class:`CommandError` (nothing changes) otherwise."""
+    ) -> bool | TableText:
+        """One ``set_vessel`` message.  True when the vessel changed (a name); False while parts are still
+        coming; the whole table (:class:`TableText`) with its last part: nothing changes until the scene has
+        parsed it and calls :meth:`use`.  :class:`CommandError` (nothing changes) otherwise."""
         if (vessel is None) == (csv is None):
             raise CommandError("set_vessel: give a vessel name or an RAO table (csv), not both")
         if vessel is not None:
@@ -59,11 +83,9 @@ class VesselChoice:
         self._parts.append(csv or "")
         if len(self._parts) < parts:
             return False
-        text, self._parts = "".join(self._parts), []
-        where = label or "RAO table"
-        try:
-            table = load_rao_csv(text, where=where)
-        except BosunError as err:
-            raise CommandError(str(err)) from None
-        self.name, self.table, self.label = None, table, f"RAO file {where}"
-        return True
+        whole, self._parts = TableText(tuple(self._parts), label), []
+        return whole
+
+    def use(self, table: RAOTable, text: TableText) -> None:
+        """The table parsed from ``text`` is the vessel now."""
+        self.name, self.table, self.label = None, table, f"RAO file {text.where}"

@@ -36,6 +36,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -298,7 +299,37 @@ def load_rao_mat(path: str | Path) -> RAOTable:
     )
 
 
-def load_rao_csv(text: str, where: str = "<csv>") -> RAOTable:
+PACE_ROWS = 8  # rows :func:`load_rao_csv` parses between two calls of its ``pace``
+_LINES_BLOCK = 1 << 16  # characters split into lines at a time (a 4 MB text in one call held the lock 20-30 ms)
+
+
+def _no_pace() -> None:
+    pass
+
+
+def _content_lines(text: str, pace: Callable[[], None] | None) -> tuple[list[int], list[str]]:
+    """The numbers and text of the lines of ``text`` that are neither blank nor comments; split a block at a
+    time, cut after a newline (the same lines as ``text.splitlines()``), with ``pace`` called between blocks.
+    Two flat lists, not a list of pairs: 56,000 tuples kept alive set off full garbage collections (70 ms in
+    a test process)."""
+    numbers: list[int] = []
+    lines: list[str] = []
+    n, start = 0, 0
+    while start < len(text):
+        cut = text.find("\n", start + _LINES_BLOCK)
+        end = len(text) if cut < 0 else cut + 1
+        for line in text[start:end].splitlines():
+            n += 1
+            if line.strip() and not line.startswith("#"):
+                numbers.append(n)
+                lines.append(line)
+        start = end
+        if pace is not None:
+            pace()
+    return numbers, lines
+
+
+def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | None = None) -> RAOTable:
     """RAO table from CSV text.
 
     Format: a header row with the columns ``w, heading_deg, surge_amp, surge_phase, sway_amp,
@@ -307,18 +338,26 @@ def load_rao_csv(text: str, where: str = "<csv>") -> RAOTable:
     Units: w in rad/s, heading in degrees (0 = following, 180 = head sea), amplitudes in m/m
     (surge, sway, heave) and rad/m (roll, pitch, yaw), phases in rad.  Lines starting with
     ``#`` are comments.
+
+    ``pace``: called every :data:`PACE_ROWS` rows (an engine's parse off its control loop waits there for
+    the loop's idle time, or raises to stop); no step between two calls holds the interpreter for long,
+    also for a table of megabytes (issue 27, item 2).
     """
-    lines = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip() and not line.startswith("#")]
+    numbers, lines = _content_lines(text, pace)
     if not lines:
         raise VesselError(f"{where}: empty RAO file")
-    header_line, header = lines[0]
+    header_line, header = numbers[0], lines[0]
     cols = [c.strip() for c in next(csv.reader(io.StringIO(header)))]
     missing = [c for c in CSV_COLUMNS if c not in cols]
     if missing:
         raise VesselError(f"{where}:{header_line}: missing column(s) {', '.join(missing)}")
     idx = [cols.index(c) for c in CSV_COLUMNS]
-    rows = []
-    for n, line in lines[1:]:
+    data = np.empty((len(lines) - 1, len(CSV_COLUMNS)))  # filled a row at a time (np.array of a list: one long call)
+    line_of = np.empty(len(lines) - 1, dtype=np.int64)
+    for k in range(len(lines) - 1):
+        n, line = numbers[k + 1], lines[k + 1]
+        if pace is not None and k % PACE_ROWS == 0:
+            pace()
         cells = next(csv.reader(io.StringIO(line)))
         if len(cells) != len(cols):
             raise VesselError(f"{where}:{n}: expected {len(cols)} fields, got {len(cells)}")
@@ -333,27 +372,37 @@ def load_rao_csv(text: str, where: str = "<csv>") -> RAOTable:
             if c.endswith("_amp") and v < 0:
                 raise VesselError(f"{where}:{n}: field {c}: amplitude must not be negative")
             vals.append(v)
-        rows.append((n, vals))
-    if not rows:
+        data[k] = vals
+        line_of[k] = n
+    if not data.shape[0]:
         raise VesselError(f"{where}: no data rows")
-    data = np.array([v for _, v in rows])
+    step = pace if pace is not None else _no_pace  # also between the whole-table steps below (each a few ms)
     w = np.unique(data[:, 0])
+    step()
     hd = np.unique(np.mod(data[:, 1], 360.0))
-    if w.size * hd.size != len(rows):
+    rows = data.shape[0]
+    if w.size * hd.size != rows:
         raise VesselError(
-            f"{where}: rows do not form a full grid ({len(rows)} rows for {w.size} frequencies × {hd.size} headings)"
+            f"{where}: rows do not form a full grid ({rows} rows for {w.size} frequencies × {hd.size} headings)"
         )
+    step()
+    i = np.searchsorted(w, data[:, 0])
+    j = np.searchsorted(hd, np.mod(data[:, 1], 360.0))
+    step()
+    _, first = np.unique(i * hd.size + j, return_index=True)  # stable: each cell's first row
+    if first.size != data.shape[0]:
+        repeat = np.ones(data.shape[0], dtype=bool)
+        repeat[first] = False
+        k = int(np.argmax(repeat))  # the first row whose cell an earlier row filled
+        v = data[k]
+        raise VesselError(f"{where}:{line_of[k]}: duplicate row for w = {v[0]}, heading = {v[1]}")
+    step()
     amp = np.zeros((6, w.size, hd.size))
+    amp[:, i, j] = data[:, 2::2].T
+    step()
     phase = np.zeros_like(amp)
-    seen = np.zeros((w.size, hd.size), dtype=bool)
-    for n, v in rows:
-        i = int(np.searchsorted(w, v[0]))
-        j = int(np.searchsorted(hd, v[1] % 360.0))
-        if seen[i, j]:
-            raise VesselError(f"{where}:{n}: duplicate row for w = {v[0]}, heading = {v[1]}")
-        seen[i, j] = True
-        amp[:, i, j] = v[2::2]
-        phase[:, i, j] = v[3::2]
+    phase[:, i, j] = data[:, 3::2].T
+    step()
     return RAOTable(w, np.deg2rad(hd), amp, phase, source=where)
 
 

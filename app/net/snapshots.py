@@ -78,6 +78,7 @@ class EngineInfo:
     rate: float = 0.0  # loop rate [Hz]
     realtime_factor: float = 1.0
     late_fraction: float = 0.0
+    max_tick_ms: float = 0.0  # the longest tick of the last second [ms], from its start to the next tick's
     paused: bool = False  # the scene's time stands still (no client shows it); STOP still works
 
 

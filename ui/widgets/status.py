@@ -78,7 +78,10 @@ def engine_light(state) -> Light:
     light turns amber only when the engine raises ``engine_slow`` (control suffers: below 90 % of real time
     for 5 s, or input gone stale while it lagged); paused (no client shows its scene) or connected."""
     e = state.engine
-    tip = f"loop: {100 * e.realtime_factor:.0f} % of real time, {100 * e.late_fraction:.1f} % of ticks late (1 s)"
+    tip = (
+        f"loop: {100 * e.realtime_factor:.0f} % of real time, {100 * e.late_fraction:.1f} % of ticks late, "
+        f"longest tick {getattr(e, 'max_tick_ms', 0.0):.0f} ms (1 s)"
+    )
     if any(a.key == "engine_slow" and a.active for a in state.alarms):
         return Light("warn", f"too slow: {100 * e.realtime_factor:.0f} % of real time", tip)
     if e.paused:
