@@ -25,22 +25,17 @@ without any message from its holder, with a warning to every client at ``lapse_w
 the displaced holder is then told so in a refusal of what it sends.  E-STOP is accepted from
 every client, also one that has not said ``hello`` (an engine restarted under a client must still
 stop); where a token is set the ``estop`` must carry it.  A non-local bind needs CURVE keys
-<<<<<<< HEAD
 (:mod:`app.net.security`).  Failed authentications are counted and throttled per connection (a
 wrong-key handshake per peer address): one client's guessing never holds back another's right key
-or token.  Once a second the loop checks itself (a diagnostic in every snapshot); below 90 % of
-real time for 5 s, or input gone stale while it lagged, raises the ``engine_slow`` alarm.
-=======
-(:mod:`app.net.security`).  Failed authentications are counted and throttled.  Once a second the
-loop checks itself (a diagnostic in every snapshot: real-time factor, late ticks, the longest tick); below
-90 % of real time for 5 s, or input gone stale while it lagged, raises the ``engine_slow`` alarm, and a tick
-longer than :data:`STALL_PERIODS` periods (at least :data:`STALL_MIN_S`) the ``loop_stall`` alarm.
+or token.  Once a second the loop checks itself (a diagnostic in every snapshot: real-time factor, late
+ticks, the longest tick); below 90 % of real time for 5 s, or input gone stale while it lagged, raises the
+``engine_slow`` alarm, and a tick longer than :data:`STALL_PERIODS` periods (at least :data:`STALL_MIN_S`)
+the ``loop_stall`` alarm.
 
 Heavy command work (a megabyte RAO table's parse and the scene rebuilt on it) never runs in a tick (issue 27,
 item 2): the scene's :mod:`jobs <app.engine.jobs>` do it in a thread paced by the I/O window (it works only
 while the loop sleeps), the loop swaps the result in at the start of a tick, after that tick's E-STOPs and
 commands, and the command's reply goes out then.
->>>>>>> i27-upload
 """
 
 from __future__ import annotations
