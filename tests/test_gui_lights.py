@@ -161,7 +161,9 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     qtbot.waitUntil(lambda: "Comau jog q1" in tab.lights.lights["plant"].text(), timeout=GUI_WAIT)
     qtbot.mouseRelease(plus, Qt.LeftButton)
     tab.stick.key(Qt.Key_Shift, False)
-    qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and not enable.text().startswith("ENABLED"), timeout=GUI_WAIT)
+    qtbot.waitUntil(
+        lambda: tab.state.comau_jog.joint == 0 and not enable.text().startswith("ENABLED"), timeout=GUI_WAIT
+    )
 
 
 def test_item6_crane_head_tab_lights_compensating_no_plc_estop_and_holding(qtbot, window):
