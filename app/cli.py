@@ -1148,6 +1148,37 @@ def cmd_bench_alarms(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench_plc_soak(args: argparse.Namespace) -> int:
+    from app.bench.plc_soak import run
+
+    rep = run(args.minutes * 60.0, seed=args.seed, progress=_progress_bar("soak", unit="s"))
+    if args.json:
+        _print_json({"benchmark": "plc-soak", "machine": _machine(), **rep.to_dict()})
+        return 0 if rep.ok else 1
+    print(f"bosun bench plc-soak: the lab engine against a misbehaving PLC (pyads' test server), {rep.seconds:g} s")
+    print(f"  phases: {rep.phases} (normal, NaN/inf/out of range, wrong sizes + STOP unusable, link gone, slow)")
+    print(f"  injections: {', '.join(f'{k} {v}' for k, v in sorted(rep.injections.items()))}")
+    print(f"  snapshots: {rep.snapshots}, numbers checked: {rep.fields_checked}, non-finite: {rep.nonfinite_fields}")
+    by = ", ".join(f"{k} {v}" for k, v in sorted(rep.refused_by.items()))
+    print(f"  operator commands: {rep.commands}, accepted {rep.accepted}, refused {rep.refused} ({by})")
+    taken = len(rep.motion_accepted_while_not_ok)
+    print(f"  motion commands taken while the link was not ok or STOP unusable: {taken}")
+    print(
+        f"  PLC connects with STOP unusable: {rep.stop_unusable_connects}; writes that could start motion there: "
+        f"{len(rep.motion_writes_while_stop_unusable)}"
+    )
+    print(
+        f"  E-STOPs there: {rep.estops} (resets refused {rep.resets_refused}; STOP written and read back on the "
+        f"sound PLC before the reset: {rep.stop_rewritten_after_fix})"
+    )
+    print(f"  link states [s]: {', '.join(f'{k} {v:g}' for k, v in rep.link_seconds.items())}")
+    print(f"  alarms raised: {', '.join(f'{k} {v}' for k, v in rep.alarms_raised.items())}")
+    print(f"  longest tick + snapshot: {rep.max_tick_s * 1e3:.1f} ms; result: {'OK' if rep.ok else 'FAILED'}")
+    for line in rep.nonfinite_paths + rep.motion_accepted_while_not_ok + rep.motion_writes_while_stop_unusable:
+        print(f"    {line}")
+    return 0 if rep.ok else 1
+
+
 def cmd_alarms(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
@@ -1340,7 +1371,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="output folder (default out/track_ROBOT_SOLVER)")
     p.set_defaults(func=cmd_track)
 
-    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik, bench loop, bench sim")
+    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik, loop, sim, hold, alarms, plc-soak")
     bench = p.add_subparsers(dest="bench", metavar="WHAT", parser_class=_Parser, required=True)
     b = bench.add_parser("ik", help="median/p95 solve time and success per robot and solver")
     b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
@@ -1384,6 +1415,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--minutes", type=_positive_float, default=10.0, help="session length (default 10)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_bench_alarms)
+    b = bench.add_parser(
+        "plc-soak", help="the lab engine against a PLC test server injecting NaN, wrong sizes, link loss, slowness"
+    )
+    b.add_argument("--minutes", type=_positive_float, default=10.0, help="soak length (default 10)")
+    b.add_argument("--seed", type=int, default=27, help="seed of the injections and commands (default 27)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_plc_soak)
     p = sub.add_parser("alarms", help="the alarm reference: every alarm, its cause, consequence and action")
     p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
     p.add_argument("--json", action="store_true", help="machine-readable output")

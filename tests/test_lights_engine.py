@@ -148,3 +148,21 @@ def test_teleop_arm_light_follows_the_joint_speeds():
     ses.tick(t + DT, DT)
     plant = scene_lights(_wire(ses))["plant"]
     assert plant.look == "error" and plant.detail == "E-STOP: stopped"
+
+
+def test_lab_lights_say_the_plc_data_is_invalid_and_held():
+    """Issue 27, item 7: a link whose values were refused as they arrived (NaN, beyond the machine's range) is
+    not "ok": the PLC light is red with the first refused value, the plant light says what is drawn is held."""
+    import dataclasses
+
+    from app.net.snapshots import PlantLink
+
+    snap = _wire(LabSession())
+    bad = "MAIN.em8000.txHmi.eta[4] = nan (not a finite number): holding the last valid value, 0.4 s old"
+    link = PlantLink(backend="plc", link="invalid", connected=True, plc_state="NORMAL", invalid=[bad])
+    state = snapshot_from_wire(to_wire(dataclasses.replace(snap, plant=link)))  # the new fields over the wire
+    assert state.plant.invalid == [bad]
+    plc = lab_plc_light(state)
+    assert (plc.look, plc.detail) == ("error", f"INVALID DATA: {bad}")
+    plant = lab_plant_light(state)
+    assert plant.look == "warn" and plant.detail.endswith("(PLC data invalid: the last valid values, held)")

@@ -1,25 +1,19 @@
 """Issue 16, item 1: the Motion-Lab's PLC bridge against pyads' own ADS test server on loopback.
 
-The test server (``pyads.testserver.AdsTestServer`` with its ``AdvancedHandler``) plays the lab's
-TwinCAT PLC: it serves the lab's symbols with the lab's types (declared below, from the lab's HMI and
-PLC project as summarised in motionlab_plc.json, Norwegian Motion-Laboratory repository, commit
-f5fbf84, MIT: structs as bytes), on its own loopback address (127.77.x.y, port 48898 as ADS has it).
-The real bridge and a real :class:`LabSession` (and, once, a real ``bosun server`` process) talk to it.
-
-pyads' test server quirks the fixtures work around: it delivers device notifications by calling the
-client's callbacks in-process (so a value the "PLC" sets reaches a subscriber in this process; the
-``bosun server`` process sees it through the bridge's 1 s refresh reads) and numbers every symbol's
-notifications from 10, which would collide in pyads' callback store: each symbol gets its own range.
+The test server (``pyads.testserver.AdsTestServer`` with its ``AdvancedHandler``, set up in
+:mod:`app.plc.testplc`) plays the lab's TwinCAT PLC: it serves the lab's symbols with the lab's types
+(from the lab's HMI and PLC project as summarised in motionlab_plc.json, Norwegian Motion-Laboratory
+repository, commit f5fbf84, MIT: structs as bytes), on its own loopback address (127.77.x.y, port 48898
+as ADS has it).  The real bridge and a real :class:`LabSession` (and, once, a real ``bosun server``
+process) talk to it.  The module's docstring names the server's quirks it works around (notifications
+in-process: the ``bosun server`` process sees a value through the bridge's 1 s refresh reads).
 """
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import os
 import re
-import socket
 import struct
 import subprocess
 import sys
@@ -30,142 +24,24 @@ import numpy as np
 import pytest
 
 from app.engine.scene import CommandError
+from app.net.snapshots import to_wire
+from app.plc.testplc import STATE, LabPlc, lab_declarations, size_of
 from tests.helpers import ROOT, needs_qt
 
 REFERENCE = ROOT.parent / "shared" / "data" / "motionlab_plc.json"
 
-BASE_SIZE = {"BOOL": 1, "SINT": 1, "INT": 2, "DINT": 4, "REAL": 4, "LREAL": 8}
-STRUCT_SIZE = {"ST_TxHmiStewart": 4 + 4 * 6 * 4, "ST_TxHmiComau": 4 * 6 * 4}
 SETTLED, NEUTRAL, GENERATOR, SIMULATION = 0, 1, 3, 2  # E_StewartMode
-STATE = {"SETTLED": 2, "NEUTRAL": 4, "ENGAGED": 8}  # E_StewartState
-
-
-def lab_declarations() -> dict[str, str]:
-    """The PLC side: every symbol the lab's HMI uses, with its IEC type (the test server's variables).
-
-    Names and given types from motionlab_plc.json (``ads_hmi``); the rest as the bridge assumes
-    (enumerations SINT like eModeCmd, MAIN.eState INT, REAL speeds and utilisation)."""
-    d = {"MAIN.eState": "INT", "MAIN.bStop": "BOOL", "MAIN.bReset": "BOOL"}
-    for p in ("em8000", "em1500"):
-        m = f"MAIN.{p}"
-        d |= {f"{m}.{n}": "BOOL" for n in ("bActive", "bError", "bBusy", "bStart", "bReset", "bResetScale")}
-        d |= {f"{m}.{n}": "SINT" for n in ("eState", "eStatus", "eOpMode", "eMode", "eModeCmd")}
-        d[f"{m}.txHmi"] = "ST_TxHmiStewart"
-        d |= {f"{m}.{n}": "ARRAY[1..6] OF LREAL" for n in ("sineAmplitude", "sineOmega", "sinePhase")}
-        d |= {f"{m}.hydro.stInput.{n}": "LREAL" for n in ("w0", "lambda", "sigma")}
-        d[f"{m}.uRemote"] = "ARRAY[1..6] OF REAL"
-    d |= {"MAIN.comau.bActive": "BOOL", "MAIN.comau.eMode": "SINT", "MAIN.comau.txHmi": "ST_TxHmiComau"}
-    d |= {"MAIN.comau.bStart": "BOOL", "MAIN.winch.bActive": "BOOL", "MAIN.winch.eMode": "SINT"}
-    d |= {"MAIN.winch.lengthUtilization": "REAL", "MAIN.winch.eModeCmd": "SINT", "MAIN.winch.bEnable": "BOOL"}
-    d |= {"MAIN.winch.u": "REAL", "MAIN.mru1.bActive": "BOOL", "MAIN.mru2.bActive": "BOOL"}
-    return d
-
-
-def size_of(iec: str) -> int:
-    if iec in BASE_SIZE:
-        return BASE_SIZE[iec]
-    if iec in STRUCT_SIZE:
-        return STRUCT_SIZE[iec]
-    m = re.fullmatch(r"ARRAY\[1\.\.(\d+)\] OF (\w+)", iec)
-    return int(m.group(1)) * BASE_SIZE[m.group(2)]
-
-
-_next_address = [0]
 
 
 def free_loopback() -> str:
-    """A loopback address of its own for each test server (port 48898 is fixed by ADS)."""
-    for _ in range(200):
-        _next_address[0] += 1
-        ip = f"127.77.{os.getpid() % 200 + 1}.{_next_address[0] % 250 + 1}"
-        with socket.socket() as s:
-            try:
-                s.bind((ip, 48898))
-                return ip
-            except OSError:
-                continue
-    pytest.skip("no free loopback address for an ADS test server")
+    """A loopback address of its own for each test server; the test skips when there is none."""
+    from app.plc.testplc import TestPlcError
+    from app.plc.testplc import free_loopback as free
 
-
-def symbol_handler():
-    """pyads' AdvancedHandler answering a name it does not hold as TwinCAT does (ADS error 0x710, symbol
-    not found) instead of raising in its connection thread (which leaves the client to time out)."""
-    from pyads import constants
-    from pyads.testserver import AdvancedHandler
-    from pyads.testserver.handler import AmsResponseData
-
-    class Handler(AdvancedHandler):
-        def handle_request(self, request):
-            head = request.ams_header
-            if struct.unpack("<H", head.command_id)[0] == constants.ADSCOMMAND_READWRITE:
-                group, _, _, n = struct.unpack("<IIII", head.data[:16])
-                if group in (constants.ADSIGRP_SYM_INFOBYNAMEEX, constants.ADSIGRP_SYM_HNDBYNAME):
-                    name = head.data[16 : 16 + n].decode().strip("\x00")
-                    if not any(v.name == name for v in self._data.values()):
-                        state = struct.pack("<H", struct.unpack("<H", head.state_flags)[0] | 1)
-                        return AmsResponseData(state, head.error_code, struct.pack("<II", 0x710, 0))
-            return super().handle_request(request)
-
-    return Handler()
-
-
-class LabPlc:
-    """pyads' ADS test server serving the lab's symbols; ``stop`` and ``start`` again on the same address."""
-
-    def __init__(self, ip: str, declarations: dict[str, str] | None = None) -> None:
-        from pyads import constants
-        from pyads.testserver import PLCVariable
-
-        adst = {
-            "BOOL": constants.ADST_BIT,
-            "SINT": constants.ADST_INT8,
-            "INT": constants.ADST_INT16,
-            "REAL": constants.ADST_REAL32,
-            "LREAL": constants.ADST_REAL64,
-        }
-        self.ip, self.server = ip, None
-        self.handler = symbol_handler()
-        for k, (name, iec) in enumerate((declarations or lab_declarations()).items()):
-            var = PLCVariable(name, bytes(size_of(iec)), adst.get(iec, constants.ADST_BIGTYPE), iec)
-            var.notification_count = 1000 * (k + 1)  # see the module's docstring
-            self.handler.add_variable(var)
-        self.set("MAIN.eState", "<h", 1)  # NORMAL
-        for p in ("em8000", "em1500"):
-            self.set(f"MAIN.{p}.eState", "<b", STATE["SETTLED"])
-
-    def start(self) -> None:
-        from pyads.testserver import AdsTestServer
-
-        self.server = AdsTestServer(handler=self.handler, ip_address=self.ip, logging=False)
-        self.server.start()
-        deadline = time.monotonic() + 10
-        while time.monotonic() < deadline:  # listening (the server thread calls listen() a moment later)
-            with contextlib.suppress(OSError), socket.create_connection((self.ip, 48898), timeout=0.5):
-                return
-            time.sleep(0.05)
-        raise AssertionError("the ADS test server did not start")
-
-    def stop(self) -> None:
-        if self.server is not None:
-            self.server.stop()
-            self.server.join(timeout=5)
-            self.server = None
-
-    def var(self, name: str):
-        return self.handler.get_variable_by_name(name)
-
-    def get(self, name: str, fmt: str):
-        raw = self.var(name).value
-        assert len(raw) == struct.calcsize(fmt), f"{name}: {len(raw)} bytes written, {fmt} expected"
-        v = struct.unpack(fmt, raw)
-        return v[0] if len(v) == 1 else list(v)
-
-    def set(self, name: str, fmt: str, *values) -> None:
-        """The PLC changes a value: subscribers in this process are notified (as on change)."""
-        self.var(name).write(struct.pack(fmt, *values))
-
-    def set_quietly(self, name: str, fmt: str, *values) -> None:
-        self.var(name).value = struct.pack(fmt, *values)
+    try:
+        return free()
+    except TestPlcError as err:
+        pytest.skip(str(err))
 
 
 @pytest.fixture
@@ -635,6 +511,185 @@ def test_bosun_server_drives_the_plc_end_to_end(lab_plc):
         srv.terminate()
         _, err = srv.communicate(timeout=20)
     assert srv.returncode == 0, err
+
+
+# ---------------------------------------------------------------------------- issue 27: STOP unusable, invalid data
+def nonfinite(wire, path: str = "") -> list[str]:
+    """The paths of every number in a wire form that is not finite."""
+    if isinstance(wire, dict):
+        return [p for k, v in wire.items() for p in nonfinite(v, f"{path}.{k}")]
+    if isinstance(wire, list | tuple):
+        return [p for i, v in enumerate(wire) for p in nonfinite(v, f"{path}[{i}]")]
+    if isinstance(wire, float) and not math.isfinite(wire):
+        return [path]
+    return []
+
+
+REST_WRITES = {"bStart": b"\x00", "bReset": b"\x00", "bResetScale": b"\x00", "u": struct.pack("<f", 0.0)}
+
+
+def motion_writes(plc: LabPlc) -> list[str]:
+    """What a client wrote to the test server that could start motion: anything but a stop or a rest value."""
+    return [f"{n} := {v.hex()}" for _, n, v in plc.writes if REST_WRITES.get(n.rsplit(".", 1)[1]) != v]
+
+
+@pytest.mark.slow
+def test_item27_1_a_stop_that_cannot_reach_the_plc_refuses_every_motion_command():
+    """Issue 27, item 1: ``MAIN.bStop`` declared INT.  Bosun names it (problem, plc_error, alarm) and, the
+    link up, refuses with one line every command that could start motion; the stick cannot be armed; an
+    E-STOP says it latched here only and its reset is refused.  Stops (DISENGAGE, Comau SETTLED, the winch let
+    go) are taken.  The server's log holds no write but those stops and the rest values of the connect."""
+    pytest.importorskip("pyads")
+    decl = lab_declarations()
+    decl["MAIN.bStop"] = "INT"
+    plc = LabPlc(free_loopback(), decl)
+    plc.start()
+    ses = make_session(plc)
+    try:
+        plc.set("MAIN.winch.eMode", "<b", 1)  # LOCAL: the slider would drive it
+        snap = pump(ses, lambda s: connected(s) and s.winch.mode == "local")
+        assert snap.plant.problems == ["MAIN.bStop: 2 bytes (INT) on the PLC, Bosun expects 1 (BOOL)"]
+        assert "STOP does not reach the PLC" in snap.plant.plc_error
+        assert any(a.key == "plc_error" and a.active and a.severity == "critical" for a in snap.alarms)
+        refused = [
+            ("lab_platform", {"platform": "em8000", "action": "neutral"}),
+            ("lab_platform", {"platform": "em1500", "action": "settle"}),
+            ("lab_platform", {"platform": "em1500", "action": "engage"}),
+            ("lab_comau_mode", {"mode": "remote"}),
+            ("lab_winch", {"mode": "local"}),
+            ("lab_winch", {"speed": 0.5}),
+            ("lab_source", {"platform": "em8000", "source": "generator"}),
+            ("lab_source", {"platform": "em1500", "source": "simulation", "hs": 2.0, "tp": 8.0}),
+            ("lab_remote_pose", {"platform": "em8000", "eta": [0.0, 0.0, 0.05, 0.0, 0.0, 0.0]}),
+            ("lab_plc_ack", {}),
+        ]
+        for name, fields in refused:
+            with pytest.raises(CommandError, match=r"^motion refused: STOP does not reach the PLC") as err:
+                ses.command(name, **fields)
+            assert "\n" not in str(err.value) and "nothing was sent" in str(err.value), name
+        assert snap.plant.motion_refused.startswith("STOP does not reach the PLC (MAIN.bStop: 2 bytes (INT)")
+        # the stick: the arming gesture (neutral, enable released, then pressed) does not arm it
+        t0 = time.monotonic()
+        pump(ses, lambda s: time.monotonic() - t0 > 0.3, sample=stick(False))
+        snap = pump(ses, lambda s: time.monotonic() - t0 > 1.0, sample=stick(True))
+        assert not snap.flags.armed and not snap.flags.enabled and "motion refused" in snap.flags.input_reason
+        with pytest.raises(CommandError, match="Comau jog"):  # (never taken over ADS in any case)
+            ses.command("lab_comau_jog", joint=1, speed=0.5)
+        # stops are taken
+        ses.command("lab_platform", platform="em8000", action="disengage")
+        ses.command("lab_comau_mode", mode="settled")
+        pump(ses, lambda s: written(ses, "MAIN.comau.bStart") == [False])
+        # the E-STOP latches here and says it does not reach the PLC; its reset is refused
+        ses.estop("test")
+        snap = pump(ses, lambda s: s.estop)
+        assert not snap.plant.stop_written
+        assert any("E-STOP latched here only: STOP does not reach the PLC" in e.text for e in ses.log)
+        with pytest.raises(CommandError, match=r"MAIN\.bStop is not usable"):
+            ses.reset()
+        assert ses.snapshot().estop
+        assert motion_writes(plc) == [] and plc.get("MAIN.em8000.eModeCmd", "<b") == SETTLED
+        assert plc.get("MAIN.bStop", "<h") == 0  # never written: Bosun does not write what it would misread
+    finally:
+        ses.close()
+        plc.stop()
+
+
+def stewart_hmi(eta, state: str = "NEUTRAL") -> tuple:
+    """``ST_TxHmiStewart``: status, eta, etaRef (0), cyl, dofScale."""
+    return (STATE[state], *eta, *[0.0] * 6, *[0.3] * 6, *[1.0] * 6)
+
+
+def comau_hmi(q) -> tuple:
+    return (*q, *[0.0] * 6, *[-2.0] * 6, *[2.0] * 6)
+
+
+@pytest.mark.slow
+def test_item27_7_invalid_plc_values_are_held_flagged_and_refuse_motion(lab_plc, session):
+    """Issue 27, item 7: a NaN, an infinity or a value beyond the machine's physical range (a pose beyond
+    the platform's stroke, a joint beyond its limit, the wire beyond its soft ends) is refused as it
+    arrives: the link reads ``invalid``, the symbol is named, a critical alarm is raised, the last valid
+    value is held (its device's light stale), no snapshot carries a non-finite number, and motion commands
+    are refused; once the value is valid again for 1 s the link is ``ok`` and commands are taken."""
+    ses, plc = session, lab_plc
+    eta = [0.01, -0.02, 0.05, 0.01, -0.02, 0.03]
+    q = [0.1, -0.2, -1.5, 0.0, 0.0, 0.0]
+    plc.set_quietly("MAIN.em8000.txHmi", "<i24f", *stewart_hmi(eta))
+    plc.set_quietly("MAIN.comau.txHmi", "<24f", *comau_hmi(q))
+    plc.set_quietly("MAIN.winch.lengthUtilization", "<f", 50.0)
+    plc.set("MAIN.comau.bActive", "<?", True)  # the Comau talks: its joints' ranges hold
+    w = ses.layout.winch
+    half = w["min_length"] + 0.5 * (w["max_length"] - w["min_length"])
+    snap = pump(ses, lambda s: connected(s) and abs(s.winch.length - half) < 1e-6 and abs(s.comau.q[0] - 0.1) < 1e-6)
+    assert snap.platforms[0].eta == pytest.approx(eta, abs=1e-6)
+    cases = [
+        ("MAIN.em8000.txHmi", "<i24f", stewart_hmi([*eta[:3], math.nan, *eta[4:]]), "eta[4] = nan", "em8000"),
+        ("MAIN.em8000.txHmi", "<i24f", stewart_hmi([*eta[:2], 2.0, *eta[3:]]), "eta[3] = 2 m/rad, outside", "em8000"),
+        ("MAIN.em8000.txHmi", "<i24f", stewart_hmi([math.inf, *eta[1:]]), "eta[1] = inf", "em8000"),
+        ("MAIN.comau.txHmi", "<24f", comau_hmi([math.inf, *q[1:]]), "q[1] = inf", "comau"),
+        ("MAIN.comau.txHmi", "<24f", comau_hmi([q[0], 2.5, *q[2:]]), "q[2] = 2.5 rad, outside", "comau"),
+        ("MAIN.winch.lengthUtilization", "<f", (-math.inf,), "lengthUtilization = -inf", None),
+        ("MAIN.winch.lengthUtilization", "<f", (250.0,), "lengthUtilization = 250 %, outside", None),
+    ]
+    good = {"MAIN.em8000.txHmi": stewart_hmi(eta), "MAIN.comau.txHmi": comau_hmi(q)}
+    good["MAIN.winch.lengthUtilization"] = (50.0,)
+    for name, fmt, values, text, light in cases:
+        plc.set_quietly(name, fmt, *values)
+        snap = pump(ses, lambda s: s.plant.link == "invalid")  # before issue 27: "ok", the value passed on
+        assert len(snap.plant.invalid) == 1 and snap.plant.invalid[0].startswith(f"{name}")
+        assert text in snap.plant.invalid[0] and "holding the last valid value" in snap.plant.invalid[0]
+        assert nonfinite(to_wire(snap)) == []
+        assert snap.platforms[0].eta == pytest.approx(eta, abs=1e-6) and snap.comau.q == pytest.approx(q[:3], abs=1e-6)
+        assert snap.winch.length == pytest.approx(half, abs=1e-6)  # the last valid values, held
+        alarm = next(a for a in snap.alarms if a.key == "plc_invalid")
+        assert alarm.active and alarm.severity == "critical" and text in alarm.text
+        if light is not None:
+            assert next(m for m in snap.machines if m.name == light).state == "stale"
+        assert snap.plant.motion_refused.startswith("the PLC sends invalid data")
+        with pytest.raises(CommandError, match=r"^motion refused: the PLC sends invalid data \(MAIN\.") as err:
+            ses.command("lab_platform", platform="em1500", action="neutral")
+        assert "\n" not in str(err.value)
+        assert any(e.text.startswith("PLC data invalid:") for e in ses.log)
+        plc.set_quietly(name, fmt, *good[name])
+        snap = pump(ses, lambda s: s.plant.link == "ok")
+        assert not any(a.key == "plc_invalid" and a.active for a in snap.alarms) and snap.plant.invalid == []
+    assert nonfinite(to_wire(ses.snapshot())) == [] and ses.plant.bad_values >= len(cases)  # each read counted
+    assert not [v for _, n, v in lab_plc.writes if n == "MAIN.em1500.eModeCmd"]  # every refusal: nothing sent
+    ses.command("lab_platform", platform="em1500", action="neutral")  # valid again: taken
+    settle_until(lambda: plc.get("MAIN.em1500.eModeCmd", "<b") == NEUTRAL)
+
+
+def test_item27_7_values_are_checked_against_the_machines_ranges():
+    """The check itself: finite, and within the platform's stroke, the joints' limits and the wire's range."""
+    from app.engine.lab_session import LabSession
+    from app.plant.plc import value_ranges
+    from app.plc.symbols import check_value, lab_symbols
+
+    lab = LabSession().lab
+    ranges, syms = value_ranges(lab, ("em8000", "em1500")), lab_symbols()
+    hmi = syms["MAIN.em8000.txHmi"]
+    settled = lab.platforms[0].settled_pose.tolist()
+    value = {"status": 2, "eta": settled, "etaRef": [0.0] * 6, "cyl": [0.0] * 6, "dofScale": [1.0] * 6}
+    assert check_value(hmi, value, ranges[hmi.name]) == (0, "")  # the settled pose is within the stroke
+    top = lab.models[0].pose_max.tolist()
+    assert check_value(hmi, value | {"eta": top}, ranges[hmi.name]) == (0, "")  # so is the Table 8 box's edge
+    bad, text = check_value(hmi, value | {"eta": [0.0, 0.0, top[2] + 0.2, 0, 0, 0]}, ranges[hmi.name])
+    assert bad == 1 and text.startswith("MAIN.em8000.txHmi.eta[3] = 1.085 m/rad, outside")
+    bad, text = check_value(hmi, value | {"etaRef": [math.nan] * 6, "dofScale": [math.inf, 1, 1, 1, 1, 1]})
+    assert bad == 7 and text == "MAIN.em8000.txHmi.etaRef[1] = nan (not a finite number) (and 6 more)"
+    comau = syms["MAIN.comau.txHmi"]
+    q = {"q": [0.0, 0.0, -1.5, 9.0, -9.0, 30.0], "u": [0.1] * 6, "qMin": [-1.0] * 6, "qMax": [1.0] * 6}
+    assert check_value(comau, q, ranges[comau.name]) == (0, "")  # joints 4-6: finite only
+    r = lab.robot
+    for i, v in ((0, r.upper[0] + 0.2), (2, r.lower[2] - 0.2)):
+        qq = list(q["q"])
+        qq[i] = float(v)
+        assert check_value(comau, q | {"q": qq}, ranges[comau.name])[1].startswith(f"MAIN.comau.txHmi.q[{i + 1}]")
+    assert check_value(comau, q | {"u": [5.0, 0, 0, 0, 0, 0]}, ranges[comau.name])[0] == 1  # faster than possible
+    util = syms["MAIN.winch.lengthUtilization"]
+    assert check_value(util, 100.0, ranges[util.name]) == (0, "")
+    text = "MAIN.winch.lengthUtilization = 120 %, outside -5 … 105 %"
+    assert check_value(util, 120.0, ranges[util.name]) == (1, text)
+    assert check_value(syms["MAIN.eState"], 7) == (0, "")  # integers are always finite
 
 
 # ---------------------------------------------------------------------------- the GUI's part

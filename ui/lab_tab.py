@@ -75,6 +75,7 @@ MACHINE_LIGHT = {
     "active": ("ok", "on"),
     "inactive": ("error", "OFF"),
     "absent": ("off", "n/c"),
+    "stale": ("warn", "old"),  # issue 27: the PLC sent invalid data for it; the last valid value is held
     "unknown": ("unknown", "?"),
 }
 MOTION_COLOR = {"SYSTEM_OK": "#3c9", "WARNING": "#fa3", "ERROR": "#e33"}

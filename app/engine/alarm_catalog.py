@@ -292,6 +292,21 @@ CATALOG: tuple[AlarmDef, ...] = (
         action="compare the PLC project with Bosun's symbol table (docs) and correct the project",
     ),
     AlarmDef(
+        key="plc_invalid",
+        title="PLC data invalid",
+        sources=("lab",),
+        priority="critical",
+        cause="the PLC sent a number that is not finite (NaN, inf) or lies beyond the machine's physical range "
+        "(a platform pose beyond its stroke, a Comau joint beyond its limit, the wire beyond its soft ends, each "
+        "with a margin): a failed sensor or encoder, a PLC project of another layout or scaling",
+        consequence="Bosun holds the last valid value (shown stale) and refuses every command that could start "
+        "motion; what the machine really does is not known here",
+        action="use the lab's hardware emergency stop if anything may move; check the named signal on the PLC; "
+        "the alarm clears once the signal is valid for 1 s",
+        trip=True,
+        shelvable=False,
+    ),
+    AlarmDef(
         key="lost",
         title="Engine connection lost",
         sources=("gui",),

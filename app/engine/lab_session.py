@@ -354,9 +354,11 @@ class LabSession(Scene):
     def estop(self, source: str = "operator") -> None:
         if not self.estop_latched:
             self.note("error", f"E-STOP from {source}: platforms, robot and winch braking to rest")
-            why = self.plant.ready()
-            if why:
+            why = self.plant.stop_path()
+            if why and self.plant.ready():
                 self.note("error", f"E-STOP latched here, not yet on the plant ({why}): written as soon as it is back")
+            elif why:  # the link is up, but STOP cannot reach the PLC (issue 27, item 1)
+                self.note("error", f"E-STOP latched here only: {why}; use the lab's hardware emergency stop")
         self.estop_latched = True
         self.vvmc = False
         self.plant.estop()
@@ -376,6 +378,9 @@ class LabSession(Scene):
 
     # ------------------------------------------------------------------ loop
     def _apply_input(self, now: float) -> None:
+        block = self.plant.motion_block()
+        if block:  # nothing may start motion: the input stays disarmed until the cause is gone (issue 27)
+            self.input.disarm(f"motion refused: {block}")
         inp = self.input.step(now)
         if inp.stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
@@ -442,8 +447,15 @@ class LabSession(Scene):
         stop = "; STOP latched here, written on reconnect" if self.estop_latched else ""
         al.set("plc_link", down, text=f"PLC link {link.link.upper()}: {link.last_error or 'no answer yet'}{stop}")
         al.set("plc_stale", link.link == "stale", text=f"PLC data {link.data_age:.1f} s old: holding the last")
-        al.set("plc_error", bool(link.plc_error), text=f"PLC error: {link.plc_error} (acknowledge: lab_plc_ack)")
+        ack = "; motion refused" if link.motion_refused.startswith("STOP") else " (acknowledge: lab_plc_ack)"
+        al.set("plc_error", bool(link.plc_error), text=f"PLC error: {link.plc_error}{ack}")
         al.set("plc_symbols", bool(link.problems), text=f"{len(link.problems)} PLC symbol(s) not usable")
+        more = f" (+{len(link.invalid) - 1} more)" if len(link.invalid) > 1 else ""
+        al.set(
+            "plc_invalid",
+            bool(link.invalid),
+            text=f"PLC data invalid: {link.invalid[0] if link.invalid else ''}{more}; motion refused",
+        )
 
     def _payload_below_deck(self) -> bool:
         """The load inside EM1500's footprint and below its top plate (z-down body frame: z > 0)."""

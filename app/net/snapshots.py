@@ -339,7 +339,7 @@ class PlantLink:
 
     backend: str = "simulated"  # simulated | plc
     target: str = ""  # the PLC: "AMS_NET_ID:PORT at HOST"
-    link: str = "simulated"  # simulated | connecting | ok | lost
+    link: str = "simulated"  # simulated | connecting | ok | stale | invalid | lost
     connected: bool = False  # the ADS connection is up (always true when simulated)
     plc_state: str = ""  # MAIN.eState by name (NORMAL, STOP, …), "" before the first value
     ads_state: int = 0  # the PLC's ADS state (5: RUN), 0 before the first
@@ -352,6 +352,10 @@ class PlantLink:
     devices: dict[str, dict[str, Any]] = field(
         default_factory=dict
     )  # per device (em8000, comau, mru1 …) its PLC states
+    # issue 27: values refused as they arrived (not finite, or beyond the machine's physical range), one line per
+    # symbol with the age of the last valid value, which is held; and why motion commands are refused ("": taken)
+    invalid: list[str] = field(default_factory=list)
+    motion_refused: str = ""
 
 
 # issue 16, item 5 (the lab HMI's status feedback, lights, jog and generator): optional fields

@@ -157,5 +157,14 @@ class LabBackend(abc.ABC):
         """ "" when commands reach the plant now, else why not (one line)."""
         return ""
 
+    def stop_path(self) -> str:
+        """ "" when a STOP reaches the plant now, else why not (one line): the E-STOP then latches here only."""
+        return self.ready()
+
+    def motion_block(self) -> str:
+        """Why commands that could start motion are refused although commands reach the plant (a STOP that
+        cannot reach it, invalid data from it: issue 27), one line; "" when they are taken."""
+        return ""
+
     def close(self) -> None:  # noqa: B027 - optional: a simulated plant owns nothing to release
         """Release threads and connections."""

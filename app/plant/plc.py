@@ -21,6 +21,13 @@ GENERATOR / REMOTE; in the last three ``bStart`` engages, else the platform goes
 ``estop`` / ``reset``              ``MAIN.bStop`` := TRUE / (``MAIN.bStop`` := FALSE, ``MAIN.bReset`` pulsed)
 ``lab_plc_ack``                    ``MAIN.bReset`` pulsed; a platform in fault: ``bReset`` pulsed, SETTLED
 =================================  =====================================================================
+
+Motion is refused (issue 27, items 1 and 7) while the link is up but STOP cannot reach the PLC
+(``MAIN.bStop`` missing or of another type) or the PLC sends invalid data (a number that is not finite or
+lies outside the machine's physical range, :func:`value_ranges`): every command that could start motion is
+refused with one line, nothing is sent; only writes that stop (``bStart`` := FALSE, the winch's ``u`` := 0)
+and the E-STOP's reset (when STOP reaches the PLC) go out.  An invalid value is never used: the last valid
+one is held (shown stale) until the symbol has sent valid values for :data:`VALID_AGAIN`.
 """
 
 from __future__ import annotations
@@ -52,6 +59,7 @@ from app.plc.bridge import (
 from app.plc.symbols import (
     COMAU_MODE,
     MAIN_STATE,
+    PLATFORMS,
     PULSE,
     STEWART_MODE,
     STEWART_OPMODE,
@@ -59,6 +67,8 @@ from app.plc.symbols import (
     STEWART_STATUS,
     WINCH_MODE,
     WINCH_SPEED_MAX,
+    Range,
+    check_value,
     decode_status,
     enum_name,
     wave_inputs,
@@ -78,6 +88,53 @@ MODE_OF_STATE = {
 }
 SOURCE_MODES = {"generator": "GENERATOR", "simulation": "SIMULATION", "remote": "REMOTE"}
 ADS_STATES = {5: "RUN", 6: "STOP", 15: "CONFIG", 16: "RECONFIG"}
+#: s of valid values after the last invalid one before a symbol counts as valid again (issue 27, item 7)
+VALID_AGAIN = 1.0
+#: margins beyond the physical ranges before a value is taken as invalid: the PLC's own filtering, a
+#: calibration a little off; a value beyond them is a broken reading, not a machine there
+POSE_MARGIN = (0.05, 0.05, 0.05, math.radians(3.0), math.radians(3.0), math.radians(3.0))  # m, rad
+JOINT_MARGIN = math.radians(5.0)  # rad
+SPEED_FACTOR = 1.5  # × the joint's datasheet speed
+UTILISATION_MARGIN = 5.0  # % of the winch's soft-end range
+
+
+#: symbols whose ranges hold only while another symbol is TRUE (the device reports; see :func:`value_ranges`)
+RANGED_WHILE = {"MAIN.comau.txHmi": "MAIN.comau.bActive"}
+
+
+def value_ranges(lab: MotionLab, names: Any = PLATFORMS) -> dict[str, dict[str, Range]]:
+    """The physical range of every number Bosun reads from the lab's PLC, by symbol and field.
+
+    * ``MAIN.<platform>.txHmi``: ``eta`` within the platform's stroke — its Table 8 pose box joined with the
+      settled pose (``envelope_min/max``) — ± :data:`POSE_MARGIN`; ``etaRef`` within the operational box
+      (the PLC limits it there: etaRef = LIMIT(etaRefMin, u, etaRefMax)) ± the same margin; ``cyl`` within
+      ± the longest leg (the summary does not say where the cylinders' zero is: a stroke from either end
+      or the length itself all lie there); ``dofScale`` finite only (its range is not known).
+    * ``MAIN.comau.txHmi``: ``q`` of the first three joints within the robot file's (datasheet) limits
+      ± :data:`JOINT_MARGIN`, ``u`` within :data:`SPEED_FACTOR` × their datasheet speed; joints 4–6 and
+      ``qMin``/``qMax`` finite only.  The ranges hold while ``MAIN.comau.bActive`` (:data:`RANGED_WHILE`):
+      the PLC has the Comau's joints from the robot's UDP interface, all zeros (q3 = 0 is beyond its
+      −256…−10° range) until the robot talks; an inactive Comau's values are checked for finiteness only.
+    * ``MAIN.winch.lengthUtilization``: 0 … 100 % of the soft-end range ± :data:`UTILISATION_MARGIN`.
+    """
+    margin = np.asarray(POSE_MARGIN)
+    out: dict[str, dict[str, Range]] = {}
+    for k, name in enumerate(names):
+        p, m = lab.platforms[k], lab.models[k]
+        out[f"MAIN.{name}.txHmi"] = {
+            "eta": (tuple(p.envelope_min - margin), tuple(p.envelope_max + margin), "m/rad"),
+            "etaRef": (tuple(p.command_min - margin), tuple(p.command_max + margin), "m/rad"),
+            "cyl": ((-float(m.leg_max),) * 6, (float(m.leg_max),) * 6, "m"),
+        }
+    r = lab.robot
+    n = min(3, r.lower.size)
+    out["MAIN.comau.txHmi"] = {
+        "q": (tuple(r.lower[:n] - JOINT_MARGIN), tuple(r.upper[:n] + JOINT_MARGIN), "rad"),
+        "u": (tuple(-SPEED_FACTOR * r.speed[:n]), tuple(SPEED_FACTOR * r.speed[:n]), "rad/s"),
+    }
+    m_u = UTILISATION_MARGIN
+    out["MAIN.winch.lengthUtilization"] = {"": ((-m_u,), (100.0 + m_u,), "%")}
+    return out
 
 
 class PlcLab(LabBackend):
@@ -112,6 +169,11 @@ class PlcLab(LabBackend):
         self._eta: list[tuple[float, NDArray[np.float64], NDArray[np.float64]] | None] = [None for _ in self.names]
         self._wire: tuple[float, float, float] | None = None  # time, utilisation [%], its rate [%/s]
         self._told = ""
+        self.ranges = value_ranges(lab, self.names)
+        self.invalid: dict[str, tuple[str, float]] = {}  # symbol → (what is wrong, time of its last bad value)
+        self.t_valid: dict[str, float] = {}  # symbol → time of its last valid value
+        self.bad_values = 0  # values refused since the start (each non-finite or out-of-range number counted)
+        self._events: list[tuple[str, str]] = []
         lab.comau_mode = "hold"  # nothing known until the PLC says
         for p in lab.platforms:
             p.transition = "unknown"
@@ -130,18 +192,46 @@ class PlcLab(LabBackend):
             return f"not connected to the PLC at {self.target} yet{why}"
         return f"the PLC link is lost{why}"
 
-    def _check(self, *names: str) -> None:
-        """Refuse (nothing sent) unless the link is up and every symbol is usable on this PLC."""
+    def stop_path(self) -> str:
+        """ "" when a STOP reaches the PLC now, else why not (one line)."""
+        if self.ready():
+            return self.ready()
+        if STOP in self.unusable:
+            return f"STOP does not reach the PLC ({self._problem(STOP)})"
+        return ""
+
+    def motion_block(self) -> str:
+        """Why a command that could start motion is refused although the link is up (issue 27, items 1 and
+        7): STOP cannot reach the PLC, or the PLC sends invalid data; "" when neither."""
+        if self.state != "ok":
+            return ""  # the link's own refusal (ready) says why
+        if STOP in self.unusable:
+            return f"STOP does not reach the PLC ({self._problem(STOP)})"
+        if self.invalid:
+            name = min(self.invalid, key=lambda n: self.invalid[n][1])
+            more = f"; {len(self.invalid) - 1} more symbol(s)" if len(self.invalid) > 1 else ""
+            return f"the PLC sends invalid data ({self.invalid[name][0]}{more})"
+        age = None if self.t_data is None else time.monotonic() - self.t_data
+        if age is None or age > DATA_STALE:  # the machines are not seen: nothing may start
+            return "no data from the PLC yet" if age is None else f"no data from the PLC for {age:.1f} s"
+        return ""
+
+    def _check(self, *names: str, stopping: bool = False) -> None:
+        """Refuse (nothing sent) unless the link is up and every symbol is usable on this PLC; unless
+        ``stopping`` (the writes can only stop a machine), also while :meth:`motion_block` says why not."""
         why = self.ready()
         if why:
             raise BackendError(f"{why}; nothing was sent and nothing is queued")
+        block = "" if stopping else self.motion_block()
+        if block:
+            raise BackendError(f"motion refused: {block}; nothing was sent")
         for name in names:
             if name in self.unusable:
                 raise BackendError(f"{name} is not usable on this PLC ({self._problem(name)})")
 
-    def _send(self, *writes: tuple) -> None:
+    def _send(self, *writes: tuple, stopping: bool = False) -> None:
         """All of ``(name, value[, pulse])`` handed to the bridge in order, or none (refused)."""
-        self._check(*(w[0] for w in writes))
+        self._check(*(w[0] for w in writes), stopping=stopping)
         for name, value, *pulse in writes:
             self.bridge.write(name, value, *pulse)
 
@@ -159,6 +249,8 @@ class PlcLab(LabBackend):
     # ------------------------------------------------------------------ commands
     def platform(self, k: int, action: str) -> None:
         m = f"MAIN.{self.names[k]}"
+        if action in ("neutral", "settle", "engage"):
+            self._check()  # the link and motion first: a refusal says why nothing may start
         if action in ("neutral", "settle"):
             mode = STEWART_MODE["NEUTRAL" if action == "neutral" else "SETTLED"]
             self._send((f"{m}.eModeCmd", mode), (f"{m}.bStart", False))
@@ -168,12 +260,13 @@ class PlcLab(LabBackend):
                 raise BackendError(f"{self.names[k]}: ENGAGE needs NEUTRAL (the PLC reports {state})")
             self._send((f"{m}.eModeCmd", STEWART_MODE[SOURCE_MODES[self.chosen[k]]]), (f"{m}.bStart", True))
         elif action == "disengage":
-            self._send((f"{m}.bStart", False))
+            self._send((f"{m}.bStart", False), stopping=True)  # back to NEUTRAL: the wave motion stops
         else:
             raise BackendError(f"platform action must be neutral, settle, engage or disengage, got {action!r}")
 
     def source(self, k: int, source: str, p: dict[str, Any]) -> dict[str, Any]:
         name, m = self.names[k], f"MAIN.{self.names[k]}"
+        self._check()
         if MODE_OF_STATE.get(self._state_of(k)) == "engaged":
             raise BackendError(f"{name} is ENGAGED; disengage before changing the motion source")
         plat = self.lab.platforms[k]
@@ -230,7 +323,7 @@ class PlcLab(LabBackend):
             raise BackendError(
                 f"Comau {mode.upper()}: over ADS the lab PLC only starts (REMOTE) or stops (SETTLED) the Comau"
             )
-        self._send(("MAIN.comau.bStart", mode == "remote"))
+        self._send(("MAIN.comau.bStart", mode == "remote"), stopping=mode == "settled")
 
     def winch_mode(self, mode: str) -> None:
         key = mode.upper()
@@ -241,9 +334,11 @@ class PlcLab(LabBackend):
 
     def winch_speed(self, speed: float) -> None:
         u = float(np.clip(speed, -self.winch_speed_max, self.winch_speed_max))
+        if u != 0.0:  # a speed, also one repeated, is refused while nothing may move (each resend)
+            self._check("MAIN.winch.u")
         if abs(u - self.winch_command) < 1e-6 or self.ready():
             return  # only changes go out; the slider is zeroed on reconnect by the bridge
-        self._send(("MAIN.winch.u", u))
+        self._send(("MAIN.winch.u", u), stopping=u == 0.0)  # letting go is always taken
         self.winch_command = u
 
     def vvmc(self, on: bool) -> None:
@@ -274,11 +369,11 @@ class PlcLab(LabBackend):
         why = self.ready()
         if why:
             raise BackendError(f"{why}: the STOP stays latched until the PLC can take the reset")
-        self._check(STOP, "MAIN.bReset")
+        self._check(STOP, "MAIN.bReset", stopping=True)  # a reset starts nothing; STOP must be usable
         self.bridge.set_stop(False)
         self.stop = False
         self.stop_written = False
-        self._send((STOP, False), ("MAIN.bReset", True, PULSE))
+        self._send((STOP, False), ("MAIN.bReset", True, PULSE), stopping=True)
 
     def faults(self) -> list[str]:
         """What the PLC reports wrong, one phrase each: its main state, each platform's status and error."""
@@ -310,6 +405,7 @@ class PlcLab(LabBackend):
     def acknowledge(self, k: int | None) -> str:
         if self.stop:
             raise BackendError("the E-STOP is latched: its reset resets the PLC (MAIN.bReset)")
+        self._check()  # its eModeCmd := SETTLED moves a platform: refused as motion is
         main = self.values.get("MAIN.eState")
         writes: list[tuple] = []
         done = []
@@ -358,8 +454,18 @@ class PlcLab(LabBackend):
                 out.append(("warning", one_line(f"PLC: not sent ({u.reason}): {names}", 300)))
             elif isinstance(u, AdsState):
                 self.ads_state = u.ads_state
+        out += self._events
+        self._events = []
+        self._valid_again(time.monotonic(), out)
         self._mirror(now)
         return out
+
+    def _valid_again(self, t: float, out: list[tuple[str, str]]) -> None:
+        """A symbol flagged invalid counts as valid again once it sent valid values for :data:`VALID_AGAIN`."""
+        for name, (_, t_bad) in list(self.invalid.items()):
+            if self.t_valid.get(name, -math.inf) > t_bad and t - t_bad >= VALID_AGAIN:
+                del self.invalid[name]
+                out.append(("info", f"PLC data valid again: {name} (valid values for {VALID_AGAIN:g} s)"))
 
     def _up(self, u: LinkUp) -> list[tuple[str, str]]:
         was = self.state
@@ -372,8 +478,15 @@ class PlcLab(LabBackend):
         text = f"PLC {what}: {self.target} (ADS state {ADS_STATES.get(u.ads_state, u.ads_state)})"
         if self.stop:
             text += "; the latched STOP was written again (MAIN.bStop)"
+        for name in [n for n in self.invalid if n in self.unusable]:  # not read any more: nothing to hold
+            del self.invalid[name]
         out = [("link_up", text)]
         out += [("warning", one_line(f"PLC symbol not used: {p}", 300)) for p in u.problems]
+        if STOP in self.unusable:
+            out.append(
+                ("error", one_line(f"STOP does not reach the PLC ({self._problem(STOP)}): every command that "
+                                   "could start motion is refused; use the lab's hardware emergency stop", 300))
+            )  # fmt: skip
         out += [("info", one_line(f"PLC: {n}", 300)) for n in u.notes]
         return out
 
@@ -393,6 +506,19 @@ class PlcLab(LabBackend):
         return []
 
     def _value(self, u: Value) -> None:
+        sym = self.bridge.symbols.get(u.name)
+        flag = RANGED_WHILE.get(u.name)
+        ranges = self.ranges.get(u.name) if flag is None or self.values.get(flag) else None  # None: finite only
+        bad, why = check_value(sym, u.value, ranges) if sym is not None else (0, "")
+        if bad:  # never used: the last valid value is held (issue 27, item 7)
+            self.bad_values += bad
+            if u.name not in self.invalid:
+                self._events.append(
+                    ("error", one_line(f"PLC data invalid: {why}; holding the last valid value, motion refused", 300))
+                )
+            self.invalid[u.name] = (one_line(why, 200), u.t)
+            return
+        self.t_valid[u.name] = u.t
         self.values[u.name] = u.value
         self.t_data = u.t
         for k, name in enumerate(self.names):
@@ -520,6 +646,8 @@ class PlcLab(LabBackend):
                 out.append(MachineLight(name=dev, state="unknown", detail=f"PLC link {self.state}"))
             elif name in self.unusable:
                 out.append(MachineLight(name=dev, state="unknown", detail=f"{name} not usable on this PLC"))
+            elif held := self._held(f"MAIN.{dev}", now):
+                out.append(MachineLight(name=dev, state="stale", detail=held))
             elif name not in self.values:
                 out.append(MachineLight(name=dev, state="unknown", detail=f"no {name} yet"))
             else:
@@ -529,10 +657,21 @@ class PlcLab(LabBackend):
             out.append(MachineLight(name=dev, state="unknown", detail="not read over ADS (no symbol known)"))
         return out
 
+    def _held(self, prefix: str, now: float) -> str:
+        """One line for the device's symbols flagged invalid (their last valid values held), "" if none."""
+        return "; ".join(self._invalid_line(n, now) for n in sorted(self.invalid) if n.startswith(prefix + "."))
+
+    def _invalid_line(self, name: str, now: float) -> str:
+        t = self.t_valid.get(name)
+        held = "no valid value yet" if t is None else f"holding the last valid value, {max(0.0, now - t):.1f} s old"
+        return one_line(f"{self.invalid[name][0]}: {held}", 300)
+
     def link(self, now: float) -> PlantLink:
         age = -1.0 if self.t_data is None else max(0.0, now - self.t_data)
         state = self.state
-        if state == "ok" and (age < 0 or age > DATA_STALE):
+        if state == "ok" and self.invalid:
+            state = "invalid"
+        elif state == "ok" and (age < 0 or age > DATA_STALE):
             state = "stale"
         return PlantLink(
             backend=self.NAME,
@@ -548,6 +687,8 @@ class PlcLab(LabBackend):
             stop_written=self.stop_written,
             problems=list(self.problems),
             devices=self.devices(),
+            invalid=[self._invalid_line(n, now) for n in sorted(self.invalid)],
+            motion_refused=self.motion_block(),
         )
 
     def close(self) -> None:

@@ -158,6 +158,51 @@ def check_size(sym: Symbol, plc_size: int, plc_type: str) -> tuple[Symbol | None
     return None, f"{sym.name}: {plc_size} bytes ({plc_type}) on the PLC, Bosun expects {sym.size} ({sym.plc_type})"
 
 
+# ----------------------------------------------------------------------------- values as they arrive
+#: a range per element: (lows, highs, unit); ``-inf``/``inf`` where only finiteness is checked
+Range = tuple[tuple[float, ...], tuple[float, ...], str]
+
+
+def check_value(sym: Symbol, value: Any, ranges: dict[str, Range] | None = None) -> tuple[int, str]:
+    """Check a decoded value (issue 27, item 7): every number finite, and within ``ranges`` where given.
+
+    Parameters
+    ----------
+    sym : Symbol      the symbol the value was read from
+    value : Any       :meth:`Symbol.decode`'s result: a scalar, a list (arrays) or a dict (structs)
+    ranges : dict     field name (``""`` for a scalar or an array) → (lows, highs, unit), one bound per
+                      element (a shorter tuple: the rest unbounded); absent fields are checked for
+                      finiteness only
+
+    Returns
+    -------
+    (bad, text) : (int, str)   how many numbers are wrong and one line naming the first, ``(0, "")`` when
+                               the value can be used.  Integers and booleans are always finite.
+    """
+    ranges = ranges or {}
+    fields = value.items() if isinstance(value, dict) else [("", value)]
+    bad, first = 0, ""
+    for field, v in fields:
+        items = v if isinstance(v, list | tuple) else [v]
+        lo, hi, unit = ranges.get(field, ((), (), ""))
+        for i, x in enumerate(items):
+            if isinstance(x, bool) or not isinstance(x, int | float):
+                continue
+            where = sym.name + (f".{field}" if field else "") + (f"[{i + 1}]" if isinstance(v, list | tuple) else "")
+            if not math.isfinite(x):
+                why = f"{where} = {x} (not a finite number)"
+            elif i < len(lo) and not lo[i] <= x <= hi[i]:
+                u = f" {unit}" if unit else ""
+                why = f"{where} = {x:.4g}{u}, outside {lo[i]:.4g} … {hi[i]:.4g}{u}"
+            else:
+                continue
+            bad += 1
+            first = first or why
+    if bad > 1:
+        first += f" (and {bad - 1} more)"
+    return bad, first
+
+
 # ----------------------------------------------------------------------------- the lab's table
 #: ST_TxHmiStewart: status DINT, eta REAL[6], etaRef REAL[6], cyl REAL[6], dofScale REAL[6]
 TX_HMI_STEWART = (("status", 1), ("eta", 6), ("etaRef", 6), ("cyl", 6), ("dofScale", 6))

@@ -210,6 +210,8 @@ def lab_plant_light(state) -> Light:
         light = Light("warn", light.detail + ", LEG LIMIT")
     if pl is not None and pl.link == "stale":
         light = Light("warn", f"{light.detail} (PLC data {pl.data_age:.1f} s old)")
+    if pl is not None and pl.link == "invalid":  # issue 27: what is drawn is the last valid value, held
+        light = Light("warn", f"{light.detail} (PLC data invalid: the last valid values, held)")
     return light
 
 
@@ -229,7 +231,8 @@ def lab_input_light(state) -> Light:
 
 
 def lab_plc_light(state) -> Light:
-    """The lab's PLC link: none (the plant is simulated), connecting, lost, stale, the PLC's error, or its state."""
+    """The lab's PLC link: none (the plant is simulated), connecting, lost, invalid data, stale, the PLC's error, or
+    its state."""
     pl = state.plant
     if pl is None or pl.backend != "plc":
         return Light("off", "none: simulated plant")
@@ -237,6 +240,9 @@ def lab_plc_light(state) -> Light:
         return Light("error", f"LOST: {pl.last_error}")
     if pl.link == "connecting":
         return Light("warn", f"connecting: {pl.last_error or pl.target}")
+    if pl.link == "invalid":  # issue 27: values refused as they arrived; motion refused
+        first = pl.invalid[0] if pl.invalid else "a value refused"
+        return Light("error", f"INVALID DATA: {first}")
     if pl.plc_error:
         return Light("error", f"ERROR: {pl.plc_error}")
     if pl.link == "stale":
