@@ -408,7 +408,11 @@ def _client(scheduler: str | None, workers: int | None):
                 # logged a traceback after a finished study; a task's own error still reaches fut.result()
             )  # fmt: skip
         procs = [p for p in multiprocessing.active_children() if p not in before]
-        return Client(cluster), cluster, procs
+        client = Client(cluster)
+        from app.analysis.study_workers import IgnoreCtrlC
+
+        client.register_plugin(IgnoreCtrlC())
+        return client, cluster, procs
     except BaseException:
         # Ctrl-C or SIGTERM while the cluster starts: its worker processes end now, not at their next heartbeat
         _kill([p for p in multiprocessing.active_children() if p not in before], cluster)
