@@ -24,7 +24,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from app import __version__
-from app.errors import BosunError, require
+from app.errors import BosunError, interrupted, require
 from app.geometry import matrix_to_euler_zyx
 
 EXIT_USAGE = 2
@@ -560,9 +560,19 @@ _SENSOR_NAMES = {
 # ----------------------------------------------------------------------------- operability (issue 17)
 def cmd_study_operability(args: argparse.Namespace) -> int:
     """The crane-head compensation's operability over a scatter diagram, one simulation per cell on Dask."""
-    from app.analysis.operability import OperabilityError, OperabilityStudy, load_scatter, run_study, save
+    from app.analysis.operability import (
+        OperabilityError,
+        OperabilityStudy,
+        check_scheduler,
+        check_study,
+        load_scatter,
+        run_study,
+        save,
+    )
 
     try:
+        # a bad scheduler first: refused within seconds, before the vessel and the simulation are loaded
+        scheduler = check_scheduler(args.scheduler) if args.scheduler else None
         scatter = load_scatter(args.scatter)
         # by default the spectrum a diagram's kind is stated with: Pierson–Moskowitz for a Tz diagram (IACS
         # Rec. 34 pairs its table with it), JONSWAP for a Tp one
@@ -571,12 +581,13 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
             mode=args.mode, headings=tuple(args.headings), seeds=args.seeds, duration=args.duration,
             criterion=args.criterion, vessel=args.vessel, spectrum=spectrum,
         )  # fmt: skip
+        check_study(study, scatter, args.max_runs)  # its size, vessel and scenario, before any file or process
         out = Path(args.out)
         if out.exists() and not out.is_dir():
             raise BosunError(f"output folder {out} is a file")
         result = run_study(
-            study, scatter, out, scheduler=args.scheduler, workers=args.workers,
-            progress=_progress_bar("study operability", unit="sim"),
+            study, scatter, out, scheduler=scheduler, workers=args.workers,
+            progress=_progress_bar("study operability", unit="sim"), max_runs=args.max_runs,
         )  # fmt: skip
         doc = save(result, out)
     except OperabilityError as err:
@@ -1266,6 +1277,9 @@ def _load_plugin_commands(sub) -> None:
 
 # ---------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
+    from app.analysis.operability import MAX_RUNS as MAX_STUDY_RUNS
+    from app.analysis.operability import RUNS_CEILING as STUDY_RUNS_CEILING
+
     parser = _Parser(
         prog="bosun",
         description="Operator HMI and universal-input teleoperation for maritime cranes and robots.",
@@ -1439,17 +1453,31 @@ def build_parser() -> argparse.ArgumentParser:
         "--scatter", required=True, metavar="NAME|FILE",
         help="north-atlantic (IACS Rec. 34, Hs × Tz) or a CSV: hs\\tp,TP1,… (or hs\\tz,TZ1,…) then HS,p1,…",
     )  # fmt: skip
-    b.add_argument("--headings", type=float, nargs="+", default=[90.0, 135.0, 180.0], help="[deg] (90 135 180)")
-    b.add_argument("--seeds", type=int, default=2, help="wave seeds per cell and heading (default 2)")
-    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time per run [s] (300)")
+    b.add_argument(
+        "--headings", type=_finite_float, nargs="+", default=[90.0, 135.0, 180.0],
+        help="[deg], each within ±360 (default 90 135 180)",
+    )  # fmt: skip
+    b.add_argument("--seeds", type=_positive_int, default=2, help="wave seeds per cell and heading, 1–1000 (default 2)")
+    b.add_argument(
+        "--max-runs", type=_positive_int, default=MAX_STUDY_RUNS, metavar="N",
+        help=f"the largest study run: cells with a probability × headings × seeds (default {MAX_STUDY_RUNS}; "
+        f"at most {STUDY_RUNS_CEILING}); a bigger one is refused before any work",
+    )  # fmt: skip
+    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time per run [s], ≤ 10800 (300)")
     b.add_argument("--criterion", type=_positive_float, default=0.1, help="workable: rms(e_c) ≤ this [m] (0.1)")
     b.add_argument("--vessel", default=None, metavar="NAME|FILE", help="vessel (default supply); bosun vessel list")
     b.add_argument(
         "--spectrum", choices=["jonswap", "pm", "torsethaugen"], default=None,
         help="default: pm for a Tz diagram (as IACS Rec. 34 states it), jonswap for a Tp one",
     )  # fmt: skip
-    b.add_argument("--scheduler", default=None, metavar="tcp://HOST:8786", help="a Dask scheduler (default: local)")
-    b.add_argument("--workers", type=int, default=None, help="local cluster's worker processes (default: cores)")
+    b.add_argument(
+        "--scheduler", default=None, metavar="tcp://HOST:8786",
+        help="a Dask scheduler (default: a local cluster); a peer that does not answer as a scheduler within 4 s "
+        "is refused",
+    )  # fmt: skip
+    b.add_argument(
+        "--workers", type=_positive_int, default=None, help="local cluster's worker processes, 1–64 (default: cores)"
+    )
     b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_study_operability)
@@ -1470,7 +1498,8 @@ def build_parser() -> argparse.ArgumentParser:
     ):  # fmt: skip
         b.add_argument(
             flag, dest=flag[2:].replace("-", "_"), type=_positive_float, default=None,
-            help=f"{what}{' [' + unit + ']' if unit else ''} (default: the MSS supply vessel's)",
+            help=f"{what}{' [' + unit + ']' if unit else ''} (default: the MSS supply vessel's; "
+            "physical range: README)",
         )  # fmt: skip
     b.add_argument("--name", default=None, help="the vessel's name (in the table's header)")
     b.add_argument(
@@ -1479,12 +1508,14 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--roll-damping", type=_positive_float, default=0.15, help="total ζ44 at the roll natural frequency (0.15)"
     )
-    b.add_argument("--nx", type=int, default=40, help="panels along the half hull (default 40)")
-    b.add_argument("--nz", type=int, default=8, help="panels down its girth (default 8)")
-    b.add_argument("--w-min", type=_positive_float, default=0.1, help="lowest wave frequency [rad/s] (0.1)")
-    b.add_argument("--w-max", type=_positive_float, default=2.0, help="highest wave frequency [rad/s] (2.0)")
-    b.add_argument("--n-w", type=int, default=40, help="number of frequencies (default 40)")
-    b.add_argument("--heading-step", type=_positive_float, default=10.0, help="heading step [deg] (default 10)")
+    b.add_argument("--nx", type=int, default=40, help="panels along the half hull, 4–200 (default 40)")
+    b.add_argument("--nz", type=int, default=8, help="panels down its girth, 2–50; nx × nz ≤ 2000 (default 8)")
+    b.add_argument("--w-min", type=_positive_float, default=0.1, help="lowest wave frequency [rad/s], ≥ 0.01 (0.1)")
+    b.add_argument("--w-max", type=_positive_float, default=2.0, help="highest wave frequency [rad/s], ≤ 20 (2.0)")
+    b.add_argument("--n-w", type=int, default=40, help="number of frequencies, 2–200 (default 40)")
+    b.add_argument(
+        "--heading-step", type=_positive_float, default=10.0, help="heading step [deg], 1–180, divides 360 (10)"
+    )
     b.add_argument("--out", default="out/vessel_rao.csv", help="the RAO table (CSV; default out/vessel_rao.csv)")
     b.add_argument("--json", action="store_true", help="machine-readable output")
     b.set_defaults(func=cmd_vessel_rao)
@@ -1722,6 +1753,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except Exception as err:
+        if interrupted(err):  # Ctrl-C or SIGTERM inside a compiled kernel's call: a SystemError caused by it
+            print("bosun: interrupted", file=sys.stderr)
+            return 130
+        raise
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

@@ -83,3 +83,30 @@ class RobotTypeError(BosunError):
 
 class JointInputError(BosunError):
     """Joint values that do not fit the robot: wrong count or not finite."""
+
+
+def shown(text: str, limit: int = 80) -> str:
+    """A field from a file quoted for an error line so that what is in it is unambiguous: control characters
+    (a TAB, a newline, …) as ``<TAB>``, ``<LF>``, ``<U+0007>``, a backslash as itself, at most ``limit``
+    characters.  ``repr`` showed a real TAB as ``'hs\\tp'``, which reads as the backslash-t a user meant to
+    type (issue 27, item 10)."""
+    names = {"\t": "<TAB>", "\n": "<LF>", "\r": "<CR>", "\ufeff": "<BOM>"}
+    out = "".join(names.get(ch, ch if ch.isprintable() else f"<U+{ord(ch):04X}>") for ch in str(text))
+    if len(out) > limit:
+        out = out[: limit - 1] + "…"
+    return f"'{out}'"
+
+
+def interrupted(exc: BaseException | None) -> bool:
+    """True when ``exc`` is a KeyboardInterrupt or was raised while one was being handled or by one.
+
+    Ctrl-C (or SIGTERM, which the CLI raises as KeyboardInterrupt) that lands while a compiled numba kernel
+    boxes or unboxes its arguments in Python code surfaces as ``SystemError: CPUDispatcher(…) returned a
+    result with an exception set``, the KeyboardInterrupt as its cause (issue 27, item 10)."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False

@@ -15,17 +15,27 @@ def main() -> int:
     import faulthandler
     import signal
 
-    def terminated(*_):  # SIGTERM while the modules still load (seconds on a busy machine) is Ctrl-C too: one
-        raise KeyboardInterrupt  # line, 130; a command with its own SIGTERM handling sets it later
-
-    signal.signal(signal.SIGTERM, terminated)
     if hasattr(signal, "SIGUSR1"):  # ``kill -USR1 PID`` prints every thread's stack (a hung process explains itself)
         faulthandler.register(signal.SIGUSR1, all_threads=True)
+
+    def terminated(*_):
+        raise KeyboardInterrupt
+
+    # SIGTERM is Ctrl-C from the first moment: one line and status 130 also while the CLI still loads (it
+    # ended the process silently with -15 before app.cli set its own handler; issue 27, item 10)
+    signal.signal(signal.SIGTERM, terminated)
     try:
         from app.cli import main as cli_main
 
         code = cli_main()
     except KeyboardInterrupt:
+        print("bosun: interrupted", file=sys.stderr)
+        code = INTERRUPTED
+    except Exception as err:
+        from app.errors import interrupted
+
+        if not interrupted(err):  # an interrupt inside a compiled kernel's call surfaces as a SystemError
+            raise
         print("bosun: interrupted", file=sys.stderr)
         code = INTERRUPTED
     if code == INTERRUPTED:
@@ -36,4 +46,35 @@ def main() -> int:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(INTERRUPTED)
-    return code
+    return _finish(code)
+
+
+def _finish(code: int) -> int:
+    """Leave with ``code`` once the command is done, an interrupt still answered until the very end.
+
+    The interpreter's own teardown clears its modules after it has put the default signal handlers back:
+    a SIGTERM there (up to a second after a study printed its result, with Dask, numba and matplotlib
+    loaded) killed the process with status −15 and no line (issue 27, item 10).  So the teardown's parts
+    that matter run here, each interruptible with one line and status 130: other non-daemon threads are
+    joined and the exit functions run (multiprocessing's, Dask's, logging's); then the process leaves
+    without clearing modules (the operating system frees their memory; every file is closed and written)."""
+    import atexit
+    import signal
+    import threading
+
+    def stop_now(*_):
+        sys.stdout.flush()
+        print("bosun: interrupted", file=sys.stderr, flush=True)
+        os._exit(INTERRUPTED)
+
+    if threading.current_thread() is not threading.main_thread():
+        return code
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, stop_now)
+    for t in threading.enumerate():
+        if t is not threading.current_thread() and not t.daemon:
+            t.join()
+    atexit._run_exitfuncs()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)

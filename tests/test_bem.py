@@ -169,3 +169,44 @@ def test_bem_vessel_within_15_percent_of_the_shipx_table(mss_table, dof, heading
         assert mine < 1e-3
     else:
         assert 0.85 <= mine / ref <= 1.15, f"BEM {mine:.4f} vs table {ref:.4f} (ratio {mine / ref:.3f})"
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"nx": 100000}, "nx must be a whole number from 4 to 200"),
+        ({"nx": 200, "nz": 50}, r"200 × 50 = 10000 panels a side, more than 2000"),
+        ({"n_w": 100000}, "n_w must be from 2 to 200"),
+        ({"w_max": 1e300}, r"w_max ≤ 20 rad/s"),
+        ({"heading_step": 0.001}, "heading step"),
+    ],
+)
+def test_a_computation_out_of_bounds_is_refused_before_any_work(kw, match):
+    """Issue 27, item 6: ``--nx 100000`` was accepted and ran without bound."""
+    from app.marine.bem import BemError, BemInputs
+
+    with pytest.raises(BemError, match=match):
+        BemInputs(**kw)
+
+
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [
+        (["--lpp", "1e300"], r"lpp 1e\+300 m is outside 5 … 500 m"),
+        (["--mass", "1e300"], r"mass 1e\+300 kg is outside"),
+        (["--nx", "100000"], "nx must be a whole number from 4 to 200"),
+    ],
+)
+def test_vessel_rao_refuses_absurd_particulars_and_meshes_in_one_line(tmp_path, argv, match):
+    """Issue 27, item 6: ``--lpp 1e300`` was an OverflowError traceback, ``--mass 1e300`` four NumPy warnings
+    and a whole computation before its error, ``--nx 100000`` ran without bound.  One line, exit 2, no file."""
+    import re
+
+    out = tmp_path / "r.csv"
+    res = subprocess.run(
+        [sys.executable, "-m", "app", "vessel", "rao", *argv, "--out", str(out)],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.count("\n") == 1 and re.search(match, res.stderr), res.stderr
+    assert "Traceback" not in res.stderr and "Warning" not in res.stderr and not out.exists()

@@ -188,3 +188,42 @@ def test_a_command_whose_extra_is_missing_says_what_to_install(capsys, monkeypat
     assert err.count("\n") == 1 and "Traceback" not in err
     needed = {"gui": ("PyQt5", "pyqtgraph", "OpenGL"), "joystick": ("pygame",)}[extra]  # the first one missing
     assert any(f"needs {m}," in err for m in needed) and f"pip install 'bosun[{extra}]'" in err, err
+
+
+def _cpu_seconds(pid: int) -> float:
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process's CPU time from /proc")
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGINT"])
+def test_an_interrupt_inside_a_compiled_kernel_is_one_line_and_130(tmp_path, sig):
+    """Issue 27, item 10: Ctrl-C or SIGTERM while ``bosun analyze`` ran the GA's compiled kernel printed
+    ``SystemError: CPUDispatcher(…) returned a result with an exception set`` and exit 1 (6 of 6 interrupts).
+    The signal is sent once the process has spent 10 s of CPU (imports and kernels take 3-5 s): the
+    GA's solves, most of whose time is the compiled kernel."""
+    import signal
+    import time
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "app", "analyze", "comau_smart5_6dof", "--grid", "14", "--out", str(tmp_path / "a")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": root},
+    )  # fmt: skip
+    try:
+        end = time.monotonic() + 240
+        while True:
+            assert proc.poll() is None, proc.communicate()[1][-800:]
+            assert time.monotonic() < end, "the study did not start solving"
+            if _cpu_seconds(proc.pid) > 10.0:
+                break
+            time.sleep(0.1)
+        proc.send_signal(getattr(signal, sig))
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130 and err == "bosun: interrupted\n", err[-800:]
+    assert not (tmp_path / "a").exists()

@@ -184,3 +184,18 @@ def test_sigint_or_sigterm_at_any_moment_of_a_study_leaves_it_complete_or_absent
         else:
             assert proc.returncode == 130 and "interrupted" in err
         assert not [p for p in tmp_path.iterdir() if ".partial-" in p.name]
+
+
+@pytest.mark.parametrize(("command", "flag"), [("tac", "--vessel"), ("vvmc", "--vessel")])
+def test_an_absurd_rao_file_is_refused_in_one_line(capsys, tmp_path, command, flag):
+    """Issue 27, item 8: a heave RAO of 1e300 m/m loaded without complaint; the crane head's state went
+    infinite and the lab's simulated source had significant heave inf.  The loader refuses it, naming line
+    and field."""
+    head = "w,heading_deg," + ",".join(f"{d}_amp,{d}_phase" for d in ("surge", "sway", "heave", "roll", "pitch", "yaw"))
+    row = "{w},0,0.1,0,0.1,0,{heave},3.1,0.01,0,0.01,0,0.01,0"
+    f = tmp_path / "absurd.csv"
+    f.write_text(f"{head}\n{row.format(w=0.5, heave=1)}\n{row.format(w=0.6, heave='1e300')}\n", encoding="utf-8")
+    code, _, err = run(capsys, "sim", command, flag, str(f), "--duration", "30", "--out", str(tmp_path / "o"))
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "absurd.csv:3: field heave_amp: 1e300 m/m is outside 0 … 100 m/m" in err
+    assert not (tmp_path / "o").exists()

@@ -3,8 +3,11 @@ scheduler started separately on loopback give identical tables; an interrupted s
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -125,3 +128,206 @@ def test_two_columns_that_name_the_same_sea_run_it_once(tmp_path):
     res = run_study(st, load_scatter(path), tmp_path / "out", workers=1)
     assert res.computed == 1 and len(res.table) == 2 and res.table[0]["tp"] == res.table[1]["tp"]
     assert res.table[0]["rms_e_c_m"] == res.table[1]["rms_e_c_m"]
+
+
+# ----------------------------------------------------------------------------- bounds (issue 27, items 4, 5, 10)
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bosun(*argv, **kw) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.Popen(
+        [sys.executable, "-m", "app", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=str(ROOT), env=env, **kw,
+    )  # fmt: skip
+
+
+def _finish(proc: subprocess.Popen, timeout: float = 180) -> tuple[int, str, str]:
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, err = proc.communicate()
+        raise AssertionError(f"bosun did not end within {timeout} s: {err[-500:]}") from None
+    return proc.returncode, out, err
+
+
+def _one_line_error(code: int, err: str, text: str) -> None:
+    assert code == 2, err
+    assert err.count("\n") == 1 and err.startswith("bosun: error: ") and text in err, err
+
+
+def test_a_study_over_its_run_limit_is_refused_before_any_work(tmp_path):
+    """Issue 27, item 4: a study's cells × headings × seeds are bounded (``--max-runs``, in --help) and checked
+    before any file or process: 100 × 100 cells × 3 headings × 2 seeds = 60 000 simulations."""
+    f = tmp_path / "s.csv"
+    f.write_text(
+        "hs\\tp," + ",".join(f"{3 + 0.1 * j:.1f}" for j in range(100)) + "\n"
+        + "".join(f"{0.5 + 0.01 * i:.2f}," + ",".join(["1"] * 100) + "\n" for i in range(100)),
+        encoding="utf-8",
+    )  # fmt: skip
+    out = tmp_path / "o"
+    code, _, err = _finish(_bosun("study", "operability", "--scatter", str(f), "--out", str(out)))
+    _one_line_error(code, err, "10,000 cells × 3 headings × 2 seeds = 60,000 simulations, more than the limit")
+    assert "--max-runs" in err and not out.exists()
+    code, _, err = _finish(_bosun("study", "operability", "--scatter", str(f), "--max-runs", "1000000"))
+    _one_line_error(code, err, "the run limit must be 1 to 100,000")
+    code, text, _ = _finish(_bosun("study", "operability", "--help"))
+    assert code == 0 and "--max-runs N" in text and "10000" in text
+
+
+def _silent_server() -> tuple[socket.socket, list]:
+    """A port that accepts connections and never speaks."""
+    import threading
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(8)
+    conns: list = []
+
+    def accept():
+        with contextlib.suppress(OSError):
+            while True:
+                conns.append(srv.accept()[0])
+
+    threading.Thread(target=accept, daemon=True).start()
+    return srv, conns
+
+
+def _http_server():
+    """An HTTP server that answers whatever it is sent with "HTTP/1.0 400" (Dask read it as a frame length)."""
+    import socketserver
+    import threading
+
+    class Handler(socketserver.BaseRequestHandler):
+        def handle(self):
+            with contextlib.suppress(OSError):
+                self.request.recv(1024)
+                self.request.sendall(b"HTTP/1.0 400 Bad Request\r\nContent-Length: 0\r\n\r\n")
+
+    srv = socketserver.ThreadingTCPServer(("127.0.0.1", 0), Handler)
+    srv.daemon_threads = True
+    threading.Thread(target=srv.serve_forever, daemon=True).start()
+    return srv
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("peer", ["http-url", "http-server", "silent", "closed"])
+def test_a_bad_scheduler_fails_in_one_line_within_seconds(tmp_path, peer):
+    """Issue 27, item 5: ``--scheduler`` at an HTTP server was a traceback (Dask read "HTTP/1.0" as a frame
+    length of 3 EiB), a port that accepts and never speaks hung past 120 s, ``http://…`` was a traceback.  Now
+    one line, exit 2, within 10 s (asserted with slack: 20 s on a busy machine), and no folder made."""
+    scatter = tmp_path / "s.csv"
+    scatter.write_text("hs\\tp,7\n1.5,1\n", encoding="utf-8")
+    closers = []
+    if peer == "http-url":
+        address, expect = "http://127.0.0.1:8787", "is a web address"
+    elif peer == "http-server":
+        srv = _http_server()
+        closers.append(srv.shutdown)
+        address, expect = f"tcp://127.0.0.1:{srv.server_address[1]}", "is not a Dask scheduler"
+    elif peer == "silent":
+        srv, _conns = _silent_server()
+        closers.append(srv.close)
+        address, expect = f"127.0.0.1:{srv.getsockname()[1]}", "no Dask scheduler answered within 4 s"
+    else:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        address, expect = f"tcp://127.0.0.1:{port}", "no Dask scheduler"  # "… there: …" or "… answered within 4 s"
+    out = tmp_path / "a" / "o"
+    try:
+        t0 = time.monotonic()
+        code, _, err = _finish(
+            _bosun("study", "operability", "--scatter", str(scatter), "--scheduler", address, "--out", str(out)),
+            timeout=150,
+        )
+        elapsed = time.monotonic() - t0
+    finally:
+        for close in closers:
+            close()
+    _one_line_error(code, err, expect)
+    assert elapsed < 20.0, f"{elapsed:.1f} s"
+    print(f"{peer}: refused in {elapsed:.1f} s")
+    assert not (tmp_path / "a").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("argv", "expect"),
+    [
+        (["--headings", "400"], "heading 400° is outside ±360°"),
+        (["--headings", "nan"], "is not a finite number"),
+        (["--vessel", "/no/such/rao.csv"], "no such RAO file"),
+        (["--duration", "1e9"], "duration must be in"),
+        (["--scheduler", "http://127.0.0.1:8787"], "is a web address"),
+    ],
+)
+def test_a_failed_study_leaves_no_folder_it_made(tmp_path, argv, expect):
+    """Issue 27, item 10: eight kinds of failed study (bad headings, a missing vessel, a bad scheduler, …)
+    left an empty ``--out`` folder behind; every input is now checked before a folder is made."""
+    scatter = tmp_path / "s.csv"
+    scatter.write_text("hs\\tp,7\n1.5,1\n", encoding="utf-8")
+    out = tmp_path / "new" / "o"
+    code, _, err = _finish(_bosun("study", "operability", "--scatter", str(scatter), "--out", str(out), *argv))
+    assert code == 2 and err.count("\n") == 1 and expect in err, err
+    assert not (tmp_path / "new").exists()
+
+
+def _descendants(pid: int) -> list[int]:
+    kids = []
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        if ppid == pid:
+            kids += [int(d), *_descendants(int(d))]
+    return kids
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc for the worker processes")
+@pytest.mark.parametrize("how", ["SIGTERM", "Ctrl-C"])
+def test_sigterm_ends_a_running_study_and_its_workers_within_seconds(tmp_path, how):
+    """Issue 27, items 4 and 10: SIGTERM (to the study's process) or Ctrl-C (SIGINT to its whole process group,
+    as a terminal sends it) ends a study within 2 s with its workers (asserted with slack: 5 s), one line
+    "bosun: interrupted", status 130; the finished cells stay (the resume cache).  Before, each worker printed
+    its own KeyboardInterrupt traceback after Ctrl-C."""
+    from tests.helpers import process_running
+
+    scatter = tmp_path / "s.csv"
+    scatter.write_text("hs\\tp,7,9\n1.5,1,1\n3,1,1\n", encoding="utf-8")
+    out = tmp_path / "o"
+    proc = _bosun(
+        "study", "operability", "--scatter", str(scatter), "--out", str(out), "--workers", "2", "--duration", "60",
+        "--seeds", "3", start_new_session=True,
+    )  # fmt: skip
+    try:
+        end = time.monotonic() + 240
+        while not (out / "cells").is_dir() or not any((out / "cells").glob("*.json")):
+            assert proc.poll() is None, proc.communicate()[1]
+            assert time.monotonic() < end, "the study never finished a cell"
+            time.sleep(0.2)
+        workers = _descendants(proc.pid)
+        t0 = time.monotonic()
+        if how == "SIGTERM":
+            proc.send_signal(signal.SIGTERM)
+        else:
+            os.killpg(proc.pid, signal.SIGINT)
+        code, _, err = _finish(proc, timeout=60)
+        elapsed = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    print(f"{how} to exit: {elapsed:.2f} s, {len(workers)} child processes")
+    assert code == 130 and err == "bosun: interrupted\n", err
+    assert elapsed < 5.0, f"{elapsed:.2f} s"
+    end = time.monotonic() + 5
+    while any(process_running(p) for p in workers) and time.monotonic() < end:
+        time.sleep(0.1)
+    assert not [p for p in workers if process_running(p)], "worker processes outlived the study"
+    assert len(list((out / "cells").glob("*.json"))) >= 1

@@ -206,3 +206,28 @@ def test_a_cell_out_of_range_refuses_the_study_and_a_bom_file_loads(tmp_path):
     f.write_bytes(b"# caf\xe9\nhs\\tp,9\n2,1\n")  # Latin-1
     with pytest.raises(OperabilityError, match="not UTF-8 text"):
         load_scatter(f)
+
+
+def test_a_real_tab_in_the_header_is_shown_as_a_tab_not_as_backslash_t(tmp_path):
+    """Issue 27, item 10: a header "hs<TAB>p" was quoted back as 'hs\\tp', which reads as the hs\\tp asked for."""
+    f = tmp_path / "s.csv"
+    f.write_text("hs\tp,7\n1,1\n", encoding="utf-8")
+    with pytest.raises(OperabilityError, match=r"with a backslash, got 'hs<TAB>p'") as err:
+        load_scatter(f)
+    assert "\\t" not in str(err.value).split("got")[1]
+    f.write_text("hs\\tp,7\n1,x\u0007\n", encoding="utf-8")
+    with pytest.raises(OperabilityError, match=r"s.csv:2: Tp 7 s: 'x<U\+0007>' is not a number"):
+        load_scatter(f)
+
+
+def test_a_scatter_file_over_its_bound_is_refused_before_it_is_read(tmp_path):
+    """Issue 27, item 4: a 3 000 × 800 diagram (4.8 MB) drove a study to 8.7 GB."""
+    f = tmp_path / "big.csv"
+    with open(f, "w", encoding="utf-8") as fh:
+        fh.write("hs\\tp," + ",".join(f"{3 + 0.01 * j:.2f}" for j in range(800)) + "\n")
+        row = ",".join(["1"] * 800)
+        for i in range(3000):
+            fh.write(f"{0.5 + 0.001 * i:.3f},{row}\n")
+    bound = r"big.csv: 4,8\d\d,\d\d\d bytes; a scatter diagram is at most 1,000,000 bytes"
+    with pytest.raises(OperabilityError, match=bound):
+        load_scatter(f)

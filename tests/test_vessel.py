@@ -273,3 +273,86 @@ def test_compiled_body_velocities_equal_the_reference():
     eta, deta, ddeta = (rng.normal(scale=s, size=(200, 6)) for s in (0.8, 1.5, 3.0))
     for got, want in zip(kernels.body_velocities(eta, deta, ddeta), body_velocities(eta, deta, ddeta), strict=True):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+# ----------------------------------------------------------------------------- bounds (issue 27, items 6, 8, 10)
+def _row(w="0.5", heading="0", heave="0.1", phase="0"):
+    cells = ["0.1,0"] * 6
+    cells[2] = f"{heave},{phase}"
+    return f"{w},{heading}," + ",".join(cells)
+
+
+@pytest.mark.parametrize(
+    ("rows", "match"),
+    [
+        ([_row(), _row(w="0.6", heave="1e300")], r"<t>:3: field heave_amp: 1e300 m/m is outside 0 … 100 m/m"),
+        ([_row(), _row(w="1e300")], r"<t>:3: field w: 1e300 rad/s is outside 0.01 … 20 rad/s"),
+        ([_row(w="5e-324"), _row()], r"<t>:2: field w: 5e-324 rad/s is outside 0.01 … 20 rad/s"),
+        ([_row(), _row(w="0.6", phase="1e300")], r"<t>:3: field heave_phase: 1e300 rad is outside"),
+        ([_row(), _row(w="0.6", heading="1e300")], r"<t>:3: field heading_deg: 1e300 deg is outside"),
+    ],
+)
+def test_absurd_rao_values_are_refused_with_line_and_field(rows, match):
+    """Issue 27, item 8: a heave RAO of 1e300 m/m and frequencies of 1e300 or 5e-324 rad/s loaded, and the
+    crane-head state went infinite.  The CSV loader (files and the protocol's set_vessel upload) names the
+    line and field; the table itself (an MSS .mat file) refuses them too."""
+    with pytest.raises(VesselError, match=match):
+        load_rao_csv(_csv(rows), "<t>")
+
+
+def test_the_rao_table_refuses_values_out_of_the_physical_bounds_whatever_its_source():
+    w, h = np.array([0.5, 1.0]), np.array([0.0])
+    amp, phase = np.full((6, 2, 1), 0.1), np.zeros((6, 2, 1))
+    RAOTable(w, h, amp, phase)
+    big = amp.copy()
+    big[2, 1, 0] = 1e300
+    with pytest.raises(VesselError, match=r"heave amplitude 1e\+300 m/m at w = 1 rad/s, heading 0° is above 100"):
+        RAOTable(w, h, big, phase, source="v.mat")
+    big = amp.copy()
+    big[3, 0, 0] = 11.0
+    with pytest.raises(VesselError, match=r"roll amplitude 11 rad/m .* above 10 rad/m"):
+        RAOTable(w, h, big, phase)
+    for bad in (np.array([5e-324, 1.0]), np.array([0.5, 1e300])):
+        with pytest.raises(VesselError, match=r"outside 0\.01 … 20 rad/s"):
+            RAOTable(bad, h, amp, phase)
+
+
+def test_the_set_vessel_upload_refuses_an_absurd_table():
+    from app.engine.scene import CommandError
+    from app.engine.vessel_upload import VesselChoice
+
+    choice = VesselChoice()
+    with pytest.raises(CommandError, match=r"up.csv:3: field heave_amp: 1e300 m/m is outside"):
+        choice.take(csv=_csv([_row(), _row(w="0.6", heave="1e300")]), label="up.csv")
+    assert choice.table is None  # nothing changed
+
+
+def test_an_rao_csv_with_a_byte_order_mark_loads(tmp_path):
+    """Excel's "CSV UTF-8" starts the file with a BOM: it was refused ("missing column(s) w")."""
+    t = parametric_rao(w=np.linspace(0.2, 2.0, 4), headings_deg=[0, 90])
+    f = tmp_path / "excel.csv"
+    f.write_bytes(b"\xef\xbb\xbf" + rao_to_csv(t).encode())
+    np.testing.assert_allclose(load_rao(f).amp, t.amp, atol=1e-7)
+    np.testing.assert_allclose(load_rao_csv("\ufeff" + rao_to_csv(t), "upload").amp, t.amp, atol=1e-7)
+    f.write_bytes(b"w,caf\xe9\n")
+    with pytest.raises(VesselError, match="not UTF-8 text"):
+        load_rao(f)
+    # the other CSV readers: a Stewart platform's motion file (the scatter diagram's: test_scatter.py)
+    from app.sim.stewart import parse_timeseries_csv
+
+    ts = parse_timeseries_csv("\ufefft,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0.1,0,0,0,0,0\n", "m.csv")
+    assert ts.t.tolist() == [0.0, 1.0]
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("lpp", 1e300, r"lpp 1e\+300 m is outside 5 … 500 m"),
+        ("mass", 1e300, r"mass 1e\+300 kg is outside 1000 … 1e\+09 kg"),
+        ("beam", 0.01, r"beam 0.01 m is outside 1 … 100 m"),
+        ("gm_l", 1e7, r"gm_l 1e\+07 m is outside"),
+    ],
+)
+def test_particulars_have_physical_ranges(field, value, match):
+    with pytest.raises(VesselError, match=match):
+        VesselParticulars(**{field: value})

@@ -22,15 +22,18 @@ Table 1, the North Atlantic (Global Wave Statistics areas 8, 9, 15, 16), Hs × T
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import hashlib
 import io
+import itertools
 import json
 import logging
 import math
+import multiprocessing
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,9 +41,29 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from app.errors import BosunError
+from app.errors import BosunError, one_line, shown
 
 CELL_VERSION = 1  # bump when a cell's simulation changes: older cached cells are not used
+
+# Bounds of a study, checked before any work (issue 27, item 4: a 3 000 × 800 diagram drove a study to 8.7 GB).
+#: simulations (cells with a probability × headings × seeds) a study runs unless told more (``--max-runs``):
+#: 4× the 2 534 of the README's seven-heading North Atlantic study
+MAX_RUNS = 10_000
+#: the most ``--max-runs`` allows: the table and the cells' results are held in memory (≈ 2 kB a simulation)
+RUNS_CEILING = 100_000
+#: a scatter diagram file, checked before it is read (a 100 × 100 diagram of 8-digit numbers is 90 kB)
+MAX_SCATTER_BYTES = 1_000_000
+MAX_HEADING = 360.0  # |heading| [deg]
+MAX_SEEDS = 1000
+MAX_DURATION = 10_800.0  # s: a simulated sea state is at most 3 h (DNV-RP-C205 §3.3.1: short-term stationary seas)
+MAX_WORKERS = 64  # worker processes of a local cluster
+#: tasks queued on the cluster beyond one a worker: results arrive as they finish, memory stays bounded
+QUEUE_PER_WORKER = 4
+#: s: a scheduler address must answer Dask's handshake and say it is a scheduler within this (then the client
+#: connects with the rest of the 10 s a bad scheduler may take to be refused)
+PROBE_TIMEOUT = 4.0
+CLIENT_TIMEOUT = 4.0
+SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss")
 
 
 class OperabilityError(BosunError):
@@ -81,6 +104,12 @@ def load_scatter(path: str | Path) -> Scatter:
         names = ", ".join(SCATTERS)
         raise OperabilityError(f"{path}: no such scatter diagram (a CSV file, or a shipped one: {names})")
     try:
+        size = path.stat().st_size
+        if size > MAX_SCATTER_BYTES:
+            raise OperabilityError(
+                f"{path}: {size:,} bytes; a scatter diagram is at most {MAX_SCATTER_BYTES:,} bytes "
+                "(a 100 × 100 diagram is 90 kB)"
+            )
         text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's "CSV UTF-8" starts with a BOM
     except UnicodeDecodeError as err:
         raise OperabilityError(f"{path}: not UTF-8 text (byte {err.start}): save it as CSV UTF-8") from None
@@ -100,7 +129,7 @@ def load_scatter(path: str | Path) -> Scatter:
         try:
             v = float(text)
         except ValueError:
-            raise OperabilityError(f"{path}:{n}: {what}: {text!r} is not a number") from None
+            raise OperabilityError(f"{path}:{n}: {what}: {shown(text)} is not a number") from None
         if not math.isfinite(v) or v < 0:
             raise OperabilityError(f"{path}:{n}: {what}: {text} must be a finite number ≥ 0")
         return v
@@ -111,7 +140,7 @@ def load_scatter(path: str | Path) -> Scatter:
     if corner not in ("hs\\tp", "hs\\tz"):
         raise OperabilityError(
             f"{path}:{n0}: the first field names the periods: hs\\tp (peak) or hs\\tz (zero up-crossing), "
-            f"got {cells[0]!r}"
+            f"with a backslash, got {shown(cells[0])}"
         )
     period = corner[-2:]
     what = "peak period" if period == "tp" else "zero up-crossing period"
@@ -179,12 +208,17 @@ class OperabilityStudy:
             raise OperabilityError(f"mode must be off, tac or cooperative, got {self.mode!r}")
         if not self.headings:
             raise OperabilityError("at least one heading is needed")
+        for h in self.headings:
+            if not (math.isfinite(h) and -MAX_HEADING <= h <= MAX_HEADING):
+                raise OperabilityError(f"heading {h:g}° is outside ±{MAX_HEADING:g}°")
         if len(set(self.headings)) != len(self.headings):
             raise OperabilityError(f"headings repeated: {', '.join(f'{h:g}' for h in self.headings)}")
-        if self.seeds < 1:
-            raise OperabilityError(f"seeds must be ≥ 1, got {self.seeds}")
-        if not (self.duration > 0 and self.criterion > 0):
-            raise OperabilityError("duration and criterion must be positive")
+        if not 1 <= self.seeds <= MAX_SEEDS:
+            raise OperabilityError(f"seeds must be 1 to {MAX_SEEDS}, got {self.seeds}")
+        if not (math.isfinite(self.duration) and 0 < self.duration <= MAX_DURATION):
+            raise OperabilityError(f"duration must be in (0, {MAX_DURATION:g}] s (3 h), got {self.duration:g}")
+        if not (math.isfinite(self.criterion) and self.criterion > 0):
+            raise OperabilityError(f"criterion must be a positive number, got {self.criterion:g}")
 
 
 def vessel_id(vessel: str | None) -> str | None:
@@ -243,26 +277,267 @@ class StudyResult:
     unsimulated: float = 0.0  # probability of the cells that cannot be simulated (breaking seas): not workable
 
 
+def study_runs(study: OperabilityStudy, scatter: Scatter) -> int:
+    """The simulations a study asks for: cells with a probability × headings × seeds."""
+    return int(np.count_nonzero(scatter.prob > 0)) * len(study.headings) * study.seeds
+
+
+def check_study(study: OperabilityStudy, scatter: Scatter, max_runs: int = MAX_RUNS) -> None:
+    """Everything a study is made of, checked before any work, file or process (one line each): its size
+    against ``max_runs`` (at most ``RUNS_CEILING``), the vessel (loaded: the RAO bounds too), and one cell's
+    scenario (spectrum, duration, time step)."""
+    if not 1 <= max_runs <= RUNS_CEILING:
+        raise OperabilityError(f"the run limit must be 1 to {RUNS_CEILING:,}, got {max_runs:,}")
+    n_cells = int(np.count_nonzero(scatter.prob > 0))
+    runs = study_runs(study, scatter)
+    if runs > max_runs:
+        raise OperabilityError(
+            f"{scatter.source}: {n_cells:,} cells × {len(study.headings)} headings × {study.seeds} seeds = {runs:,} "
+            f"simulations, more than the limit of {max_runs:,} (--max-runs N raises it, up to {RUNS_CEILING:,})"
+        )
+    from app.marine.vessels import vessel_rao
+    from app.scenarios.tac import TacScenario
+
+    try:
+        vessel_rao(study.vessel)
+        TacScenario(
+            hs=float(scatter.hs[0]), tp=9.0, heading=study.headings[0], duration=study.duration, dt=study.dt,
+            mode=study.mode, spectrum=study.spectrum, rao=study.vessel,
+        )  # fmt: skip
+    except BosunError as err:
+        raise OperabilityError(str(err)) from None
+
+
+@contextlib.contextmanager
+def _quiet(*names: str) -> Iterator[None]:
+    """Dask's loggers at CRITICAL meanwhile: a peer that is no scheduler is reported in one line of ours."""
+    loggers = [logging.getLogger(n) for n in names]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, levels, strict=True):
+            lg.setLevel(level)
+
+
+def check_scheduler(address: str, timeout: float = PROBE_TIMEOUT) -> str:
+    """The scheduler's address (``tcp://HOST:PORT``; ``HOST:PORT`` is taken as tcp) once its peer has answered
+    Dask's handshake and an ``identity`` request as a scheduler, within ``timeout`` seconds; else one line.
+
+    Issue 27, item 5: an HTTP server's reply was read as a frame length (Dask tried to allocate 3 EiB), a port
+    that accepted and never spoke hung the client past 120 s, ``http://…`` was a traceback."""
+    text = address.strip()
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        scheme, rest = "tcp", text
+    scheme = scheme.lower()
+    if scheme in ("http", "https"):
+        raise OperabilityError(
+            f"--scheduler {shown(address)} is a web address: a Dask scheduler listens on tcp://HOST:PORT "
+            "(8786 by default; the dashboard's http port is not it)"
+        )
+    if scheme not in SCHEDULER_SCHEMES:
+        raise OperabilityError(
+            f"--scheduler {shown(address)}: unknown scheme {shown(scheme)} "
+            f"(tcp://HOST:PORT, or {', '.join(SCHEDULER_SCHEMES)})"
+        )
+    host, _, port = rest.rpartition(":")
+    if not host or not port.isdigit() or not 1 <= int(port) <= 65535 or "/" in rest or any(c.isspace() for c in rest):
+        raise OperabilityError(f"--scheduler {shown(address)}: expected {scheme}://HOST:PORT (port 1–65535)")
+    url = f"{scheme}://{rest}"
+    import asyncio
+
+    try:
+        from distributed.comm import connect
+    except ImportError:
+        raise OperabilityError("operability studies need Dask: pip install 'bosun[study]'") from None
+
+    async def identity() -> Any:
+        comm = await connect(url, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        with _quiet("distributed", "tornado", "asyncio"):
+            reply = asyncio.run(asyncio.wait_for(identity(), timeout))
+    except TimeoutError:
+        raise OperabilityError(
+            f"--scheduler {url}: no Dask scheduler answered within {timeout:g} s (nothing there, or a peer that "
+            "does not speak Dask's protocol)"
+        ) from None
+    except OSError as err:
+        raise OperabilityError(f"--scheduler {url}: no Dask scheduler there: {one_line(str(err), 200)}") from None
+    except Exception as err:  # garbage read as Dask frames: MemoryError, OverflowError, ValueError, msgpack's …
+        raise OperabilityError(
+            f"--scheduler {url}: the peer is not a Dask scheduler (its answer is not Dask's protocol: "
+            f"{type(err).__name__})"
+        ) from None
+    kind = reply.get("type") if isinstance(reply, dict) else None
+    if kind != "Scheduler":
+        what = f"a Dask {kind}" if isinstance(kind, str) else "an unknown Dask peer"
+        raise OperabilityError(f"--scheduler {url}: the peer is {what}, not a scheduler")
+    return url
+
+
 def _client(scheduler: str | None, workers: int | None):
+    """(client, cluster or None, the processes the cluster started); a remote scheduler is checked first."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
         raise OperabilityError("operability studies need Dask: pip install 'bosun[study]'") from None
     if scheduler:
+        url = check_scheduler(scheduler)
         try:
-            return Client(scheduler, timeout="20s"), None
-        except OSError as err:
-            raise OperabilityError(f"no Dask scheduler at {scheduler}: {err}") from None
-    cluster = LocalCluster(
-        n_workers=workers or max(1, (os.cpu_count() or 1)), threads_per_worker=1, processes=True,
-        dashboard_address=None, silence_logs=logging.CRITICAL,  # a worker's heartbeat racing the shutdown
-        # logged a traceback after a finished study; a task's own error still reaches fut.result()
-    )  # fmt: skip
+            with _quiet("distributed"):
+                return Client(url, timeout=f"{CLIENT_TIMEOUT:g}s"), None, []
+        except (OSError, TimeoutError, ValueError) as err:
+            raise OperabilityError(f"--scheduler {url}: cannot connect: {one_line(str(err), 200)}") from None
+    n = workers or max(1, (os.cpu_count() or 1))
+    before = set(multiprocessing.active_children())
+    cluster = None
     try:
-        return Client(cluster), cluster
-    except Exception:
-        cluster.close()
+        with _quiet_resource_tracker():
+            cluster = LocalCluster(
+                n_workers=n, threads_per_worker=1, processes=True,
+                dashboard_address=None, silence_logs=logging.CRITICAL,  # a worker's heartbeat racing the shutdown
+                # logged a traceback after a finished study; a task's own error still reaches fut.result()
+            )  # fmt: skip
+        procs = [p for p in multiprocessing.active_children() if p not in before]
+        client = Client(cluster)
+        from app.analysis.study_workers import IgnoreCtrlC
+
+        client.register_plugin(IgnoreCtrlC())
+        return client, cluster, procs
+    except BaseException:
+        # Ctrl-C or SIGTERM while the cluster starts: its worker processes end now, not at their next heartbeat
+        _kill([p for p in multiprocessing.active_children() if p not in before], cluster)
+        if cluster is not None:
+            with contextlib.suppress(Exception):
+                cluster.close(timeout=2)
         raise
+
+
+@contextlib.contextmanager
+def _quiet_resource_tracker() -> Iterator[None]:
+    """The multiprocessing resource tracker started meanwhile (the cluster's first semaphore starts it) ignores
+    its own "leaked semaphore objects" warning: a study interrupted while its cluster started left the
+    nannies' queues to the tracker, which cleans them up, as it is there to, and said so in three lines
+    after "bosun: interrupted".  Only that warning (its message starts "resource_tracker")."""
+    old = os.environ.get("PYTHONWARNINGS")
+    rule = "ignore:resource_tracker:UserWarning"
+    os.environ["PYTHONWARNINGS"] = f"{old},{rule}" if old else rule
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("PYTHONWARNINGS", None)
+        else:
+            os.environ["PYTHONWARNINGS"] = old
+
+
+def _kill(procs: list, cluster=None) -> None:
+    """End a local cluster's worker processes at once (a graceful close waits for running simulations: 4 s);
+    its nannies are told first that the workers are going (else each starts a new one, and the close waits)."""
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        with contextlib.suppress(Exception):
+            nanny.close_gracefully(reason="bosun: the study ended")
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.kill()
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(timeout=1)
+
+
+def _make_dirs(path: Path) -> list[Path]:
+    """``path`` and its missing parents made; the ones made, deepest first (a failed study removes them)."""
+    made = []
+    p = path
+    while not p.exists():
+        made.append(p)
+        if p.parent == p:
+            break
+        p = p.parent
+    path.mkdir(parents=True, exist_ok=True)
+    return made
+
+
+def _remove_if_empty(made: list[Path]) -> None:
+    for p in made:  # deepest first; a folder that holds anything (a finished cell: the resume cache) stays
+        with contextlib.suppress(OSError):
+            p.rmdir()
+
+
+def _run_cells(
+    study: OperabilityStudy,
+    todo: list[tuple[str, dict[str, Any]]],
+    done: list[dict[str, Any]],
+    total: int,
+    cache: Path,
+    scheduler: str | None,
+    workers: int | None,
+    progress: Callable[[int, int], None] | None,
+) -> tuple[int, str]:
+    """Run ``todo`` on a cluster, each result appended to ``done`` and written to ``cache`` as it arrives;
+    (workers, scheduler address).  The cluster holds a few tasks a worker at a time (memory stays bounded
+    whatever the study's size).  On failure or interrupt the local workers end at once and the folders made
+    here are removed unless a finished cell is in them."""
+    from distributed import as_completed
+
+    client, cluster, procs = _client(scheduler, workers)
+    finished = False
+    made: list[Path] = []
+    try:
+        try:
+            made = _make_dirs(cache)
+        except OSError as err:
+            raise OperabilityError(f"cannot create {cache}: {err.strerror or err}") from None
+        if progress is not None:
+            progress(len(done), total)
+        n_workers = len(client.scheduler_info().get("workers", {}))
+        address = client.scheduler.address
+        pending = iter(todo)
+        keys: dict[str, str] = {}
+        running = as_completed()
+
+        def submit(k: int) -> None:
+            for key, p in itertools.islice(pending, k):
+                fut = client.submit(run_cell, p, vessel=study.vessel, pure=False)
+                keys[fut.key] = key
+                running.add(fut)
+
+        submit(QUEUE_PER_WORKER * max(n_workers, 2))
+        for fut in running:
+            res = fut.result()
+            key = keys.pop(fut.key)
+            tmp = cache / f".{key}.partial"
+            tmp.write_text(json.dumps(res), encoding="utf-8")
+            tmp.replace(cache / f"{key}.json")
+            done.append(res)
+            submit(1)
+            if progress is not None:
+                progress(len(done), total)
+        finished = True
+    finally:
+        if not finished:
+            _kill(procs, cluster)
+        try:
+            # after a failure the close must not hide it (nor wait on the workers just ended)
+            with contextlib.nullcontext() if finished else contextlib.suppress(Exception):
+                client.close(timeout=CLIENT_TIMEOUT)
+                if cluster is not None:
+                    cluster.close(timeout=10)
+        except BaseException:  # interrupted while a finished study's cluster closes gracefully: end it now
+            _kill(procs, cluster)
+            raise
+        if not finished:
+            _remove_if_empty(made)
+    return n_workers, address
 
 
 def run_study(
@@ -272,12 +547,21 @@ def run_study(
     scheduler: str | None = None,
     workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    max_runs: int = MAX_RUNS,
 ) -> StudyResult:
-    """Run (or resume) the study; every finished cell is in ``out/cells`` at once."""
+    """Run (or resume) the study; every finished cell is in ``out/cells`` at once.
+
+    Everything is checked before any file or process is made (:func:`check_study`, the cells' seas, the
+    scheduler); a study that fails or is interrupted removes the folders it made unless a finished cell is in
+    them (the resume cache), and ends a local cluster's workers at once."""
+    check_study(study, scatter, max_runs)
+    if workers is not None and not 1 <= workers <= MAX_WORKERS:
+        raise OperabilityError(f"workers must be 1 to {MAX_WORKERS}, got {workers}")
     tps, why = cell_periods(scatter, study.spectrum)  # a study that cannot be made is refused before any file
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise OperabilityError(f"output folder {out} is a file")
     cache = out / "cells"
-    cache.mkdir(parents=True, exist_ok=True)
     todo, done = [], []
     seen: set[str] = set()
     vid = vessel_id(study.vessel)  # the file read and hashed once
@@ -303,32 +587,15 @@ def run_study(
                     todo.append((key, p))
     total = len(todo) + len(done)
     cached = len(done)
-    if progress is not None:
-        progress(cached, total)
     t0 = time.perf_counter()
     n_workers, address = 0, "cache"
     if todo:
-        from distributed import as_completed
-
-        client, cluster = _client(scheduler, workers)
-        try:
-            n_workers = len(client.scheduler_info().get("workers", {}))
-            address = client.scheduler.address
-            futures = client.map(run_cell, [p for _, p in todo], vessel=study.vessel, pure=False)
-            keys = {fut.key: key for fut, (key, _) in zip(futures, todo, strict=True)}
-            for fut in as_completed(futures):
-                res = fut.result()
-                key = keys[fut.key]
-                tmp = cache / f".{key}.partial"
-                tmp.write_text(json.dumps(res), encoding="utf-8")
-                tmp.replace(cache / f"{key}.json")
-                done.append(res)
-                if progress is not None:
-                    progress(len(done), total)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        # an interrupted cluster start leaves tasks whose failure asyncio reports at garbage collection
+        # ("Task exception was never retrieved", a traceback after "bosun: interrupted"): not a study's news
+        with _quiet("asyncio") if scheduler is None else contextlib.nullcontext():
+            n_workers, address = _run_cells(study, todo, done, total, cache, scheduler, workers, progress)
+    elif progress is not None:
+        progress(cached, total)
     wall = time.perf_counter() - t0
     table, oper = aggregate(study, scatter, done, tps, why)
     unsim = float(sum(scatter.prob[ij] for ij in why))

@@ -43,6 +43,19 @@ from app.marine.vessel import RAOTable, VesselParticulars
 from app.marine.waves import G
 
 RHO = 1025.0  # sea water [kg/m³]
+#: Bounds of a computation (issue 27, item 6: ``--nx 100000`` ran without bound), checked before any work.
+#: The mesh: Capytaine's influence matrices are dense, two complex N/2 × N/2 blocks each for the mirrored
+#: hull, so memory grows with the panels squared (≈ 64 B × (nx·nz)²: 0.26 GB at the 2 000 panels a side
+#: allowed, 6 MB at the default 40 × 8); frequencies within the RAO bounds of the table it makes
+#: (``app.marine.vessel.RAO_W_RANGE``); at most 200 of them and 360 headings (one diffraction problem
+#: each); water 990–1050 kg/m³ (fresh to the saltiest sea water).  The particulars have their physical
+#: ranges in ``app.marine.vessel.PARTICULAR_RANGES``.
+NX_RANGE = (4, 200)
+NZ_RANGE = (2, 50)
+MAX_PANELS_A_SIDE = 2000
+MAX_FREQUENCIES = 200
+MIN_HEADING_STEP = 1.0  # deg
+RHO_RANGE = (990.0, 1050.0)
 #: the total roll damping ratio at the roll natural frequency: the MSS toolbox's offshore supply vessel
 #: model (Fossen, ``osv.m``: ``vessel.zeta4 = 0.15``, relative damping ratio in roll)
 ROLL_DAMPING_DEFAULT = 0.15
@@ -80,14 +93,34 @@ class BemInputs:
     rho: float = RHO
 
     def __post_init__(self) -> None:
-        if not (0.0 < self.w_min < self.w_max and self.n_w >= 2):
+        from app.marine.vessel import RAO_W_RANGE
+
+        for name, (lo, hi) in (("nx", NX_RANGE), ("nz", NZ_RANGE)):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and lo <= v <= hi):
+                raise BemError(f"mesh: {name} must be a whole number from {lo} to {hi}, got {v}")
+        if self.nx * self.nz > MAX_PANELS_A_SIDE:
             raise BemError(
-                f"frequencies: need 0 < w_min < w_max and n_w ≥ 2, got {self.w_min}, {self.w_max}, {self.n_w}"
+                f"mesh: {self.nx} × {self.nz} = {self.nx * self.nz} panels a side, more than {MAX_PANELS_A_SIDE} "
+                "(the solver's dense matrices grow with the panels squared)"
             )
-        if not (0.0 < self.heading_step <= 180.0 and (360.0 / self.heading_step).is_integer()):
-            raise BemError(f"heading step must divide 360°, got {self.heading_step:g}")
+        lo, hi = RAO_W_RANGE
+        if not (math.isfinite(self.w_min) and math.isfinite(self.w_max) and lo <= self.w_min < self.w_max <= hi):
+            raise BemError(
+                f"frequencies: need {lo:g} ≤ w_min < w_max ≤ {hi:g} rad/s, got {self.w_min:g} and {self.w_max:g}"
+            )
+        if not (isinstance(self.n_w, int) and 2 <= self.n_w <= MAX_FREQUENCIES):
+            raise BemError(f"frequencies: n_w must be from 2 to {MAX_FREQUENCIES}, got {self.n_w}")
+        if not (MIN_HEADING_STEP <= self.heading_step <= 180.0 and (360.0 / self.heading_step).is_integer()):
+            raise BemError(
+                f"heading step must divide 360° and be {MIN_HEADING_STEP:g}° to 180°, got {self.heading_step:g}"
+            )
         if not (0.0 < self.roll_damping < 1.0):
             raise BemError(f"roll damping ratio must be in (0, 1), got {self.roll_damping:g}")
+        if self.cwp is not None and not (math.isfinite(self.cwp) and 0.0 < self.cwp < 1.0):
+            raise BemError(f"waterplane coefficient must be in (0, 1), got {self.cwp:g}")
+        if not RHO_RANGE[0] <= self.rho <= RHO_RANGE[1]:
+            raise BemError(f"water density must be {RHO_RANGE[0]:g} to {RHO_RANGE[1]:g} kg/m³, got {self.rho:g}")
 
     @property
     def omegas(self) -> NDArray[np.float64]:

@@ -51,6 +51,24 @@ from app.marine.waves import G, WaveComponents
 DOF_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 CSV_COLUMNS = ("w", "heading_deg") + tuple(f"{d}_{part}" for d in DOF_NAMES for part in ("amp", "phase"))
 
+#: Physical bounds of an RAO table (issue 27, item 8), checked by every loader (CSV file, the protocol's
+#: ``set_vessel`` upload, MSS ``.mat``) before a table is used: a heave RAO of 1e300 m/m made the crane-head
+#: state infinite.  Frequencies: 0.01–20 rad/s, periods 0.31 s to 10.5 min, around the ocean's gravity and
+#: infragravity waves (periods 1 s to 5 min: Munk 1950, "Origin and generation of waves", Proc. 1st Conf.
+#: Coastal Eng., Fig. 1, the ocean-wave spectrum).  Amplitudes: a linear RAO is the hull's long-wave response
+#: (1 m/m in heave; the wave slope ω²/g, at most 0.1 rad/m below the 1 rad/s under which hull roll and pitch
+#: resonances lie) times the dynamic amplification 1/(2ζ), at most 100 for a resonance damped at ζ = 0.5 %
+#: of critical (potential-flow roll damping alone: 0.63 % for the shipped supply vessel's table, its header's
+#: ``roll_radiation_damping_ratio``): translations ≤ 100 m/m, rotations ≤ 10 rad/m.  Phases within ±1000 rad
+#: (float64 keeps cos φ to 1e-13 there; an unwrapped phase k·x is ≤ 20 rad at 2 rad/s 50 m from the origin);
+#: headings within ±720°.
+RAO_W_RANGE = (0.01, 20.0)  # rad/s
+RAO_AMP_MAX = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0)  # m/m (surge, sway, heave), rad/m (roll, pitch, yaw)
+RAO_PHASE_MAX = 1000.0  # rad
+RAO_HEADING_MAX = 720.0  # deg
+#: an RAO file's size, checked before it is read (the shipped 40 × 36 table is 0.3 MB; an upload is ≤ 4 MiB)
+MAX_RAO_BYTES = 10_000_000
+
 
 class VesselError(BosunError):
     """Bad vessel particulars or RAO data (names the file, line and field when it can)."""
@@ -95,6 +113,22 @@ class RAOTable:
                 raise VesselError(f"{where}: RAO {name} has NaN or infinite values")
         if np.any(amp < 0):
             raise VesselError(f"{where}: RAO amplitudes must not be negative")
+        lo, hi = RAO_W_RANGE
+        if w[0] < lo or w[-1] > hi:
+            bad = w[0] if w[0] < lo else w[-1]
+            raise VesselError(
+                f"{where}: frequency {bad:.6g} rad/s is outside {lo:g} … {hi:g} rad/s (RAO bounds, README)"
+            )
+        for d, top in enumerate(RAO_AMP_MAX):
+            if amp[d].size and amp[d].max() > top:
+                i, j = np.unravel_index(int(np.argmax(amp[d])), amp[d].shape)
+                unit = "m/m" if d < 3 else "rad/m"
+                raise VesselError(
+                    f"{where}: {DOF_NAMES[d]} amplitude {amp[d, i, j]:.6g} {unit} at w = {w[i]:g} rad/s, heading "
+                    f"{math.degrees(h[j]):g}° is above {top:g} {unit} (RAO bounds, README)"
+                )
+        if np.abs(phase).max(initial=0.0) > RAO_PHASE_MAX:
+            raise VesselError(f"{where}: RAO phases must be within ±{RAO_PHASE_MAX:g} rad (RAO bounds, README)")
         for name, arr in (("w", w), ("headings", h), ("amp", amp), ("phase", phase)):
             object.__setattr__(self, name, arr)
         object.__setattr__(self, "_complex", amp * np.exp(1j * phase))
@@ -146,6 +180,24 @@ def significant_response(rao, spectrum_values: ArrayLike, w: ArrayLike, heading:
 
 
 # ----------------------------------------------------------------------------- parametric model
+#: Physical ranges of main particulars (issue 27, item 6: ``--lpp 1e300`` overflowed, ``--mass 1e300`` ran a
+#: whole BEM computation into NaN): field -> (lowest, highest, unit).  They bracket every hull afloat, from a
+#: 5 m workboat to the largest ship built (Seawise Giant: 458 m, B 68.9 m, T 24.6 m, 657 000 t displacement):
+#: C_B from fast craft (0.35) to a box barge (1); GM_L up to a box barge's BM_L = L²/(12 T) at 500 m × 0.2 m.
+PARTICULAR_RANGES: dict[str, tuple[float, float, str]] = {
+    "lpp": (5.0, 500.0, " m"),
+    "beam": (1.0, 100.0, " m"),
+    "draft": (0.2, 35.0, " m"),
+    "cb": (0.3, 1.0, ""),
+    "gm_t": (0.01, 1000.0, " m"),
+    "gm_l": (0.1, 1e5, " m"),
+    "r44": (0.1, 50.0, " m"),
+    "r55": (0.5, 250.0, " m"),
+    "r66": (0.5, 250.0, " m"),
+    "mass": (1e3, 1e9, " kg"),
+}
+
+
 @dataclass(frozen=True)
 class VesselParticulars:
     """Main particulars for :func:`parametric_rao`; defaults: the MSS supply vessel (TAC §9)."""
@@ -171,6 +223,12 @@ class VesselParticulars:
                 raise VesselError(f"vessel particulars: {f} must be a positive number, got {v}")
         if not 0 < self.cb <= 1:
             raise VesselError(f"vessel particulars: cb must be in (0, 1], got {self.cb}")
+        for f, (lo, hi, unit) in PARTICULAR_RANGES.items():
+            v = getattr(self, f)
+            if not lo <= v <= hi:
+                raise VesselError(
+                    f"vessel particulars: {f} {v:.6g}{unit} is outside {lo:g} … {hi:g}{unit} (physical ranges, README)"
+                )
         if not (math.isfinite(self.roll_damping) and 0 < self.roll_damping < 1):
             raise VesselError(f"vessel particulars: roll_damping must be in (0, 1), got {self.roll_damping}")
         if not (math.isfinite(self.roll_added_inertia) and self.roll_added_inertia >= 0):
@@ -254,11 +312,23 @@ def load_rao(path: str | Path) -> RAOTable:
     if not path.is_file():
         raise VesselError(f"{path}: no such RAO file")
     suffix = path.suffix.lower()
+    if suffix not in (".mat", ".csv"):
+        raise VesselError(f"{path}: unknown RAO file type '{suffix}' (use .mat or .csv)")
+    try:
+        size = path.stat().st_size
+    except OSError as err:
+        raise VesselError(f"{path}: cannot be read: {err.strerror or err}") from None
+    if size > MAX_RAO_BYTES:
+        raise VesselError(f"{path}: {size:,} bytes; an RAO file is at most {MAX_RAO_BYTES:,} bytes")
     if suffix == ".mat":
         return load_rao_mat(path)
-    if suffix == ".csv":
-        return load_rao_csv(path.read_text(encoding="utf-8"), str(path))
-    raise VesselError(f"{path}: unknown RAO file type '{suffix}' (use .mat or .csv)")
+    try:
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's "CSV UTF-8" starts with a byte-order mark
+    except UnicodeDecodeError as err:
+        raise VesselError(f"{path}: not UTF-8 text (byte {err.start}): save it as CSV UTF-8") from None
+    except OSError as err:
+        raise VesselError(f"{path}: cannot be read: {err.strerror or err}") from None
+    return load_rao_csv(text, str(path))
 
 
 def load_rao_mat(path: str | Path) -> RAOTable:
@@ -329,6 +399,19 @@ def _content_lines(text: str, pace: Callable[[], None] | None) -> tuple[list[int
     return numbers, lines
 
 
+def _csv_bounds(column: str) -> tuple[float, float, str]:
+    """The RAO bounds of one CSV column: (lowest, highest, unit)."""
+    if column == "w":
+        return (*RAO_W_RANGE, "rad/s")
+    if column == "heading_deg":
+        return (-RAO_HEADING_MAX, RAO_HEADING_MAX, "deg")
+    dof, part = column.rsplit("_", 1)
+    if part == "phase":
+        return (-RAO_PHASE_MAX, RAO_PHASE_MAX, "rad")
+    d = DOF_NAMES.index(dof)
+    return (0.0, RAO_AMP_MAX[d], "m/m" if d < 3 else "rad/m")
+
+
 def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | None = None) -> RAOTable:
     """RAO table from CSV text.
 
@@ -337,12 +420,16 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
     yaw_phase`` (any order), then one row per (frequency, heading) pair of a full grid.
     Units: w in rad/s, heading in degrees (0 = following, 180 = head sea), amplitudes in m/m
     (surge, sway, heave) and rad/m (roll, pitch, yaw), phases in rad.  Lines starting with
-    ``#`` are comments.
+    ``#`` are comments; a leading byte-order mark (Excel's "CSV UTF-8") is skipped.  Every value is checked
+    against the RAO bounds (``RAO_W_RANGE``, ``RAO_AMP_MAX``, …: the module's constants) on its line.
 
     ``pace``: called every :data:`PACE_ROWS` rows (an engine's parse off its control loop waits there for
     the loop's idle time, or raises to stop); no step between two calls holds the interpreter for long,
     also for a table of megabytes (issue 27, item 2).
     """
+    if len(text) > MAX_RAO_BYTES:
+        raise VesselError(f"{where}: {len(text):,} characters; an RAO table is at most {MAX_RAO_BYTES:,}")
+    text = text.removeprefix("\ufeff")
     numbers, lines = _content_lines(text, pace)
     if not lines:
         raise VesselError(f"{where}: empty RAO file")
@@ -352,6 +439,7 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
     if missing:
         raise VesselError(f"{where}:{header_line}: missing column(s) {', '.join(missing)}")
     idx = [cols.index(c) for c in CSV_COLUMNS]
+    bounds = [_csv_bounds(c) for c in CSV_COLUMNS]
     data = np.empty((len(lines) - 1, len(CSV_COLUMNS)))  # filled a row at a time (np.array of a list: one long call)
     line_of = np.empty(len(lines) - 1, dtype=np.int64)
     for k in range(len(lines) - 1):
@@ -362,7 +450,7 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
         if len(cells) != len(cols):
             raise VesselError(f"{where}:{n}: expected {len(cols)} fields, got {len(cells)}")
         vals = []
-        for c, i in zip(CSV_COLUMNS, idx, strict=True):
+        for c, i, (lo, hi, unit) in zip(CSV_COLUMNS, idx, bounds, strict=True):
             try:
                 v = float(cells[i])
             except ValueError:
@@ -371,6 +459,11 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
                 raise VesselError(f"{where}:{n}: field {c}: value is not finite")
             if c.endswith("_amp") and v < 0:
                 raise VesselError(f"{where}:{n}: field {c}: amplitude must not be negative")
+            if not lo <= v <= hi:
+                raise VesselError(
+                    f"{where}:{n}: field {c}: {cells[i].strip()} {unit} is outside {lo:g} … {hi:g} {unit} "
+                    "(RAO bounds, README)"
+                )
             vals.append(v)
         data[k] = vals
         line_of[k] = n

@@ -36,7 +36,7 @@ def _shipped_table() -> RAOTable:
     path = shipped_table_path()
     if not path.is_file():
         raise VesselError(f"the shipped RAO table {path} is missing (reinstall Bosun)")
-    table = load_rao_csv(path.read_text(encoding="utf-8"), where=str(path))
+    table = load_rao_csv(path.read_text(encoding="utf-8-sig"), where=str(path))
     return RAOTable(table.w, table.headings, table.amp, table.phase, source=VESSELS["supply"])
 
 

@@ -239,6 +239,7 @@ def parse_timeseries_csv(text: str, where: str = "<csv>") -> TimeSeries:
         ``where:line: what is wrong`` for a missing column, a non-number, NaN/inf, time that does
         not increase, fewer than two rows.
     """
+    text = text.removeprefix("\ufeff")  # a spreadsheet's "CSV UTF-8" starts with a byte-order mark
     rows = list(csv.reader(io.StringIO(text)))
     rows = [(i + 1, r) for i, r in enumerate(rows) if r and any(c.strip() for c in r) and not r[0].startswith("#")]
     if not rows:
