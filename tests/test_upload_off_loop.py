@@ -70,7 +70,8 @@ def test_a_large_upload_holds_up_neither_the_loop_nor_a_stop(serve, big_table, s
     """The 780 × 72 table in 64 parts to a 50 Hz engine; a viewer's STOP the moment the loop takes the last
     part.  No tick spends more than 0.1 s of the loop's CPU (the old loop spent the whole parse in one);
     the STOP latches (14-35 ms measured; the old loop: after the parse, 0.5 s on the issue's machine, seconds
-    here; the bound is 2 s so that a busy machine's scheduler does not fail it); the table is taken, the reply says so, and the swap leaves the STOP latched."""
+    here; the bound is 2 s so that a busy machine's scheduler does not fail it); the table is taken, the
+    reply says so, and the swap leaves the STOP latched."""
     ses = TacSession() if scene == "tac" else LabSession()
     srv, _ = serve(ses, rate=50)
     ticks: list[tuple[float, float]] = []  # (wall, loop-thread CPU) of each tick

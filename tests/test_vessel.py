@@ -322,8 +322,9 @@ def test_the_set_vessel_upload_refuses_an_absurd_table():
     from app.engine.vessel_upload import VesselChoice
 
     choice = VesselChoice()
+    whole = choice.take(csv=_csv([_row(), _row(w="0.6", heave="1e300")]), label="up.csv")
     with pytest.raises(CommandError, match=r"up.csv:3: field heave_amp: 1e300 m/m is outside"):
-        choice.take(csv=_csv([_row(), _row(w="0.6", heave="1e300")]), label="up.csv")
+        whole.parse()  # the scene's job (off the loop in an engine) parses the whole table
     assert choice.table is None  # nothing changed
 
 
