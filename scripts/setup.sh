@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything Bosun needs on a Debian machine (run as root for the system packages):
 #   * Debian packages for Qt's xcb platform, Mesa OpenGL and Xvfb (skipped when present or not root),
-#   * a virtual environment .venv/ with Bosun and its test tools installed from pyproject.toml.
+#   * a virtual environment .venv/ with Bosun, its test tools and the docs site's MkDocs installed from
+#     pyproject.toml (the extra all).
 # Safe to run again: it only installs what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,7 +46,7 @@ if ! .venv/bin/python -m pip install --disable-pip-version-check -e '.[all]' >"$
   echo "setup: pip install failed (full log: $log)" >&2
   exit 1
 fi
-PYGAME_HIDE_SUPPORT_PROMPT=1 .venv/bin/python -c "import app, numpy, scipy, lxml, PyQt5, pyqtgraph, pygame, capytaine, distributed" \
+PYGAME_HIDE_SUPPORT_PROMPT=1 .venv/bin/python -c "import app, numpy, scipy, lxml, PyQt5, pyqtgraph, pygame, capytaine, distributed, mkdocs, material" \
   || { echo "setup: installed packages do not import" >&2; exit 1; }
 # compile ahead: numba caches the kernels' machine code on disk, so no engine compiles in its first tick
 .venv/bin/python -c "from app.warmup import warm_up; t = warm_up(); print(f'setup: kernels compiled ({t:.1f} s)')" \

@@ -38,7 +38,8 @@ def test_the_core_does_not_depend_on_qt_or_pygame():
     extras = PYPROJECT["project"]["optional-dependencies"]
     assert {"gui", "joystick", "bench", "test"} <= set(extras)
     assert any("pygame" in d for d in extras["joystick"]) and any("PyQt5" in d for d in extras["gui"])
-    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui,plc,marine,study]"]  # what setup.sh installs
+    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui,plc,marine,study,docs]"]  # what setup.sh installs
+    assert any(d.startswith("mkdocs-material") for d in extras["docs"])  # the documentation site (issue 28)
     assert any(d.startswith("pyads") for d in extras["plc"])  # the real Motion-Lab's PLC (issue 16)
     assert any(d.startswith("capytaine") for d in extras["marine"])  # bosun vessel rao (issue 17)
     assert any(d.startswith("dask[distributed]") for d in extras["study"])  # bosun study operability (issue 17)
