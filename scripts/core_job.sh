@@ -38,7 +38,7 @@ for m in PyQt5 pyqtgraph pygame OpenGL pytestqt; do
 done
 # the tests, robot files, docs and README beside them, but no app/ or ui/: they import the installed wheel
 mkdir -p "$job/tree"
-for f in tests robots docs README.md pyproject.toml .ci scripts; do cp -r "$f" "$job/tree/"; done
+for f in tests robots docs README.md mkdocs.yml pyproject.toml .ci scripts; do cp -r "$f" "$job/tree/"; done
 find "$job/tree" -name __pycache__ -prune -exec rm -rf {} +
 [ -d ../shared ] && ln -sfn "$(cd .. && pwd)/shared" "$job/shared"  # tests read ../shared/data beside the tree
 cd "$job/tree"
