@@ -73,6 +73,19 @@ class RobotXmlError(BosunError):
         super().__init__(f"{where}: {message}")
 
 
+def error_line(err: BaseException, limit: int) -> str:
+    """``str(err)`` as one line of at most ``limit`` characters that still names what it refused: a
+    :class:`RobotXmlError`'s ``file:line`` is kept whole when it fits in half the line, else its path loses
+    its middle (:func:`printable_path`), and the message is cut instead (cutting the whole line at its end
+    dropped the line number, or the file name itself, of a refusal under a long path: issue 28)."""
+    if isinstance(err, RobotXmlError):
+        where = printable_path(err.path, max(20, limit // 2))
+        if err.line:
+            where += f":{err.line}"
+        return f"{where}: {one_line(err.message, max(1, limit - len(where) - 2))}"
+    return one_line(str(err), limit)
+
+
 class RobotNotFoundError(BosunError):
     """A robot name or path that names no robot file."""
 

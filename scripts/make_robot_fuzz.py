@@ -159,7 +159,7 @@ def main(out: Path) -> int:
     out.mkdir(parents=True, exist_ok=True)
     for old in out.glob("*.xml"):
         old.unlink()
-    texts = {name: (ROOT / "robots" / f"{name}.xml").read_text() for name in SOURCES}
+    texts = {name: (ROOT / "robots" / f"{name}.xml").read_text(encoding="utf-8") for name in SOURCES}
     count = 0
     for kind, n in PLAN.items():
         made = 0

@@ -72,7 +72,7 @@ def arm_and_hold(client, axes, state_of, flag: str, sends: int = 40) -> dict:
 def process_running(pid: int) -> bool:
     """True while the process exists and is not a zombie (Linux /proc)."""
     try:
-        with open(f"/proc/{pid}/status") as f:
+        with open(f"/proc/{pid}/status", encoding="utf-8") as f:
             return "\nState:\tZ" not in f.read()
     except FileNotFoundError:
         return False

@@ -76,8 +76,8 @@ def test_the_layer_contracts_catch_an_import_across_floors(tmp_path, where, line
     shutil.copytree(ROOT / "app", tmp_path / "app", ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path)
     (tmp_path / "ui").mkdir()
-    (tmp_path / "ui" / "__init__.py").write_text("")
-    (tmp_path / "app" / where).write_text(line + "\n")
+    (tmp_path / "ui" / "__init__.py").write_text("", encoding="utf-8")
+    (tmp_path / "app" / where).write_text(line + "\n", encoding="utf-8")
     res = subprocess.run(
         [_tool("lint-imports"), "--no-cache"], cwd=tmp_path, capture_output=True, text=True, timeout=120
     )

@@ -132,15 +132,15 @@ def test_errors_are_one_line_exit_2(capsys, argv, message):
 
 def test_bad_xml_file_names_file_and_line(capsys, tmp_path):
     f = tmp_path / "arm.xml"
-    f.write_text(GOOD.replace('min="-90" max="90"', 'min="90" max="-90"'))
+    f.write_text(GOOD.replace('min="-90" max="90"', 'min="90" max="-90"'), encoding="utf-8")
     code, _, err = run(capsys, "fk", str(f), "--q", "0", "0")
     assert code == 2
     assert err.strip() == f"bosun: error: {f}:9: joint q1 limits: min (90) must be less than max (-90)"
 
 
 def test_invalid_library_file_is_reported_not_fatal(capsys, tmp_path, monkeypatch):
-    (tmp_path / "good.xml").write_text(GOOD.replace('name="two_link"', 'name="good"'))
-    (tmp_path / "broken.xml").write_text("<robot>")
+    (tmp_path / "good.xml").write_text(GOOD.replace('name="two_link"', 'name="good"'), encoding="utf-8")
+    (tmp_path / "broken.xml").write_text("<robot>", encoding="utf-8")
     monkeypatch.setenv("BOSUN_ROBOTS_DIR", str(tmp_path))
     code, out, err = run(capsys, "robots")
     assert code == 2 and "good" in out and "broken.xml:1: XML syntax error" in err
@@ -191,7 +191,7 @@ def test_a_command_whose_extra_is_missing_says_what_to_install(capsys, monkeypat
 
 
 def _cpu_seconds(pid: int) -> float:
-    with open(f"/proc/{pid}/stat") as f:
+    with open(f"/proc/{pid}/stat", encoding="utf-8") as f:
         fields = f.read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 

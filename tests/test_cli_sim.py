@@ -34,7 +34,7 @@ def test_sim_tac_writes_csv_figures_and_summary(capsys, tmp_path):
     assert doc["x_d_m"] == pytest.approx(6.51, abs=0.01)
     for f in (*FIGURES, "timeseries.csv", "summary.json"):
         assert (tmp_path / f).stat().st_size > 0
-    with open(tmp_path / "timeseries.csv") as fh:
+    with open(tmp_path / "timeseries.csv", encoding="utf-8") as fh:
         rows = list(csv.reader(fh))
     assert rows[0][:4] == ["t", "x", "y", "z"] and "e_c" in rows[0] and len(rows) == 2001
 
@@ -51,7 +51,7 @@ def test_sweep_table_and_plot(capsys, tmp_path):
     )
     assert code == 0
     assert "tac: ratio ≤ 5 % up to Hs = 2 m" in out and "off: ratio ≤ 5 % up to Hs = —" in out
-    doc = json.loads((tmp_path / "sweep.json").read_text())
+    doc = json.loads((tmp_path / "sweep.json").read_text(encoding="utf-8"))
     assert len(doc["rows"]) == 4 and (tmp_path / "sweep.png").stat().st_size > 0
 
 
@@ -114,7 +114,7 @@ def test_sim_vvmc_writes_csv_plots_and_summary(capsys, tmp_path):
     assert c["rms_tool_error_m"] < u["rms_tool_error_m"]
     for f in ("timeseries.csv", "platforms.png", "tool_error.png", "robot_winch_load.png", "summary.json"):
         assert (tmp_path / f).stat().st_size > 0
-    with open(tmp_path / "timeseries.csv") as fh:
+    with open(tmp_path / "timeseries.csv", encoding="utf-8") as fh:
         rows = list(csv.reader(fh))
     n = round(25 / doc["scenario"]["dt"])  # one row a step (dt 0.005 s: the lab PLC's task)
     assert rows[0][0] == "t" and "em1500_heave" in rows[0] and "L_w" in rows[0] and len(rows) == n + 1
@@ -145,7 +145,7 @@ def test_an_interrupted_save_leaves_the_previous_complete_output_and_no_partial_
     before = {p.name: p.read_bytes() for p in out.iterdir()}
 
     def interrupted(result, folder):
-        (folder / "timeseries.csv").write_text("t,x\n0.0,")  # half written when Ctrl-C comes
+        (folder / "timeseries.csv").write_text("t,x\n0.0,", encoding="utf-8")  # half written when Ctrl-C comes
         raise KeyboardInterrupt
 
     monkeypatch.setattr(report, "save_run", interrupted)
@@ -177,8 +177,8 @@ def test_sigint_or_sigterm_at_any_moment_of_a_study_leaves_it_complete_or_absent
         _, err = proc.communicate(timeout=120)
         assert "Traceback" not in err
         if out.exists():  # finished before the signal: complete
-            summary = json.loads((out / "summary.json").read_text())
-            with open(out / "timeseries.csv") as fh:
+            summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+            with open(out / "timeseries.csv", encoding="utf-8") as fh:
                 rows = sum(1 for _ in fh) - 1
             assert rows == summary.get("samples", rows) and rows >= 3000
         else:

@@ -103,7 +103,7 @@ def test_workspace_step_is_checked(head):
 
 
 def test_any_delta_geometry_from_xml(rng):
-    text = Path(load_spec("tac_delta_head").path).read_text()
+    text = Path(load_spec("tac_delta_head").path).read_text(encoding="utf-8")
     small = text.replace('l_k="2.00" l_a="3.25" l_r="7.00" l_p="1.25"', 'l_k="0.20" l_a="0.30" l_r="0.80" l_p="0.05"')
     small = (
         small.replace('rot_x="150"', 'rot_x="90"')

@@ -265,7 +265,7 @@ def test_sigterm_closes_the_gui_and_its_engine(tmp_path, after):
 def _scara():
     from pathlib import Path
 
-    return (Path(__file__).resolve().parents[1] / "robots" / "scara.xml").read_text()
+    return (Path(__file__).resolve().parents[1] / "robots" / "scara.xml").read_text(encoding="utf-8")
 
 
 def test_a_doctype_or_entity_in_a_robot_file_is_refused_with_its_name():

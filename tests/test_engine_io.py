@@ -121,5 +121,5 @@ def test_the_loop_keeps_ticking_and_estop_gets_through_a_junk_flood(serve):
 def test_rate_burst_is_documented_in_the_protocol():
     from pathlib import Path
 
-    text = (Path(__file__).parents[1] / "docs" / "protocol.md").read_text()
+    text = (Path(__file__).parents[1] / "docs" / "protocol.md").read_text(encoding="utf-8")
     assert f"bursts of {RATE_BURST}" in text and "dropped" in text

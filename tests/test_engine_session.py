@@ -141,7 +141,7 @@ def test_estop_stops_in_one_tick_and_latches():
 def test_bad_commands_leave_state_unchanged(tmp_path):
     ses = Session(robot_name="scara", robots_dirs=(str(tmp_path),))
     bad = tmp_path / "bad.xml"
-    bad.write_text("<robot>")
+    bad.write_text("<robot>", encoding="utf-8")
     with pytest.raises(CommandError, match=r"bad\.xml:1: XML syntax error"):
         ses.set_robot(str(bad))
     with pytest.raises(CommandError, match="unknown robot"):
@@ -187,10 +187,10 @@ def test_set_robot_reads_paths_only_inside_the_allowed_robot_folders(tmp_path, m
     monkeypatch.delenv("BOSUN_ROBOTS_DIR", raising=False)
     secret = tmp_path / "outside" / "secret.xml"
     secret.parent.mkdir()
-    secret.write_text("<robot>top secret content</robot>")
+    secret.write_text("<robot>top secret content</robot>", encoding="utf-8")
     allowed = tmp_path / "robots"
     allowed.mkdir()
-    (allowed / "arm.xml").write_text((ROOT / "robots" / "scara.xml").read_text())
+    (allowed / "arm.xml").write_text((ROOT / "robots" / "scara.xml").read_text(encoding="utf-8"), encoding="utf-8")
     (allowed / "escape.xml").symlink_to(secret)
     ses = Session(robot_name="comau_smart5_3dof", robots_dirs=(str(allowed),))
     for ref in [
@@ -230,7 +230,7 @@ def test_set_robot_refusals_name_no_server_path_beyond_the_folder_names(tmp_path
 
     allowed = tmp_path / "site" / "my_robots"
     allowed.mkdir(parents=True)
-    (allowed / "broken.xml").write_text("<robot>")
+    (allowed / "broken.xml").write_text("<robot>", encoding="utf-8")
     ses = Session(robot_name="comau_smart5_3dof", robots_dirs=(str(allowed),))
     for ref in ("/etc/passwd.xml", str(tmp_path / "elsewhere.xml"), str(allowed / "broken.xml"), "broken.xml"):
         with pytest.raises(CommandError) as info:
@@ -265,7 +265,7 @@ def test_robot_files_are_size_checked_before_reading(tmp_path):
 
 def test_a_client_can_send_its_own_robot_file_as_text():
     ses = Session(robot_name="comau_smart5_3dof")
-    ses.set_robot("my/arm.xml", xml=(ROOT / "robots" / "scara.xml").read_text())
+    ses.set_robot("my/arm.xml", xml=(ROOT / "robots" / "scara.xml").read_text(encoding="utf-8"))
     assert ses.robot_name == "scara"
     with pytest.raises(CommandError, match=r"^arm\.xml:1: XML syntax error"):
         ses.set_robot("/home/me/my/arm.xml", xml="<robot>")

@@ -127,7 +127,7 @@ def test_stop_latches_and_reset_clears(qtbot, window):
 
 def test_invalid_xml_gives_error_and_keeps_robot(qtbot, window, tmp_path):
     bad = tmp_path / "broken_arm.xml"
-    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>')
+    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>', encoding="utf-8")
     window.teleop.load_robot_file(str(bad))
     qtbot.waitUntil(lambda: len(window.messages) > 0, timeout=GUI_WAIT)
     title, message = window.messages[-1]
@@ -162,7 +162,7 @@ def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     window.teleop.start_logger()
     qtbot.waitUntil(lambda: window.teleop.logger is not None and window.teleop.logger.rows >= 10, timeout=GUI_WAIT)
     window.teleop.stop_logger()
-    with open(path) as f:
+    with open(path, encoding="utf-8") as f:
         rows = list(csv.reader(f))
     assert rows[0][:4] == ["t", "q_q1", "q_q2", "q_q3"] and len(rows) >= 11
 
@@ -185,7 +185,7 @@ def test_csv_logger_rows_and_closed_mid_run(tmp_path):
         if log.add(replace(state, t=k * 0.02)):
             written += 1
     assert written == 6 and log.done  # t = 0 .. 0.10 s, then the duration ended the file
-    with open(tmp_path / "a.csv") as f:
+    with open(tmp_path / "a.csv", encoding="utf-8") as f:
         rows = list(csv.reader(f))
     assert len(rows) == 7 and rows[0] == [
         "t",
@@ -201,7 +201,7 @@ def test_csv_logger_rows_and_closed_mid_run(tmp_path):
     log2 = StateCsvLogger(tmp_path / "b.csv", ["q"], joint_names=names)
     for k in range(5):
         log2.add(replace(state, t=k * 0.02))
-    with open(tmp_path / "b.csv") as f:
+    with open(tmp_path / "b.csv", encoding="utf-8") as f:
         assert len(list(csv.reader(f))) == 6
     with pytest.raises(ValueError, match="unknown or no signals"):
         StateCsvLogger(tmp_path / "c.csv", ["nope"])

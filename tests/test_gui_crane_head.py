@@ -179,15 +179,15 @@ def test_the_tab_names_the_vessel_and_loads_an_rao_file(qtbot, window, engines, 
     # a table large enough to go in several parts (Bosun's CSV, 60 × 72 rows)
     table = parametric_rao(w=np.linspace(0.1, 3.0, 60), headings_deg=np.arange(0, 360, 5))
     path = tmp_path / "big_vessel.csv"
-    path.write_text(rao_to_csv(table))
-    assert len(path.read_text()) > 3 * 55_000
+    path.write_text(rao_to_csv(table), encoding="utf-8")
+    assert len(path.read_text(encoding="utf-8")) > 3 * 55_000
     assert tab.vessel.send_file(str(path))
     qtbot.waitUntil(lambda: tab.vessel.label.text() == "RAO file big_vessel.csv", timeout=GUI_WAIT)
     assert tab.vessel.combo.currentText() == "RAO file…"
     got = ses.vessel.table
     np.testing.assert_allclose(got.w, table.w) and np.testing.assert_allclose(got.amp, table.amp, rtol=1e-7)
     bad = tmp_path / "bad.csv"
-    bad.write_text("w,heading_deg\n1,2\n")
+    bad.write_text("w,heading_deg\n1,2\n", encoding="utf-8")
     assert not tab.vessel.send_file(str(bad))
     qtbot.waitUntil(
         lambda: any("RAO file not sent" in m and "missing column" in m for _, m in win.messages), timeout=GUI_WAIT

@@ -120,7 +120,7 @@ def test_bad_time_series_is_refused_with_a_dialog(qtbot, window, tmp_path):
     win.tabs.setCurrentWidget(tab)
     qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     bad = tmp_path / "waves.csv"
-    bad.write_text("t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,0,0,0,0,0\n0.5,0,0,0,0,0,0\n")
+    bad.write_text("t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,0,0,0,0,0\n0.5,0,0,0,0,0,0\n", encoding="utf-8")
     p = tab.platforms["em8000"]
     p.source.setCurrentIndex(3)
     p.load_csv(str(bad))
@@ -285,7 +285,7 @@ def test_lab_csv_logger_writes_every_state_for_its_duration(qtbot, window, tmp_p
     tab.log_button.click()
     assert tab.logger is not None and tab.log_button.text() == "Stop logging"
     qtbot.waitUntil(lambda: tab.logger is None, timeout=GUI_WAIT)
-    rows = list(csv.reader(path.open()))
+    rows = list(csv.reader(path.open(encoding="utf-8", newline="")))
     assert tuple(rows[0]) == LAB_LOG_COLUMNS and len(rows) - 1 == 51  # 0 … 2 s every 0.04 s
     t = np.array([float(r[0]) for r in rows[1:]])
     assert t[-1] == pytest.approx(2.0) and np.allclose(np.diff(t), 0.04, atol=1e-6)  # none lost
@@ -308,7 +308,7 @@ def test_lab_csv_logger_stops_cleanly_when_the_engine_goes(qtbot, tmp_path, lab_
     qtbot.waitUntil(lambda: tab.logger is None, timeout=GUI_WAIT)
     assert any("engine lost" in n for n in notices)
     assert all(light.state == "unknown" for light in tab.machine_lights.values())  # nothing known any more
-    lines = path.read_text().splitlines()
+    lines = path.read_text(encoding="utf-8").splitlines()
     assert len(lines) > 11 and all(len(line.split(",")) == len(lines[0].split(",")) for line in lines)
 
 

@@ -158,7 +158,7 @@ def test_item2_no_control_moves_when_the_banner_and_a_message_come_and_go(qtbot,
     qtbot.wait(300)
     assert moved(base, control_geometry(win)) == []
     bad = tmp_path / "broken_arm.xml"  # a message bar appears beside it
-    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>')
+    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>', encoding="utf-8")
     win.teleop.load_robot_file(str(bad))
     qtbot.waitUntil(lambda: win.message_bar.isVisible(), timeout=GUI_WAIT)
     assert "Robot not loaded: E-STOP is latched" in win.message_bar.text.text()

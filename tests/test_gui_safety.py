@@ -163,7 +163,7 @@ def test_item1_estop_not_confirmed_raises_an_alarm(qtbot, rig):
 def test_item2_error_and_file_dialog_leave_stop_live(qtbot, rig, tmp_path):
     win, _ = rig
     bad = tmp_path / "broken_arm.xml"
-    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>')
+    bad.write_text('<robot name="x" type="serial" angle_unit="deg"><description/></robot>', encoding="utf-8")
     win.teleop.load_robot_file(str(bad))
     qtbot.waitUntil(lambda: win.message_bar.isVisible(), timeout=GUI_WAIT)
     assert "broken_arm.xml:1" in win.message_bar.text.text()
@@ -466,7 +466,7 @@ def test_item9_csv_logger_keeps_every_state_while_the_gui_stalls(qtbot, rig, tmp
     time.sleep(1.5)  # the GUI thread is blocked; the link's thread keeps every state it receives
     qtbot.wait(1000)
     win.teleop.stop_logger()
-    with open(path) as f:
+    with open(path, encoding="utf-8") as f:
         rows = list(csv.reader(f))[1:]
     t = np.array([float(r[0]) for r in rows])
     # the engine publishes one state every 4 ticks of 5 ms: consecutive rows 20 ms of engine time apart

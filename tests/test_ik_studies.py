@@ -25,7 +25,7 @@ def test_error_distribution_grid_and_outputs(tmp_path):
     assert s["targets"] == 64 and s["reachable"] == int(res.reachable.sum()) and 0 < s["reachable"] < 64
     assert s["success"] == s["reachable"]  # the closed form solves every reachable target
     res.write_csv(tmp_path / "e.csv")
-    with open(tmp_path / "e.csv") as f:
+    with open(tmp_path / "e.csv", encoding="utf-8") as f:
         rows = list(csv.reader(f))
     assert len(rows) == 65 and rows[0][:3] == ["target_x", "target_y", "target_z"]
 
@@ -148,7 +148,7 @@ def test_cli_analyze_and_track_write_files(capsys, tmp_path):
     out = tmp_path / "t"
     assert main(["track", "scara", "--solver", "jacobian", "--duration", "2", "--out", str(out)]) == 0
     assert "rms error" in capsys.readouterr().out
-    with open(out / "tracking.csv") as f:
+    with open(out / "tracking.csv", encoding="utf-8") as f:
         assert len(list(csv.reader(f))) == 22
     assert (out / "tracking.png").read_bytes()[:4] == b"\x89PNG"
 

@@ -279,8 +279,8 @@ def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(t
 
     (tmp_path / "models").mkdir()
     (tmp_path / "sim").mkdir()
-    (tmp_path / "models/kernels.py").write_text("def f(): pass\n")
-    (tmp_path / "sim/kernels.py").write_text("from app.models import kernels as model_kernels\n")
+    (tmp_path / "models/kernels.py").write_text("def f(): pass\n", encoding="utf-8")
+    (tmp_path / "sim/kernels.py").write_text("from app.models import kernels as model_kernels\n", encoding="utf-8")
     files = ("models/kernels.py", "sim/kernels.py")
     assert clear_stale_caches(tmp_path, files) == list(files)  # first look: no stamps yet
     cached = [
@@ -288,11 +288,13 @@ def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(t
         tmp_path / "models/__pycache__/kernels.f-1.py311.nbi",
     ]
     for f in cached:
-        f.write_text("machine code")
+        f.write_text("machine code", encoding="utf-8")
     assert clear_stale_caches(tmp_path, files) == []  # nothing changed: caches kept
     assert all(f.exists() for f in cached)
-    (tmp_path / "models/kernels.py").write_text("def f(): return 1\n")
+    (tmp_path / "models/kernels.py").write_text("def f(): return 1\n", encoding="utf-8")
     assert clear_stale_caches(tmp_path, files) == ["sim/kernels.py"]  # its import changed
     assert not cached[0].exists() and cached[1].exists()  # numba itself handles models/kernels.py's own edit
-    (tmp_path / "sim/kernels.py").write_text("from app.models import kernels as model_kernels\n# edited\n")
+    (tmp_path / "sim/kernels.py").write_text(
+        "from app.models import kernels as model_kernels\n# edited\n", encoding="utf-8"
+    )
     assert clear_stale_caches(tmp_path, files) == []  # an edit of the file itself is numba's to notice

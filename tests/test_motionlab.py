@@ -25,7 +25,7 @@ def lab() -> MotionLab:
 # ----------------------------------------------------------------------------- calibration
 def test_layout_matches_the_lab_calibration(shared_data):
     """The transforms transcribed into robots/labs/motionlab.xml are the lab's H matrices."""
-    calib = json.loads((shared_data / "motionlab_calib.json").read_text())
+    calib = json.loads((shared_data / "motionlab_calib.json").read_text(encoding="utf-8"))
     layout = load_lab()
     for key, T in (
         ("WORLD_TO_EM8000", layout.T_world_n1),

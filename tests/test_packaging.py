@@ -55,7 +55,7 @@ def test_shipped_data_is_found_through_importlib_resources():
 def test_bosun_robots_dir_still_replaces_the_library(tmp_path, monkeypatch):
     from app.models.registry import list_robots
 
-    (tmp_path / "arm.xml").write_text((robot_library() / "scara.xml").read_text())
+    (tmp_path / "arm.xml").write_text((robot_library() / "scara.xml").read_text(encoding="utf-8"), encoding="utf-8")
     monkeypatch.setenv("BOSUN_ROBOTS_DIR", str(tmp_path))
     assert list_robots() == ["arm"]
 

@@ -213,7 +213,7 @@ def test_a_study_runs_below_the_engines_priority():
         deadline = time.monotonic() + 30
         nice = None
         while time.monotonic() < deadline:  # the worker lowers its own priority first thing
-            with open(f"/proc/{pid}/stat") as f:
+            with open(f"/proc/{pid}/stat", encoding="utf-8") as f:
                 nice = int(f.read().rsplit(")", 1)[1].split()[16])
             if nice >= os.nice(0) + STUDY_NICE or nice == 19:
                 break

@@ -71,7 +71,7 @@ def test_bosun_keys_writes_a_pair_and_refuses_to_overwrite(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "engine.key" in out and "engine.key_secret" in out
     assert (tmp_path / "engine.key_secret").stat().st_mode & 0o077 == 0  # secret: owner only
-    assert "secret-key" not in (tmp_path / "engine.key").read_text()
+    assert "secret-key" not in (tmp_path / "engine.key").read_text(encoding="utf-8")
     assert main(["keys", "engine", "--dir", str(tmp_path)]) == 2  # never overwrites a key
     with pytest.raises(KeyFileError, match="holds no secret key"):
         ClientCurve.from_files(str(tmp_path / "engine.key"), str(tmp_path / "engine.key"))

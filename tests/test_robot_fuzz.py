@@ -129,8 +129,8 @@ def test_the_engine_refuses_or_loads_each_file_and_keeps_running():
 
 
 # ---------------------------------------------------------------------------- physical bounds
-SCARA = (ROOT / "robots" / "scara.xml").read_text()
-EM8000 = (ROOT / "robots" / "em8000.xml").read_text()
+SCARA = (ROOT / "robots" / "scara.xml").read_text(encoding="utf-8")
+EM8000 = (ROOT / "robots" / "em8000.xml").read_text(encoding="utf-8")
 
 
 @pytest.mark.parametrize(
@@ -199,7 +199,7 @@ def test_stewart_legs_must_reach_the_neutral_pose_and_each_pose_limit(old, new, 
 
 
 def test_a_huge_coupling_is_refused_before_it_makes_the_jacobian_infinite():
-    text = (ROOT / "robots" / "comau_smart5_3dof.xml").read_text()
+    text = (ROOT / "robots" / "comau_smart5_3dof.xml").read_text(encoding="utf-8")
     assert 'factor="1"' in text
     with pytest.raises(RobotXmlError, match="factor bound"):
         parse_robot_xml(text.replace('factor="1"', 'factor="1e308"', 1))
@@ -207,7 +207,7 @@ def test_a_huge_coupling_is_refused_before_it_makes_the_jacobian_infinite():
 
 def test_bosun_check_names_each_file(tmp_path, capsys):
     bad = tmp_path / "bad.xml"
-    bad.write_text(SCARA.replace('speed="386"', 'speed="0.0000000001"'))
+    bad.write_text(SCARA.replace('speed="386"', 'speed="0.0000000001"'), encoding="utf-8")
     assert cli_main(["check", "scara", str(bad)]) == 2
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("ok ") and "scara" in out[0]

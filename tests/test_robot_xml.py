@@ -146,12 +146,12 @@ def test_bad_xml_raises_one_clear_error(text, pattern):
 
 
 def test_bad_delta_and_stewart():
-    delta = Path(robots_dir(), "tac_delta_head.xml").read_text()
+    delta = Path(robots_dir(), "tac_delta_head.xml").read_text(encoding="utf-8")
     with pytest.raises(RobotXmlError, match=r"delta arm limits: min \(70\) must be less than max \(-40\)"):
         parse_robot_xml(delta.replace('min="-40" max="70"', 'min="70" max="-40"'), "d.xml")
     with pytest.raises(RobotXmlError, match="index 1, 2 and 3 once each"):
         parse_robot_xml(delta.replace('index="3"', 'index="2"'), "d.xml")
-    stewart = Path(robots_dir(), "em8000.xml").read_text()
+    stewart = Path(robots_dir(), "em8000.xml").read_text(encoding="utf-8")
     with pytest.raises(RobotXmlError, match="leg length: min"):
         parse_robot_xml(stewart.replace('min_length="1.6864"', 'min_length="3.5"'), "s.xml")
     with pytest.raises(RobotXmlError, match="pose limit for 'surge' is given twice"):
@@ -172,7 +172,7 @@ def test_missing_file(tmp_path):
 
 def test_load_by_path_and_env_dir(tmp_path, monkeypatch):
     f = tmp_path / "two_link.xml"
-    f.write_text(GOOD)
+    f.write_text(GOOD, encoding="utf-8")
     robot = load_robot(str(f))
     assert robot.name == "two_link" and robot.n_joints == 2
     # theta1 = q1 rotates a 1 m link after a base yaw of 90 deg; d2 = 0.2 + q2 + 0.5 q1; tool 0.1 m on z.

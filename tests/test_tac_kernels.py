@@ -79,7 +79,7 @@ ON_AXIS = math.acos(-0.75 / 3.25)  # a − l_a cos α = 0: the knee on the head'
     ],
 )
 def test_delta_fk_errors_are_the_same(rods, alpha, match):
-    text = Path(load_spec("tac_delta_head").path).read_text().replace('l_r="7.00"', f'l_r="{rods}"')
+    text = Path(load_spec("tac_delta_head").path).read_text(encoding="utf-8").replace('l_r="7.00"', f'l_r="{rods}"')
     heads = [DeltaHead(parse_robot_xml(text, "delta.xml")) for _ in range(2)]
     heads[1].use_kernels = False
     for head in heads:

@@ -166,7 +166,7 @@ def test_load_rao_file_errors(tmp_path):
     with pytest.raises(VesselError, match="no such RAO file"):
         load_rao(tmp_path / "none.csv")
     bad = tmp_path / "x.txt"
-    bad.write_text("1")
+    bad.write_text("1", encoding="utf-8")
     with pytest.raises(VesselError, match="unknown RAO file type"):
         load_rao(bad)
     junk = tmp_path / "junk.mat"

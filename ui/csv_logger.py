@@ -46,7 +46,7 @@ class StateCsvLogger:
         self.signals = list(signals)
         self.duration = duration
         self.joint_names = joint_names  # from the engine's description (column names)
-        self.file = open(self.path, "w", newline="", buffering=1)  # noqa: SIM115 - kept open while logging
+        self.file = open(self.path, "w", encoding="utf-8", newline="", buffering=1)  # noqa: SIM115 - kept open while logging
         self.writer = csv.writer(self.file)
         self.header: list[str] | None = None
         self.t0: float | None = None
@@ -123,7 +123,7 @@ class LabCsvLogger:
             raise ValueError(f"duration must be {lo:g} to {hi:g} s, got {duration:g}")
         self.path = Path(path)
         self.duration = float(duration)
-        self.file = open(self.path, "w", newline="", buffering=1)  # noqa: SIM115 - kept open while logging
+        self.file = open(self.path, "w", encoding="utf-8", newline="", buffering=1)  # noqa: SIM115 - kept open while logging
         self.writer = csv.writer(self.file)
         self.writer.writerow(LAB_LOG_COLUMNS)
         self.t0: float | None = None

@@ -51,7 +51,7 @@ def _f6(values) -> list[str]:
 
 def _write_rows(path: Path, header: list[str], rows) -> None:
     """The CSV files of the studies: a header, then one row per target."""
-    with open(path, "w", newline="") as f:
+    with open(path, "w", encoding="utf-8", newline="") as f:
         w = csv.writer(f)
         w.writerow(header)
         w.writerows(rows)
@@ -467,4 +467,4 @@ def bench_ik(
 
 
 def write_json(obj: Any, path: Path) -> None:
-    path.write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n")
+    path.write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n", encoding="utf-8")

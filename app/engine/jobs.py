@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from app.errors import BosunError, one_line
+from app.errors import BosunError, error_line
 
 log = logging.getLogger("bosun.engine")
 
@@ -121,7 +121,7 @@ class Jobs:
         except SupersededError:
             return
         except BosunError as err:
-            result, error = None, one_line(str(err), 500) or type(err).__name__
+            result, error = None, error_line(err, 500) or type(err).__name__
         except Exception as err:  # a bug: refused in one line, logged, the scene unchanged
             log.exception("%s failed", job.what)
             result, error = None, f"refused: internal error ({type(err).__name__})"
@@ -144,7 +144,7 @@ class Jobs:
                 try:
                     job.apply(job.result)
                 except BosunError as err:
-                    error = one_line(str(err), 500) or type(err).__name__
+                    error = error_line(err, 500) or type(err).__name__
                 except Exception as err:  # a bug in a swap: refused, logged; the loop goes on
                     log.exception("%s: applying its result failed", job.what)
                     error = f"refused: internal error ({type(err).__name__})"

@@ -26,7 +26,7 @@ import numpy as np
 from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, LogEntry, Scene
 from app.engine.studies import STUDIES, StudyError, StudyRunner
-from app.errors import BosunError, one_line, printable
+from app.errors import BosunError, error_line, one_line, printable_path
 from app.ik import DEFAULT, make_solver, solvers_for
 from app.models.registry import (
     allowed_dirs,
@@ -68,7 +68,7 @@ __all__ = ["CommandError", "LogEntry", "Session", "library_entries"]
 
 def _label(ref: str) -> str:
     """The file name a client gave its robot text, as shown in errors."""
-    return printable(ref.replace("\\", "/").rsplit("/", 1)[-1], 80) or "<robot text>"
+    return printable_path(ref.replace("\\", "/").rsplit("/", 1)[-1], 80) or "<robot text>"
 
 
 @functools.cache
@@ -186,10 +186,11 @@ class Session(Scene):
                     raise
                 solver = DEFAULT_SOLVER
             self._load(robot, solver, model, xml)
-        except OSError as err:
-            raise CommandError(f"{_label(robot)}: cannot read: {one_line(str(err), 200)}") from None
+        except OSError as err:  # not str(err): it holds the whole path (the engine's folders), cut at its end
+            why = one_line(err.strerror or type(err).__name__, 200)
+            raise CommandError(f"{_label(robot)}: cannot read: {why}") from None
         except BosunError as err:
-            raise CommandError(one_line(str(err), 300)) from None
+            raise CommandError(error_line(err, 300)) from None
         self.input.disarm("robot changed")
         self.note("info", f"robot {self.robot_name} loaded ({self.robot.n_joints} joints, solver {solver})")
 

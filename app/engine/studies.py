@@ -16,7 +16,7 @@ import queue
 import time
 from typing import Any
 
-from app.errors import BosunError, one_line
+from app.errors import BosunError, error_line, one_line
 
 STUDIES = ("distribution", "tracking")
 PROGRESS_EVERY = 0.1  # s: the worker reports progress at most this often
@@ -56,7 +56,7 @@ def _work(kind: str, xml: str, label: str, solver: str, grid: int, out, cancel) 
             result = track(robot, solver, **hooks)
         out.put(("done", result.to_wire()))
     except (BosunError, ValueError) as err:
-        out.put(("failed", one_line(str(err), 300)))
+        out.put(("failed", error_line(err, 300)))
     except Exception as err:  # a bug: say which, never a silent worker
         out.put(("failed", f"internal error ({type(err).__name__}: {one_line(str(err), 200)})"))
 

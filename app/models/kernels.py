@@ -62,14 +62,14 @@ def clear_stale_caches(root: Path, files: tuple[str, ...] = KERNEL_FILES) -> lis
         stem = Path(name).stem
         stamp = cache / f"{stem}.bosun-imports.sha256"
         with contextlib.suppress(OSError):
-            if stamp.read_text() == digest:
+            if stamp.read_text(encoding="utf-8") == digest:
                 continue
         for f in [*cache.glob(f"{stem}.*.nbi"), *cache.glob(f"{stem}.*.nbc")]:
             with contextlib.suppress(OSError):
                 f.unlink()
         with contextlib.suppress(OSError):  # a read-only install: numba then does not cache either
             cache.mkdir(exist_ok=True)
-            stamp.write_text(digest)
+            stamp.write_text(digest, encoding="utf-8")
         cleared.append(name)
     return cleared
 
