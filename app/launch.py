@@ -11,20 +11,21 @@ import sys
 INTERRUPTED = 130
 
 
+def _terminated(*_):
+    raise KeyboardInterrupt
+
+
 def main() -> int:
-    import faulthandler
-    import signal
-
-    if hasattr(signal, "SIGUSR1"):  # ``kill -USR1 PID`` prints every thread's stack (a hung process explains itself)
-        faulthandler.register(signal.SIGUSR1, all_threads=True)
-
-    def terminated(*_):
-        raise KeyboardInterrupt
-
-    # SIGTERM is Ctrl-C from the first moment: one line and status 130 also while the CLI still loads (it
-    # ended the process silently with -15 before app.cli set its own handler; issue 27, item 10)
-    signal.signal(signal.SIGTERM, terminated)
     try:
+        # inside the try: Ctrl-C 50 ms after start landed in ``import signal`` (its enums), a traceback
+        import faulthandler
+        import signal
+
+        if hasattr(signal, "SIGUSR1"):  # ``kill -USR1 PID`` prints every thread's stack (a hung process says where)
+            faulthandler.register(signal.SIGUSR1, all_threads=True)
+        # SIGTERM is Ctrl-C from the first moment: one line and status 130 also while the CLI still loads (it
+        # ended the process silently with -15 before app.cli set its own handler; issue 27, item 10)
+        signal.signal(signal.SIGTERM, _terminated)
         from app.cli import main as cli_main
 
         code = cli_main()

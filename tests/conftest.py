@@ -14,8 +14,6 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 # QSettings (the GUI's remembered choices) goes to a throw-away folder, never the user's config
 os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="bosun-test-config-")
-# removed when the test process ends (each xdist worker makes its own: 467 were left in /tmp in a day)
-atexit.register(shutil.rmtree, os.environ["XDG_CONFIG_HOME"], ignore_errors=True)
 
 import numpy as np
 import pytest
@@ -26,6 +24,9 @@ try:  # before pytest-qt makes the QApplication: the GL views share shaders (ui/
     share_gl_contexts()
 except ImportError:  # the core without the GUI extra
     pass
+
+# removed when the test process ends (each xdist worker makes its own: 467 were left in /tmp in a day)
+atexit.register(shutil.rmtree, os.environ["XDG_CONFIG_HOME"], ignore_errors=True)
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = ROOT.parent / "shared" / "data"
