@@ -1720,9 +1720,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dir", default="keys", help="folder to write into (default ./keys)")
     p.set_defaults(func=cmd_keys)
 
-    p = sub.add_parser(
-        "cli-reference", help="this command line's reference in Markdown (docs/cli.md, as generated)"
-    )
+    p = sub.add_parser("cli-reference", help="this command line's reference in Markdown (docs/cli.md, as generated)")
     p.set_defaults(func=cmd_cli_reference)
     return parser
 
