@@ -15,8 +15,27 @@ def _terminated(*_):
     raise KeyboardInterrupt
 
 
+#: the processes that run a fixed-rate loop or a screen: one BLAS thread each (see :func:`_one_blas_thread`)
+REALTIME_COMMANDS = ("server", "gui", "view", "joystick")
+
+
+def _one_blas_thread(argv: list[str]) -> None:
+    """An engine, the GUI, a viewer and the joystick client use one BLAS thread (unless the user set it).
+
+    Their matrices are small (6 × 6 Jacobians, the anti-sway's 4-state Riccati equations): a second OpenBLAS
+    thread only spins against the control loop and the other processes on the machine.  Measured on the
+    2-core VM beside a busy process, the Motion-Lab engine's anti-sway gain schedule (82 Riccati solves at
+    start) took 0.32 s with two threads and 0.12 s with one; in a profile, 1.7 s.  Studies, benchmarks and
+    ``vessel rao`` (Capytaine's dense BEM solves) keep OpenBLAS's default.  Set before NumPy loads."""
+    cmd = argv[0] if argv and not argv[0].startswith("-") else "gui"
+    if cmd in REALTIME_COMMANDS:
+        for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(var, "1")
+
+
 def main() -> int:
     try:
+        _one_blas_thread(sys.argv[1:])
         # inside the try: Ctrl-C 50 ms after start landed in ``import signal`` (its enums), a traceback
         import faulthandler
         import signal

@@ -12,6 +12,9 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+# one BLAS thread a test process, as the engines take (app/launch.py): the tests' matrices are small and xdist
+# already runs a process a core; a second OpenBLAS thread a process only spins against the others
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # QSettings (the GUI's remembered choices) goes to a throw-away folder, never the user's config
 os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="bosun-test-config-")
 

@@ -25,7 +25,6 @@ import time
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
 from app.models import kernels
@@ -138,6 +137,9 @@ class JacobianSolver(Solver):
         e_p = x_t - T[:3, 3]
         if self._target_R is None:
             return J[:3], e_p, float(np.linalg.norm(e_p))
+        from scipy.spatial.transform import Rotation  # here: scipy.spatial takes 0.45 s to import, position-only
+        # solves (every engine's teleop) never need it
+
         e_o = Rotation.from_matrix(self._target_R @ T[:3, :3].T).as_rotvec()
         w = self.orientation_weight
         e = np.r_[e_p, w * e_o]

@@ -30,15 +30,18 @@ The inverse and forward kinematics run compiled (:mod:`app.control.tac_kernels`)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import ConvexHull
 
 from app.errors import JointInputError
 from app.geometry import rot_x
 from app.models import crane_head_kernels as kern
 from app.models.spec import RobotSpec
+
+if TYPE_CHECKING:  # scipy.spatial takes 0.45 s to import: only the workspace study needs it, not every engine
+    from scipy.spatial import ConvexHull
 
 
 @dataclass(frozen=True, eq=False)
@@ -229,6 +232,8 @@ class DeltaWorkspace:
         pts = grid[ok]
         if len(pts) < 4:
             raise ValueError(f"no workspace found with grid step {h} m; use a smaller step")
+        from scipy.spatial import ConvexHull
+
         hull = ConvexHull(pts)
         ws = DeltaWorkspace(pts, hull, h, np.zeros(3))
         ws.center = np.array([ws.best_x_on_axis(), 0.0, 0.0])
