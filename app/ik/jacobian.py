@@ -137,8 +137,7 @@ class JacobianSolver(Solver):
         e_p = x_t - T[:3, 3]
         if self._target_R is None:
             return J[:3], e_p, float(np.linalg.norm(e_p))
-        from scipy.spatial.transform import Rotation  # here: scipy.spatial takes 0.45 s to import, position-only
-        # solves (every engine's teleop) never need it
+        from scipy.spatial.transform import Rotation  # loaded by solve_pose, before its clock starts
 
         e_o = Rotation.from_matrix(self._target_R @ T[:3, :3].T).as_rotvec()
         w = self.orientation_weight
@@ -278,6 +277,10 @@ class JacobianSolver(Solver):
         if R.shape != (3, 3) or not np.all(np.isfinite(R)):
             raise IKError("rotation must be a finite 3×3 matrix")
         U, _, Vt = np.linalg.svd(R)
+        # scipy.spatial takes 0.45 s to import: here, not inside the timed solve (it ate the first call's budget)
+        # and not at module level (position-only solves, every engine's teleop, never need it)
+        import scipy.spatial.transform  # noqa: F401
+
         self._target_R = U @ Vt
         try:
             return self.solve_position(target, q0, time_budget=time_budget)
