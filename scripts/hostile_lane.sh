@@ -10,15 +10,28 @@
 # (a second copy only when the temporary folder is on another file system), the staged folders owned by the
 # lane's user, the venv's absolute paths (pyvenv.cfg, bin/ scripts and links, the editable install's finder)
 # rewritten to the staged copies.  Nothing of the checkout is changed, and the staging is removed at the end.
-# Usage: bash scripts/hostile_lane.sh [pytest args]      (default: -m "not slow")
+# Usage: bash scripts/hostile_lane.sh [--core] [pytest args]      (default: -m "not slow")
+#   --core: the core job's tree and venv (scripts/core_job.sh --prepare made them: the wheel without the GUI
+#   extras), not this checkout and .venv.  CI runs the core job's fast lane this way: one lane that is both
+#   the second run of the fast lane and the hostile one (issue 28, item 5: CI in five minutes).
 #   HOSTILE_USER=name: the user to run as when root (default nobody); HOSTILE_KEEP=1 keeps the staging folder.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+if [ "${1:-}" = --core ]; then
+  shift
+  [ -x .core-job/venv/bin/python ] && [ -d .core-job/tree ] ||
+    { echo "hostile lane: no core job to test (run scripts/core_job.sh --prepare)" >&2; exit 1; }
+  cd .core-job/tree
+  venv=$(cd ../venv && pwd -P)
+  what="the core job (the wheel without the GUI extras)"
+else
+  [ -x .venv/bin/python ] || { echo "hostile lane: no .venv (run scripts/setup.sh)" >&2; exit 1; }
+  venv=$(cd .venv && pwd -P)
+  what="this checkout"
+fi
 repo=$(pwd -P)
 [ $# -eq 0 ] && set -- -m "not slow"
-[ -x .venv/bin/python ] || { echo "hostile lane: no .venv (run scripts/setup.sh)" >&2; exit 1; }
-venv=$(cd .venv && pwd -P)
-base=$(.venv/bin/python -c 'import sys; print(sys.base_prefix)') || exit 1
+base=$("$venv/bin/python" -c 'import sys; print(sys.base_prefix)') || exit 1
 base=$(cd "$base" && pwd -P)
 
 stage=$(mktemp -d "${TMPDIR:-/tmp}/bosun-hostile.XXXXXX") || exit 1
@@ -63,14 +76,14 @@ if [ "$(id -u)" -eq 0 ]; then
   fi
   # the venv and the interpreter it was made from, staged when the lane's user cannot use them where they are
   # (an interpreter it cannot read may still start, on another stdlib: check that it can read this one's)
-  stdlib=$(.venv/bin/python -c 'import os; print(os.path.realpath(os.__file__))') || exit 1
+  stdlib=$("$venv/bin/python" -c 'import os; print(os.path.realpath(os.__file__))') || exit 1
   newbase=$base
   if ! can test -r "$stdlib"; then
     newbase="$stage/python"
     link_copy "$base" "$newbase" || exit 1
   fi
   link_copy "$venv" "$work/.venv" || exit 1
-  .venv/bin/python - "$work/.venv" "$venv=$work/.venv" "$repo=$work" "$base=$newbase" <<'EOF' || exit 1
+  "$venv/bin/python" - "$work/.venv" "$venv=$work/.venv" "$repo=$work" "$base=$newbase" <<'EOF' || exit 1
 import os, sys
 from pathlib import Path
 venv, pairs = Path(sys.argv[1]), [a.split("=", 1) for a in sys.argv[2:]]
@@ -110,12 +123,14 @@ EOF
     exit 1
   fi
   extra_env=(LD_LIBRARY_PATH="$newbase/lib")
-  echo "hostile lane: as $user (uid $uid) in a staged copy: $work"
+  echo "hostile lane: $what, as $user (uid $uid) in a staged copy: $work"
+  python="$work/.venv/bin/python"
 else
   user=$(id -un 2>/dev/null || id -u)
   work=$repo
   extra_env=()
-  echo "hostile lane: as $user (not root: no other user to run as) in $work"
+  echo "hostile lane: $what, as $user (not root: no other user to run as) in $work"
+  python="$venv/bin/python"
 fi
 chmod 1777 "$stage/tmp"
 echo "hostile lane: --basetemp '$long' ($(printf %s "$long" | wc -m) characters), LANG=C.UTF-8, TZ=Pacific/Chatham"
@@ -130,7 +145,7 @@ cd "$stage/home" || exit 1
 start=$(date +%s)
 "${run_as[@]}" env -i PATH="/usr/local/bin:/usr/bin:/bin:/usr/sbin:/sbin" HOME="$stage/home" USER="$user" \
   LOGNAME="$user" TMPDIR="$stage/tmp" XDG_RUNTIME_DIR="$stage/run" LANG=C.UTF-8 TZ=Pacific/Chatham "${extra_env[@]}" \
-  "$work/.venv/bin/python" -m pytest -p no:cacheprovider --rootdir "$work" -c "$work/pyproject.toml" \
+  "$python" -m pytest -p no:cacheprovider --rootdir "$work" -c "$work/pyproject.toml" \
   --basetemp "$long" "${args[@]}"
 rc=$?
 echo "hostile lane: exit $rc in $(( $(date +%s) - start )) s"
