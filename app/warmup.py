@@ -3,35 +3,72 @@
 Each kernel file lists calls with the argument types its callers pass (``warm_up_steps``); running
 them all here, at set-up and before an engine's loop starts, means no control tick ever waits for a
 compile.  This module sits above every floor that holds kernels (models, marine, ik, sim, control).
+
+Set-up compiles on every core (``workers``): each kernel file's steps in one process, the files shared
+out by their compile time, then this process loads them all from the cache.  A kernel that calls another
+file's kernel compiles the callee into its own code and adds no signature, and no cache entry, to the
+callee's dispatcher: each cache entry is written by one process only (tests/test_kernels.py checks it).
 """
 
 from __future__ import annotations
 
+import importlib
 import time
 from collections.abc import Callable
 
+#: the kernel files, with their compile time from cold on the 2-core VM (s, 2026-11-28, beside a busy
+#: process: the proportions are what count), used to share them out between processes
+KERNEL_MODULES = {
+    "app.models.kernels": 39.0,
+    "app.marine.kernels": 2.0,
+    "app.sim.kernels": 22.0,
+    "app.ik.ga_kernels": 23.0,
+    "app.models.crane_head_kernels": 11.0,
+    "app.control.tac_kernels": 7.0,
+}
 
-def warm_up(progress: Callable[[int, int], None] | None = None) -> float:
+
+def _steps(modules) -> list[Callable[[], object]]:
+    return [step for name in modules for step in importlib.import_module(name).warm_up_steps()]
+
+
+def _compile(modules: list[str]) -> float:
+    """One worker's share: run the steps of ``modules`` (numba writes each kernel's cache); seconds taken."""
+    t0 = time.perf_counter()
+    for step in _steps(modules):
+        step()
+    return time.perf_counter() - t0
+
+
+def shares(workers: int) -> list[list[str]]:
+    """The kernel files shared out among ``workers`` processes, longest first to the least loaded."""
+    load = [0.0] * workers
+    out: list[list[str]] = [[] for _ in range(workers)]
+    for name, seconds in sorted(KERNEL_MODULES.items(), key=lambda kv: -kv[1]):
+        k = load.index(min(load))
+        out[k].append(name)
+        load[k] += seconds
+    return [s for s in out if s]
+
+
+def warm_up(progress: Callable[[int, int], None] | None = None, workers: int = 1) -> float:
     """Compile (or load) every kernel now, not in a control tick; seconds taken (0 with ``BOSUN_JIT=0``).
 
-    ``progress(k, n)`` is called after each of the n steps."""
-    from app.control import tac_kernels
-    from app.ik import ga_kernels
-    from app.marine import kernels as marine_kernels
-    from app.models import crane_head_kernels, kernels
-    from app.sim import kernels as sim_kernels
+    ``workers`` > 1 compiles in that many processes first (set-up: a cold cache on several cores); this
+    process then loads what they cached.  ``progress(k, n)`` is called after each of the n steps here."""
+    from app.models import kernels
 
     t0 = time.perf_counter()
     if not kernels.ENABLED:
         return 0.0
-    steps = [
-        *kernels.warm_up_steps(),
-        *marine_kernels.warm_up_steps(),
-        *sim_kernels.warm_up_steps(),
-        *ga_kernels.warm_up_steps(),
-        *crane_head_kernels.warm_up_steps(),
-        *tac_kernels.warm_up_steps(),
-    ]
+    if workers > 1:
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        parts = shares(workers)
+        with ProcessPoolExecutor(len(parts), mp_context=mp.get_context("spawn")) as pool:
+            list(pool.map(_compile, parts))
+    steps = _steps(KERNEL_MODULES)
     for k, step in enumerate(steps):
         step()
         if progress is not None:

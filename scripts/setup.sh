@@ -49,6 +49,6 @@ fi
 PYGAME_HIDE_SUPPORT_PROMPT=1 .venv/bin/python -c "import app, numpy, scipy, lxml, PyQt5, pyqtgraph, pygame, capytaine, distributed, mkdocs, material" \
   || { echo "setup: installed packages do not import" >&2; exit 1; }
 # compile ahead: numba caches the kernels' machine code on disk, so no engine compiles in its first tick
-.venv/bin/python -c "from app.warmup import warm_up; t = warm_up(); print(f'setup: kernels compiled ({t:.1f} s)')" \
+.venv/bin/python -c "import os; from app.warmup import warm_up; t = warm_up(workers=len(os.sched_getaffinity(0))); print(f'setup: kernels compiled ({t:.1f} s)')" \
   || { echo "setup: compiling the kernels failed" >&2; exit 1; }
 echo "setup: ready (.venv)"

@@ -272,6 +272,38 @@ def test_no_kernel_compiles_after_warm_up_in_any_engine():
     assert all(n <= 1 for n in counts["after"].values()), counts
 
 
+FOREIGN_SIGNATURES = r"""
+import importlib, json, sys
+from app.warmup import KERNEL_MODULES
+mods = {n: importlib.import_module(n) for n in KERNEL_MODULES}
+for step in mods[sys.argv[1]].warm_up_steps():
+    step()
+print(json.dumps([f"{n}.{a}" for n, m in mods.items() if n != sys.argv[1]
+                  for a, f in vars(m).items() if getattr(f, "__module__", "") == n and getattr(f, "signatures", None)]))
+"""
+
+
+@pytest.mark.slow
+def test_each_kernel_files_warm_up_writes_only_its_own_cache_entries():
+    """Set-up compiles the kernel files in parallel processes (``warm_up(workers=2)``); that is safe because a
+    file's steps give no other file's kernel a signature (a callee in another file is compiled into the
+    caller), so no two processes write one cache entry.  Each file's steps alone, in a fresh process."""
+    import json
+    import subprocess
+    import sys
+
+    from app.warmup import KERNEL_MODULES, shares
+
+    for name in KERNEL_MODULES:
+        cmd = [sys.executable, "-c", FOREIGN_SIGNATURES, name]
+        out = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert json.loads(out.stdout.strip().splitlines()[-1]) == [], name
+    for workers in (1, 2, 3, 8):
+        parts = shares(workers)
+        assert sorted(n for p in parts for n in p) == sorted(KERNEL_MODULES) and len(parts) == min(workers, 6)
+
+
 def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(tmp_path):
     """Numba checks a cached kernel against its own file only; the lab step calls this package's
     Comau candidates, so an edit of app/models/kernels.py must clear app/sim/kernels.py's cache too."""
