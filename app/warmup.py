@@ -54,6 +54,26 @@ def shares(workers: int) -> list[list[str]]:
     return [s for s in out if s]
 
 
+def cold(modules) -> list[str]:
+    """The kernel files among ``modules`` with a kernel numba has no fresh cache entry for (a cache it
+    would compile), by numba's own index (an unreadable index counts as cold)."""
+    import numba
+
+    out = []
+    for name in modules:
+        module = importlib.import_module(name)
+        for f in vars(module).values():
+            if isinstance(f, numba.core.registry.CPUDispatcher) and f.__module__ == name:
+                try:
+                    if not f._cache._cache_file._load_index():  # {} when missing or stale (source changed)
+                        out.append(name)
+                        break
+                except Exception:  # numba's private layout changed: compile as if cold
+                    out.append(name)
+                    break
+    return out
+
+
 def warm_up(progress: Callable[[int, int], None] | None = None, workers: int = 1) -> float:
     """Compile (or load) every kernel now, not in a control tick; seconds taken (0 with ``BOSUN_JIT=0``).
 
@@ -64,7 +84,7 @@ def warm_up(progress: Callable[[int, int], None] | None = None, workers: int = 1
     t0 = time.perf_counter()
     if not kernels.ENABLED:
         return 0.0
-    if workers > 1:
+    if workers > 1 and len(cold(KERNEL_MODULES)) > 1:  # a warm cache loads faster here than processes start
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor
 

@@ -119,6 +119,10 @@ def test_warm_up_compiles_every_kernel_and_says_how_long():
     seen = []
     seconds = warm_up(progress=lambda k, n: seen.append((k, n)))
     assert seconds >= 0 and seen[-1][0] == seen[-1][1] == len(seen)
+    # then every kernel file has a fresh cache (set-up's second run spawns no compile processes)
+    from app.warmup import KERNEL_MODULES, cold
+
+    assert cold(KERNEL_MODULES) == []
 
 
 @pytest.mark.parametrize("name", ["comau_smart5_3dof", "kuka_youbot", "scara"])
