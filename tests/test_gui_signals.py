@@ -54,6 +54,10 @@ def test_a_stop_signalled_inside_a_qt_call_closes_the_window(qtbot, restore_hand
     qtbot.waitUntil(lambda: bool(asked), timeout=GUI_WAIT)
     qtbot.waitUntil(lambda: not win.isVisible(), timeout=GUI_WAIT)
     assert asked[0] == {signal.SIGTERM: "SIGTERM", signal.SIGINT: "SIGINT"}[sig]
+    # the timer closed it once and stopped: one that kept calling close() fired while the window was destroyed
+    from PyQt5.QtCore import QTimer
+
+    assert [t.isActive() for t in win.findChildren(QTimer) if t.interval() == 100] == [False]
 
 
 def test_the_old_way_loses_the_stop(qtbot, restore_handlers):

@@ -43,7 +43,15 @@ def close_when_asked(win, asked: list[str]) -> None:
 
     timer = QTimer(win)
     timer.setInterval(100)  # also lets Python run its signal handlers while Qt's loop runs in C
-    timer.timeout.connect(lambda: win.close() if asked else None)
+
+    def check() -> None:
+        if asked:
+            # once: a timer that went on calling close() every 100 ms fired while the closed window was being
+            # destroyed (a test process died of SIGSEGV in the next test's event processing, CI 2026-11-28)
+            timer.stop()
+            win.close()
+
+    timer.timeout.connect(check)
     timer.start()
 
 
