@@ -54,16 +54,19 @@ def test_mru_heave_errors_are_a_scale_error_and_integrated_accelerometer_noise()
     """Heave (and surge, sway) come from integrating the accelerometer: a per-run scale error of rms 5 %
     and the accelerometer's 0.01 m/s² through the 25 s heave filter.  At a platform's wave period that is
     millimetres — inside the product's "5 cm or 5 %"."""
+    # the scale error is drawn when a run starts: 200 runs' draws (std within 20 %: 2.8 standard errors)
+    sensors = [MotionSensor(MRU5, np.random.default_rng(seed), 0.005) for seed in range(200)]
+    assert np.std([s.scale[2] - 1.0 for s in sensors]) == pytest.approx(0.05, rel=0.2)
+    assert all(s.scale[3] == 1.0 for s in sensors)  # attitudes are measured, not integrated
+    # what is left after the scale error, over whole 2-minute runs: 6 of them (median 2.9 mm; 30 runs gave
+    # 3.1 mm and took 35 s of the suite)
     t = np.arange(0, 120, 0.005)
     sig = np.zeros((t.size, 6))
     sig[:, 2] = 0.1 * np.sin(2 * np.pi * t / 8)
-    scales, errs = [], []
-    for seed in range(30):
+    errs = []
+    for seed in range(6):
         out, s = _run(MRU5, sig, dt=0.005, seed=seed)
-        scales.append(s.scale[2] - 1.0)
-        errs.append(np.std(out[:, 2] - s.scale[2] * sig[:, 2]))  # what is left after the scale error
-        assert s.scale[3] == 1.0  # attitudes are measured, not integrated
-    assert np.std(scales) == pytest.approx(0.05, rel=0.35)
+        errs.append(np.std(out[:, 2] - s.scale[2] * sig[:, 2]))
     assert 0.0005 < np.median(errs) < 0.01
 
 
