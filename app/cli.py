@@ -1825,11 +1825,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(["gui"] if "gui" in _commands(parser) else ["robots"])
     import signal
 
-    def terminated(*_):  # SIGTERM ends a study like Ctrl-C: its partial output removed, one line, status 130
-        raise KeyboardInterrupt
+    from app.errors import raise_interrupt
 
     main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, terminated) if main_thread else None  # server, joystick, GUI: own
+    # SIGTERM ends a study like Ctrl-C (main() is also called in-process); server, joystick, GUI set their own
+    previous = signal.signal(signal.SIGTERM, raise_interrupt) if main_thread else None
     try:
         return args.func(args)
     except BosunError as err:

@@ -3,6 +3,12 @@
 from __future__ import annotations
 
 
+def raise_interrupt(*_: object) -> None:
+    """A SIGTERM handler: the signal ends the program as Ctrl-C does (one line, status 130, a study's
+    partial output removed).  Set by the entry point (app/launch.py) and by :func:`app.cli.main`."""
+    raise KeyboardInterrupt
+
+
 def one_line(text: str, limit: int) -> str:
     """A message for one log or error line: whitespace runs (newlines too) as one space, at most
     ``limit`` characters (cut with "…")."""

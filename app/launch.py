@@ -11,10 +11,6 @@ import sys
 INTERRUPTED = 130
 
 
-def _terminated(*_):
-    raise KeyboardInterrupt
-
-
 #: the processes that run a fixed-rate loop or a screen: one BLAS thread each (see :func:`_one_blas_thread`)
 REALTIME_COMMANDS = ("server", "gui", "view", "joystick")
 
@@ -44,7 +40,9 @@ def main() -> int:
             faulthandler.register(signal.SIGUSR1, all_threads=True)
         # SIGTERM is Ctrl-C from the first moment: one line and status 130 also while the CLI still loads (it
         # ended the process silently with -15 before app.cli set its own handler; issue 27, item 10)
-        signal.signal(signal.SIGTERM, _terminated)
+        from app.errors import raise_interrupt
+
+        signal.signal(signal.SIGTERM, raise_interrupt)
         from app.cli import main as cli_main
 
         code = cli_main()
