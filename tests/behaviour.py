@@ -1,0 +1,276 @@
+"""What today's simulations and engines compute, recorded before the block redesign (issue 29, item 4).
+
+Every case runs at a fixed seed, in this process, and returns named arrays: the time series sampled at
+``ROWS`` instants (the last one always among them) and every number of the summaries the commands print.
+``tests/data/behaviour_baseline.npz`` holds them as recorded on 2026-11-28 (main at the commit that added
+this file); ``tests/test_behaviour_kept.py`` compares a fresh run with them to 1e-9 relative.
+
+The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
+run 300–600 s; every case here passes through the start-up, the ramp and the steady state):
+
+* ``sim tac`` in every mode, and ``sim tac-sweep`` (3 modes × 2 sea states);
+* ``sim vvmc`` with the true, MRU and tracker states, each with and without ``--antisway``;
+* ``sim antisway``: the free swing with and without the law, and the VVMC study without and with it;
+* the engines' snapshots over a scripted session: the teleop engine (arming, stick, release, a solver and
+  a mode change, E-STOP, reset), the TAC engine (arming, stick, a mode change) and the Motion-Lab engine
+  (platforms engaged on the wave source, VVMC, anti-swing, E-STOP).  The teleop session uses the Jacobian
+  and analytic solvers: the GA's per-tick budget is wall-clock time, so its answers depend on the machine.
+
+Record again (only when a change of the numbers is meant, and say so in the commit):
+``python -m tests.behaviour --record``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+BASELINE = Path(__file__).resolve().parent / "data" / "behaviour_baseline.npz"
+ROWS = 64  # sampled instants of each time series
+
+
+def _rows(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a)
+    if a.ndim == 0 or len(a) <= ROWS:
+        return a
+    idx = np.unique(np.r_[np.linspace(0, len(a) - 1, ROWS).round().astype(int), len(a) - 1])
+    return a[idx]
+
+
+def _numbers(prefix: str, obj, out: dict[str, np.ndarray]) -> None:
+    """Every number in ``obj`` (dicts, lists, dataclasses, arrays) as ``out[prefix.key...]`` arrays."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        obj = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            _numbers(f"{prefix}.{k}", v, out)
+    elif isinstance(obj, np.ndarray) and obj.dtype.kind in "biuf":
+        out[prefix] = _rows(obj).astype(float)
+    elif isinstance(obj, (list, tuple)) and obj and all(isinstance(x, (bool, int, float)) for x in obj):
+        out[prefix] = np.asarray(obj, dtype=float)
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            _numbers(f"{prefix}[{i}]", v, out)
+    elif isinstance(obj, (bool, int, float, np.floating, np.integer, np.bool_)) and obj is not None:
+        out[prefix] = np.asarray(float(obj))
+
+
+# ------------------------------------------------------------------------------------------------ simulations
+def _tac(mode: str) -> dict[str, np.ndarray]:
+    from app.scenarios.tac import TacScenario, simulate
+
+    res = simulate(TacScenario(mode=mode, duration=60.0, seed=3))
+    out: dict[str, np.ndarray] = {}
+    names, cols = res.data.columns()
+    for name, col in zip(names, cols.T, strict=True):
+        out[f"series.{name}"] = _rows(col)
+    _numbers("summary", {k: v for k, v in res.summary.items() if "wall" not in k and "speed" not in k}, out)
+    _numbers("x_d", res.x_d, out)
+    _numbers("p_d_n", res.p_d_n, out)
+    return out
+
+
+def _tac_sweep() -> dict[str, np.ndarray]:
+    from app.analysis.tac_report import sweep
+    from app.scenarios.tac import TacScenario
+
+    rows = sweep(TacScenario(duration=40.0, seed=2), [1.5, 4.0], ("off", "tac", "cooperative"))
+    out: dict[str, np.ndarray] = {}
+    for i, row in enumerate(rows):
+        _numbers(f"row{i}", {k: v for k, v in row.items() if "wall" not in k and "speed" not in k}, out)
+    return out
+
+
+def _vvmc(sensors: str, antisway: bool) -> dict[str, np.ndarray]:
+    from app.scenarios.vvmc import VvmcScenario, simulate, summarize
+
+    sc = VvmcScenario(duration=20.0, seed=4, sensors=sensors, antisway=antisway)
+    on, off = simulate(sc, True), simulate(sc, False)
+    out: dict[str, np.ndarray] = {}
+    _numbers("on", on, out)
+    _numbers("off", off, out)
+    _numbers("summary", summarize(sc, on, off), out)
+    return out
+
+
+def _antisway() -> dict[str, np.ndarray]:
+    from app.scenarios.antisway import antisway_study, free_swing
+    from app.scenarios.vvmc import VvmcScenario
+
+    out: dict[str, np.ndarray] = {}
+    for active in (False, True):
+        _numbers(f"free_{active}", free_swing(active, duration=10.0), out)
+    study = antisway_study(VvmcScenario(duration=20.0, seed=5))
+    _numbers("study", {k: v for k, v in study.items() if k != "runs"}, out)
+    _numbers("runs", list(study["runs"]), out)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------- engines
+def _snap(session, t: float, out: dict[str, list], every: int, k: int) -> None:
+    if k % every:
+        return
+    flat: dict[str, np.ndarray] = {}
+    _numbers("", session.snapshot(), flat)
+    for name, v in flat.items():
+        if name.endswith((".t_raised", ".t_cleared", "solver_time")) or name.startswith(".engine.") or "wall" in name:
+            continue  # wall-clock readings, not the machine's state
+        out.setdefault(name, []).append(np.ravel(v))
+
+
+def _drive(session, script: list[tuple[float, Callable[[], None] | None, tuple, bool]], dt: float, every: int):
+    """Run ``script`` (seconds, an action at its start or None, the stick's axes, the enable button) and take a
+    snapshot every ``every`` ticks."""
+    from app.teleop.devices import InputSample
+
+    out: dict[str, list] = {}
+    t, k = 0.0, 0
+    for seconds, action, axes, enable in script:
+        if action is not None:
+            action()
+        for _ in range(round(seconds / dt)):
+            t += dt
+            k += 1
+            session.feed(InputSample(tuple(axes), (enable, False), "script"), t)
+            session.tick(t, dt)
+            _snap(session, t, out, every, k)
+    keep = {}
+    for name, rows in out.items():
+        sizes = sorted({len(r) for r in rows})
+        for n in sizes:  # a robot change changes the joint count: each size apart
+            keep[f"snap{name}" + (f"@{n}" if len(sizes) > 1 else "")] = np.array([r for r in rows if len(r) == n])
+    return keep
+
+
+def _engine_teleop() -> dict[str, np.ndarray]:
+    from app.engine.session import Session
+
+    s = Session(robot_name="comau_smart5_6dof", solver_name="jacobian", mode="velocity")
+    z = (0.0, 0.0, 0.0)
+
+    def analytic_3dof():
+        s.set_robot("comau_smart5_3dof")
+        s.set_solver("analytic")
+
+    script = [
+        (0.1, None, z, False),
+        (0.1, None, z, True),  # armed
+        (1.0, None, (0.6, -0.4, 0.3), True),
+        (0.5, None, z, True),  # centred: holds
+        (0.1, lambda: s.set_mode("position"), z, False),
+        (0.1, None, z, True),
+        (1.0, None, (-0.5, 0.2, 0.4), True),
+        (0.2, analytic_3dof, z, False),  # a robot change, and the closed-form solver
+        (0.1, None, z, True),
+        (0.8, None, (0.3, 0.3, -0.3), True),
+        (0.2, lambda: s.estop("script"), (0.3, 0.3, -0.3), True),
+        (0.2, s.reset, z, False),
+        (0.1, None, z, True),
+        (0.5, None, (0.0, 0.5, 0.0), True),
+    ]
+    return _drive(s, script, dt=0.002, every=25)
+
+
+def _engine_tac() -> dict[str, np.ndarray]:
+    from app.engine.tac_session import TacSession
+
+    s = TacSession()
+    z = (0.0, 0.0, 0.0)
+    script = [
+        (2.0, None, z, False),
+        (0.1, None, z, True),
+        (3.0, None, (0.5, 0.0, -0.3), True),
+        (0.1, lambda: s.set_tac_mode("cooperative"), z, True),
+        (3.0, None, z, True),
+        (0.1, lambda: s.set_tac_mode("off"), z, False),
+        (2.0, None, z, False),
+    ]
+    return _drive(s, script, dt=0.02, every=10)
+
+
+def _engine_lab() -> dict[str, np.ndarray]:
+    from app.engine.lab_session import LabSession
+
+    s = LabSession()
+    z = (0.0, 0.0, 0.0)
+
+    def neutral():
+        for p in s.names:
+            s.lab_platform(p, "neutral")
+
+    def engage():
+        for k, p in enumerate(s.names):
+            s.lab_source(p, "simulation", hs=2.0, tp=8.0, heading=150.0 - 60.0 * k, seed=7 + k)
+            s.lab_platform(p, "engage")
+
+    script = [
+        (0.5, None, z, False),
+        (0.1, neutral, z, False),
+        (15.0, None, z, False),  # raised at a fifth of the Table 8 speeds
+        (0.1, engage, z, False),
+        (8.0, None, z, False),
+        (0.1, lambda: s.lab_vvmc(True), z, False),
+        (6.0, None, z, False),
+        (0.1, lambda: s.lab_antisway("activate"), z, False),
+        (6.0, None, z, False),
+        (0.1, lambda: s.estop("script"), z, False),
+        (2.0, None, z, False),
+    ]
+    try:
+        return _drive(s, script, dt=0.02, every=25)
+    finally:
+        s.close()
+
+
+CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
+    "sim_tac_off": lambda: _tac("off"),
+    "sim_tac_tac": lambda: _tac("tac"),
+    "sim_tac_cooperative": lambda: _tac("cooperative"),
+    "sim_tac_sweep": _tac_sweep,
+    **{
+        f"sim_vvmc_{sensors}{'_antisway' if a else ''}": (lambda sensors=sensors, a=a: _vvmc(sensors, a))
+        for sensors in ("true", "mru", "tracker")
+        for a in (False, True)
+    },
+    "sim_antisway": _antisway,
+    "engine_teleop": _engine_teleop,
+    "engine_tac": _engine_tac,
+    "engine_lab": _engine_lab,
+}
+
+
+def run_case(name: str) -> dict[str, np.ndarray]:
+    out = CASES[name]()
+    bad = [k for k, v in out.items() if not np.all(np.isfinite(v) | np.isnan(v))]
+    assert not bad, bad
+    return out
+
+
+def load_baseline() -> dict[str, dict[str, np.ndarray]]:
+    with np.load(BASELINE) as z:
+        cases: dict[str, dict[str, np.ndarray]] = {}
+        for key in z.files:
+            case, name = key.split("/", 1)
+            cases.setdefault(case, {})[name] = z[key]
+    return cases
+
+
+def record() -> None:
+    arrays = {}
+    for name in CASES:
+        for k, v in run_case(name).items():
+            arrays[f"{name}/{k}"] = v
+        print(f"recorded {name}", flush=True)
+    BASELINE.parent.mkdir(exist_ok=True)
+    np.savez_compressed(BASELINE, **arrays)
+    print(f"wrote {BASELINE} ({len(arrays)} arrays, {BASELINE.stat().st_size / 1e3:.0f} kB)")
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] != ["--record"]:
+        sys.exit("usage: python -m tests.behaviour --record")
+    record()
