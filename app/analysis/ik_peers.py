@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-PEERS = ("rtb ik_LM", "rtb ikine_LM", "ikpy")
 RTB_TOL = 1e-9  # ½‖e‖² < 1e-9: ‖e‖ < 0.045 mm (Bosun's own test is 0.1 mm)
 
 

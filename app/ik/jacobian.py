@@ -26,7 +26,7 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
+from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver
 from app.models import kernels
 
 SEEDS = 256  # restart table size: its tool positions cover the workspace to a few centimetres
@@ -75,8 +75,6 @@ class JacobianSolver(Solver):
         self.lambda_max = 0.1 * scale
         self.e_ref = 0.05 * scale
         self.max_step = np.where(np.array(robot.joint_kinds) == "revolute", 0.3, 0.1 * (robot.upper - robot.lower))
-        self.orientation_weight = scale  # metres per radian when orientation is asked for
-        self._target_R: NDArray[np.float64] | None = None
         self._kernel_tail: tuple | None = None
         self._seed_table: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
@@ -135,24 +133,16 @@ class JacobianSolver(Solver):
         T = self.robot.fk(q)
         J = self.robot.jacobian(q)
         e_p = x_t - T[:3, 3]
-        if self._target_R is None:
-            return J[:3], e_p, float(np.linalg.norm(e_p))
-        from scipy.spatial.transform import Rotation  # loaded by solve_pose, before its clock starts
-
-        e_o = Rotation.from_matrix(self._target_R @ T[:3, :3].T).as_rotvec()
-        w = self.orientation_weight
-        e = np.r_[e_p, w * e_o]
-        Jw = np.vstack([J[:3], w * J[3:]])
-        return Jw, e, float(np.linalg.norm(e))
+        return J[:3], e_p, float(np.linalg.norm(e_p))
 
     def _descend(self, q: NDArray[np.float64], x_t: NDArray[np.float64], deadline: float):
         """Iterate DLS steps from q; (best q, its error, iterations).
 
         Position targets run in the compiled kernel (:func:`app.models.kernels.descend`, the same
         steps); it checks no clock, so the time budget is checked between descents (one descent
-        is at most ``max_iterations`` steps of a few microseconds).  Poses and
-        ``robot.use_kernels = False`` run the NumPy reference below."""
-        if self._target_R is None and getattr(self.robot, "use_kernels", False):
+        is at most ``max_iterations`` steps of a few microseconds).  ``robot.use_kernels = False`` runs the
+        NumPy reference below."""
+        if getattr(self.robot, "use_kernels", False):
             best_q, best_err, iterations = kernels.descend(
                 *self.robot.kernel_args,
                 np.ascontiguousarray(q, dtype=float),
@@ -180,7 +170,7 @@ class JacobianSolver(Solver):
         """As :meth:`Solver.solve_position`; a warm start (q0 given, position only) that converges in
         its first descent is answered from one compiled call (teleoperation's common case: tens of
         microseconds); anything else takes the general path (restarts, time budget)."""
-        if q0 is not None and self._target_R is None and getattr(self.robot, "use_kernels", False):
+        if q0 is not None and getattr(self.robot, "use_kernels", False):
             start = time.perf_counter()
             x_t = self.check_target(target)
             q_s = self.check_q0(q0)
@@ -237,7 +227,7 @@ class JacobianSolver(Solver):
 
     def _search(self, x_t, q0, deadline) -> SearchOutcome:
         starts = [q0 if q0 is not None else self.default_q0()]
-        restarts = self._restart_points(x_t) if self._target_R is None else None
+        restarts = self._restart_points(x_t)
         best_q, best_err, total_it = starts[0], math.inf, 0
         attempt = 0
         reason = "iteration limit"
@@ -256,37 +246,12 @@ class JacobianSolver(Solver):
                 reason = "not reached after restarts (target may be outside the workspace)"
                 break
             attempt += 1
-            starts.append(next(restarts) if restarts is not None else self.random_q())
+            starts.append(next(restarts))
         return SearchOutcome(
             q=best_q, iterations=total_it, converged=best_err <= self.tolerance, reason=reason, cost=best_err
         )
 
     # ---------------------------------------------------------------- interface
-    def solve_pose(
-        self,
-        target: ArrayLike,
-        rotation: ArrayLike,
-        q0: ArrayLike | None = None,
-        *,
-        time_budget: float | object | None = DEFAULT,
-    ) -> IKResult:
-        """Position and orientation (arms with 6 or more joints): tool rotation R_world_tool (3×3)."""
-        if self.robot.n_joints < 6:
-            raise IKError(f"{self.robot.name} has {self.robot.n_joints} joints; orientation needs 6")
-        R = np.asarray(rotation, dtype=float)
-        if R.shape != (3, 3) or not np.all(np.isfinite(R)):
-            raise IKError("rotation must be a finite 3×3 matrix")
-        U, _, Vt = np.linalg.svd(R)
-        # scipy.spatial takes 0.45 s to import: here, not inside the timed solve (it ate the first call's budget)
-        # and not at module level (position-only solves, every engine's teleop, never need it)
-        import scipy.spatial.transform  # noqa: F401
-
-        self._target_R = U @ Vt
-        try:
-            return self.solve_position(target, q0, time_budget=time_budget)
-        finally:
-            self._target_R = None
-
     def solve_velocity(self, q_a, xdot, dt, *, time_budget: float | object | None = DEFAULT) -> IKResult:
         """θ̇ = J⁺_λ ẋ with the same damped, clamped inverse (eq. 4)."""
         start = time.perf_counter()

@@ -295,9 +295,6 @@ class DeltaWorkspace:
             out[outside] = c + t_exit[:, None] * direction
         return out, outside
 
-    def limits_box(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        return self.points.min(axis=0), self.points.max(axis=0)
-
 
 def default_center(head: DeltaHead, h: float = 0.25) -> NDArray[np.float64]:
     """p_d^t = [x_d, 0, 0] of §8, from the workspace."""

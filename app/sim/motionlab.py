@@ -662,11 +662,6 @@ class MotionLab:
         """Payload position in {g}, eq. (58)."""
         return self.p_t_g + R_G_D @ (self.winch.length * self.pendulum.direction())
 
-    def v_p_g(self) -> NDArray[np.float64]:
-        """Payload velocity in {g}, eq. (59)."""
-        pd = self.pendulum
-        return self.v_t_g + R_G_D @ (self.winch.length * pd.direction_rate() + self.winch.speed * pd.direction())
-
     def _sample(self) -> LabSample:
         R2, o2 = self._b2_to_g()
         e_b2 = R2.T @ (self.p_t_g - o2) - self.layout.work_point_b2
