@@ -1820,6 +1820,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         argv = ["gui", *argv]
     args = parser.parse_args(argv)
     args.argv = argv  # what made an output (vessel rao writes it)
+    from app.models.kernels import clear_stale
+
+    clear_stale()  # before any kernel loads its cached machine code (build_parser has imported the kernels)
     if args.command is None:
         # the GUI when it is installed, else the robot library
         args = parser.parse_args(["gui"] if "gui" in _commands(parser) else ["robots"])

@@ -56,14 +56,17 @@ def shares(workers: int) -> list[list[str]]:
 
 def cold(modules) -> list[str]:
     """The kernel files among ``modules`` with a kernel numba has no fresh cache entry for (a cache it
-    would compile), by numba's own index (an unreadable index counts as cold)."""
+    would compile), by numba's own index (an unreadable index counts as cold).  Only the kernels Python
+    calls count (public names, the ones ``warm_up_steps`` call): a private helper is compiled into its
+    callers and has a cache entry of its own only if something once called it directly (a test), so its
+    missing index said "cold" after every clearing of stale caches, whatever warm_up had just compiled."""
     import numba
 
     out = []
     for name in modules:
         module = importlib.import_module(name)
         for f in vars(module).values():
-            if isinstance(f, numba.core.registry.CPUDispatcher) and f.__module__ == name:
+            if isinstance(f, numba.core.registry.CPUDispatcher) and f.__module__ == name and f.__name__[0] != "_":
                 try:
                     if not f._cache._cache_file._load_index():  # {} when missing or stale (source changed)
                         out.append(name)
@@ -84,6 +87,7 @@ def warm_up(progress: Callable[[int, int], None] | None = None, workers: int = 1
     t0 = time.perf_counter()
     if not kernels.ENABLED:
         return 0.0
+    kernels.clear_stale()
     if workers > 1 and len(cold(KERNEL_MODULES)) > 1:  # a warm cache loads faster here than processes start
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor

@@ -84,6 +84,15 @@ def serve():
         srv.close()
 
 
+def pytest_configure(config):
+    """Kernel caches made stale by an edit of a kernel file another one imports are cleared once, by the
+    controlling process (xdist's workers start after it), before any test loads a kernel."""
+    if not hasattr(config, "workerinput"):
+        from app.models.kernels import clear_stale
+
+        clear_stale()
+
+
 def pytest_collection_modifyitems(items):
     """Every test in a tests/test_gui*.py file is marked ``gui`` and ``slow``: each starts engine processes
     and a window (seconds).  The fast lane, ``-m "not slow"``, runs everything else."""

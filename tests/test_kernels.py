@@ -3,6 +3,8 @@
 Every serial robot of the library and random chains, random configurations inside (and outside)
 the limits; results equal to 1e-12 (they are bitwise equal today)."""
 
+import os
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -334,3 +336,56 @@ def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(t
         "from app.models import kernels as model_kernels\n# edited\n", encoding="utf-8"
     )
     assert clear_stale_caches(tmp_path, files) == []  # an edit of the file itself is numba's to notice
+
+
+NOTHING_AT_IMPORT = r"""
+import importlib, json, os, pathlib
+touched = []
+for name in ("unlink", "write_text", "write_bytes", "mkdir"):
+    original = getattr(pathlib.Path, name)
+    def spy(self, *a, _name=name, _original=original, **k):
+        touched.append(f"{_name} {self}")
+        return _original(self, *a, **k)
+    setattr(pathlib.Path, name, spy)
+real_remove = os.remove
+os.remove = os.unlink = lambda p, *a, **k: (touched.append(f"remove {p}"), real_remove(p, *a, **k))[1]
+from app.warmup import KERNEL_MODULES
+for n in KERNEL_MODULES:
+    importlib.import_module(n)
+print(json.dumps(touched))
+"""
+
+
+def test_importing_the_kernel_files_changes_no_file(tmp_path):
+    """Issue 29, item 5 (nothing happens at import): importing a kernel file used to clear stale numba caches
+    (and write their stamps); the CLI, ``warm_up`` and the test session do it now, so an import writes and
+    removes nothing, even in a copy of the package with no stamps at all."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    app_dir = Path(__file__).resolve().parents[1] / "app"
+    if not app_dir.is_dir():
+        pytest.skip("needs the checkout's app/")
+    shutil.copytree(app_dir, tmp_path / "app", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    out = subprocess.run(
+        [sys.executable, "-c", NOTHING_AT_IMPORT], capture_output=True, text=True, timeout=300, cwd=tmp_path, env=env
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == []
+
+
+def test_warm_up_and_the_cli_clear_stale_caches_first(monkeypatch):
+    from app import cli, warmup
+    from app.models import kernels
+
+    calls = []
+    monkeypatch.setattr(kernels, "clear_stale", lambda: calls.append("cleared") or [])
+    monkeypatch.setattr(warmup, "_steps", lambda modules: [])
+    warmup.warm_up()
+    assert calls == ["cleared"] or not kernels.ENABLED
+    assert cli.main(["robots"]) == 0
+    assert calls[-1] == "cleared"

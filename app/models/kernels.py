@@ -74,8 +74,10 @@ def clear_stale_caches(root: Path, files: tuple[str, ...] = KERNEL_FILES) -> lis
     return cleared
 
 
-if ENABLED:
-    clear_stale_caches(Path(__file__).resolve().parents[1])
+def clear_stale() -> list[str]:
+    """:func:`clear_stale_caches` for this installation's kernel files: called by the CLI's entry point, by
+    :func:`app.warmup.warm_up` and by the test session before any kernel runs (never at import)."""
+    return clear_stale_caches(Path(__file__).resolve().parents[1]) if ENABLED else []
 
 
 def _jit(fn):
