@@ -24,26 +24,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 
 from app.engine.alarm_catalog import SHELVE_MAX_S, AlarmDef, definition
+from app.net.snapshots import Alarm  # one alarm record: the engine's list holds what the wire carries
 
 SEVERITIES = ("info", "warning", "critical")
-
-
-@dataclass
-class Alarm:
-    key: str
-    severity: str
-    source: str
-    text: str
-    active: bool
-    acked: bool
-    t_raised: float
-    t_cleared: float | None
-    first_out: bool
-    count: int = 1
-    shelved_until: float | None = None  # wall-clock time the shelving ends (None: not shelved)
 
 
 class AlarmList:
@@ -141,7 +127,10 @@ class AlarmList:
         first = trip and not any(x.active and x.shelved_until is None and _is_trip(x.key) for x in self.items.values())
         text = text or (d.title if d is not None else key)
         if a is None:
-            a = Alarm(key, severity, source or self.source, text, True, False, self._clock(), None, first)
+            a = Alarm(
+                key=key, severity=severity, source=source or self.source, text=text, active=True, acked=False,
+                t_raised=self._clock(), t_cleared=None, first_out=first,
+            )  # fmt: skip
             self.items[key] = a
         else:  # raised again before it was acknowledged: one entry, counted
             a.active, a.acked, a.t_cleared, a.first_out = True, False, None, first
