@@ -318,7 +318,7 @@ def test_sea_surface_is_a_finite_grid_in_the_display_frame(rng):
     sea = wave_components("jonswap", 3.0, 9.0, rng, heading=0.7)
     field = WaveField(
         amplitude=sea.amplitude.tolist(), omega=sea.omega.tolist(), k=sea.wavenumber.tolist(),
-        heading=sea.direction.tolist(), phase=sea.phase.tolist(),
+        heading_rad=sea.direction.tolist(), phase=sea.phase.tolist(),
     )  # fmt: skip
     m = dr.sea_surface(field, 5.0, center=(10.0, -20.0), size=100.0, n=21, share=1.0)
     assert m.vertices.shape == (21 * 21, 3) and m.faces.shape == (2 * 20 * 20, 3)

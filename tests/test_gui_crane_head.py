@@ -93,7 +93,7 @@ def test_sea_and_mode_reach_the_engine(qtbot, window):
     tab.heading.setValue(135)
     tab.apply_sea.click()
     qtbot.waitUntil(lambda: tab.state.sea.spectrum == "torsethaugen", timeout=GUI_WAIT)
-    assert tab.state.sea.hs == 2.0 and tab.state.sea.heading == 135.0
+    assert tab.state.sea.hs == 2.0 and tab.state.sea.heading_deg == 135.0
     tab.mode.setCurrentText("cooperative")
     tab.mode.activated.emit(tab.mode.currentIndex())  # what the operator's pick in the list emits
     qtbot.waitUntil(lambda: tab.state.tac_mode == "cooperative", timeout=GUI_WAIT)

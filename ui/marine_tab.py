@@ -438,7 +438,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             if sea.seq != self._sea_seq:
                 self._sea_seq = sea.seq
             fields = (self.spectrum, self.hs, self.tp, self.heading)
-            for w, v in zip(fields, (sea.spectrum, sea.hs, sea.tp, sea.heading), strict=True):
+            for w, v in zip(fields, (sea.spectrum, sea.hs, sea.tp, sea.heading_deg), strict=True):
                 self.sea_fields.engine_value(w, v)
         if self.mode.currentText() != state.tac_mode and not self.mode.view().isVisible():
             self.mode.setCurrentText(state.tac_mode)  # the engine's mode (another console may change it)
@@ -469,7 +469,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         if state.holding and not state.estop:
             stop = "<span style='color:#e08020'><b>HOLDING</b>: choose a mode to resume</span><br>"
         paused = "<span style='color:#8a8aa0'><b>paused</b> (tab hidden)</span><br>" if state.engine.paused else ""
-        sea_text = f"{sea.spectrum} Hs {sea.hs:g} m, Tp {sea.tp:g} s, {sea.heading:g}°" if sea is not None else "—"
+        sea_text = f"{sea.spectrum} Hs {sea.hs:g} m, Tp {sea.tp:g} s, {sea.heading_deg:g}°" if sea is not None else "—"
         self.readout.setText(
             f"{stop}{paused}t = {s.t:.1f} s — mode <b>{state.tac_mode}</b>, {flag}<br>"
             f"sea: {sea_text}<br>"

@@ -269,7 +269,7 @@ class TacSession(Scene):
                 amplitude=sea.amplitude.tolist(),
                 omega=sea.omega.tolist(),
                 k=sea.wavenumber.tolist(),
-                heading=sea.direction.tolist(),
+                heading_rad=sea.direction.tolist(),
                 phase=sea.phase.tolist(),
             ),
             modes=list(MODES),
@@ -278,7 +278,7 @@ class TacSession(Scene):
 
     def _sea(self) -> SeaState:
         sc = self.scenario
-        return SeaState(spectrum=sc.spectrum, hs=sc.hs, tp=sc.tp, heading=sc.heading, seq=self.sea_seq)
+        return SeaState(spectrum=sc.spectrum, hs=sc.hs, tp=sc.tp, heading_deg=sc.heading, seq=self.sea_seq)
 
     def snapshot(self) -> TacSnapshot:
         return TacSnapshot(

@@ -787,13 +787,17 @@ def strongest_components(amplitude: ArrayLike, share: float = 0.99) -> NDArray[n
     return np.sort(order[:n])
 
 
+#: a ``WaveField``'s arrays, in :func:`wave_elevation`'s order
+WAVE_FIELDS = ("amplitude", "omega", "k", "heading_rad", "phase")
+
+
 def sea_profile(waves, t: float, p0: ArrayLike, p1: ArrayLike, n: int = 80, share: float = 0.99) -> NDArray[np.float64]:
     """The sea surface along the segment p0 → p1 (north, east in {n}) as points (n, 3) in the display frame
     (x north, y west, z up) [m]."""
     s = np.linspace(0.0, 1.0, n)[:, None]
     ne = np.asarray(p0, dtype=float) + s * (np.asarray(p1, dtype=float) - np.asarray(p0, dtype=float))
     keep = strongest_components(waves.amplitude, share)
-    parts = (np.asarray(getattr(waves, f), dtype=float)[keep] for f in ("amplitude", "omega", "k", "heading", "phase"))
+    parts = (np.asarray(getattr(waves, f), dtype=float)[keep] for f in WAVE_FIELDS)
     zeta = wave_elevation(*parts, t, ne[:, 0], ne[:, 1])
     return np.column_stack([ne[:, 0], -ne[:, 1], zeta])
 
@@ -820,7 +824,7 @@ def sea_surface(
 
     Parameters
     ----------
-    waves : object with amplitude, omega, k, heading, phase (a ``WaveField``)
+    waves : object with amplitude, omega, k, heading_rad, phase (a ``WaveField``)
         Components in {n}.
     t : float
         Time of the sea record [s].
@@ -837,7 +841,7 @@ def sea_surface(
     east = c[1] + np.linspace(-size / 2, size / 2, n)
     N, E = np.meshgrid(north, east)  # rows: east, columns: north
     keep = strongest_components(waves.amplitude, share)
-    parts = (np.asarray(getattr(waves, f), dtype=float)[keep] for f in ("amplitude", "omega", "k", "heading", "phase"))
+    parts = (np.asarray(getattr(waves, f), dtype=float)[keep] for f in WAVE_FIELDS)
     zeta = wave_elevation(*parts, t, N, E)
     # display: y = −east; flip the rows so y increases along them
     return grid_surface(north, -east[::-1], zeta[::-1])

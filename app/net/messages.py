@@ -1,4 +1,4 @@
-"""The Bosun protocol, version 2: message types and their fields (see docs/protocol.md).
+"""The Bosun protocol, version 3: message types and their fields (see docs/protocol.md).
 
 Version 2 (typed state): every snapshot has ``kind`` and the E-STOP latch at ``estop`` (version 1
 nested it under ``flags`` for the teleop scene); static data (robot file, limits, joint names,
@@ -22,7 +22,7 @@ below.  A field spec is (kind, required, limit):
 
 from __future__ import annotations
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 MAX_MESSAGE_BYTES = 65_536  # a client's message
 MAX_ENGINE_MESSAGE_BYTES = 16 * 2**20  # an engine's (a study's result, a description with robot files)
 MAX_ROBOT_TEXT = 60_000  # robot XML sent by a client in set_robot (larger files go in a robot folder)

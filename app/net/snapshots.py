@@ -1,4 +1,4 @@
-"""Typed engine state of protocol version 2: one snapshot class and one description class per scene.
+"""Typed engine state of protocol version 3: one snapshot class and one description class per scene.
 
 An engine publishes a :class:`Snapshot` subclass 25–50 times a second (what changes) and answers a
 ``describe`` request with a :class:`Description` subclass (what is static: the robot file, joint
@@ -193,7 +193,7 @@ class SeaState:
     spectrum: str
     hs: float  # [m]
     tp: float  # [s]
-    heading: float  # [deg]
+    heading_deg: float  # wave heading [deg]: 0 following, 90 beam, 180 head sea
     seq: int = 0  # increments on every new sea
 
 
@@ -256,7 +256,7 @@ class WaveField:
     amplitude: list[float]  # [m]
     omega: list[float]  # [rad/s]
     k: list[float]  # wave numbers [rad/m]
-    heading: list[float]  # μ [rad]
+    heading_rad: list[float]  # each component's direction μ [rad]
     phase: list[float]  # φ [rad]
 
 
