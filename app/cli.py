@@ -935,6 +935,21 @@ def cmd_server(args: argparse.Namespace) -> int:
     from app.net.security import ENV_OPERATOR_SECRET, ServerCurve
     from app.net.transport import check_url, is_local
 
+    running: list = []  # the server, once it exists
+    if getattr(args, "exit_with_parent", False):
+        # watched from the first moment, not after the kernels load: an engine whose GUI went while it was
+        # still starting ran on for seconds on a busy machine (the GUI's SIGTERM test, 2026-11-28)
+        parent = os.getppid()
+
+        def watch_parent() -> None:
+            while os.getppid() == parent:  # re-parented: the GUI is gone (killed, crashed)
+                time.sleep(0.5)
+            if running:
+                running[0].stop()
+            else:  # still starting: ended as SIGTERM ends it (one line, status 130)
+                os.kill(os.getpid(), signal.SIGTERM)
+
+        threading.Thread(target=watch_parent, daemon=True).start()
     check_url(args.bind)
     if (args.curve_secret is None) != (args.curve_clients is None):
         raise BosunError("--curve-secret and --curve-clients go together")
@@ -973,15 +988,7 @@ def cmd_server(args: argparse.Namespace) -> int:
         operator_timeout=args.operator_timeout,
     )
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
-    if getattr(args, "exit_with_parent", False):
-        parent = os.getppid()
-
-        def watch_parent() -> None:
-            while os.getppid() == parent:  # re-parented: the GUI is gone (killed, crashed)
-                time.sleep(0.5)
-            server.stop()
-
-        threading.Thread(target=watch_parent, daemon=True).start()
+    running.append(server)  # from now on the parent watcher stops the loop
     print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
     print(f"  requests on {server.url}, state on {server.state_url}", flush=True)
     if curve is not None:

@@ -84,3 +84,44 @@ def test_the_old_way_loses_the_stop(qtbot, restore_handlers):
     finally:
         sys.excepthook = old_hook
     assert not caught and KeyboardInterrupt in hooked and win.isVisible()
+
+
+def test_an_interrupt_while_an_engine_starts_stops_that_engine(monkeypatch):
+    """H89: SIGTERM (as KeyboardInterrupt) reached the GUI while it waited for its engine's "requests on"
+    line; the caller had no EngineProcess yet to stop, so the engine ran on until its own start-up ended
+    (both ``test_sigterm_closes_the_gui_and_its_engine`` cases failed beside a CPU hog, 2026-11-28).  The
+    engine here never starts (a process that only sleeps): the interrupt must leave it stopped."""
+    import contextlib
+    import subprocess
+    import threading
+
+    from app.errors import raise_interrupt
+    from tests.helpers import process_running
+    from ui import engine_process
+
+    started = []
+    real_popen = subprocess.Popen
+
+    def sleeper(cmd, **kw):
+        started.append(real_popen([sys.executable, "-c", "import time; time.sleep(120)"], **kw))
+        return started[-1]
+
+    monkeypatch.setattr(engine_process.subprocess, "Popen", sleeper)
+    previous = signal.signal(signal.SIGUSR2, raise_interrupt)
+    timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGUSR2))
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            engine_process.EngineProcess(timeout=60.0)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGUSR2, previous)
+    assert len(started) == 1
+    proc = started[0]
+    try:
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            proc.wait(timeout=10)
+        assert not process_running(proc.pid), "the engine being started was left running"
+    finally:
+        if proc.poll() is None:
+            proc.kill()

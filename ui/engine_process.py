@@ -58,14 +58,21 @@ class EngineProcess:
         self.proc = subprocess.Popen(self.cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         url = None
         deadline = time.monotonic() + self.timeout
-        while time.monotonic() < deadline:
-            line = self.proc.stdout.readline()
-            if not line:
-                break
-            m = re.search(r"requests on (tcp://\S+),", line)
-            if m:
-                url = m.group(1)
-                break
+        try:
+            while time.monotonic() < deadline:
+                line = self.proc.stdout.readline()
+                if not line:
+                    break
+                m = re.search(r"requests on (tcp://\S+),", line)
+                if m:
+                    url = m.group(1)
+                    break
+        except BaseException:
+            # Ctrl-C or SIGTERM while the engine starts: the caller has no EngineProcess to stop yet, so this
+            # one stops its process (it was left to run on until its own start-up ended, seconds on a busy
+            # machine: the hog run of 2026-11-28)
+            self.stop()
+            raise
         if url is None:
             err = self.proc.stderr.read() if self.proc.poll() is not None else ""
             self.stop()
