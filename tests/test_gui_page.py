@@ -625,14 +625,16 @@ def test_item10_the_windows_frame_opens_at_the_top_of_a_1280x800_screen(tmp_path
             ("--connect", ["--connect", url]),
         ):
             gui = subprocess.Popen(
-                [sys.executable, "-m", "app", *args, "--quit-after", "60"],
+                [sys.executable, "-m", "app", *args, "--quit-after", "900"],  # ended below; a busy machine
+                # took over 60 s to frame the window, and the GUI had quit (its window gone) before it was read
                 env=env,
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.PIPE,
                 text=True,
             )
             procs.append(gui)
-            ids = _x("xdotool", "search", "--sync", "--name", "Bosun: universal", env=env, timeout=240).split()
+            find = ("xdotool", "search", "--sync", "--onlyvisible", "--name", "Bosun: universal")
+            ids = _x(*find, env=env, timeout=240).split()
             assert ids, f"{name}: no window"
             deadline = time.monotonic() + 60
             while time.monotonic() < deadline:  # the window manager frames the window some time after it shows

@@ -85,8 +85,9 @@ class LongCommandSession(Session):
         if self._next is None:
             self._next = now + 0.5
         elif now >= self._next:
+            start = time.perf_counter()
             json.dumps(self._big)  # one C call: the lock is not released until it returns
-            self.note("info", "held up")
+            self.note("info", f"held up {time.perf_counter() - start:.3f} s")
             now = time.monotonic()
             self._next = now + 0.5
         super().tick(now, dt, solve_budget)
@@ -112,13 +113,17 @@ def hold_steady(op, seconds: float, between=None):
     return last, sent, logs
 
 
-def judge(st, sent, holds: int) -> None:
-    """On the tick's clock every hold-up made the steady stick stale.  A busy machine can also starve the
-    test's own client or the sockets' delivery (a real gap, rightly stale): such episodes are allowed, but
-    fewer than a third as many as the hold-ups, and the client's own pauses are counted apart."""
+def judge(st, sent, holds: list[float]) -> None:
+    """On the tick's clock every hold-up (``holds``: their lengths [s]) made the steady stick stale.  A busy
+    machine can also starve the test's own client or the sockets' delivery (a real gap, rightly stale): such
+    episodes are allowed, but fewer than a third as many as the hold-ups.  The client's own pauses are
+    counted apart, and so is a hold-up the machine stretched near or past a deaf receiver's limit (beside a
+    CPU hog the 0.3-s call took longer): there the input is rightly stale."""
     pauses = sum(1 for a, b in itertools.pairwise(sent) if b - a > 0.15)
-    assert holds >= 5, holds
-    assert st.flags.stale_count - pauses < holds / 3, (st.flags.stale_count, pauses, holds)
+    deaf = sum(1 for d in holds if d > 0.8 * DEAF_LIMIT)
+    assert len(holds) >= 5 and deaf <= len(holds) / 2, holds  # the test tried what it says
+    allowed = pauses + deaf
+    assert st.flags.stale_count - allowed < len(holds) / 3, (st.flags.stale_count, pauses, holds)
 
 
 def serve_long_commands(url: str) -> None:
@@ -154,7 +159,7 @@ def test_a_steady_stick_is_never_stale_through_a_long_command():
     try:
         arm(op)
         st, sent, logs = hold_steady(op, 6.0)
-        judge(st, sent, sum("held up" in line for line in logs))
+        judge(st, sent, [float(line.split()[-2]) for line in logs if line.startswith("held up")])
     finally:
         op.close()
         proc.terminate()
@@ -175,7 +180,7 @@ def test_a_steady_stick_is_never_stale_when_the_engine_process_is_held_up():
     proc, op = _start_engine(["-m", "app", "server", "--bind", "URL", "--rate", "500", "--duration", "60"])
     try:
         arm(op)
-        holds = []
+        holds, lengths = [], []
 
         def hold_up(sent):
             if sent[-1] >= 0.5 + (holds[-1] if holds else sent[0]):
@@ -187,9 +192,10 @@ def test_a_steady_stick_is_never_stale_when_the_engine_process_is_held_up():
                     time.sleep(0.02)
                 proc.send_signal(signal.SIGCONT)
                 holds.append(time.monotonic())
+                lengths.append(holds[-1] - t_stop)
 
         st, sent, _ = hold_steady(op, 6.0, hold_up)
-        judge(st, sent, len(holds))
+        judge(st, sent, lengths)
     finally:
         op.close()
         proc.send_signal(signal.SIGCONT)
