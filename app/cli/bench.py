@@ -1,0 +1,299 @@
+"""``bosun bench ik|loop|sim|hold|alarms|plc-soak``: benchmarks, not tests."""
+
+from __future__ import annotations
+
+import argparse
+
+from app.cli.common import (
+    _kernels_on,
+    _machine,
+    _Parser,
+    _positive_float,
+    _positive_int,
+    _print_json,
+    _progress_bar,
+    _table,
+)
+from app.errors import BosunError
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from app.analysis.ik_studies import bench_ik
+    from app.models.registry import list_robots, load_robot, load_spec
+    from app.warmup import warm_up
+
+    names = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
+    robots = [load_robot(n) for n in names]
+    warm_up()  # compiled (or loaded) before the clock runs, never inside a timed solve
+    rows = bench_ik(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik"))
+    peers_missing: list[str] = []
+    if args.peers:
+        from app.analysis.ik_peers import available, bench_peers
+
+        peers_missing = [p for p, ok in available().items() if not ok]
+        rows += bench_peers(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik peers"))
+        ref = {(r["robot"], r["start"]): r["median_ms"] for r in rows if r["solver"] == "rtb ik_LM"}
+        for r in rows:
+            base = ref.get((r["robot"], r["start"]))
+            r["ratio_to_rtb_cpp"] = r["median_ms"] / base if base else None
+    if args.json:
+        _print_json(
+            {
+                "benchmark": "ik",
+                "machine": _machine(),
+                "kernels": _kernels_on(),
+                "targets": args.targets,
+                "seed": args.seed,
+                "peers_missing": peers_missing,
+                "results": rows,
+            }
+        )
+        return 0
+    print(
+        f"bosun bench ik: {args.targets} seeded reachable targets per robot; cold = default start, warm = targets "
+        "1 cm apart from the previous solution; success = error < 1 mm inside the limits; budget 100 ms"
+    )
+    print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
+    if peers_missing:
+        print(f"peers not installed (pip install -e '.[bench]'): {', '.join(peers_missing)}")
+    header = ["robot", "solver", "start", "median [ms]", "p95 [ms]", "p99 [ms]", "success", "own test", "median err"]
+    if args.peers:
+        header.append("× RTB C++")
+
+    def row(r: dict) -> list[str]:
+        cells = [
+            r["robot"],
+            r["solver"],
+            r["start"],
+            f"{r['median_ms']:.3f}",
+            f"{r['p95_ms']:.2f}",
+            f"{r['p99_ms']:.2f}",
+            f"{r['success_rate']:.1%}",
+            f"{r['own_success_rate']:.1%}" if "own_success_rate" in r else "-",
+            f"{r['median_error_m']:.1e}",
+        ]
+        if args.peers:
+            ratio = r.get("ratio_to_rtb_cpp")
+            cells.append(f"{ratio:.2f}" if ratio is not None else "-")
+        return cells
+
+    rows.sort(key=lambda r: (r["robot"], r["start"]))
+    print(_table(header, [row(r) for r in rows]))
+    return 0
+
+
+def cmd_bench_sim(args: argparse.Namespace) -> int:
+    from app.bench.sim_speed import engine_speed
+
+    cases = [(k, m) for k in args.kinds for m in ((False, True) if k == "lab" else (False,))]
+    rows = [engine_speed(kind, seconds=args.seconds, motion=motion) for kind, motion in cases]
+    if args.json:
+        _print_json({"benchmark": "sim", "machine": _machine(), "results": rows})
+        return 0
+    print(f"bosun bench sim: engine plants ticked back to back at their default rate, {args.seconds:g} s simulated")
+    print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
+    labels = {("lab", False): "lab (as it starts)", ("lab", True): "lab (VVMC in waves)", ("tac", False): "crane head"}
+    print(
+        _table(
+            ["engine", "ticks", "wall [s]", "× real time"],
+            [
+                [
+                    labels[(r["kind"], r["motion"])],
+                    str(r["ticks"]),
+                    f"{r['wall_s']:.2f}",
+                    f"{r['speed_x_realtime']:.0f}",
+                ]
+                for r in rows
+            ],
+        )
+    )
+    return 0
+
+
+def cmd_bench_hold(args: argparse.Namespace) -> int:
+    from app.bench.hold import HOLD_TOLERANCE, bench_hold
+    from app.models.registry import list_robots, load_spec
+
+    robots = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
+    if not 1.0 <= args.rate <= 1000.0:
+        raise BosunError(f"--rate must be between 1 and 1000 Hz, got {args.rate:g}")
+    rows = bench_hold(
+        robots, tuple(args.modes), args.sequences, seed=args.seed, rate=args.rate, workers=args.workers,
+        progress=_progress_bar("hold", unit="sequence"),
+    )  # fmt: skip
+    if args.json:
+        _print_json({"benchmark": "hold", "machine": _machine(), "rate": args.rate, "results": rows})
+        return 0
+    print(f"bosun bench hold: {args.sequences} seeded stick sequences per case ending still, {args.rate:g} Hz")
+    print(f"held: overrun past the braking stop and drift once at rest both < {HOLD_TOLERANCE * 100:g} cm")
+    print(
+        _table(
+            ["robot", "solver", "mode", "held", "max overrun [mm]", "max drift [mm]", "slowest settle [s]"],
+            [
+                [
+                    r["robot"],
+                    r["solver"],
+                    r["mode"],
+                    f"{r['held']}/{r['sequences']}",
+                    f"{r['max_overrun_m'] * 1e3:.3f}",
+                    f"{r['max_drift_m'] * 1e3:.3f}",
+                    f"{r['max_settle_s']:.2f}",
+                ]
+                for r in rows
+            ],
+        )
+    )
+    return 0 if all(r["held"] == r["sequences"] for r in rows) else 1
+
+
+def cmd_bench_alarms(args: argparse.Namespace) -> int:
+    from app.bench.alarm_rates import run
+
+    rep = run(args.minutes, progress=_progress_bar("session", unit="s")).report()
+    if args.json:
+        _print_json({"benchmark": "alarms", "machine": _machine(), **rep})
+        return 0
+    print(f"bosun bench alarms: a scripted {args.minutes:g}-minute session, three engines (machine: {_machine()})")
+    print(f"  E-STOPs by the operator (counted apart): {rep['operator_estops']}")
+    print(f"  alarms not caused by the operator: {rep['alarms_not_by_the_operator']}")
+    print(
+        f"  steady operation: {rep['steady_alarms']} in {rep['steady_seconds']:.0f} s = "
+        f"{rep['steady_per_10_min']:.1f} per 10 min (EEMUA 191: at most 1)"
+    )
+    print(f"  after each upset (10 min): {rep['after_each_upset_10_min']} (EEMUA 191: at most 10)")
+    print(f"  chattering (3 or more in a minute): {', '.join(rep['chattering']) or 'none'}")
+    for a in rep["alarms"]:
+        who = " (operator)" if a["operator"] else ""
+        print(f"    {a['t']:7.1f} s  {a['engine']:6s} {a['severity']:8s} {a['key']}{who}: {a['text']}")
+    gaps = ", ".join(f"{k} {v:.2f} s" for k, v in rep["longest_state_gap_s"].items())
+    rt = ", ".join(f"{k} {v:.2f}" for k, v in rep["lowest_realtime_factor"].items())
+    print(f"  longest state gap: {gaps}; lowest real-time factor: {rt}")
+    return 0
+
+
+def cmd_bench_plc_soak(args: argparse.Namespace) -> int:
+    from app.bench.plc_soak import run
+
+    rep = run(args.minutes * 60.0, seed=args.seed, progress=_progress_bar("soak", unit="s"))
+    if args.json:
+        _print_json({"benchmark": "plc-soak", "machine": _machine(), **rep.to_dict()})
+        return 0 if rep.ok else 1
+    print(f"bosun bench plc-soak: the lab engine against a misbehaving PLC (pyads' test server), {rep.seconds:g} s")
+    print(f"  phases: {rep.phases} (normal, NaN/inf/out of range, wrong sizes + STOP unusable, link gone, slow)")
+    print(f"  injections: {', '.join(f'{k} {v}' for k, v in sorted(rep.injections.items()))}")
+    print(f"  snapshots: {rep.snapshots}, numbers checked: {rep.fields_checked}, non-finite: {rep.nonfinite_fields}")
+    by = ", ".join(f"{k} {v}" for k, v in sorted(rep.refused_by.items()))
+    print(f"  operator commands: {rep.commands}, accepted {rep.accepted}, refused {rep.refused} ({by})")
+    taken = len(rep.motion_accepted_while_not_ok)
+    print(f"  motion commands taken while the link was not ok or STOP unusable: {taken}")
+    print(
+        f"  PLC connects with STOP unusable: {rep.stop_unusable_connects}; writes that could start motion there: "
+        f"{len(rep.motion_writes_while_stop_unusable)}"
+    )
+    print(
+        f"  E-STOPs there: {rep.estops} (resets refused {rep.resets_refused}; STOP written and read back on the "
+        f"sound PLC before the reset: {rep.stop_rewritten_after_fix})"
+    )
+    print(f"  link states [s]: {', '.join(f'{k} {v:g}' for k, v in rep.link_seconds.items())}")
+    print(f"  alarms raised: {', '.join(f'{k} {v}' for k, v in rep.alarms_raised.items())}")
+    print(f"  longest tick + snapshot: {rep.max_tick_s * 1e3:.1f} ms; result: {'OK' if rep.ok else 'FAILED'}")
+    for line in rep.nonfinite_paths + rep.motion_accepted_while_not_ok + rep.motion_writes_while_stop_unusable:
+        print(f"    {line}")
+    return 0 if rep.ok else 1
+
+
+def cmd_bench_loop(args: argparse.Namespace) -> int:
+    from app.bench.loop import bench_loop
+
+    result = bench_loop(
+        rate=args.rate, seconds=args.seconds, robot=args.robot, solver=args.solver, flood=args.flood, burn=args.burn
+    )
+    result["machine"] = _machine()
+    if args.json:
+        _print_json(result)
+        return 0
+    extra = (f", {args.flood} junk messages/s from one client" if args.flood else "") + (
+        ", one core kept busy by another process" if args.burn else ""
+    )
+    print(
+        f"bosun bench loop: {args.robot} / {args.solver}, {args.rate:g} Hz for {args.seconds:g} s, one viewer and "
+        f"one input client at 500 Hz over tcp://127.0.0.1{extra}"
+    )
+    print(f"machine: {result['machine']}")
+    lp = result["loop"]
+    print(
+        f"  tick period  p50 {lp['period_p50_ms']:.3f} ms   p99 {lp['period_p99_ms']:.3f} ms   "
+        f"max {lp['period_max_ms']:.3f} ms   jitter p99 {lp['jitter_p99_ms']:.3f} ms"
+    )
+    print(f"  missed deadlines {lp['missed_deadlines']} of {lp['ticks']} ticks;  work p99 {lp['work_p99_ms']:.3f} ms")
+    print(
+        f"  input -> joint command latency  p50 {lp['latency_p50_ms']:.3f} ms   p99 {lp['latency_p99_ms']:.3f} ms "
+        f"({lp['latency_samples']} samples)"
+    )
+    print(
+        f"  tick rate {lp['tick_rate_hz']:.1f} Hz ({100 * result['tick_rate_fraction']:.1f} % of nominal);  "
+        f"viewer received {result['viewer_states']} states ({result['viewer_rate_hz']:.1f} /s, "
+        f"{100 * result['viewer_fraction']:.1f} % of those published)"
+    )
+    if args.flood:
+        print(f"  flood: {result['flood_sent']} sent; engine dropped {lp['dropped']} unread, rejected {lp['rejected']}")
+    print(
+        f"  E-STOP: {len(result['estop_ticks'])} of {result['estops_sent']} applied, at most "
+        f"{result['estop_ticks_max']} tick(s) after receipt; joint speed after: {result['speed_after_estop']}"
+    )
+    return 0
+
+
+def register(sub) -> None:
+    """Add this group's commands to ``bosun``'s subparsers."""
+    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik, loop, sim, hold, alarms, plc-soak")
+    bench = p.add_subparsers(dest="bench", metavar="WHAT", parser_class=_Parser, required=True)
+    b = bench.add_parser("ik", help="median/p95 solve time and success per robot and solver")
+    b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
+    b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
+    b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
+    b.add_argument(
+        "--peers",
+        action="store_true",
+        help="also robotics-toolbox-python (ik_LM, ikine_LM) and ikpy on the same targets (extra 'bench')",
+    )
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench)
+    b = bench.add_parser("loop", help="engine tick period, jitter, missed deadlines and input latency")
+    b.add_argument("--rate", type=float, choices=[500.0, 1000.0], default=500.0, help="loop rate [Hz] (500 or 1000)")
+    b.add_argument("--seconds", type=_positive_float, default=30.0, help="duration [s] (default 30)")
+    b.add_argument("--robot", default="comau_smart5_3dof", help="robot (default comau_smart5_3dof)")
+    b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
+    b.add_argument("--flood", type=int, default=0, metavar="N", help="one more client sending N junk messages a second")
+    b.add_argument("--burn", action="store_true", help="another process keeps one core busy")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_loop)
+    b = bench.add_parser("sim", help="how fast the lab and crane-head engines run unthrottled")
+    b.add_argument("--kinds", nargs="+", choices=["lab", "tac"], default=["lab", "tac"], help="engines (default both)")
+    b.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated time [s] (default 20)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_sim)
+    b = bench.add_parser(
+        "hold", help="hold means hold: seeded stick sequences ending still, tool drift after braking (issue 26)"
+    )
+    b.add_argument("--sequences", type=_positive_int, default=1000, help="sequences per robot × solver × mode")
+    b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
+    b.add_argument("--modes", nargs="+", choices=["velocity", "position"], default=["velocity", "position"])
+    b.add_argument("--rate", type=float, default=1000.0, help="engine rate [Hz] (default 1000, as the engine runs)")
+    b.add_argument("--seed", type=int, default=0, help="seed of the stick sequences (default 0)")
+    b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_hold)
+    b = bench.add_parser(
+        "alarms", help="alarm rates of a scripted session (three engines, a study, VVMC, two STOPs) vs EEMUA 191"
+    )
+    b.add_argument("--minutes", type=_positive_float, default=10.0, help="session length (default 10)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_alarms)
+    b = bench.add_parser(
+        "plc-soak", help="the lab engine against a PLC test server injecting NaN, wrong sizes, link loss, slowness"
+    )
+    b.add_argument("--minutes", type=_positive_float, default=10.0, help="soak length (default 10)")
+    b.add_argument("--seed", type=int, default=27, help="seed of the injections and commands (default 27)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_bench_plc_soak)

@@ -1,0 +1,300 @@
+"""``bosun server``, ``joystick``, ``keys``: the engine headless, the input client, CURVE keys."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import threading
+import time
+from pathlib import Path
+
+from app.cli.common import (
+    _positive_float,
+)
+from app.errors import BosunError, require
+
+
+def _make_session(args: argparse.Namespace):
+    if getattr(args, "plant", "teleop") == "tac":
+        from app.engine.tac_session import TacSession
+
+        return TacSession()
+    if getattr(args, "plant", "teleop") == "lab":
+        from app.engine.lab_session import LabSession
+
+        return LabSession(plc=_plc_target(args))
+    from app.engine.session import Session
+
+    folders = list(getattr(args, "robots_dir", None) or [])
+    if args.robot.endswith(".xml") or "/" in args.robot:  # the start-up robot's folder is allowed too
+        folders.append(str(Path(args.robot).expanduser().resolve().parent))
+    for folder in folders:
+        if not Path(folder).is_dir():
+            raise BosunError(f"--robots-dir {folder}: not a folder")
+    return Session(robot_name=args.robot, solver_name=args.solver, mode=args.mode, seed=0, robots_dirs=tuple(folders))
+
+
+def _plc_target(args: argparse.Namespace):
+    """The PLC of ``--plc`` (None without it); pyads must be there (the extra ``plc``)."""
+    if getattr(args, "plc", None) is None:
+        if getattr(args, "plc_host", None) or getattr(args, "plc_local_id", None):
+            raise BosunError("--plc-host and --plc-local-id go with --plc AMS_NET_ID[:PORT]")
+        return None
+    if getattr(args, "plant", "teleop") != "lab":
+        raise BosunError("--plc drives the Motion-Lab's PLC: use it with --plant lab")
+    require("pyads", "plc", "bosun server --plc")
+    from app.plc.bridge import PlcTarget
+
+    return PlcTarget.parse(args.plc, args.plc_host, args.plc_local_id)
+
+
+def cmd_server(args: argparse.Namespace) -> int:
+    import signal
+
+    from app.engine.server import DEFAULT_RATE, EngineServer
+    from app.net.security import ENV_OPERATOR_SECRET, ServerCurve
+    from app.net.transport import check_url, is_local
+
+    running: list = []  # the server, once it exists
+    if getattr(args, "exit_with_parent", False):
+        # watched from the first moment, not after the kernels load: an engine whose GUI went while it was
+        # still starting ran on for seconds on a busy machine (the GUI's SIGTERM test, 2026-11-28)
+        parent = os.getppid()
+
+        def watch_parent() -> None:
+            while os.getppid() == parent:  # re-parented: the GUI is gone (killed, crashed)
+                time.sleep(0.5)
+            if running:
+                running[0].stop()
+            else:  # still starting: ended as SIGTERM ends it (one line, status 130)
+                os.kill(os.getpid(), signal.SIGTERM)
+
+        threading.Thread(target=watch_parent, daemon=True).start()
+    check_url(args.bind)
+    if (args.curve_secret is None) != (args.curve_clients is None):
+        raise BosunError("--curve-secret and --curve-clients go together")
+    curve = ServerCurve.from_files(args.curve_secret, args.curve_clients) if args.curve_secret else None
+    if not is_local(args.bind) and curve is None:
+        raise BosunError(
+            f"binding to the non-local address {args.bind} needs CURVE keys (--curve-secret, --curve-clients); "
+            "make them with 'bosun keys' (README: remote operation)"
+        )
+    plc = _plc_target(args)  # before the kernels compile: a missing extra or a bad address says so at once
+    # the launch secret of a GUI's own engine comes in the environment, never on the command line
+    operator_secret = os.environ.pop(ENV_OPERATOR_SECRET, None) or None
+    from app.warmup import warm_up
+
+    # compile (or load from the on-disk cache) before the first tick: never in the control loop
+    compile_s = warm_up(
+        progress=lambda k, n: print(f"bosun server: compiled kernels {k}/{n}", flush=True) if k == n else None
+    )
+    if compile_s > 1.0:
+        print(f"bosun server: kernels compiled in {compile_s:.1f} s (cached for the next start)", flush=True)
+    session = _make_session(args)
+    rate = args.rate if args.rate is not None else (50.0 if args.plant in ("tac", "lab") else DEFAULT_RATE)
+    pub = (
+        min(args.publish_rate, rate)
+        if args.publish_rate is not None
+        else (25.0 if args.plant in ("tac", "lab") else 50.0)
+    )
+    server = EngineServer(
+        session,
+        bind=args.bind,
+        rate=rate,
+        publish_rate=pub,
+        token=args.token,
+        curve=curve,
+        operator_secret=operator_secret,
+        operator_timeout=args.operator_timeout,
+    )
+    signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    running.append(server)  # from now on the parent watcher stops the loop
+    print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
+    print(f"  requests on {server.url}, state on {server.state_url}", flush=True)
+    if curve is not None:
+        n_keys = len(list(curve.clients_dir.glob("*.key")))
+        print(f"  CURVE: encrypted; {n_keys} allowed client key(s) in {curve.clients_dir}", flush=True)
+    if operator_secret:
+        print("  the operator role needs this engine's launch secret", flush=True)
+    if plc is not None:
+        print(f"  plant: the Motion-Lab's PLC at {plc} over ADS (pyads); STOP writes MAIN.bStop", flush=True)
+    try:
+        server.run(duration=args.duration)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.close()
+    st = server.stats.summary()
+    print(f"bosun server: stopped after {st['ticks']} ticks, {st['missed_deadlines']} missed deadlines", flush=True)
+    return 0
+
+
+def cmd_keys(args: argparse.Namespace) -> int:
+    from app.net.security import create_keys, load_public
+
+    public, secret = create_keys(args.dir, args.name)
+    print(f"public key  {public}  ({load_public(public).decode()}): give it to the other side")
+    print(f"secret key  {secret}  (mode 0600): keep it on this machine")
+    print("an engine uses its secret key and a folder of allowed client public keys:")
+    print("  bosun server --bind tcp://0.0.0.0:5555 --curve-secret ENGINE.key_secret --curve-clients ALLOWED_DIR")
+    print("a client uses its secret key and the engine's public key:")
+    print("  bosun joystick --connect tcp://HOST:5555 --curve-secret CLIENT.key_secret --server-key ENGINE.key")
+    return 0
+
+
+def cmd_joystick(args: argparse.Namespace) -> int:
+    from app.net.transport import TransportError, check_url
+    from app.teleop.client import run_joystick_client
+
+    check_url(args.connect)
+    virtual = None
+    if args.virtual:
+        from app.teleop.devices import PygameJoysticks
+        from app.teleop.virtual import VirtualJoystick
+
+        PygameJoysticks()  # initialise SDL's joystick subsystem before attaching
+        virtual = VirtualJoystick(n_axes=4, n_buttons=8)
+
+        def operator(vj=virtual) -> None:
+            """The arming gesture an operator makes: stick centred, press the deadman, then deflect."""
+            time.sleep(0.5)
+            vj.set_button(0, True)
+            time.sleep(0.3)
+            vj.set_axis(0, 0.5)
+
+        threading.Thread(target=operator, daemon=True).start()
+        print(
+            "bosun joystick: a virtual joystick stands in for hardware (centred, deadman pressed at 0.5 s, "
+            "x = 0.5 from 0.8 s)",
+            flush=True,
+        )
+    import signal
+
+    from app.net.security import ClientCurve
+
+    if (args.curve_secret is None) != (args.server_key is None):
+        raise BosunError("--curve-secret and --server-key go together")
+    curve = ClientCurve.from_files(args.curve_secret, args.server_key) if args.curve_secret else None
+    stop = threading.Event()  # SIGTERM and Ctrl-C stop streaming cleanly: the client says bye, the engine holds
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    try:
+        sent = run_joystick_client(
+            args.connect,
+            token=args.token,
+            curve=curve,
+            device=args.device,
+            rate=args.rate,
+            duration=args.duration,
+            stop=stop,
+            on_event=lambda t: print(f"bosun joystick: {t}", flush=True),
+        )
+    except TransportError as err:
+        raise BosunError(str(err)) from None
+    except RuntimeError as err:
+        raise BosunError(str(err)) from None
+    except KeyboardInterrupt:
+        sent = 0
+    finally:
+        if virtual is not None:
+            virtual.detach()
+    print(f"bosun joystick: sent {sent} input messages", flush=True)
+    return 0
+
+
+def register(sub) -> None:
+    """Add this group's commands to ``bosun``'s subparsers."""
+
+    def add_engine_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--robot", default="comau_smart5_3dof", help="robot to load (default comau_smart5_3dof)")
+        p.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
+        p.add_argument("--mode", choices=["position", "velocity"], default="velocity", help="default velocity")
+        p.add_argument(
+            "--robots-dir",
+            action="append",
+            metavar="DIR",
+            help="a folder whose robot files clients may load by path (repeatable; the library and "
+            "$BOSUN_ROBOTS_DIR always are)",
+        )
+
+    p = sub.add_parser("server", help="run the engine headless (fixed-rate loop, ZeroMQ protocol)")
+    p.add_argument(
+        "--bind",
+        default="tcp://127.0.0.1:5555",
+        help="request URL: tcp://HOST:PORT or ipc://PATH (default tcp://127.0.0.1:5555); "
+        "a non-local address needs CURVE keys (--curve-secret and --curve-clients)",
+    )
+    add_engine_args(p)
+    p.add_argument(
+        "--plant",
+        choices=["teleop", "tac", "lab"],
+        default="teleop",
+        help="teleop (a library manipulator), tac (vessel, crane, Delta head), lab (Motion-Lab); default teleop",
+    )
+    p.add_argument(
+        "--rate",
+        type=_positive_float,
+        default=None,
+        help="control rate [Hz], up to 1000 (default 1000; tac and lab 50)",
+    )
+    p.add_argument(
+        "--publish-rate", type=_positive_float, default=None, help="state messages per second (default 50; tac 25)"
+    )
+    p.add_argument("--token", default=None, help="shared token every client must present (loopback testing only)")
+    p.add_argument(
+        "--curve-secret", default=None, metavar="FILE", help="the engine's CURVE secret key file (bosun keys)"
+    )
+    p.add_argument(
+        "--curve-clients", default=None, metavar="DIR", help="folder of the client public keys (*.key) allowed in"
+    )
+    p.add_argument(
+        "--operator-timeout",
+        type=_positive_float,
+        default=5.0,
+        help="seconds without a message before the operator role lapses (default 5; a warning at 2)",
+    )
+    p.add_argument(
+        "--plc",
+        default=None,
+        metavar="AMS_NET_ID[:PORT]",
+        help="with --plant lab: drive the real Motion-Lab through its TwinCAT PLC over ADS (needs the extra "
+        "plc: pip install 'bosun[plc]'), e.g. 192.168.90.150.1.1:851 (port default 851)",
+    )
+    p.add_argument(
+        "--plc-host", default=None, metavar="HOST", help="the PLC's IP or name (default: the Net ID's first 4 numbers)"
+    )
+    p.add_argument(
+        "--plc-local-id",
+        default=None,
+        metavar="AMS_NET_ID",
+        help="this machine's AMS Net ID, if the PLC's route to it names another (default: the ADS library's)",
+    )
+    p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
+    p.add_argument(
+        "--exit-with-parent",
+        action="store_true",
+        help="stop when the process that started this engine ends (the GUI's own engines use it)",
+    )
+    p.set_defaults(func=cmd_server)
+
+    p = sub.add_parser("joystick", help="stream a local joystick to an engine (the input client)")
+    p.add_argument("--connect", required=True, help="the engine's request URL, e.g. tcp://127.0.0.1:5555")
+    p.add_argument("--token", default=None, help="shared token of the engine (loopback testing)")
+    p.add_argument("--curve-secret", default=None, metavar="FILE", help="this client's CURVE secret key (bosun keys)")
+    p.add_argument("--server-key", default=None, metavar="FILE", help="the engine's CURVE public key")
+    p.add_argument("--device", default=None, help="use the first joystick whose name contains this")
+    p.add_argument("--rate", type=_positive_float, default=100.0, help="input messages per second (default 100)")
+    p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
+    p.add_argument("--virtual", action="store_true", help="attach an SDL virtual joystick (no hardware needed)")
+    p.set_defaults(func=cmd_joystick)
+
+    p = sub.add_parser(
+        "keys",
+        help="make a CURVE key pair for remote operation (NAME.key public, NAME.key_secret secret)",
+        description="Writes NAME.key (public: give it to the other side) and NAME.key_secret (keep it; mode "
+        "0600) in ZeroMQ's certificate format. The engine needs its own secret key and a folder with each "
+        "allowed client's public key; a client needs its own secret key and the engine's public key.",
+    )
+    p.add_argument("name", help="name of the pair, e.g. engine or operator-laptop")
+    p.add_argument("--dir", default="keys", help="folder to write into (default ./keys)")
+    p.set_defaults(func=cmd_keys)

@@ -1,0 +1,132 @@
+"""``bosun vessel list|rao``: the vessels known by name, and RAOs from main particulars."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from app.cli.common import (
+    _Parser,
+    _positive_float,
+    _print_json,
+    _progress_bar,
+)
+from app.errors import BosunError
+
+
+# ----------------------------------------------------------------------------- vessels (issue 17)
+def cmd_vessel_list(args: argparse.Namespace) -> int:
+    from app.marine.vessels import DEFAULT_VESSEL, VESSELS
+
+    if args.json:
+        _print_json({"default": DEFAULT_VESSEL, "vessels": VESSELS})
+        return 0
+    for name, text in VESSELS.items():
+        print(f"{name:20s} {text}{'  (default)' if name == DEFAULT_VESSEL else ''}")
+    print("or any RAO file: --vessel FILE.mat|FILE.csv")
+    return 0
+
+
+def cmd_vessel_rao(args: argparse.Namespace) -> int:
+    """6-DOF motion RAOs of a monohull from its main particulars (Capytaine BEM + viscous roll damping)."""
+    import dataclasses
+    import shlex
+
+    from app.marine.bem import BemError, BemInputs, compute_raos
+    from app.marine.hull import HullError
+    from app.marine.vessel import VesselError, VesselParticulars, rao_to_csv
+
+    names = ("lpp", "beam", "draft", "cb", "gm_t", "gm_l", "r44", "r55", "r66", "mass")
+    given = {n: getattr(args, n) for n in names if getattr(args, n) is not None}
+    try:
+        name = args.name or ("MSS supply vessel" if not given else "monohull")
+        vessel = VesselParticulars(**given, name=name)
+        inputs = BemInputs(
+            vessel=vessel, cwp=args.cwp, roll_damping=args.roll_damping, nx=args.nx, nz=args.nz,
+            w_min=args.w_min, w_max=args.w_max, n_w=args.n_w, heading_step=args.heading_step,
+        )  # fmt: skip
+        out = Path(args.out)
+        if out.is_dir():
+            raise BosunError(f"--out {out} is a folder; give a .csv file")
+        result = compute_raos(inputs, progress=_progress_bar("vessel rao", unit="frequency"))
+    except (BemError, HullError, VesselError) as err:
+        raise BosunError(str(err)) from None
+    argv = getattr(args, "argv", None) or []
+    command = "bosun " + " ".join(shlex.quote(a) for a in argv) if argv else "bosun vessel rao"
+    header = {
+        "command": command,
+        "inputs": inputs.to_dict(),
+        "vessel": dataclasses.asdict(vessel),
+        "info": result.info,
+    }
+    text = rao_to_csv(result.table)
+    lines = text.splitlines(keepends=True)
+    meta = "".join(f"# {line}\n" for line in json.dumps(header, indent=1, sort_keys=True).splitlines())
+    body = lines[0] + "# made by: " + command + "\n" + meta + "".join(lines[1:])
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(f".{out.name}.partial")
+        tmp.write_text(body, encoding="utf-8")
+        tmp.replace(out)
+    except OSError as err:
+        raise BosunError(f"cannot write {out}: {err.strerror or err}") from None
+    info = result.info
+    if args.json:
+        _print_json({"out": str(out), **header})
+        return 0
+    t = result.table
+    print(f"{vessel.name}: {t.w.size} frequencies × {t.headings.size} headings, {info['panels']} panels", end="")
+    print(f" (+{info['lid_panels']} lid), {info['wall_s']:.0f} s")
+    cwp, cm = info["waterplane_coefficient"], info["midship_section_coefficient"]
+    origin = "given" if inputs.cwp is not None else "from GM_L − GM_T"
+    print(f"  hull: C_WP {cwp:.3f} ({origin}), C_M {cm:.3f}, z_G {info['z_g_m']:+.2f} m above the waterline")
+    ratio = 100 * info["roll_radiation_damping_ratio"]
+    print(
+        f"  roll: ω4 {info['roll_natural_frequency_rad_s']:.3f} rad/s, radiation damping {ratio:.2f} % of critical,",
+        end="",
+    )
+    print(f" viscous added to {100 * inputs.roll_damping:g} %")
+    print(f"wrote {out}")
+    return 0
+
+
+def register(sub) -> None:
+    """Add this group's commands to ``bosun``'s subparsers."""
+    p = sub.add_parser("vessel", help="vessels: vessel list, vessel rao (RAOs from main particulars, Capytaine)")
+    ves = p.add_subparsers(dest="vessel_cmd", metavar="WHAT", parser_class=_Parser, required=True)
+    b = ves.add_parser("list", help="the vessels known by name (the default first)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_vessel_list)
+    b = ves.add_parser(
+        "rao", help="6-DOF motion RAOs of a monohull from its main particulars (boundary elements, extra 'marine')"
+    )
+    for flag, unit, what in (
+        ("--lpp", "m", "length between perpendiculars"), ("--beam", "m", "beam"), ("--draft", "m", "draft"),
+        ("--cb", "", "block coefficient"), ("--gm-t", "m", "transverse metacentric height"),
+        ("--gm-l", "m", "longitudinal metacentric height"), ("--r44", "m", "roll radius of gyration"),
+        ("--r55", "m", "pitch radius of gyration"), ("--r66", "m", "yaw radius of gyration"), ("--mass", "kg", "mass"),
+    ):  # fmt: skip
+        b.add_argument(
+            flag, dest=flag[2:].replace("-", "_"), type=_positive_float, default=None,
+            help=f"{what}{' [' + unit + ']' if unit else ''} (default: the MSS supply vessel's; "
+            "physical range: README)",
+        )  # fmt: skip
+    b.add_argument("--name", default=None, help="the vessel's name (in the table's header)")
+    b.add_argument(
+        "--cwp", type=_positive_float, default=None, help="waterplane coefficient (default: from GM_L − GM_T)"
+    )
+    b.add_argument(
+        "--roll-damping", type=_positive_float, default=0.15, help="total ζ44 at the roll natural frequency (0.15)"
+    )
+    b.add_argument("--nx", type=int, default=40, help="panels along the half hull, 4–200 (default 40)")
+    b.add_argument("--nz", type=int, default=8, help="panels down its girth, 2–50; nx × nz ≤ 2000 (default 8)")
+    b.add_argument("--w-min", type=_positive_float, default=0.1, help="lowest wave frequency [rad/s], ≥ 0.01 (0.1)")
+    b.add_argument("--w-max", type=_positive_float, default=2.0, help="highest wave frequency [rad/s], ≤ 20 (2.0)")
+    b.add_argument("--n-w", type=int, default=40, help="number of frequencies, 2–200 (default 40)")
+    b.add_argument(
+        "--heading-step", type=_positive_float, default=10.0, help="heading step [deg], 1–180, divides 360 (10)"
+    )
+    b.add_argument("--out", default="out/vessel_rao.csv", help="the RAO table (CSV; default out/vessel_rao.csv)")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.set_defaults(func=cmd_vessel_rao)
