@@ -53,9 +53,9 @@ def main() -> int:
         tab.close_link()
         app.quit()
 
-    QTimer.singleShot(1500, tab.vvmc.click)
+    QTimer.singleShot(1500, tab.comau.vvmc.click)
     QTimer.singleShot(4000, lambda: kicks.append((4.0, 1.5)))
-    QTimer.singleShot(6000, tab.swing_buttons["activate"].click)
+    QTimer.singleShot(6000, tab.swing.swing_buttons["activate"].click)
     QTimer.singleShot(16000, grab)
     app.exec_()
     srv.stop()

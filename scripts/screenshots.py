@@ -78,7 +78,7 @@ def motion_lab(app: QApplication, win: MainWindow) -> None:
     lab = win.motion_lab
     win.tabs.setCurrentWidget(lab)
     pump(app, 1.0)
-    lab.log_path.setText("/home/operator/lab runs/bosun_lab_log.csv")  # not this checkout's path
+    lab.status.log_path.setText("/home/operator/lab runs/bosun_lab_log.csv")  # not this checkout's path
     for p in lab.platforms.values():
         p.buttons["neutral"].click()
     pump(app, 12.0)
@@ -95,7 +95,7 @@ def motion_lab(app: QApplication, win: MainWindow) -> None:
     em8000.buttons["engage"].click()
     em1500.buttons["engage"].click()
     pump(app, 3.0)
-    lab.vvmc.click()
+    lab.comau.vvmc.click()
     pump(app, 30.0)
     lab.tabs.setCurrentIndex(0)
     pump(app, 0.5)

@@ -49,7 +49,7 @@ from app.engine.session import Session
 from app.models.drawing import up_rotation
 from app.models.serial import SerialRobot
 from app.models.xml import parse_robot_xml
-from ui.lab_tab import LabScene3D
+from ui.lab.scene import LabScene3D
 from ui.widgets.view3d import RobotView3D
 
 out = {}
@@ -205,7 +205,7 @@ def test_2d_polylines_draw_no_stray_bars(qtbot):
 def test_2d_lab_view_has_no_stray_bars_and_the_load_above_the_deck(qtbot):
     from app.engine.lab_session import LabSession
     from app.models.drawing import outline
-    from ui.lab_tab import LabScene2D
+    from ui.lab.scene import LabScene2D
 
     s = LabSession()
     view = LabScene2D()

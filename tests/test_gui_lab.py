@@ -12,7 +12,7 @@ from app.engine.lab_session import LabSession
 from app.engine.server import EngineServer
 from app.engine.session import Session
 from tests.helpers import GUI_WAIT
-from ui.lab_tab import LabScene2D
+from ui.lab.scene import LabScene2D
 from ui.link import EngineLink
 from ui.main_window import MainWindow
 
@@ -100,9 +100,9 @@ def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
     assert np.nanmax(np.abs(z)) > 0.02  # it heaves
     assert all(0 <= b.value() <= 1000 for b in em1500.leg_bars)
     # VVMC on: Comau and winch in MOTION_COMP, reported back by the engine
-    tab.vvmc.click()
+    tab.comau.vvmc.click()
     qtbot.waitUntil(lambda: tab.state.vvmc and tab.state.comau.mode == "motion_comp", timeout=GUI_WAIT)
-    assert tab.comau_mode.currentText() == "MOTION_COMP" and tab.winch_mode.currentText() == "MOTION_COMP"
+    assert tab.comau.comau_mode.currentText() == "MOTION_COMP" and tab.comau.winch_mode.currentText() == "MOTION_COMP"
     # the robot first travels to the work point (EM8000 is still SETTLED, 0.9 m low), then holds it
     qtbot.waitUntil(lambda: np.linalg.norm(tab.state.tool_error_b2) < 0.01, timeout=GUI_WAIT)
     # STOP: everything brakes to rest and commands are refused until reset
@@ -138,7 +138,7 @@ def test_platform_status_line_wraps_instead_of_being_cut(qtbot):
 
     from PyQt5.QtCore import QRect, Qt
 
-    from ui.lab_tab import PlatformPanel
+    from ui.lab.platform import PlatformPanel
 
     panel = PlatformPanel("em8000", "E-Motion 8000")
     qtbot.addWidget(panel)
@@ -173,19 +173,19 @@ def test_winch_slider_is_the_labs_and_the_operational_box_is_shown(qtbot, window
     tab = win.motion_lab
     win.tabs.setCurrentWidget(tab)
     qtbot.waitUntil(lambda: tab.state is not None and tab.desc is not None, timeout=GUI_WAIT)
-    assert "max 0.2 m/s" in tab.winch_slider_label.text()
-    assert (tab.winch_slider.minimum(), tab.winch_slider.maximum()) == (-100, 100)
-    tab.winch_slider.setSliderDown(True)
-    tab.winch_slider.setValue(50)
+    assert "max 0.2 m/s" in tab.comau.winch_slider_label.text()
+    assert (tab.comau.winch_slider.minimum(), tab.comau.winch_slider.maximum()) == (-100, 100)
+    tab.comau.winch_slider.setSliderDown(True)
+    tab.comau.winch_slider.setValue(50)
     qtbot.waitUntil(lambda: abs(tab.state.winch.speed_command - 0.1) < 1e-9, timeout=GUI_WAIT)
-    tab.winch_slider.setSliderDown(False)
-    tab.winch_slider.sliderReleased.emit()
-    assert tab.winch_slider.value() == 0
+    tab.comau.winch_slider.setSliderDown(False)
+    tab.comau.winch_slider.sliderReleased.emit()
+    assert tab.comau.winch_slider.value() == 0
     qtbot.waitUntil(lambda: tab.state.winch.speed_command == 0.0, timeout=GUI_WAIT)
     em8000 = tab.platforms["em8000"]
     assert "heave -0.6…+0.6 m" in em8000.box_label.text() and "yaw -10…+10 °" in em8000.box_label.text()
     assert em8000.gen[2][0].maximum() == pytest.approx(0.6) and em8000.remote[5].maximum() == pytest.approx(10.0)
-    assert "lab" in tab.comau_limits.text() and "q2 -30…30°" in tab.comau_limits.text()
+    assert "lab" in tab.comau.comau_limits.text() and "q2 -30…30°" in tab.comau.comau_limits.text()
 
 
 # ---------------------------------------------------------------------------- the lab HMI's parity (issue 16, item 5)
@@ -212,7 +212,7 @@ def test_status_word_lights_and_generator_defaults_as_the_lab_hmi(qtbot, window)
     qtbot.waitUntil(lambda: "SETTLED" in em8000.motion_label.text(), timeout=GUI_WAIT)
     text = em8000.motion_label.text()
     assert "SYSTEM_OK" in text and "op mode <b>NORMAL</b>" in text and "0x01000002" in text
-    lights = tab.machine_lights
+    lights = tab.status.machine_lights
     qtbot.waitUntil(lambda: lights["em8000"].state == "ok", timeout=GUI_WAIT)
     green, grey = (tuple(int(LIGHT[k][i : i + 2], 16) for i in (1, 3, 5)) for k in ("ok", "off"))
     for name in ("em8000", "em1500", "comau", "mru1", "mru2"):
@@ -243,7 +243,7 @@ def test_comau_joint_jog_from_the_gui_holds_enable_and_stops_on_release(qtbot, w
     qtbot.waitUntil(lambda: tab.state is not None and tab.state.comau.mode == "remote", timeout=GUI_WAIT)
     qtbot.wait(300)  # the stick seen at neutral with enable released
     q0 = np.array(tab.state.comau.q)
-    plus = tab.jog_buttons[(2, 1)]
+    plus = tab.comau.jog_buttons[(2, 1)]
     qtbot.mousePress(plus, Qt.LeftButton)  # not armed: refused, said once, nothing moves
     qtbot.waitUntil(lambda: any("lab_comau_jog refused" in m for _, m in win.messages), timeout=GUI_WAIT)
     qtbot.wait(600)  # five more refreshes, each refused
@@ -255,7 +255,7 @@ def test_comau_joint_jog_from_the_gui_holds_enable_and_stops_on_release(qtbot, w
     qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
     qtbot.mousePress(plus, Qt.LeftButton)
     qtbot.waitUntil(
-        lambda: tab.state.comau_jog.joint == 2 and "jogging q2 +25 %" in tab.jog_label.text(), timeout=GUI_WAIT
+        lambda: tab.state.comau_jog.joint == 2 and "jogging q2 +25 %" in tab.comau.jog_label.text(), timeout=GUI_WAIT
     )
     qtbot.waitUntil(lambda: tab.state.comau.q[1] - q0[1] > np.radians(2.0), timeout=GUI_WAIT)
     qtbot.mouseRelease(plus, Qt.LeftButton)
@@ -279,18 +279,18 @@ def test_lab_csv_logger_writes_every_state_for_its_duration(qtbot, window, tmp_p
     win.tabs.setCurrentWidget(tab)
     qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     path = tmp_path / "lab.csv"
-    tab.log_path.setText(str(path))
-    tab.log_duration.setValue(2)
-    assert (tab.log_duration.minimum(), tab.log_duration.maximum()) == (1, 1200)
-    tab.log_button.click()
-    assert tab.logger is not None and tab.log_button.text() == "Stop logging"
-    qtbot.waitUntil(lambda: tab.logger is None, timeout=GUI_WAIT)
+    tab.status.log_path.setText(str(path))
+    tab.status.log_duration.setValue(2)
+    assert (tab.status.log_duration.minimum(), tab.status.log_duration.maximum()) == (1, 1200)
+    tab.status.log_button.click()
+    assert tab.status.logger is not None and tab.status.log_button.text() == "Stop logging"
+    qtbot.waitUntil(lambda: tab.status.logger is None, timeout=GUI_WAIT)
     rows = list(csv.reader(path.open(encoding="utf-8", newline="")))
     assert tuple(rows[0]) == LAB_LOG_COLUMNS and len(rows) - 1 == 51  # 0 … 2 s every 0.04 s
     t = np.array([float(r[0]) for r in rows[1:]])
     assert t[-1] == pytest.approx(2.0) and np.allclose(np.diff(t), 0.04, atol=1e-6)  # none lost
-    assert tab.log_progress.value() == 1000 and tab.log_samples.text() == "51 samples"
-    assert tab.log_button.text() == "Start logging"
+    assert tab.status.log_progress.value() == 1000 and tab.status.log_samples.text() == "51 samples"
+    assert tab.status.log_button.text() == "Start logging"
     assert "CSV logger duration reached: 51 samples in lab.csv" in win.status.log_view.toPlainText()
 
 
@@ -298,16 +298,16 @@ def test_lab_csv_logger_stops_cleanly_when_the_engine_goes(qtbot, tmp_path, lab_
     """Item 5: an engine that goes away ends the log with a complete file and says so; so does closing."""
     _, srv, th, tab, notices = lab_alone
     path = tmp_path / "lost.csv"
-    tab.log_path.setText(str(path))
-    tab.log_duration.setValue(600)
-    tab.start_logger()
-    qtbot.waitUntil(lambda: tab.logger is not None and tab.logger.rows > 10, timeout=GUI_WAIT)
+    tab.status.log_path.setText(str(path))
+    tab.status.log_duration.setValue(600)
+    tab.status.start_logger()
+    qtbot.waitUntil(lambda: tab.status.logger is not None and tab.status.logger.rows > 10, timeout=GUI_WAIT)
     srv.stop()
     th.join(timeout=5)
     srv.close()
-    qtbot.waitUntil(lambda: tab.logger is None, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.status.logger is None, timeout=GUI_WAIT)
     assert any("engine lost" in n for n in notices)
-    assert all(light.state == "unknown" for light in tab.machine_lights.values())  # nothing known any more
+    assert all(light.state == "unknown" for light in tab.status.machine_lights.values())  # nothing known any more
     lines = path.read_text(encoding="utf-8").splitlines()
     assert len(lines) > 11 and all(len(line.split(",")) == len(lines[0].split(",")) for line in lines)
 
@@ -323,12 +323,12 @@ def test_load_swing_tab_activates_anti_swing_and_shows_estimate_beside_the_true_
     tab.tabs.setCurrentIndex(tab.tabs.count() - 1)
     assert tab.tabs.tabText(tab.tabs.currentIndex()) == "Load swing"
     qtbot.waitUntil(lambda: tab.state is not None and tab.state.swing is not None, timeout=GUI_WAIT)
-    buttons = tab.swing_buttons
-    assert not buttons["activate"].isEnabled() and "needs VVMC on" in tab.swing_label.text()
+    buttons = tab.swing.swing_buttons
+    assert not buttons["activate"].isEnabled() and "needs VVMC on" in tab.swing.swing_label.text()
     buttons["activate"].setEnabled(True)  # sent anyway: the engine refuses, the GUI says why
     buttons["activate"].click()
     qtbot.waitUntil(lambda: any("turn VVMC on first" in n for n in notices), timeout=GUI_WAIT)
-    tab.vvmc.click()
+    tab.comau.vvmc.click()
     qtbot.waitUntil(lambda: tab.state.vvmc and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
     qtbot.wait(1500)  # the Comau settles on the work point
     kick, tick = [], ses.tick
@@ -345,18 +345,18 @@ def test_load_swing_tab_activates_anti_swing_and_shows_estimate_beside_the_true_
     qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) > 3.0, timeout=GUI_WAIT)
     buttons["reset"].click()
     buttons["activate"].click()
-    qtbot.waitUntil(lambda: tab.state.swing.active and "ACTIVE" in tab.swing_label.text(), timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.state.swing.active and "ACTIVE" in tab.swing.swing_label.text(), timeout=GUI_WAIT)
     t_active = tab.state.t
     qtbot.waitUntil(lambda: math.degrees(tab.state.pendulum.swing) < 0.5, timeout=GUI_WAIT)
     qtbot.waitUntil(lambda: tab.state.t > t_active + 3.0, timeout=GUI_WAIT)
-    ts, true = tab.swing_state_curves[0].getData()
-    est = tab.swing_state_curves[1].getData()[1]
+    ts, true = tab.swing.swing_state_curves[0].getData()
+    est = tab.swing.swing_state_curves[1].getData()[1]
     assert np.nanmax(true) > 3.0  # the swing was seen …
     late = ts > t_active + 1.0  # … and, a second after its reset, the estimate follows it
     assert late.sum() >= 10 and np.nanmax(np.abs(est[late] - true[late])) < 0.5
-    band = tab.swing_err_curves[2].getData()[1]
-    assert np.all(band[late] > 0) and np.all(tab.swing_err_curves[3].getData()[1][late] < 0)
-    assert np.nanmax(np.abs(tab.swing_off_curves[0].getData()[1])) > 5.0  # the law moved the tool [mm]
+    band = tab.swing.swing_err_curves[2].getData()[1]
+    assert np.all(band[late] > 0) and np.all(tab.swing.swing_err_curves[3].getData()[1][late] < 0)
+    assert np.nanmax(np.abs(tab.swing.swing_off_curves[0].getData()[1])) > 5.0  # the law moved the tool [mm]
     buttons["deactivate"].click()
     qtbot.waitUntil(lambda: not tab.state.swing.active and buttons["activate"].isEnabled(), timeout=GUI_WAIT)
 
@@ -395,11 +395,11 @@ def test_a_held_jog_stops_when_its_page_or_the_tab_is_left(qtbot, window):
         qtbot.wait(300)
         tab.stick.key(Qt.Key_Shift, True)
         qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
-        plus = tab.jog_buttons[(1, 1)]
+        plus = tab.comau.jog_buttons[(1, 1)]
         qtbot.mousePress(plus, Qt.LeftButton)
         qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 1, timeout=GUI_WAIT)
         leave()  # no release reaches the button
-        qtbot.waitUntil(lambda: tab._jogging is None, timeout=GUI_WAIT)  # the GUI stopped resending
+        qtbot.waitUntil(lambda: tab.comau._jogging is None, timeout=GUI_WAIT)  # the GUI stopped resending
         win.tabs.setCurrentWidget(tab)
         qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and tab.state.comau.qd == [0, 0, 0], timeout=GUI_WAIT)
     tab.stick.key(Qt.Key_Shift, False)

@@ -104,7 +104,7 @@ def test_item5_estop_on_a_platform_page_shows_the_latched_stop_not_a_green_engag
     assert "ENGAGED — E-STOP latched: stopped" in em8000.status.text()
     assert _px(em8000.status, green) == 0 and _px(em8000.status, "#e33") > 20  # no green on the page's status
     assert not any(b.isEnabled() for b in em8000.buttons.values())  # DISENGAGE too: the engine refuses it
-    for widget in (tab.comau_mode, tab.winch_mode, tab.vvmc, tab.winch_slider):
+    for widget in (tab.comau.comau_mode, tab.comau.winch_mode, tab.comau.vvmc, tab.comau.winch_slider):
         assert not widget.isEnabled()
     assert _has(win, "● plant: E-STOP")
     win.reset()
@@ -125,7 +125,7 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
         qtbot.waitUntil(lambda p=panel: p.buttons["engage"].isEnabled(), timeout=GUI_WAIT)
         panel.buttons["engage"].click()
     qtbot.waitUntil(lambda: all(p.mode == "engaged" for p in tab.state.platforms), timeout=GUI_WAIT)
-    tab.vvmc.click()
+    tab.comau.vvmc.click()
     qtbot.waitUntil(lambda: tab.state.vvmc and tab.state.comau.mode == "motion_comp", timeout=GUI_WAIT)
     qtbot.wait(300)  # the window has shown a few of these states
     assert not any("plant: holding" in t for t in shown_lights(win)), shown_lights(win)
@@ -134,7 +134,7 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     assert "EM8000 engag" in tab.lights.lights["plant"].text() and "EM1500 engag" in tab.lights.lights["plant"].text()
     assert _has(win, "● input: not used (Comau MOTION_COMP")
     # VVMC off: the Comau in REMOTE takes the stick and the jog
-    tab.vvmc.click()
+    tab.comau.vvmc.click()
     qtbot.waitUntil(lambda: not tab.state.vvmc and tab.state.comau.mode == "remote", timeout=GUI_WAIT)
     tab.tabs.setCurrentIndex(2)
     enable = tab.stick.enable
@@ -152,7 +152,7 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     tab.stick.key(Qt.Key_Shift, True)
     qtbot.waitUntil(lambda: tab.state.flags.enabled and enable.text().startswith("ENABLED"), timeout=GUI_WAIT)
     assert _px(enable, LIGHT["ok"]) > 50 and _has(win, "● input: enabled")
-    plus = tab.jog_buttons[(1, 1)]
+    plus = tab.comau.jog_buttons[(1, 1)]
     qtbot.mousePress(plus, Qt.LeftButton)
     qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 1, timeout=GUI_WAIT)
     qtbot.wait(300)

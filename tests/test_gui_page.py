@@ -270,15 +270,17 @@ def test_item3_the_wheel_never_changes_an_unfocused_field_on_any_tab_and_a_focus
     assert scrolled > 0  # the notches scrolled the page (where it could scroll) instead
     # the case: the jog speed in the Comau & winch panel, unfocused: unchanged; focused: changed, logged
     lab = win.motion_lab
-    lab.tabs.setCurrentIndex(next(i for i in range(lab.tabs.count()) if lab.tabs.widget(i).isAncestorOf(lab.jog_speed)))
+    lab.tabs.setCurrentIndex(
+        next(i for i in range(lab.tabs.count()) if lab.tabs.widget(i).isAncestorOf(lab.comau.jog_speed))
+    )
     qtbot.wait(200)
-    assert lab.jog_speed.value() == 25
-    wheel(lab.jog_speed, -8)
-    assert lab.jog_speed.value() == 25
-    lab.jog_speed.setFocus(Qt.MouseFocusReason)
-    qtbot.waitUntil(lab.jog_speed.hasFocus, timeout=GUI_WAIT)
-    wheel(lab.jog_speed, -8)
-    assert lab.jog_speed.value() == 17
+    assert lab.comau.jog_speed.value() == 25
+    wheel(lab.comau.jog_speed, -8)
+    assert lab.comau.jog_speed.value() == 25
+    lab.comau.jog_speed.setFocus(Qt.MouseFocusReason)
+    qtbot.waitUntil(lab.comau.jog_speed.hasFocus, timeout=GUI_WAIT)
+    wheel(lab.comau.jog_speed, -8)
+    assert lab.comau.jog_speed.value() == 17
     line = "set-point jog speed: 25 % of the joint speed → 17 % of the joint speed (mouse wheel"
     qtbot.waitUntil(lambda: line in log_text(win), timeout=GUI_WAIT)
 

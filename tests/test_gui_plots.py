@@ -19,7 +19,8 @@ from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.snapshots import TeleopSnapshot
 from tests.helpers import GUI_WAIT
-from ui.lab_tab import LabScene2D, MotionLabTab
+from ui.lab.scene import LabScene2D
+from ui.lab_tab import MotionLabTab
 from ui.link import EngineLink
 from ui.main_window import MainWindow
 from ui.marine_tab import CraneHeadTab, SceneView2D
@@ -281,13 +282,13 @@ def test_lab_plots_come_back_fitted_to_the_newest_data(qtbot):
 
     feed(60, 0.0, 0.0)
     qtbot.wait(200)
-    tab.joint_plot.getPlotItem().vb.setRange(xRange=(0.0, 0.5), yRange=(-1.0, 1.0))  # zoomed in, then left
+    tab.comau.joint_plot.getPlotItem().vb.setRange(xRange=(0.0, 0.5), yRange=(-1.0, 1.0))  # zoomed in, then left
     tab.tabs.setCurrentIndex(0)
     qtbot.wait(100)
     last = feed(100, 3.0, 2.0)  # +2 rad: far out of the zoomed range
     tab.tabs.setCurrentIndex(2)
     qtbot.wait(500)
-    x_range, y_range = tab.joint_plot.getPlotItem().viewRange()
+    x_range, y_range = tab.comau.joint_plot.getPlotItem().viewRange()
     assert _in(x_range, tab.ring.view()[-1, 0])  # the newest sample plotted (25 per second of engine time)
     assert _in(y_range, np.degrees(last.comau.q))
 

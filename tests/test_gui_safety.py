@@ -209,7 +209,7 @@ def test_item3_reset_leaves_the_lab_where_it_stands(qtbot, rig):
     for p0, p1 in zip(before.platforms, after.platforms, strict=True):
         assert p1.status == "settled"
         np.testing.assert_allclose(p1.eta, p0.eta, atol=1e-9)
-    assert after.comau.mode == "hold" and tab.comau_mode.currentText() == "HOLD"
+    assert after.comau.mode == "hold" and tab.comau.comau_mode.currentText() == "HOLD"
     np.testing.assert_allclose(after.comau.q, before.comau.q, atol=1e-9)
 
 
@@ -273,8 +273,8 @@ def test_item6_comau_and_winch_remote_from_the_gui_stick(qtbot, rig):
     tab = win.motion_lab
     win.tabs.setCurrentWidget(tab)
     qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
-    tab.comau_mode.activated.emit(1)  # REMOTE
-    tab.winch_mode.activated.emit(1)  # REMOTE
+    tab.comau.comau_mode.activated.emit(1)  # REMOTE
+    tab.comau.winch_mode.activated.emit(1)  # REMOTE
     qtbot.waitUntil(lambda: tab.state.comau.mode == "remote" and tab.state.winch.mode == "remote", timeout=GUI_WAIT)
     q0 = np.array(tab.state.comau.q)
     L0 = tab.state.winch.length
@@ -552,7 +552,7 @@ def test_stop_acts_on_press_even_if_the_pointer_slides_off(qtbot, rig):
 
 
 def test_winch_slider_only_commands_while_held(qtbot):
-    from ui.lab_tab import SpringSlider
+    from ui.lab.comau import SpringSlider
 
     sl = SpringSlider()
     qtbot.addWidget(sl)

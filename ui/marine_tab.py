@@ -21,15 +21,13 @@ from PyQt5.QtWidgets import (
     QLabel,
     QPushButton,
     QSplitter,
-    QVBoxLayout,
     QWidget,
 )
 
-from ui.glprobe import gl_available
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.fields import EngineFields
-from ui.widgets.machines3d import LazyDraw
 from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
+from ui.widgets.scene_view import DrawnScene, make_view
 from ui.widgets.status import SceneLights
 from ui.widgets.vessel import VesselRow
 
@@ -107,30 +105,32 @@ class TacDrawing:
         return sea_surface(self.waves, sample.t, center=sample.eta[:2], size=size, n=41)
 
 
-class SceneView3D(LazyDraw, QWidget):
+def _machines_3d(parent: QWidget) -> QWidget:
+    from ui.widgets.machines3d import MachineView3D
+
+    return MachineView3D(parent, tooltip=SCENE_TIP)
+
+
+def _machines_2d(parent: QWidget) -> QWidget:
+    from ui.widgets.machines3d import MachineView2D
+
+    views = [
+        ("astern", "seen from astern: east [m] – up [m]", ((0, -1, 0), (0, 0, 1))),
+        ("side", "seen from starboard: north [m] – up [m]", ((1, 0, 0), (0, 0, 1))),
+    ]
+    m = MachineView2D(parent, views=views, note="crane head, 2D views (no OpenGL here)", vertical=True)
+    m.setToolTip(SCENE_TIP)
+    return m
+
+
+class SceneView3D(DrawnScene):
     """The vessel on a moving sea, the offshore crane on its deck and the Delta head, as solids."""
 
     kind = "3d"
 
     def __init__(self, parent=None) -> None:
-        super().__init__(parent)
-        from ui.widgets.machines3d import MachineView3D
-
-        self.machines = MachineView3D(self, tooltip=SCENE_TIP)
+        super().__init__(_machines_3d, TacDrawing(), parent)
         self.view = self.machines.view
-        self.draw = TacDrawing()
-        self._fitted = False
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.machines)
-
-    def set_description(self, desc) -> None:
-        self.draw.set_description(desc)
-        self._fitted = False
-
-    def update_scene(self, scene, p_d_n, sample=None) -> None:
-        """Draw the scene points and the sample (now if shown, else when next shown)."""
-        self.submit(scene, p_d_n, sample)
 
     def draw_now(self, scene, p_d_n, sample=None) -> None:
         from app.models.drawing import merge
@@ -141,46 +141,24 @@ class SceneView3D(LazyDraw, QWidget):
         size = 3.0 * (self.draw.ship.length if self.draw.ship is not None else 80.0)
         m.set_mesh("sea", self.draw.sea(sample, size), translucent=True)
         m.set_points("goal", _up(p_d_n)[None], (0.2, 0.85, 0.3, 1), 12)
-        if not self._fitted:
+
+        def fit() -> None:
             lo = np.min([x.vertices.min(axis=0) for x in meshes], axis=0)
             hi = np.max([x.vertices.max(axis=0) for x in meshes], axis=0)
             m.set_extent(lo, hi, floor=float(lo[2]))
-            self._fitted = True
 
-    def grab_image(self):
-        return self.machines.grab_image()
+        self.fit_once(fit)
 
 
-class SceneView2D(LazyDraw, QWidget):
+class SceneView2D(DrawnScene):
     """Without OpenGL: the scene's solids seen from astern (east–up, the plane a beam sea rolls the vessel
     in) and from starboard (north–up), with the sea's profile through the vessel."""
 
     kind = "2d"
 
     def __init__(self, parent=None) -> None:
-        super().__init__(parent)
-        from ui.widgets.machines3d import MachineView2D
-
-        views = [
-            ("astern", "seen from astern: east [m] – up [m]", ((0, -1, 0), (0, 0, 1))),
-            ("side", "seen from starboard: north [m] – up [m]", ((1, 0, 0), (0, 0, 1))),
-        ]
-        self.machines = MachineView2D(self, views=views, note="crane head, 2D views (no OpenGL here)", vertical=True)
-        self.machines.setToolTip(SCENE_TIP)
+        super().__init__(_machines_2d, TacDrawing(), parent)
         self.plot = self.machines.plots["astern"]["plot"]
-        self.draw = TacDrawing()
-        self._fitted = False
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.machines)
-
-    def set_description(self, desc) -> None:
-        self.draw.set_description(desc)
-        self._fitted = False
-
-    def update_scene(self, scene, p_d_n, sample=None) -> None:
-        """Draw the scene points and the sample (now if shown, else when next shown)."""
-        self.submit(scene, p_d_n, sample)
 
     def draw_now(self, scene, p_d_n, sample=None) -> None:
         from app.models.drawing import sea_profile
@@ -198,23 +176,11 @@ class SceneView2D(LazyDraw, QWidget):
                 ("side", (n0 - half, e0), (n0 + half, e0)),
             ):
                 m.set_line("sea", sea_profile(self.draw.waves, sample.t, p0, p1), sea, 2, only=key, fill=water)
-        if not self._fitted:
-            m.fit_meshes(meshes)
-            self._fitted = True
-
-    def grab_image(self):
-        return self.machines.grab_image()
+        self.fit_once(lambda: m.fit_meshes(meshes))
 
 
 def make_scene_view(use_gl: bool | None = None) -> QWidget:
-    if use_gl is None:
-        use_gl = gl_available()
-    if use_gl:
-        try:
-            return SceneView3D()
-        except Exception:
-            pass
-    return SceneView2D()
+    return make_view(SceneView3D, SceneView2D, use_gl)
 
 
 class CraneHeadTab(SceneEngineMixin, QWidget):

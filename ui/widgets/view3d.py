@@ -13,7 +13,7 @@ Without a usable description the links are drawn between the snapshot's frame or
 from __future__ import annotations
 
 import numpy as np
-from PyQt5.QtWidgets import QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QWidget
 
 from app.models.drawing import (
     LOAD_COLOR,
@@ -24,8 +24,8 @@ from app.models.drawing import (
     serial_robot_meshes,
     up_rotation,
 )
-from ui.glprobe import gl_available
-from ui.widgets.machines3d import LazyDraw, MachineView2D, MachineView3D
+from ui.widgets.machines3d import MachineView2D, MachineView3D
+from ui.widgets.scene_view import DrawnScene, make_view
 
 LINK_COLOR = (0.85, 0.55, 0.15, 1.0)
 TARGET_COLOR = (0.2, 0.8, 0.2, 1.0)
@@ -95,31 +95,34 @@ class RobotDrawing:
         return link_radius(self.model.links) if self.model is not None else 0.05
 
 
-class RobotView3D(LazyDraw, QWidget):
-    """OpenGL view: the arm as solids (one mesh), target, tool point, workspace box, scaled grid."""
+class _RobotView(DrawnScene):
+    """What both views of the arm share: the engine's robot file and workspace box, a camera (or axes) fitted
+    again when the robot or its box changes."""
 
-    kind = "3d"
-
-    def __init__(self, parent: QWidget | None = None) -> None:
-        super().__init__(parent)
-        self.machines = MachineView3D(self, background=(20, 24, 30), tooltip=TOOLTIP)
-        self.view = self.machines.view
-        self.draw = RobotDrawing()
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(self.machines)
+    def __init__(self, make_machines, parent: QWidget | None = None) -> None:
+        super().__init__(make_machines, RobotDrawing(), parent)
         self._fit_key = None
         self.desc = None
 
     def set_description(self, desc) -> None:
         """The engine's robot file and workspace box (its ``description``)."""
         self.desc = desc
-        self.draw.set_description(desc)
+        super().set_description(desc)
         self._fit_key = None
 
     def update_state(self, state) -> None:
         """Draw a TeleopSnapshot (now if shown, else when next shown)."""
         self.submit(state)
+
+
+class RobotView3D(_RobotView):
+    """OpenGL view: the arm as solids (one mesh), target, tool point, workspace box, scaled grid."""
+
+    kind = "3d"
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(lambda w: MachineView3D(w, background=(20, 24, 30), tooltip=TOOLTIP), parent)
+        self.view = self.machines.view
 
     def draw_now(self, state) -> None:
         d = self.draw
@@ -138,54 +141,45 @@ class RobotView3D(LazyDraw, QWidget):
             self.machines.set_extent(pts.min(axis=0), pts.max(axis=0), floor=base_z)
             self._fit_key = key
 
-    def grab_image(self):
-        return self.machines.grab_image()
+
+def _machines_2d(parent: QWidget) -> QWidget:
+    m = MachineView2D(
+        parent,
+        views=[("top", "top: x–y [m]", ((1, 0, 0), (0, 1, 0))), ("side", "side: x–z [m]", ((1, 0, 0), (0, 0, 1)))],
+        note="2D views (no OpenGL context available)",
+    )
+    m.setToolTip("No OpenGL here: top (x–y) and side (x–z) views [m]. " + TOOLTIP)
+    return m
 
 
-class RobotView2D(LazyDraw, MachineView2D):
+class RobotView2D(_RobotView):
     """Fallback without OpenGL: the arm's solids in top (x–y) and side (x–z) projections."""
 
     kind = "2d"
 
     def __init__(self, parent: QWidget | None = None) -> None:
-        super().__init__(
-            parent,
-            views=[("top", "top: x–y [m]", ((1, 0, 0), (0, 1, 0))), ("side", "side: x–z [m]", ((1, 0, 0), (0, 0, 1)))],
-            note="2D views (no OpenGL context available)",
-        )
-        self.setToolTip("No OpenGL here: top (x–y) and side (x–z) views [m]. " + TOOLTIP)
-        self.draw = RobotDrawing()
-        self._fit_key = None
-        self.desc = None
-
-    def set_description(self, desc) -> None:
-        """The engine's robot file and workspace box (its ``description``)."""
-        self.desc = desc
-        self.draw.set_description(desc)
-        self._fit_key = None
-
-    def update_state(self, state) -> None:
-        """Draw a TeleopSnapshot (now if shown, else when next shown)."""
-        self.submit(state)
+        super().__init__(_machines_2d, parent)
+        self.plots = self.machines.plots
 
     def draw_now(self, state) -> None:
         d = self.draw
         meshes = d.meshes(state)
-        self.set_meshes(meshes)
+        m2 = self.machines
+        m2.set_meshes(meshes)
         box = d.box(state)
         if box is not None:
             lo, hi = box
             edges = _box_edges(lo, hi).reshape(-1, 2, 3)
             segs = np.concatenate([np.vstack([e, [[np.nan] * 3]]) for e in edges])
-            self.set_line("box", segs, (120, 140, 220), 1)
+            m2.set_line("box", segs, (120, 140, 220), 1)
         if state.target:
-            self.set_points("target", d.up([state.target]), (50, 200, 50), "o", 12)
+            m2.set_points("target", d.up([state.target]), (50, 200, 50), "o", 12)
         if state.tool:
-            self.set_points("tool", d.up([state.tool]), (230, 50, 50), "x", 12)
+            m2.set_points("tool", d.up([state.tool]), (230, 50, 50), "x", 12)
         key = (state.robot, None if box is None else tuple(np.round(np.r_[box[0], box[1]], 6)))
         if key != self._fit_key and meshes:
             pts = np.concatenate([m.vertices for m in meshes] + ([np.array(box)] if box is not None else []))
-            self.set_extent(pts.min(axis=0), pts.max(axis=0))
+            m2.set_extent(pts.min(axis=0), pts.max(axis=0))
             self._fit_key = key
 
     def grab_image(self):
@@ -194,11 +188,4 @@ class RobotView2D(LazyDraw, MachineView2D):
 
 def make_robot_view(parent: QWidget | None = None, use_gl: bool | None = None) -> QWidget:
     """The 3D view when OpenGL works here, else the 2D fallback (never a crash)."""
-    if use_gl is None:
-        use_gl = gl_available()
-    if use_gl:
-        try:
-            return RobotView3D(parent)
-        except Exception:
-            pass
-    return RobotView2D(parent)
+    return make_view(lambda: RobotView3D(parent), lambda: RobotView2D(parent), use_gl)
