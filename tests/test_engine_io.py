@@ -11,7 +11,8 @@ import time
 import numpy as np
 import pytest
 
-from app.engine.server import RATE_BURST, EngineServer, Inbox, RateLimit
+from app.engine.inbox import RATE_BURST, Inbox, RateLimit
+from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.net.transport import Client
 from app.teleop.devices import InputSample

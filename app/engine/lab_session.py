@@ -32,7 +32,7 @@ import numpy as np
 
 from app.engine.alarms import AlarmList
 from app.engine.jobs import Deferred
-from app.engine.scene import CommandError, Scene
+from app.engine.scene import CommandError, Scene, command
 from app.engine.vessel_upload import TableText, VesselChoice
 from app.errors import BosunError
 from app.marine.vessel import RAOTable
@@ -87,21 +87,6 @@ class LabSession(Scene):
 
     KIND: ClassVar[str] = "lab"
     TITLE: ClassVar[str] = "the Motion-Lab"
-    COMMANDS: ClassVar[dict[str, str]] = {
-        m: m
-        for m in (
-            "lab_platform",
-            "lab_source",
-            "lab_remote_pose",
-            "lab_comau_mode",
-            "lab_winch",
-            "lab_vvmc",
-            "lab_plc_ack",
-            "lab_comau_jog",
-            "lab_antisway",
-            "set_vessel",
-        )
-    }
 
     def __post_init__(self) -> None:
         self._init_scene()
@@ -154,12 +139,14 @@ class LabSession(Scene):
         except BosunError as err:
             raise CommandError(str(err)) from None
 
+    @command
     def lab_platform(self, platform: str, action: str) -> None:
         self._guard()
         k = self._platform(platform)
         self._plant(self.plant.platform, k, action)
         self.note("info", f"{platform}: {action.upper()}")
 
+    @command
     def lab_source(self, platform: str, source: str, **p: Any) -> None:
         k = self._platform(platform)
         info = self._plant(self.plant.source, k, source, p)
@@ -169,6 +156,7 @@ class LabSession(Scene):
         self.changed()
         self.note("info", f"{platform}: motion source {source.upper()}")
 
+    @command
     def set_vessel(
         self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
     ) -> Deferred | None:
@@ -200,10 +188,12 @@ class LabSession(Scene):
         self.changed()
         self.note("info", f"wave simulator vessel: {self.vessel.label} (from the next SIMULATION source on)")
 
+    @command
     def lab_remote_pose(self, platform: str, eta: list[float]) -> None:
         k = self._platform(platform)
         self._plant(self.plant.remote_pose, k, eta)
 
+    @command
     def lab_comau_mode(self, mode: str) -> None:
         self._guard()
         if mode == "remote":
@@ -213,6 +203,7 @@ class LabSession(Scene):
             self._swing_off(f"Comau {mode.upper()}")
         self.note("info", f"Comau: {mode.upper()}")
 
+    @command
     def lab_winch(self, mode: str | None = None, speed: float | None = None) -> None:
         self._guard()
         if mode is not None:
@@ -227,6 +218,7 @@ class LabSession(Scene):
             self._plant(self.plant.winch_speed, float(np.clip(speed, -lim, lim)))
             self._local_speed_time = time.monotonic()  # the GUI resends while the slider is held
 
+    @command
     def lab_vvmc(self, on: bool) -> None:
         self._guard()
         self.input.disarm("VVMC switched")  # off puts the Comau in REMOTE: a held stick must not drive it
@@ -236,6 +228,7 @@ class LabSession(Scene):
             self._swing_off("VVMC off")  # at once, not at the next step (an off and on in one tick)
         self.note("info", f"VVMC {'ON: Comau and winch MOTION_COMP' if on else 'OFF: Comau REMOTE, winch LOCAL'}")
 
+    @command
     def lab_plc_ack(self, platform: str | None = None) -> None:
         """Acknowledge the PLC's error as the lab HMI does (``MAIN.bReset``; a platform in WARNING or ERROR:
         its ``bReset``, then ``eModeCmd`` := SETTLED).  Refused while the E-STOP is latched: its reset
@@ -245,6 +238,7 @@ class LabSession(Scene):
         self.note("info", self._plant(self.plant.acknowledge, k))
 
     # ------------------------------------------------------------------ Comau joint jog (issue 16, item 5)
+    @command
     def lab_comau_jog(self, joint: int, speed: float) -> None:
         """Jog joint ``joint`` (1–3) at ``speed`` (−1…1) × the profile's joint speed, resent while the operator
         holds it; 0 stops any jog and is always taken.  Refused while the E-STOP is latched, unless the Comau is
@@ -284,6 +278,7 @@ class LabSession(Scene):
         self._jog_reason = reason
 
     # ------------------------------------------------------------------ load swing (issue 16, item 4)
+    @command
     def lab_antisway(self, action: str) -> None:
         """The lab HMI's "Pendel Estimator" buttons: ``activate`` adds the anti-swing law's offset to the work
         point the Comau tracks (VVMC on, no E-STOP), ``deactivate`` brings the offset back to zero along the

@@ -4,8 +4,9 @@ The server owns sockets and time; a scene owns its machines.  A scene has
 
 * ``describe()``: its static data (a :class:`~app.net.snapshots.Description`), sent on join and
   whenever it changes (``describe_seq`` increments, :meth:`changed`);
-* a **command table** ``COMMANDS``: protocol message type → method name, called with the message's
-  fields as keywords; a command of another scene is refused by name, not by string matching;
+* a **command table** ``COMMANDS``: protocol message type → the method that runs it (the scene's methods
+  marked ``@command``, named as their message), called with the message's fields as keywords; a command
+  of another scene is refused by name, and nothing is looked up by a string from the wire;
 * ``tick(now, dt, solve_budget)``, ``snapshot()`` (a typed :class:`~app.net.snapshots.Snapshot`),
   ``estop(source)``, ``reset()``, ``pause(on)``;
 * one log (``note``), one input pipeline (``input``) and one alarm list (``alarms``);
@@ -20,6 +21,7 @@ from __future__ import annotations
 import abc
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -40,13 +42,31 @@ class LogEntry:
     text: str
 
 
+def command(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """Marks a scene method as the handler of the protocol message of its name (one of
+    :data:`app.net.messages.SCENE_MESSAGES`): the scene's ``COMMANDS`` table is made of them."""
+    fn.command_type = fn.__name__
+    return fn
+
+
 class Scene(abc.ABC):
     """Base of the engine's scenes; subclasses are dataclasses that call :meth:`_init_scene`."""
 
     KIND: ClassVar[str] = ""
     TITLE: ClassVar[str] = ""
-    #: protocol message type -> method name (fields as keywords)
-    COMMANDS: ClassVar[dict[str, str]] = {}
+    #: protocol message type -> the method that runs it (fields as keywords); built from the ``@command``
+    #: methods of the class and its bases
+    COMMANDS: ClassVar[dict[str, Callable[..., Any]]] = {}
+
+    def __init_subclass__(cls, **kw: Any) -> None:
+        super().__init_subclass__(**kw)
+        own = vars(cls)  # an override of an inherited command runs, marked again or not
+        table = {mtype: own.get(mtype, fn) for mtype, fn in cls.COMMANDS.items()}
+        for fn in own.values():
+            mtype = getattr(fn, "command_type", None)
+            if mtype is not None:
+                table[mtype] = fn
+        cls.COMMANDS = table
 
     def _init_scene(self) -> None:
         self.log: deque = deque(maxlen=200)
@@ -70,10 +90,10 @@ class Scene(abc.ABC):
     def command(self, mtype: str, **fields: Any) -> Any:
         """Run a scene command from the table; :class:`CommandError` for one of another scene.  Returns what
         the command returns: a :class:`~app.engine.jobs.Deferred` when its work went off the loop."""
-        name = self.COMMANDS.get(mtype)
-        if name is None:
+        run = self.COMMANDS.get(mtype)
+        if run is None:
             raise CommandError(f"{mtype}: this engine runs {self.TITLE}, not the scene of that command")
-        return getattr(self, name)(**fields)
+        return run(self, **fields)
 
     def pause(self, on: bool) -> None:
         """Stand time still (no client shows this scene) or let it run again.  Pausing and resuming

@@ -1,12 +1,13 @@
 """The engine process: a fixed-rate loop around a :class:`Session`, served over ZeroMQ.
 
-Two threads.  The **I/O thread** owns the request socket: it receives, rate-limits (per client,
-before decoding: a flooding client costs a receive and a counter), decodes and validates every
-message, keeps the client book (hello, roles, tokens, the launch secret, lapses) and answers what
-it can answer itself.  What the control step must see it hands over in a bounded inbox: E-STOPs
-in a list of their own that the loop empties first in every tick (no queue, no rate limit, no
-bound delays them), then commands and input in arrival order, consecutive inputs of a client
-with the same buttons coalesced to the newest (button edges are kept, so no press is lost).
+Two threads.  The **I/O thread** (:mod:`app.engine.io`) owns the request socket: it receives,
+rate-limits (per client, before decoding: a flooding client costs a receive and a counter), decodes and
+validates every message, keeps the client book (:mod:`app.engine.clients`: hello, roles, tokens, the
+launch secret, lapses) and answers what it can answer itself.  What the control step must see it hands
+over in a bounded inbox (:mod:`app.engine.inbox`): E-STOPs in a list of their own that the loop empties
+first in every tick (no queue, no rate limit, no bound delays them), then commands and input in arrival
+order, consecutive inputs of a client with the same buttons coalesced to the newest (button edges are
+kept, so no press is lost).
 The **loop** runs the control tick at a fixed rate: E-STOPs, inbox, ``session.tick``, publish
 every ``publish_every`` ticks, then sleep to the next deadline (sleep, then a short spin for
 sub-millisecond accuracy).
@@ -48,167 +49,36 @@ import sys
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 import zmq
 
 from app.engine.alarm_catalog import SHELVE_DEFAULT_S
+from app.engine.clients import ClientBook
+from app.engine.inbox import RATE_BURST, RATE_LIMIT, Inbox, LoopStats, RateLimit
+from app.engine.io import EngineIO, IOWindow
 from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene
-from app.errors import BosunError, printable
-from app.net.codec import ProtocolError, decode, encode
-from app.net.messages import OPERATOR_ONLY, SCENE_MESSAGES
+from app.errors import BosunError
+from app.net.codec import encode
+from app.net.messages import SCENE_MESSAGES
 from app.net.security import AuthThrottle, CurveAuthenticator, ServerCurve
 from app.net.snapshots import EngineInfo, to_wire
 from app.net.transport import TransportError, check_url, is_local, state_url_for
-from app.teleop.devices import InputSample
 
 log = logging.getLogger("bosun.engine")
-
-
-def _clean_name(name: str) -> str:
-    """A client's name as it may appear in every log: printable, one line, at most 64 characters."""
-    return printable(name, 64) or "?"
-
-
-@dataclass
-class ClientInfo:
-    name: str
-    role: str
-    last_seen: float
-    refused_at: float = -math.inf  # last explicit refusal of its input (at most one a second)
-
-
-@dataclass
-class LoopStats:
-    """Tick timing of the fixed-rate loop, over a ring buffer of recent ticks."""
-
-    period: float
-    periods: deque = field(default_factory=lambda: deque(maxlen=200_000))
-    work: deque = field(default_factory=lambda: deque(maxlen=200_000))
-    latencies: deque = field(default_factory=lambda: deque(maxlen=200_000))
-    missed: int = 0
-    ticks: int = 0
-
-    def summary(self) -> dict[str, Any]:
-        p = np.array(self.periods) if self.periods else np.array([math.nan])
-        w = np.array(self.work) if self.work else np.array([math.nan])
-        lat = np.array(self.latencies) if self.latencies else np.array([math.nan])
-
-        def pct(a, q):
-            return float(np.percentile(a, q)) if np.all(np.isfinite(a)) else None
-
-        return {
-            "ticks": self.ticks,
-            "period_target_ms": self.period * 1e3,
-            "period_p50_ms": pct(p, 50) and pct(p, 50) * 1e3,
-            "period_p99_ms": pct(p, 99) and pct(p, 99) * 1e3,
-            "period_max_ms": float(np.max(p)) * 1e3 if np.all(np.isfinite(p)) else None,
-            "jitter_p99_ms": pct(np.abs(p - self.period), 99) and pct(np.abs(p - self.period), 99) * 1e3,
-            "work_p99_ms": pct(w, 99) and pct(w, 99) * 1e3,
-            "missed_deadlines": self.missed,
-            "latency_p50_ms": pct(lat, 50) and pct(lat, 50) * 1e3,
-            "latency_p99_ms": pct(lat, 99) and pct(lat, 99) * 1e3,
-            "latency_samples": len(self.latencies),
-        }
 
 
 # the loop sleeps until SPIN before its deadline and spins the rest (sleep overshoots by ~0.1 ms);
 # the I/O window shuts IO_MARGIN before the deadline, so the I/O thread waits (lock free) by then
 SPIN = 0.0002
 IO_MARGIN = 0.0003
-JOB_MARGIN = 0.001  # s: a job takes no step with less than this (or a quarter period) left in the I/O window
 IO_SHARE = 0.1  # of a period the I/O thread is given when messages wait, even after a long tick
 DEFAULT_RATE = 1000.0  # Hz, the teleop engine's control loop
-RATE_LIMIT = 1000.0  # messages a second per client, sustained; the joystick sends 500 and pings 2
-RATE_BURST = 250  # messages a client may send at once
-INBOX_LIMIT = 1024  # commands and inputs waiting for the loop; past it, refused ("engine busy")
 SLOW_FACTOR = 0.9  # of real time: below it for SLOW_FOR seconds in a row, control suffers (alarm engine_slow)
 SLOW_FOR = 5
 STALL_PERIODS = 10  # a tick longer than this many periods (and STALL_MIN_S) raises loop_stall (issue 27, item 2)
 STALL_MIN_S = 0.1  # s: at 1 kHz ten periods are 10 ms, a scheduler's hiccup on a busy computer, not a stall
-
-
-class RateLimit:
-    """Token buckets per client: ``rate`` messages a second, bursts of ``burst``; the excess counted."""
-
-    def __init__(self, rate: float = RATE_LIMIT, burst: int = RATE_BURST, clients: int = 4096) -> None:
-        self.rate, self.burst, self.max_clients = rate, float(burst), clients
-        self.buckets: dict[bytes, list[float]] = {}  # ident -> [tokens, last refill time]
-        self.dropped: dict[bytes, int] = {}
-        self.total_dropped = 0
-
-    def allow(self, ident: bytes, now: float) -> bool:
-        b = self.buckets.get(ident)
-        if b is None:
-            if len(self.buckets) >= self.max_clients:  # identities are cheap to invent: forget, never grow
-                self.buckets.clear()
-                self.dropped.clear()
-            b = self.buckets[ident] = [self.burst, now]
-        b[0] = min(self.burst, b[0] + (now - b[1]) * self.rate)
-        b[1] = now
-        if b[0] >= 1.0:
-            b[0] -= 1.0
-            return True
-        self.dropped[ident] = self.dropped.get(ident, 0) + 1
-        self.total_dropped += 1
-        return False
-
-
-class Inbox:
-    """What the I/O thread hands the loop: E-STOPs apart, then commands and input in arrival order.
-
-    Bounded (``limit`` events; E-STOPs are never refused).  Consecutive inputs of one client with the
-    same buttons and device are coalesced to the newest: the loop takes the newest input per client
-    each tick, and a button edge (a press, a release, a stop button) always survives."""
-
-    def __init__(self, limit: int = INBOX_LIMIT) -> None:
-        self.limit = limit
-        self.lock = threading.Lock()
-        self.estops: list[tuple[float, int, str]] = []  # (receive time, tick at receipt, source)
-        self.events: list[tuple] = []
-        self.coalesced = 0
-        self.refused = 0
-        self.listened = -math.inf  # monotonic time the I/O thread last found the request socket empty
-
-    def estop(self, now: float, tick: int, source: str) -> None:
-        with self.lock:
-            self.estops.append((now, tick, source))
-
-    def put(self, event: tuple) -> bool:
-        with self.lock:
-            if len(self.events) >= self.limit:
-                self.refused += 1
-                return False
-            self.events.append(event)
-            return True
-
-    def put_input(self, ident: bytes, sample: InputSample, t_send: float | None) -> bool:
-        with self.lock:
-            last = self.events[-1] if self.events else None
-            if (
-                last is not None
-                and last[0] == "input"
-                and last[1] == ident
-                and last[2].buttons == sample.buttons
-                and last[2].device == sample.device
-            ):
-                self.events[-1] = ("input", ident, sample, t_send)
-                self.coalesced += 1
-                return True
-            if len(self.events) >= self.limit:
-                self.refused += 1
-                return False
-            self.events.append(("input", ident, sample, t_send))
-            return True
-
-    def take(self) -> tuple[list, list]:
-        with self.lock:
-            estops, self.estops = self.estops, []
-            events, self.events = self.events, []
-        return estops, events
 
 
 class EngineServer:
@@ -262,14 +132,10 @@ class EngineServer:
         self.publish_every = max(1, round(rate / publish_rate))
         self.token = token
         self.operator_secret = operator_secret
-        self.operator_timeout = operator_timeout
-        self.lapse_warning = min(lapse_warning, operator_timeout)
         self.auth = AuthThrottle()
         self.limits = RateLimit(rate_limit, rate_burst)
         self.inbox = Inbox()
-        self._displaced: dict[bytes, str] = {}  # former operators -> why they lost the role
-        self._warned_silence = False
-        self.client_timeout = client_timeout  # clients silent this long are forgotten (no ghosts pile up)
+        self.book = ClientBook(self._note, operator_timeout, lapse_warning, client_timeout)
         self.ctx = context or zmq.Context.instance()
         self.router = self.ctx.socket(zmq.ROUTER)
         self.router.setsockopt(zmq.LINGER, 0)
@@ -302,15 +168,12 @@ class EngineServer:
             raise TransportError(f"cannot bind {bind}: {err}") from None
         self.url = self.router.getsockopt(zmq.LAST_ENDPOINT).decode()
         self.state_url = self.pub.getsockopt(zmq.LAST_ENDPOINT).decode()
-        self.clients: dict[bytes, ClientInfo] = {}  # the I/O thread's book; the loop only reads it
-        self.operator: bytes | None = None
         self.rejected = 0
         self.stats = LoopStats(self.dt)
         self.estop_ticks: deque = deque(maxlen=10_000)  # ticks from an E-STOP's receipt to the tick that applied it
         self._stop = threading.Event()
         self._pending_latency: float | None = None
         self._log_sent = 0
-        self._unknown_logged: dict[bytes, float] = {}
         self._limited: dict[str, float] = {}
         self.engine_id = secrets.token_hex(4)  # a new value each start: clients tell a restarted engine apart
         self.estops = 0  # estop messages received: clients confirm a STOP by a state counting theirs
@@ -323,155 +186,38 @@ class EngineServer:
         self._slow_seconds = 0.0  # seconds in a row below SLOW_FACTOR of real time
         self._stale_seen = 0  # the session's stale-input count at the last health check
         # the I/O window: the I/O thread runs Python only while the loop sleeps (see the module text)
-        self._window = threading.Condition()
-        self._window_end = math.inf  # perf_counter time the window closes; open until the loop runs
+        self.window = IOWindow(self._stop, self.dt)
+        self.io = EngineIO(self)
         self._io_thread: threading.Thread | None = None
-        self._io_backlog = False  # the I/O thread's window closed on waiting messages
         self.io_deferred = 0  # ticks started late to give the I/O thread its share
-        self._io_error: BaseException | None = None
         jobs = getattr(session, "jobs", None)
         if jobs is not None:  # heavy command work off the loop, in the loop's idle time (issue 27, item 2)
-            jobs.pace = self._job_pace
+            jobs.pace = self.window.wait_job
         self._described = -1  # describe_seq of the cached description
         self._description = b""  # the encoded ``description`` (read by the I/O thread, written by the loop)
-        self._frame: zmq.Frame | None = None  # the I/O thread's message in hand (its peer address, its key)
         self._refresh_description()
 
-    # ------------------------------------------------------------------ I/O thread: the protocol
-    def _reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
-        fields: dict[str, Any] = {"re": re, "ok": ok}
-        if error:
-            fields["error"] = error[:1000]
-        self.router.send_multipart([ident, encode("reply", **fields)], zmq.NOBLOCK)
+    # ------------------------------------------------------------------ shared by both threads
+    @property
+    def clients(self) -> dict:
+        """The client book's entries by identity (the I/O thread's; the loop only reads them)."""
+        return self.book.clients
+
+    @property
+    def operator(self) -> bytes | None:
+        return self.book.operator
+
+    @operator.setter
+    def operator(self, ident: bytes | None) -> None:
+        self.book.operator = ident
+
+    @property
+    def io_backlog(self) -> bool:
+        return self.io.backlog
 
     def _note(self, level: str, text: str) -> None:
         """A session log line from the I/O thread (the loop writes it: the session is the loop's)."""
         self.inbox.put(("note", level, text))
-
-    def _reject(self, ident: bytes, reason: str, re: str | None = None) -> None:
-        self.rejected += 1
-        self._log_limited(f"reject:{reason[:40]}", f"rejected message from {ident[:32]!r}: {reason}", note=False)
-        if re is not None:
-            self._reply(ident, re, False, reason)
-
-    def _source(self, ident: bytes) -> str:
-        """Who a failed token or secret is pinned on: this connection (identity, peer address, CURVE key).
-
-        The address and key come from the message in hand (ZeroMQ's ``Peer-Address`` and ``User-Id``
-        properties; the key is the one the ZAP handler admitted)."""
-        address = user = ""
-        frame = self._frame
-        if frame is not None:
-            with contextlib.suppress(zmq.ZMQError, AttributeError):
-                address = frame.get("Peer-Address")
-            if self.curve is not None:
-                with contextlib.suppress(zmq.ZMQError, AttributeError):
-                    user = frame.get("User-Id")
-        where = f" at {printable(address, 64)}" if address else ""
-        key = f" with key {user[:8]}…" if user else ""
-        return f"client {ident[:32]!r}{where}{key}"
-
-    def _credential(self, ident: bytes, given: Any, expected: str | None, what: str) -> str:
-        """'' when ``given`` is right (or this engine expects nothing), else why not, in a few words.
-
-        Compared in constant time on UTF-8 bytes (compare_digest refuses non-ASCII str).  Failures are
-        throttled per connection (:meth:`_source`): past 10 in a second, that connection's further
-        tries are refused unexamined for a second; anybody else's are still looked at (issue 27, item 3)."""
-        if expected is None:
-            return ""
-        source = f"{what} {self._source(ident)}"
-        if not self.auth.allowed(source):
-            return (
-                f"not checked: {self.auth.burst} wrong {what}s from this client within {self.auth.window:g} s; "
-                "try again in a second"
-            )
-        given = "" if given is None else str(given)
-        if given and secrets.compare_digest(given.encode(), expected.encode()):
-            return ""
-        if self.auth.failed(source) == self.auth.burst:
-            self._log_limited(
-                f"auth:{source}",
-                f"{self.auth.burst} wrong {what}s within {self.auth.window:g} s from {source[len(what) + 1 :]}: "
-                f"its tries are refused unexamined for {self.auth.window:g} s ({self.auth.failures} failures so far)",
-            )
-        return f"with a wrong {what}" if given else f"without a {what} (this engine needs one)"
-
-    def _check_operator(self, now: float) -> None:
-        """Warn every client when the operator falls silent; lapse the role after operator_timeout."""
-        if self.operator is None:
-            return
-        holder = self.clients.get(self.operator)
-        silent = now - holder.last_seen if holder is not None else math.inf
-        if silent <= self.lapse_warning:
-            self._warned_silence = False
-            return
-        name = holder.name if holder is not None else "?"
-        if silent > self.operator_timeout:
-            self._lapse(f"the role lapsed after {self.operator_timeout:g} s without a message from {name}")
-        elif not self._warned_silence:
-            self._warned_silence = True
-            self._note(
-                "warning",
-                f"operator {name} silent for {self.lapse_warning:g} s: the role lapses at {self.operator_timeout:g} s",
-            )
-
-    def _lapse(self, why: str) -> None:
-        ident = self.operator
-        self.operator = None
-        self._warned_silence = False
-        if ident is None:
-            return
-        holder = self.clients.get(ident)
-        if holder is not None:
-            holder.role = "viewer"
-        if len(self._displaced) > 1000:
-            self._displaced.clear()
-        self._displaced[ident] = why
-        self._note("warning", f"operator role free: {why}")  # its input went stale long ago: holding
-
-    def _operator_alive(self, now: float) -> bool:
-        if self.operator is None or self.operator not in self.clients:
-            return False
-        return now - self.clients[self.operator].last_seen <= self.operator_timeout
-
-    def _refuse_displaced(self, ident: bytes, client, mtype: str, now: float) -> None:
-        """A former operator's command: an explicit refusal (for input at most once a second)."""
-        why = self._displaced[ident]
-        holder = self.clients[self.operator].name if self.operator in self.clients else "nobody"
-        if mtype == "input":
-            if now - client.refused_at < 1.0:
-                self.rejected += 1
-                return
-            client.refused_at = now
-        self._reject(
-            ident,
-            f"{client.name} is no longer the operator: {why}; held by {holder} now. "
-            "Say hello as operator to take the role back when it is free",
-            re=mtype,
-        )
-
-    def handle(self, ident: bytes, data: bytes, now: float) -> None:
-        """Rate-limit, validate and dispatch one message from a client; nothing a message does escapes.
-
-        Any exception a handler raises (a bug, a value the checks missed) becomes a refusal to that
-        client and one rate-limited log line; the engine keeps running and keeps its E-STOP.  A client
-        over its budget has the message dropped unread, unless it may be an E-STOP (the word is in it)."""
-        if not self.limits.allow(ident, now) and b"estop" not in data:
-            if self.limits.dropped[ident] % 10_000 == 1:
-                self._log_limited(
-                    f"flood:{ident[:16]!r}",
-                    f"client {ident[:32]!r} over {self.limits.rate:g} messages/s: excess dropped "
-                    f"({self.limits.dropped[ident]} so far)",
-                )
-            return
-        self._current_type = "invalid"
-        try:
-            self._handle(ident, data, now)
-        except Exception as err:  # the boundary: a message can be refused, never kill or freeze the engine
-            self.rejected += 1
-            self._log_limited("internal", f"message refused by an internal error: {type(err).__name__}: {err}")
-            with contextlib.suppress(Exception):
-                self._reply(ident, self._current_type, False, f"refused: internal error ({type(err).__name__})")
 
     def _log_limited(self, key: str, text: str, every: float = 5.0, note: bool = True) -> None:
         """One log line per ``key`` and ``every`` seconds (neither thread ever floods the log)."""
@@ -483,208 +229,6 @@ class EngineServer:
             log.warning("%s", text)
             if note:
                 self._note("warning", text[:1000])
-
-    def _estop(self, ident: bytes, source: str, now: float) -> None:
-        """Past every queue: the loop applies it first thing in its next tick, then confirms."""
-        self.inbox.estop(now, self.stats.ticks, source)
-        self._reply(ident, "estop", True)
-
-    def _handle(self, ident: bytes, data: bytes, now: float) -> None:
-        try:
-            msg = decode(data)
-        except ProtocolError as err:
-            self._reject(ident, str(err), re="invalid")
-            return
-        mtype = msg["type"]
-        self._current_type = mtype
-        if mtype == "hello":
-            self._hello(ident, msg, now)
-            return
-        client = self.clients.get(ident)
-        if client is None:
-            if mtype == "estop":  # STOP must never fail: accepted before or without hello
-                why = self._credential(ident, msg.get("token"), self.token, "token")
-                if why:
-                    self._reject(ident, f"estop {why}", re="estop")
-                    return
-                self._estop(ident, f"an unregistered client ({msg.get('reason', 'no reason')})", now)
-                return
-            self.rejected += 1
-            if now - self._unknown_logged.get(ident, -math.inf) > 5.0:  # a re-hello hint, not a log flood
-                if len(self._unknown_logged) > 1000:
-                    self._unknown_logged.clear()
-                self._unknown_logged[ident] = now
-                log.warning("%s from %r before hello: told to say hello", mtype, ident[:32])
-            self._reply(ident, mtype, False, f"{mtype} before hello: say hello first (engine restarted?)")
-            return
-        client.last_seen = now
-        if mtype == "bye":
-            self.clients.pop(ident, None)
-            if self.operator == ident:
-                self.operator = None
-                self._note("info", f"operator {client.name} left")
-            return
-        if mtype == "ping":
-            self._reply(ident, "ping", True)
-            return
-        if mtype == "describe":
-            self.router.send_multipart([ident, self._description], zmq.NOBLOCK)
-            return
-        if mtype == "estop":
-            self._estop(ident, client.name, now)
-            return
-        if mtype == "release_operator":
-            if self.operator == ident:
-                self.operator = None
-                client.role = "viewer"
-                self._note("info", f"operator {client.name} released the role")
-            self._reply(ident, mtype, True)
-            return
-        if mtype in OPERATOR_ONLY and ident != self.operator:
-            if ident in self._displaced:
-                self._refuse_displaced(ident, client, mtype, now)
-            elif mtype == "input":
-                self._reject(ident, f"input from viewer {client.name}")
-            else:
-                self._reject(ident, f"{mtype}: only the operator may do this", re=mtype)
-            return
-        if mtype == "input":
-            sample = InputSample(tuple(msg["axes"]), tuple(msg["buttons"]), msg["device"], now)
-            if not self.inbox.put_input(ident, sample, msg.get("t_send")):
-                self.rejected += 1
-            return
-        if mtype == "device_lost":
-            if not self.inbox.put(("lost", ident, bool(msg.get("released", False)), now)):
-                self.rejected += 1
-            return
-        if not self.inbox.put(("command", ident, mtype, msg, client.name, now)):
-            self._reject(ident, f"{mtype}: engine busy ({self.inbox.limit} requests waiting); try again", re=mtype)
-
-    def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
-        why = self._credential(ident, msg.get("token"), self.token, "token")
-        if why:
-            self._reject(ident, f"hello {why}", re="hello")
-            return
-        role, note = "viewer", ""
-        name = _clean_name(msg["name"])
-        why = ""
-        if msg["role"] == "operator":
-            why = self._credential(ident, msg.get("secret"), self.operator_secret, "launch secret")
-        if why:
-            note = (
-                "the operator role of this engine belongs to the program that started it "
-                f"(hello {why}); joined as viewer"
-            )
-        elif msg["role"] == "operator":
-            if self.operator not in (None, ident) and not self._operator_alive(now):
-                self._lapse(f"the role lapsed after {self.operator_timeout:g} s of silence")
-            if self.operator in (None, ident):
-                self.operator = ident
-                self._displaced.pop(ident, None)
-                self._warned_silence = False
-                role = "operator"
-                # a new (or reconnected) operator starts disarmed: before any of its input reaches the loop
-                self.inbox.put(("operator", name))
-            else:
-                note = f"operator role is held by {self.clients[self.operator].name}; joined as viewer"
-        self.clients[ident] = ClientInfo(name, role, now)
-        self._note("info", f"{name} connected as {role}")
-        welcome: dict[str, Any] = {
-            "client_id": ident.decode(errors="replace")[:64],
-            "role": role,
-            "state_url": self.state_url,
-        }
-        if note:
-            welcome["note"] = note
-        self.router.send_multipart([ident, encode("welcome", **welcome)], zmq.NOBLOCK)
-        self.router.send_multipart([ident, self._description], zmq.NOBLOCK)  # the scene's static data
-
-    def _housekeeping(self, now: float) -> None:
-        """The operator's silence (warning, lapse) and clients silent for ``client_timeout`` forgotten."""
-        self._check_operator(now)
-        for ident in [i for i, c in self.clients.items() if now - c.last_seen > self.client_timeout]:
-            gone = self.clients.pop(ident)
-            if self.operator == ident:
-                self.operator = None
-            self._note("info", f"{gone.name} silent for {self.client_timeout:g} s: forgotten")
-
-    def _wait_window(self) -> None:
-        """Block (interpreter lock free) while the loop is in, or about to start, its tick.
-
-        A window shut for longer than a period and a millisecond means the loop overran or stalls in
-        a long command: the I/O thread then carries on (sharing the lock), so E-STOPs still come in."""
-        with self._window:
-            while not self._stop.is_set() and (now := time.perf_counter()) >= self._window_end:
-                if now - self._window_end > self.dt + 0.001:
-                    return
-                self._window.wait(0.001)
-
-    def _job_pace(self) -> None:
-        """A step of a scene's job (:mod:`app.engine.jobs`) waits for the loop's idle time: the I/O window, with
-        :data:`JOB_MARGIN` (at most a quarter period) to spare so that a step started in it ends before the
-        tick.  Unlike the I/O thread it never carries on while the loop is in a tick, however long: nothing of a
-        job is urgent, and a thread that shares the interpreter lock with the loop stretches the loop's tick."""
-        margin = min(JOB_MARGIN, 0.25 * self.dt)
-        with self._window:
-            while not self._stop.is_set() and time.perf_counter() >= self._window_end - margin:
-                self._window.wait(0.005)
-
-    def _io_run(self) -> None:
-        """The I/O thread: requests in, replies out, the client book kept; Python only in I/O windows."""
-        poller = zmq.Poller()
-        poller.register(self.router, zmq.POLLIN)
-        poller.register(self._reply_in, zmq.POLLIN)
-        next_house = 0.0
-        try:
-            while not self._stop.is_set():
-                looked = time.monotonic()  # stamped before looking: a hold-up after it cannot pass as silence
-                ready = dict(poller.poll(5))
-                if self.router not in ready:
-                    self.inbox.listened = looked  # nothing was waiting then (input age counts)
-                self._wait_window()
-                if self._reply_in in ready:
-                    for _ in range(1000):
-                        try:
-                            frames = self._reply_in.recv_multipart(zmq.NOBLOCK)
-                        except zmq.Again:
-                            break
-                        self.router.send_multipart(frames, zmq.NOBLOCK)
-                if self.router in ready:
-                    for _ in range(2000):
-                        if time.perf_counter() >= self._window_end:
-                            # messages still waiting: the loop leaves a share of the next period
-                            self._io_backlog = bool(self.router.getsockopt(zmq.EVENTS) & zmq.POLLIN)
-                            self._wait_window()
-                        looked = time.monotonic()
-                        try:
-                            # as frames: a hello's peer address and CURVE key are read from them (_source)
-                            parts = self.router.recv_multipart(zmq.NOBLOCK, copy=False)
-                        except zmq.Again:
-                            self._io_backlog = False
-                            self.inbox.listened = looked
-                            break
-                        now = time.monotonic()
-                        frames = [p.bytes for p in parts]
-                        if len(frames) != 2:
-                            if self.limits.allow(frames[0] if frames else b"?", now):
-                                self._reject(frames[0] if frames else b"?", f"{len(frames)} frames; expected one")
-                            continue
-                        self._frame = parts[1]
-                        self.handle(frames[0], frames[1], now)
-                        self._frame = None
-                now = time.monotonic()
-                if now >= next_house:
-                    next_house = now + 0.02
-                    self._housekeeping(now)
-        except zmq.ZMQError as err:  # sockets closed under us at shutdown: nothing left to serve
-            if not self._stop.is_set():  # not a shutdown: the engine is deaf from now on, so STOP
-                self._io_error = err
-                log.error("engine I/O thread stopped: %s", err)
-                self.inbox.estop(time.monotonic(), self.stats.ticks, f"the engine's I/O thread (ZMQError: {err})")
-        except Exception as err:  # a bug here must not leave a silent engine: STOP, say so, end the loop
-            self._io_error = err
-            log.exception("engine I/O thread failed")
-            self.inbox.estop(time.monotonic(), self.stats.ticks, f"the engine's I/O thread ({type(err).__name__})")
 
     # ------------------------------------------------------------------ loop: applying what came in
     def _send_reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
@@ -887,17 +431,12 @@ class EngineServer:
         if self.stats.ticks % self.publish_every == 0:
             self.publish()
 
-    def _open_window(self, until: float) -> None:
-        with self._window:
-            self._window_end = until
-            self._window.notify_all()  # the I/O thread and a job's thread
-
     def run(self, duration: float | None = None) -> LoopStats:
         """Run until :meth:`stop` (or for ``duration`` seconds); the I/O thread lives as long."""
         self._stop.clear()
         if sys.getswitchinterval() > 0.0005:  # a thread wanting the lock waits at most this long (5 ms default)
             sys.setswitchinterval(0.0005)
-        self._io_thread = threading.Thread(target=self._io_run, name="bosun-engine-io", daemon=True)
+        self._io_thread = threading.Thread(target=self.io.run, name="bosun-engine-io", daemon=True)
         self._io_thread.start()
         next_t = time.perf_counter()
         end = math.inf if duration is None else next_t + duration
@@ -921,14 +460,14 @@ class EngineServer:
                     self.stats.missed += 1
                     next_t = done  # do not try to catch up with a burst of ticks
                 shut = next_t - IO_MARGIN
-                if self._io_backlog and shut < done + IO_SHARE * self.dt:
+                if self.io.backlog and shut < done + IO_SHARE * self.dt:
                     # messages wait and this period leaves them no room: the next tick starts late
                     # (a missed deadline) rather than leave an E-STOP unread behind them
                     shut = done + IO_SHARE * self.dt
                     next_t = shut + IO_MARGIN
                     self.stats.missed += 1
                     self.io_deferred += 1
-                self._open_window(shut)
+                self.window.open_until(shut)
                 remaining = next_t - time.perf_counter()
                 if remaining > SPIN:
                     time.sleep(remaining - SPIN)
@@ -936,7 +475,7 @@ class EngineServer:
                     pass
         finally:
             self._stop.set()
-            self._open_window(math.inf)
+            self.window.open_until(math.inf)
             self._io_thread.join(timeout=5)
         return self.stats
 

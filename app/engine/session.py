@@ -24,7 +24,7 @@ from typing import ClassVar
 import numpy as np
 
 from app.engine.alarms import AlarmList
-from app.engine.scene import CommandError, LogEntry, Scene
+from app.engine.scene import CommandError, LogEntry, Scene, command
 from app.engine.studies import STUDIES, StudyError, StudyRunner
 from app.errors import BosunError, error_line, one_line, printable_path
 from app.ik import DEFAULT, make_solver, solvers_for
@@ -92,15 +92,6 @@ class Session(Scene):
 
     KIND: ClassVar[str] = "teleop"
     TITLE: ClassVar[str] = "the teleop scene"
-    COMMANDS: ClassVar[dict[str, str]] = {
-        "set_robot": "set_robot",
-        "set_solver": "set_solver",
-        "set_mode": "set_mode",
-        "set_scaling": "set_scaling",
-        "study_start": "study_start",
-        "study_cancel": "study_cancel",
-    }
-
     robot_name: str = DEFAULT_ROBOT
     solver_name: str = DEFAULT_SOLVER
     mode: str = "velocity"
@@ -133,12 +124,13 @@ class Session(Scene):
         self._load(self.robot_name, self.solver_name)
 
     # ------------------------------------------------------------------ commands
-    def _load(self, robot_ref: str, solver_name: str, robot=None, xml: str | None = None) -> None:
+    def _load(self, robot_ref: str, solver_name: str, robot=None, xml: str | None = None, solver=None) -> None:
         if robot is None or xml is None:  # the file read once, by the reader ``bosun check`` uses
             robot, xml = load_robot_file(robot_ref)
         if not isinstance(robot, SerialRobot):
             raise CommandError(f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms")
-        solver = make_solver(solver_name, robot, seed=self.seed)
+        if solver is None:
+            solver = make_solver(solver_name, robot, seed=self.seed)
         q0 = 0.5 * (robot.lower + robot.upper)
         old = getattr(self, "robot", None)
         if old is not None and old.joint_names == robot.joint_names and np.all(robot.within_limits(self.actuators.q)):
@@ -158,6 +150,7 @@ class Session(Scene):
         """Whether any joint moves faster than 0.1 % of its speed limit."""
         return bool(np.any(np.abs(self.actuators.qdot) > 1e-3 * self.robot.speed))
 
+    @command
     def set_robot(self, robot: str, xml: str | None = None) -> None:
         """Load a robot; on any error the previous robot stays.
 
@@ -180,12 +173,12 @@ class Session(Scene):
                     f"{model.name} is a {model.kind} mechanism; the teleoperation engine drives serial arms"
                 )
             try:
-                make_solver(solver, model)
+                built = make_solver(solver, model, seed=self.seed)
             except BosunError as err:
                 if "no closed-form solution" not in str(err):
                     raise
-                solver = DEFAULT_SOLVER
-            self._load(robot, solver, model, xml)
+                solver, built = DEFAULT_SOLVER, None  # the analytic solver does not apply: the default's
+            self._load(robot, solver, model, xml, built)
         except OSError as err:  # not str(err): it holds the whole path (the engine's folders), cut at its end
             why = one_line(err.strerror or type(err).__name__, 200)
             raise CommandError(f"{_label(robot)}: cannot read: {why}") from None
@@ -194,6 +187,7 @@ class Session(Scene):
         self.input.disarm("robot changed")
         self.note("info", f"robot {self.robot_name} loaded ({self.robot.n_joints} joints, solver {solver})")
 
+    @command
     def set_solver(self, solver: str) -> None:
         name = solver
         try:
@@ -205,6 +199,7 @@ class Session(Scene):
         self.input.disarm("solver changed")
         self.note("info", f"solver {name}")
 
+    @command
     def set_mode(self, mode: str) -> None:
         if mode not in MODES:
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
@@ -217,6 +212,7 @@ class Session(Scene):
             self.input.disarm("mode changed")
             self.note("info", f"mode {mode}")
 
+    @command
     def set_scaling(self, k_p=None, x_w=None, k_v=None) -> None:
         new = Scaling(
             tuple(np.broadcast_to(np.asarray(k_p, dtype=float), 3)) if k_p is not None else self.scaling.k_p,
@@ -240,6 +236,7 @@ class Session(Scene):
     def _allowed(self):
         return allowed_dirs(self.robots_dirs)
 
+    @command
     def study_start(self, study: str, solver: str | None = None, grid: int = 8) -> None:
         """Run an IK study of the loaded robot in a worker process (progress in ``study`` messages)."""
         name = solver or self.solver_name
@@ -254,6 +251,7 @@ class Session(Scene):
         what = f"{grid}³ targets" if study == "distribution" else "a 20 s path"
         self.note("info", f"study {n}: {study} of {self.robot_name} with {name} ({what}) started")
 
+    @command
     def study_cancel(self) -> None:
         if not self.studies.running:
             raise CommandError("no study is running")

@@ -20,7 +20,7 @@ import numpy as np
 
 from app.engine.alarms import AlarmList
 from app.engine.jobs import Deferred
-from app.engine.scene import CommandError, Scene
+from app.engine.scene import CommandError, Scene, command
 from app.engine.vessel_upload import TableText, VesselChoice
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
@@ -54,11 +54,6 @@ class TacSession(Scene):
 
     KIND: ClassVar[str] = "tac"
     TITLE: ClassVar[str] = "the crane-head scene"
-    COMMANDS: ClassVar[dict[str, str]] = {
-        "set_sea": "set_sea",
-        "set_tac_mode": "set_tac_mode",
-        "set_vessel": "set_vessel",
-    }
 
     def __post_init__(self) -> None:
         self._init_scene()
@@ -84,6 +79,7 @@ class TacSession(Scene):
         self.note("info", f"crane-head scene: Hs {self.scenario.hs:g} m, Tp {self.scenario.tp:g} s, mode {self.mode}")
 
     # ------------------------------------------------------------------ commands
+    @command
     def set_sea(self, spectrum: str, hs: float, tp: float, heading: float) -> None:
         try:
             sc = replace(self.scenario, spectrum=spectrum, hs=hs, tp=tp, heading=heading, seed=self.scenario.seed + 1)
@@ -106,6 +102,7 @@ class TacSession(Scene):
         self.sea_seq += 1
         self.changed()
 
+    @command
     def set_vessel(
         self, vessel: str | None = None, csv: str | None = None, part: int = 0, parts: int = 1, label: str = ""
     ) -> Deferred | None:
@@ -157,6 +154,7 @@ class TacSession(Scene):
         t = self.sim.vessel_rao
         self.note("info", f"vessel: {self.vessel.label} ({t.w.size} frequencies × {t.headings.size} headings)")
 
+    @command
     def set_tac_mode(self, mode: str) -> None:
         if mode not in MODES:
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
