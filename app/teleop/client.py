@@ -6,14 +6,11 @@ import threading
 import time
 from collections.abc import Callable
 
-import zmq
-
-from app.net.codec import ProtocolError, decode_engine
+from app.net.link import EngineConnection, connect
 from app.net.security import ClientCurve
-from app.net.transport import Client
 from app.teleop.devices import PygameJoysticks
 
-KEEPALIVE = 0.5  # s between pings while no device streams (the operator role lapses after 5 s of silence)
+LOST_AFTER = 1.0  # s without a state: the engine is lost (the connection says hello again by itself)
 FIND_DEVICE = 1.0  # s to wait for SDL to list a joystick at start-up
 
 
@@ -54,15 +51,17 @@ def run_joystick_client(
         sticks.close()
         which = f" matching '{device}'" if device else ""
         raise NoDeviceError(f"no joystick{which} found; plug one in (or try --virtual)")
-    client = Client(url, role="operator", name=name, token=token, curve=curve)
-    if client.role != "operator":
-        client.close()
+    conn = connect(url, role="operator", name=name, token=token, curve=curve, lost_after=LOST_AFTER)
+    if conn.role != "operator":
+        conn.stop()
+        conn.join(timeout=2)
+        conn.client.close()
         sticks.close()
-        raise RuntimeError(client.note or "the engine did not grant the operator role")
+        raise RuntimeError(conn.client.note or "the engine did not grant the operator role")
     stop = stop or threading.Event()
     period = 1.0 / rate
     end = time.monotonic() + duration if duration is not None else float("inf")
-    sent, had_device, last_ping = 0, None, 0.0
+    sent, had_device = 0, None
     try:
         while not stop.is_set() and time.monotonic() < end:
             t0 = time.monotonic()
@@ -70,35 +69,30 @@ def run_joystick_client(
             for ev in sticks.take_events():
                 say(f"{ev.device} {ev.kind}")
             if sample is None:
-                if had_device is not False:
-                    client.send("device_lost", device=(had_device or "")[:128] if isinstance(had_device, str) else "")
+                if had_device is not False:  # once: the engine holds; the connection's pings keep the role
+                    conn.clear_input(had_device if isinstance(had_device, str) else "", released=False)
                     say("no joystick: the engine holds the robot; waiting for one (the role is kept)")
                 had_device = False
-                if t0 - last_ping >= KEEPALIVE:
-                    client.send("ping")
-                    last_ping = t0
             else:
-                client.send_input(sample.axes[:16], sample.buttons[:64], sample.device[:128])
+                conn.set_input(sample.axes[:16], sample.buttons[:64], sample.device[:128])
                 had_device = sample.device
                 sent += 1
-            _check_replies(client)
+            _check_events(conn, say)
             time.sleep(max(0.0, period - (time.monotonic() - t0)))
     finally:
-        client.close()
+        conn.stop()
+        conn.join(timeout=2)
+        if not conn.is_alive():  # never close sockets a running thread still uses
+            conn.client.close()
         sticks.close()
     return sent
 
 
-def _check_replies(client: Client) -> None:
-    """Raise RoleLostError on the engine's refusal of our input or keep-alive (other replies are dropped)."""
-    for _ in range(100):
-        try:
-            data = client.dealer.recv(zmq.NOBLOCK)
-        except zmq.Again:
-            return
-        try:
-            msg = decode_engine(data)
-        except ProtocolError:
-            continue
-        if msg["type"] == "reply" and not msg["ok"] and msg.get("re") in ("input", "device_lost"):
-            raise RoleLostError(msg.get("error", "the engine refused our input"))
+def _check_events(conn: EngineConnection, say: Callable[[str], None]) -> None:
+    """Raise RoleLostError on the engine's refusal of our input; say when the engine is lost or back."""
+    while conn.events:
+        ev = conn.events.popleft()
+        if ev[0] == "reply" and not ev[2] and ev[1] in ("input", "device_lost"):
+            raise RoleLostError(ev[3] or "the engine refused our input")
+        if ev[0] == "conn":
+            say(ev[2])
