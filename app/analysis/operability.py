@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import csv
 import hashlib
-import io
 import itertools
 import json
 import logging
@@ -41,6 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from app.csvtext import cells, content_lines
 from app.errors import BosunError, one_line, shown
 
 CELL_VERSION = 1  # bump when a cell's simulation changes: older cached cells are not used
@@ -115,10 +115,7 @@ def load_scatter(path: str | Path) -> Scatter:
         raise OperabilityError(f"{path}: not UTF-8 text (byte {err.start}): save it as CSV UTF-8") from None
     except OSError as err:
         raise OperabilityError(f"{path}: cannot be read: {err.strerror or err}") from None
-    lines = [
-        (n, line) for n, line in enumerate(text.splitlines(), 1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]  # fmt: skip
+    lines = list(zip(*content_lines(text), strict=True))
     if len(lines) < 2:
         raise OperabilityError(f"{path}: a header row of periods and at least one row of Hs are needed")
 
@@ -135,21 +132,21 @@ def load_scatter(path: str | Path) -> Scatter:
         return v
 
     n0, head = lines[0]
-    cells = next(csv.reader(io.StringIO(head)))
-    corner = cells[0].strip().lower().replace(" ", "").replace("/", "\\")
+    heads = cells(head)
+    corner = heads[0].strip().lower().replace(" ", "").replace("/", "\\")
     if corner not in ("hs\\tp", "hs\\tz"):
         raise OperabilityError(
             f"{path}:{n0}: the first field names the periods: hs\\tp (peak) or hs\\tz (zero up-crossing), "
-            f"with a backslash, got {shown(cells[0])}"
+            f"with a backslash, got {shown(heads[0])}"
         )
     period = corner[-2:]
     what = "peak period" if period == "tp" else "zero up-crossing period"
-    periods = np.array([number(c, n0, f"{what} (column {k + 2})") for k, c in enumerate(cells[1:])])
+    periods = np.array([number(c, n0, f"{what} (column {k + 2})") for k, c in enumerate(heads[1:])])
     if periods.size == 0 or np.any(periods <= 0) or np.any(np.diff(periods) <= 0):
         raise OperabilityError(f"{path}:{n0}: {what}s must be positive and increasing")
     hs, rows = [], []
     for n, line in lines[1:]:
-        row = next(csv.reader(io.StringIO(line)))
+        row = cells(line)
         if len(row) != periods.size + 1:
             raise OperabilityError(f"{path}:{n}: expected {periods.size + 1} fields, got {len(row)}")
         hs.append(number(row[0], n, "Hs"))

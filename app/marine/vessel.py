@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.csvtext import cells, content_lines
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.marine import kernels
@@ -370,33 +371,10 @@ def load_rao_mat(path: str | Path) -> RAOTable:
 
 
 PACE_ROWS = 8  # rows :func:`load_rao_csv` parses between two calls of its ``pace``
-_LINES_BLOCK = 1 << 16  # characters split into lines at a time (a 4 MB text in one call held the lock 20-30 ms)
 
 
 def _no_pace() -> None:
     pass
-
-
-def _content_lines(text: str, pace: Callable[[], None] | None) -> tuple[list[int], list[str]]:
-    """The numbers and text of the lines of ``text`` that are neither blank nor comments; split a block at a
-    time, cut after a newline (the same lines as ``text.splitlines()``), with ``pace`` called between blocks.
-    Two flat lists, not a list of pairs: 56,000 tuples kept alive set off full garbage collections (70 ms in
-    a test process)."""
-    numbers: list[int] = []
-    lines: list[str] = []
-    n, start = 0, 0
-    while start < len(text):
-        cut = text.find("\n", start + _LINES_BLOCK)
-        end = len(text) if cut < 0 else cut + 1
-        for line in text[start:end].splitlines():
-            n += 1
-            if line.strip() and not line.startswith("#"):
-                numbers.append(n)
-                lines.append(line)
-        start = end
-        if pace is not None:
-            pace()
-    return numbers, lines
 
 
 def _csv_bounds(column: str) -> tuple[float, float, str]:
@@ -429,12 +407,11 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
     """
     if len(text) > MAX_RAO_BYTES:
         raise VesselError(f"{where}: {len(text):,} characters; an RAO table is at most {MAX_RAO_BYTES:,}")
-    text = text.removeprefix("\ufeff")
-    numbers, lines = _content_lines(text, pace)
+    numbers, lines = content_lines(text, pace)
     if not lines:
         raise VesselError(f"{where}: empty RAO file")
     header_line, header = numbers[0], lines[0]
-    cols = [c.strip() for c in next(csv.reader(io.StringIO(header)))]
+    cols = [c.strip() for c in cells(header)]
     missing = [c for c in CSV_COLUMNS if c not in cols]
     if missing:
         raise VesselError(f"{where}:{header_line}: missing column(s) {', '.join(missing)}")
@@ -446,22 +423,22 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
         n, line = numbers[k + 1], lines[k + 1]
         if pace is not None and k % PACE_ROWS == 0:
             pace()
-        cells = next(csv.reader(io.StringIO(line)))
-        if len(cells) != len(cols):
-            raise VesselError(f"{where}:{n}: expected {len(cols)} fields, got {len(cells)}")
+        row = cells(line)
+        if len(row) != len(cols):
+            raise VesselError(f"{where}:{n}: expected {len(cols)} fields, got {len(row)}")
         vals = []
         for c, i, (lo, hi, unit) in zip(CSV_COLUMNS, idx, bounds, strict=True):
             try:
-                v = float(cells[i])
+                v = float(row[i])
             except ValueError:
-                raise VesselError(f"{where}:{n}: field {c}: '{cells[i].strip()}' is not a number") from None
+                raise VesselError(f"{where}:{n}: field {c}: '{row[i].strip()}' is not a number") from None
             if not math.isfinite(v):
                 raise VesselError(f"{where}:{n}: field {c}: value is not finite")
             if c.endswith("_amp") and v < 0:
                 raise VesselError(f"{where}:{n}: field {c}: amplitude must not be negative")
             if not lo <= v <= hi:
                 raise VesselError(
-                    f"{where}:{n}: field {c}: {cells[i].strip()} {unit} is outside {lo:g} … {hi:g} {unit} "
+                    f"{where}:{n}: field {c}: {row[i].strip()} {unit} is outside {lo:g} … {hi:g} {unit} "
                     "(RAO bounds, README)"
                 )
             vals.append(v)

@@ -29,7 +29,6 @@ Sources:
 
 from __future__ import annotations
 
-import csv
 import io
 import math
 from dataclasses import dataclass, field
@@ -37,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.csvtext import cells, content_lines
 from app.errors import BosunError
 from app.marine.vessel import VesselMotion, significant_response
 from app.marine.waves import spectrum as sea_spectrum
@@ -239,9 +239,7 @@ def parse_timeseries_csv(text: str, where: str = "<csv>") -> TimeSeries:
         ``where:line: what is wrong`` for a missing column, a non-number, NaN/inf, time that does
         not increase, fewer than two rows.
     """
-    text = text.removeprefix("\ufeff")  # a spreadsheet's "CSV UTF-8" starts with a byte-order mark
-    rows = list(csv.reader(io.StringIO(text)))
-    rows = [(i + 1, r) for i, r in enumerate(rows) if r and any(c.strip() for c in r) and not r[0].startswith("#")]
+    rows = [(n, cells(line)) for n, line in zip(*content_lines(text), strict=True)]
     if not rows:
         raise PlatformError(f"{where}: empty file; expected a header t,x,y,z,phi,theta,psi")
     line, header = rows[0]
