@@ -325,3 +325,35 @@ def test_cli_server_refuses_public_bind_without_curve_keys(capsys):
     assert main(["server", "--bind", "tcp://0.0.0.0:0", "--duration", "0.1"]) == 2
     err = capsys.readouterr().err
     assert "needs CURVE keys" in err and err.count("\n") == 1
+
+
+def test_the_joystick_client_says_a_lost_engine_and_stops_when_its_input_is_refused():
+    """The joystick client runs on the one reconnecting client (app/net/link.py, issue 29, item 5): a lost
+    engine is said (the connection greets it again by itself), a refusal of its input ends it."""
+    from collections import deque
+    from types import SimpleNamespace
+
+    from app.teleop.client import RoleLostError, _check_events
+
+    said = []
+    conn = SimpleNamespace(events=deque([("conn", False, "lost the engine connection"), ("reply", "ping", True, "")]))
+    _check_events(conn, said.append)
+    assert said == ["lost the engine connection"] and not conn.events
+    conn.events.append(("reply", "input", False, "joystick is no longer the operator: the role lapsed"))
+    with pytest.raises(RoleLostError, match="no longer the operator"):
+        _check_events(conn, said.append)
+
+
+def test_every_scene_command_is_a_protocol_message_and_each_scene_runs_its_own():
+    """Issue 29, item 5: a scene's command table is made of its ``@command`` methods (no list written twice,
+    no ``getattr`` on a string from the wire); each is a scene message of the protocol."""
+    from app.engine.lab_session import LabSession
+    from app.engine.session import Session
+    from app.engine.tac_session import TacSession
+    from app.net.messages import SCENE_MESSAGES
+
+    tables = {cls: set(cls.COMMANDS) for cls in (Session, TacSession, LabSession)}
+    assert set().union(*tables.values()) == set(SCENE_MESSAGES)
+    assert tables[LabSession] >= {"lab_winch", "lab_vvmc", "lab_antisway", "set_vessel"}
+    assert "set_robot" in tables[Session] and "set_robot" not in tables[LabSession]
+    assert all(fn.__name__ == mtype for cls in tables for mtype, fn in cls.COMMANDS.items())
