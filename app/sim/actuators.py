@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.models.block import Block
 from app.sim import kernels as sim_kernels
 
 
@@ -57,6 +58,36 @@ def approach_speed(e: ArrayLike, v_brake: ArrayLike, tau: float) -> NDArray[np.f
     return np.clip(e / tau, -np.asarray(v_brake, dtype=float), v_brake)
 
 
+def _actuators_reference(x, u, p, dt):
+    """The NumPy reference of :data:`JOINT_ACTUATORS` (the kernel: ``app.sim.kernels.actuator_block``)."""
+    q, qdot, _ = x
+    lower, upper, speed, accel, tau = p
+    q_ref = np.clip(np.asarray(u[0], dtype=float), lower, upper)
+    e = q_ref - q
+    gap = np.abs(e) / dt
+    v_des = np.clip(approach_speed(e, braking_speed(np.abs(e), accel, dt), tau), -gap, gap)
+    # the admissible speeds: acceleration, speed and exact braking towards each limit (as MotionFilter)
+    dv = accel * dt
+    hi = np.minimum(np.minimum(qdot + dv, speed), braking_speed(upper - q, accel, dt))
+    lo = np.maximum(np.maximum(qdot - dv, -speed), -braking_speed(q - lower, accel, dt))
+    v = np.clip(v_des, lo, np.maximum(hi, lo))  # hi < lo only by rounding
+    q_new = np.clip(q + v * dt, lower, upper)
+    v = (q_new - q) / dt
+    return (q_new, v, (v - qdot) / dt), (q_new,)
+
+
+#: the joint actuators of a simulated arm as a block (app.models.block): the teleop scene's plant
+JOINT_ACTUATORS = Block(
+    "joint actuators",
+    state=("q", "qdot", "qddot"),
+    inputs=("q_ref",),
+    outputs=("q",),
+    params=("lower", "upper", "speed", "accel", "tau"),
+    reference=_actuators_reference,
+    kernel=sim_kernels.actuator_block,
+)
+
+
 class JointActuators:
     """Per-joint servo: q̇_des = (q_ref − q)/τ, bounded by the braking speed towards q_ref
     (:func:`approach_speed`), then limited.
@@ -104,34 +135,17 @@ class JointActuators:
         self.qddot = np.zeros_like(self.q)
         self.use_kernels = sim_kernels.ENABLED
 
-    def _braking_speed(self, distance: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
-        return braking_speed(distance, self.accel, dt)
+    @property
+    def params(self) -> tuple:
+        """The block's parameter record: (lower, upper, speed, accel, τ)."""
+        return (self.lower, self.upper, self.speed, self.accel, float(self.tau))
 
     def step(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """Advance by dt toward q_ref; returns the new position (compiled unless ``use_kernels`` is False)."""
-        if self.use_kernels:
-            self.q, self.qdot, self.qddot = sim_kernels.actuator_step(
-                self.q, self.qdot, np.ascontiguousarray(q_ref, dtype=float), self.lower, self.upper, self.speed,
-                self.accel,
-                float(self.tau), float(dt),
-            )  # fmt: skip
-            return self.q
-        return self._step_reference(q_ref, dt)
-
-    def _step_reference(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
-        q_ref = np.clip(np.asarray(q_ref, dtype=float), self.lower, self.upper)
-        e = q_ref - self.q
-        gap = np.abs(e) / dt
-        v_des = np.clip(approach_speed(e, self._braking_speed(np.abs(e), dt), self.tau), -gap, gap)
-        # the admissible speeds: acceleration, speed and exact braking towards each limit (as MotionFilter)
-        dv = self.accel * dt
-        hi = np.minimum(np.minimum(self.qdot + dv, self.speed), self._braking_speed(self.upper - self.q, dt))
-        lo = np.maximum(np.maximum(self.qdot - dv, -self.speed), -self._braking_speed(self.q - self.lower, dt))
-        v = np.clip(v_des, lo, np.maximum(hi, lo))  # hi < lo only by rounding
-        q_new = np.clip(self.q + v * dt, self.lower, self.upper)
-        v = (q_new - self.q) / dt
-        self.qddot = (v - self.qdot) / dt
-        self.q, self.qdot = q_new, v
+        """Advance by dt toward q_ref (one step of :data:`JOINT_ACTUATORS`, compiled unless ``use_kernels`` is
+        False); returns the new position."""
+        x = (self.q, self.qdot, self.qddot)
+        u = (np.ascontiguousarray(q_ref, dtype=float),)
+        (self.q, self.qdot, self.qddot), _ = JOINT_ACTUATORS.step(x, u, self.params, float(dt), self.use_kernels)
         return self.q
 
     def stopping_point(self, dt: float) -> NDArray[np.float64]:

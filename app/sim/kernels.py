@@ -31,6 +31,7 @@ from app.models.kernels import ENABLED, _jit
 
 __all__ = [
     "ENABLED",
+    "actuator_block",
     "actuator_step",
     "approach_speed",
     "braking_speed",
@@ -146,6 +147,15 @@ def actuator_step(q, qdot, q_ref, lower, upper, speed, accel, tau, dt):
         a_new[i] = (v - qdot[i]) / dt
         q_new[i], v_new[i] = qn, v
     return q_new, v_new, a_new
+
+
+@_jit
+def actuator_block(x, u, p, dt):
+    """The joint actuators as a block (:data:`app.sim.actuators.JOINT_ACTUATORS`): state (q, q̇, q̈), input
+    (q_ref,), parameters (lower, upper, speed, accel, τ); returns (x', y) with y = (q,)."""
+    q, qdot, _ = x
+    q_new, v_new, a_new = actuator_step(q, qdot, u[0], p[0], p[1], p[2], p[3], p[4], dt)
+    return (q_new, v_new, a_new), (q_new,)
 
 
 # ============================================================================= Motion-Lab
@@ -687,6 +697,7 @@ def warm_up_steps() -> list:
     return [
         lambda: motion_filter_step(o6, o6, o6, o6, True, -o6, o6, o6, o6, o6, 0.1, 0.01, 1.0),
         lambda: actuator_step(o6, o6, o6, -o6, o6, o6, o6, 0.05, 0.002),
+        lambda: actuator_block((o6, o6, o6), (o6,), (-o6, o6, o6, o6, 0.05), 0.002),
         lambda: motion_filter_update(vec(3), vec(3), vec(3), o3, o3, True, -o3, o3, o3, o3, o3, 0.1, 0.01, 1.0),
         lambda: clamp_to_legs(a_n, b_b, z6, 0.5, 1.5),
         lambda: follow_clamped(a_n, b_b, 0.5, 1.5, 1.0, z6, z6, vec(6), vec(6), vec(6), -o6, o6, o6, o6, 0.1, 0.01),

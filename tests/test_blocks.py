@@ -1,0 +1,63 @@
+"""The block shape (issue 29, item 1): named records, one pure step(x, u, p, dt) -> (x', y), the compiled
+kernel and the NumPy reference two implementations of it, chosen in one place."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+from app.models.block import Block
+from app.sim import kernels as sim_kernels
+from app.sim.actuators import JOINT_ACTUATORS, JointActuators
+
+
+def _limits(n=3):
+    return np.array([-1.0, -2.0, 0.1])[:n], np.array([1.0, 0.5, 2.0])[:n], np.array([0.8, 1.5, 0.3])[:n]
+
+
+def test_the_actuator_block_kernel_and_reference_give_the_same_numbers():
+    lower, upper, speed = _limits()
+    accel = np.array([4.0, 10.0, 1.0])
+    p = JOINT_ACTUATORS.record("params", lower=lower, upper=upper, speed=speed, accel=accel, tau=0.05)
+    rng = np.random.default_rng(29)
+    x_k = x_r = (np.array([0.0, -0.5, 1.0]), np.zeros(3), np.zeros(3))
+    for k in range(400):
+        u = (rng.uniform(-3.0, 3.0, 3) if k % 40 == 0 else x_k[0] + rng.normal(0.0, 0.2, 3),)
+        x_k, y_k = JOINT_ACTUATORS.step(x_k, u, p, 0.002, use_kernels=True)
+        x_r, y_r = JOINT_ACTUATORS.step(x_r, u, p, 0.002, use_kernels=False)
+        for a, b in zip((*x_k, *y_k), (*x_r, *y_r), strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+        assert np.all((x_k[0] >= lower) & (x_k[0] <= upper))  # never past a limit
+        assert np.all(np.abs(x_k[1]) <= speed * (1 + 1e-12))
+    assert JOINT_ACTUATORS.named("outputs", y_k)["q"] is y_k[0]
+
+
+def test_the_block_is_the_one_place_that_chooses_the_implementation():
+    assert JOINT_ACTUATORS.implementation(use_kernels=False) is JOINT_ACTUATORS.reference
+    assert JOINT_ACTUATORS.implementation(use_kernels=True) is sim_kernels.actuator_block
+    ref_only = Block("r", (), (), (), (), reference=lambda x, u, p, dt: (x, ()))
+    assert ref_only.implementation(use_kernels=True) is ref_only.reference
+    # the shape: four arguments, whatever the block (issue 29: no compiled step with more than 8)
+    assert list(inspect.signature(JOINT_ACTUATORS.reference).parameters) == ["x", "u", "p", "dt"]
+
+
+def test_a_record_names_every_field_or_is_refused():
+    with pytest.raises(ValueError, match="expected lower, upper, speed, accel, tau"):
+        JOINT_ACTUATORS.record("params", lower=1, upper=2)
+
+
+@pytest.mark.parametrize("use_kernels", [True, False])
+def test_joint_actuators_step_through_the_block_as_before(use_kernels):
+    """JointActuators is the block's holder: its steps are the block's, bit for bit."""
+    lower, upper, speed = _limits()
+    act = JointActuators(lower, upper, speed, [4.0, 10.0, 1.0], tau=0.05, q0=[0.0, -0.5, 1.0])
+    act.use_kernels = use_kernels
+    x = (act.q.copy(), act.qdot.copy(), act.qddot.copy())
+    for k in range(50):
+        q_ref = np.array([0.9, 0.4, 0.2]) if k < 30 else np.array([-0.9, -1.9, 1.9])
+        act.step(q_ref, 0.002)
+        x, _ = JOINT_ACTUATORS.step(x, (q_ref,), act.params, 0.002, use_kernels=use_kernels)
+        np.testing.assert_array_equal(act.q, x[0])
+        np.testing.assert_array_equal(act.qdot, x[1])
