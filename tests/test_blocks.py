@@ -61,3 +61,27 @@ def test_joint_actuators_step_through_the_block_as_before(use_kernels):
         x, _ = JOINT_ACTUATORS.step(x, (q_ref,), act.params, 0.002, use_kernels=use_kernels)
         np.testing.assert_array_equal(act.q, x[0])
         np.testing.assert_array_equal(act.qdot, x[1])
+
+
+def test_the_load_block_kernel_and_reference_agree_and_the_plant_steps_through_it():
+    """The second block: the suspended load of Motion-Lab eqs. (29)–(30), its reference the models' RK4
+    (app.models.pendulum.swing_rk4, which the controllers predict with), its kernel the lab's."""
+    from app.sim.motionlab import PENDULUM, Pendulum
+
+    p = PENDULUM.record("params", damping=0.05, g=9.81)
+    x_k = x_r = (0.2, -0.1, 0.0, 0.3)
+    rng = np.random.default_rng(30)
+    for _ in range(500):
+        u = (rng.normal(0.0, 1.0, 3), 2.0 + rng.uniform(-0.5, 0.5), rng.uniform(-0.2, 0.2))
+        x_k, _ = PENDULUM.step(x_k, u, p, 0.005, use_kernels=True)
+        x_r, y_r = PENDULUM.step(x_r, u, p, 0.005, use_kernels=False)
+        np.testing.assert_allclose(x_k, x_r, rtol=1e-11, atol=1e-12)
+    assert y_r == x_r[:2]
+    for use_kernels in (True, False):
+        load = Pendulum(damping=0.05, alpha=0.2, beta=-0.1, use_kernels=use_kernels)
+        x = (0.2, -0.1, 0.0, 0.0)
+        for k in range(100):
+            a_t = np.array([0.5, -0.2, 0.1 * k / 100])
+            load.step(0.005, a_t, 2.0, 0.01)
+            x, _ = PENDULUM.step(x, (a_t, 2.0, 0.01), p, 0.005, use_kernels=use_kernels)
+        assert (load.alpha, load.beta, load.alpha_dot, load.beta_dot) == x

@@ -45,6 +45,7 @@ __all__ = [
     "lstsq3",
     "motion_filter_step",
     "motion_filter_update",
+    "pendulum_block",
     "pendulum_step",
     "pose_in",
     "rotation_xyz",
@@ -516,6 +517,15 @@ def pendulum_step(alpha, beta, alpha_dot, beta_dot, dt, ax, ay, az, L, Ld, c, g)
     )
 
 
+@_jit
+def pendulum_block(x, u, p, dt):
+    """The load as a block (:data:`app.sim.motionlab.PENDULUM`): state (α, β, α̇, β̇), inputs (a_t^d (3,) in {d},
+    L, L̇), parameters (c, g); y = (α, β)."""
+    a_t = u[0]
+    a, b, ad, bd = pendulum_step(x[0], x[1], x[2], x[3], dt, a_t[0], a_t[1], a_t[2], u[1], u[2], p[0], p[1])
+    return (a, b, ad, bd), (a, b)
+
+
 # ----------------------------------------------------------------------------- the lab
 @_jit
 def lab_step(
@@ -703,6 +713,7 @@ def warm_up_steps() -> list:
         lambda: follow_clamped(a_n, b_b, 0.5, 1.5, 1.0, z6, z6, vec(6), vec(6), vec(6), -o6, o6, o6, o6, 0.1, 0.01),
         lambda: command_clip(z6, z6, -o6, o6),
         lambda: pendulum_step(0.1, 0.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.0, 1.0, 0.0, 0.1, 9.81),
+        lambda: pendulum_block((0.1, 0.0, 0.0, 0.0), (z3, 1.0, 0.0), (0.1, 9.81), 0.01),
         lambda: pose_in(eye, z6),
         lab,
     ]

@@ -31,8 +31,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.errors import BosunError
+from app.models.block import Block
 from app.models.closed_form import ComauArm
 from app.models.lab import LabLayout
+from app.models.pendulum import swing_derivative, swing_rk4
 from app.models.registry import load_robot
 from app.models.stewart import StewartPlatform
 from app.sim import kernels as sim_kernels
@@ -143,6 +145,24 @@ def tool_on_platform(
 
 
 # ----------------------------------------------------------------------------- pendulum
+def _pendulum_reference(x, u, p, dt):
+    """The NumPy reference of :data:`PENDULUM`: one RK4 step of :func:`app.models.pendulum.swing_rk4`."""
+    a, b, ad, bd = (float(v) for v in swing_rk4(np.array(x, dtype=float), dt, u[0], u[1], u[2], p[0], p[1]))
+    return (a, b, ad, bd), (a, b)
+
+
+#: the suspended load as a block (app.models.block): the plant of eqs. (29)–(30), RK4 over a step
+PENDULUM = Block(
+    "load (spherical pendulum)",
+    state=("alpha", "beta", "alpha_dot", "beta_dot"),
+    inputs=("a_t_d", "L", "L_dot"),
+    outputs=("alpha", "beta"),
+    params=("damping", "g"),
+    reference=_pendulum_reference,
+    kernel=sim_kernels.pendulum_block,
+)
+
+
 @dataclass
 class Pendulum:
     """The 2-DOF spherical pendulum of eqs. (29)–(30) (corrected z̈ sign, see module doc), RK4.
@@ -160,33 +180,16 @@ class Pendulum:
     use_kernels: bool = field(default=sim_kernels.ENABLED, repr=False)
 
     def derivative(self, x: NDArray[np.float64], a_t: NDArray[np.float64], L: float, Ld: float) -> NDArray[np.float64]:
-        a, b, ad, bd = x
-        sa, ca, sb, cb = math.sin(a), math.cos(a), math.sin(b), math.cos(b)
-        ax, ay, az = a_t
-        c = self.damping
-        add = (
-            ax * ca + ay * sa * sb + az * sa * cb - self.g * sa * cb - 2 * Ld * ad - L * bd * bd * sa * ca
-        ) / L - c * ad
-        ca_safe = ca if abs(ca) > 1e-6 else math.copysign(1e-6, ca)
-        bdd = (-ay * cb + az * sb - self.g * sb - 2 * Ld * bd * ca + 2 * L * ad * bd * sa) / (L * ca_safe) - c * bd
-        return np.array([ad, bd, add, bdd])
+        """ẋ of eqs. (29)–(30) (:func:`app.models.pendulum.swing_derivative` with this load's c and g)."""
+        return swing_derivative(x, a_t, L, Ld, self.damping, self.g)
 
     def step(self, dt: float, a_t_d: NDArray[np.float64], L: float, Ld: float) -> None:
-        """Advance by dt: tool acceleration a_t_d in {d} held, wire length L + Ld·s over the step."""
-        if self.use_kernels:
-            ax, ay, az = (float(v) for v in a_t_d)
-            self.alpha, self.beta, self.alpha_dot, self.beta_dot = sim_kernels.pendulum_step(
-                float(self.alpha), float(self.beta), float(self.alpha_dot), float(self.beta_dot), float(dt),
-                ax, ay, az, float(L), float(Ld), float(self.damping), float(self.g),
-            )  # fmt: skip
-            return
-        x = np.array([self.alpha, self.beta, self.alpha_dot, self.beta_dot])
-        k1 = self.derivative(x, a_t_d, L, Ld)
-        k2 = self.derivative(x + 0.5 * dt * k1, a_t_d, L + 0.5 * dt * Ld, Ld)
-        k3 = self.derivative(x + 0.5 * dt * k2, a_t_d, L + 0.5 * dt * Ld, Ld)
-        k4 = self.derivative(x + dt * k3, a_t_d, L + dt * Ld, Ld)
-        x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-        self.alpha, self.beta, self.alpha_dot, self.beta_dot = (float(v) for v in x)
+        """Advance by dt: tool acceleration a_t_d in {d} held, wire length L + Ld·s over the step (one step of
+        :data:`PENDULUM`, compiled unless ``use_kernels`` is False)."""
+        x = (float(self.alpha), float(self.beta), float(self.alpha_dot), float(self.beta_dot))
+        u = (np.ascontiguousarray(a_t_d, dtype=float), float(L), float(Ld))
+        p = (float(self.damping), float(self.g))
+        (self.alpha, self.beta, self.alpha_dot, self.beta_dot), _ = PENDULUM.step(x, u, p, float(dt), self.use_kernels)
 
     def direction(self) -> NDArray[np.float64]:
         """Unit wire vector in {d}: (−sα, cα sβ, cα cβ) of eq. (23)."""
