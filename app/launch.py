@@ -11,17 +11,6 @@ import sys
 INTERRUPTED = 130
 
 
-_interrupts: list[int] = []  # SIGINTs received while Bosun starts (see :func:`_on_sigint`)
-
-
-def _on_sigint(signum, frame) -> None:
-    """Ctrl-C as Python's own handler does it (KeyboardInterrupt), remembered: one that lands inside an
-    extension module's import (NumPy's) can surface as that module's ImportError instead, which then also
-    ends in one line, not a traceback (a start-up flake seen once in 1,140 tests)."""
-    _interrupts.append(signum)
-    raise KeyboardInterrupt
-
-
 #: the processes that run a fixed-rate loop or a screen: one BLAS thread each (see :func:`_one_blas_thread`)
 REALTIME_COMMANDS = ("server", "gui", "view", "joystick")
 
@@ -47,8 +36,6 @@ def main() -> int:
         import faulthandler
         import signal
 
-        signal.signal(signal.SIGINT, _on_sigint)
-
         if hasattr(signal, "SIGUSR1"):  # ``kill -USR1 PID`` prints every thread's stack (a hung process says where)
             faulthandler.register(signal.SIGUSR1, all_threads=True)
         # SIGTERM is Ctrl-C from the first moment: one line and status 130 also while the CLI still loads (it
@@ -65,8 +52,8 @@ def main() -> int:
     except Exception as err:
         from app.errors import interrupted
 
-        if not (interrupted(err) or _interrupts):  # an interrupt inside a compiled kernel's call surfaces as a
-            raise  # SystemError; one inside an extension's import as its ImportError
+        if not interrupted(err):  # an interrupt inside a compiled kernel's call surfaces as a SystemError
+            raise
         print("bosun: interrupted", file=sys.stderr)
         code = INTERRUPTED
     if code == INTERRUPTED:
