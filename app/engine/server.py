@@ -211,10 +211,6 @@ class EngineServer:
     def operator(self, ident: bytes | None) -> None:
         self.book.operator = ident
 
-    @property
-    def io_backlog(self) -> bool:
-        return self.io.backlog
-
     def _note(self, level: str, text: str) -> None:
         """A session log line from the I/O thread (the loop writes it: the session is the loop's)."""
         self.inbox.put(("note", level, text))

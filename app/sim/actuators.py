@@ -134,11 +134,8 @@ class JointActuators:
         self.qdot = np.zeros_like(self.q)
         self.qddot = np.zeros_like(self.q)
         self.use_kernels = sim_kernels.ENABLED
-
-    @property
-    def params(self) -> tuple:
-        """The block's parameter record: (lower, upper, speed, accel, τ)."""
-        return (self.lower, self.upper, self.speed, self.accel, float(self.tau))
+        # the block's parameter record (lower, upper, speed, accel, τ): fixed, so made once, not every tick
+        self.params = (self.lower, self.upper, self.speed, self.accel, float(self.tau))
 
     def step(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Advance by dt toward q_ref (one step of :data:`JOINT_ACTUATORS`, compiled unless ``use_kernels`` is
