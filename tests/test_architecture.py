@@ -67,8 +67,15 @@ def test_import_linter_contracts_hold():
         ("models/_bad.py", "from app.sim import motionlab", "floors"),
         ("analysis/_bad.py", "from app.engine import server", "floors"),
         ("plc/_bad.py", "from app.engine import lab_session", "floors"),
+        ("control/_bad.py", "from app.scenes import lab", "floors"),
     ],
-    ids=["plant-imports-controller", "models-import-plants", "studies-import-engine", "ads-bridge-imports-engine"],
+    ids=[
+        "plant-imports-controller",
+        "models-import-plants",
+        "studies-import-engine",
+        "ads-bridge-imports-engine",
+        "controller-imports-its-scene",
+    ],
 )
 def test_the_layer_contracts_catch_an_import_across_floors(tmp_path, where, line, contract):
     """The floors of ARCHITECTURE.md are enforced, not only written down: a copy of the core with one
@@ -113,3 +120,22 @@ def test_no_module_of_the_core_or_the_gui_is_a_hall():
     }
     assert len(sizes) > 100
     assert {name: n for name, n in sizes.items() if n > 800} == {}
+
+
+def test_no_compiled_function_takes_more_than_eight_arguments():
+    """Issue 29, item 3: a kernel takes records (tuples of arrays and numbers), not a frozen row of positional
+    parameters (the lab step took 69, the crane-head chunk 27): adding a block to a scene adds a record
+    field, not a parameter to every signature."""
+    import ast
+
+    kernels, over = 0, {}
+    for path in (ROOT / "app").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef) and any(ast.unparse(d) == "_jit" for d in node.decorator_list):
+                kernels += 1
+                a = node.args
+                count = len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs) + bool(a.vararg) + bool(a.kwarg)
+                if count > 8:
+                    over[f"{path.relative_to(ROOT)}:{node.name}"] = count
+    assert kernels > 40
+    assert over == {}

@@ -85,3 +85,78 @@ def test_the_load_block_kernel_and_reference_agree_and_the_plant_steps_through_i
             load.step(0.005, a_t, 2.0, 0.01)
             x, _ = PENDULUM.step(x, (a_t, 2.0, 0.01), p, 0.005, use_kernels=use_kernels)
         assert (load.alpha, load.beta, load.alpha_dot, load.beta_dot) == x
+
+
+# ------------------------------------------------------------------------------------- the Motion-Lab's blocks
+def _lab_view(rng, lab):
+    """A random (η1, η̇1, R1, Ṙ1, η2, η̇2, R2, Ṙ2) near the lab's neutral poses (eqs. 33, 47)."""
+    from app.models.stewart import StewartPlatform
+
+    out = []
+    for _ in range(2):
+        eta = np.r_[rng.normal(0.0, 0.05, 3) + [0.0, 0.0, -0.1], rng.normal(0.0, 0.05, 3)]
+        eta_dot, eta_ddot = rng.normal(0.0, 0.1, 6), rng.normal(0.0, 0.3, 6)
+        R, Rd, _ = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+        out += [eta, eta_dot, R, Rd]
+    return tuple(np.ascontiguousarray(a) for a in out)
+
+
+@pytest.mark.skipif(not sim_kernels.ENABLED, reason="numba not installed or BOSUN_JIT=0")
+def test_the_lab_controllers_and_plants_are_blocks_whose_kernels_equal_their_references():
+    """Issue 29, items 1–2: the Comau's law and the winch's heave compensation (control floor), the Comau's
+    drives and the winch drum (simulation floor), each a block whose kernel gives its NumPy reference's numbers
+    over seeded random inputs in every mode."""
+    from app.control.lab import COMAU_LAW, WINCH_LAW
+    from app.control.lab_kernels import BRAKE, MOTION_COMP, REMOTE, SETTLED
+    from app.models.lab import load_lab
+    from app.models.stewart import StewartPlatform
+    from app.scenes.lab import MotionLab
+    from app.sim.motionlab import COMAU_DRIVES, WINCH_DRUM
+
+    lab = MotionLab(load_lab(), at_work=True)
+    g, f, wf = lab._geometry, lab.joints, lab.winch.filter
+    law_p = (*g[:3], *g[5:9], f.lower, f.upper)
+    rng = np.random.default_rng(2029)
+    seen_modes = set()
+    for k in range(240):
+        mode = (SETTLED, REMOTE, MOTION_COMP, BRAKE)[k % 4]
+        q = np.ascontiguousarray(lab.q_work + rng.normal(0.0, 0.05, 3))
+        view = _lab_view(rng, lab)
+        offset = (rng.normal(0.0, 0.02, 3), rng.normal(0.0, 0.02, 3))
+        u = COMAU_LAW.record("inputs", mode=mode, q=q, v_cmd=rng.normal(0.0, 0.1, 3), offset=offset, view=view)
+        _, y_k = COMAU_LAW.step((), u, law_p, 0.005, use_kernels=True)
+        _, y_r = COMAU_LAW.step((), u, law_p, 0.005, use_kernels=False)
+        assert bool(y_k[0]) == bool(y_r[0]) and bool(y_k[3]) == bool(y_r[3]) and y_k[4] == y_r[4]
+        if not y_k[0]:
+            np.testing.assert_allclose(y_k[1], y_r[1], rtol=0, atol=1e-10)
+            if y_k[3]:
+                np.testing.assert_allclose(y_k[2], y_r[2], rtol=1e-8, atol=1e-10)
+        seen_modes.add(mode)
+        # the drives take the command, from the same random state, both ways
+        x0 = (q, rng.normal(0.0, 0.2, 3), np.zeros(3))
+        x_k, _ = COMAU_DRIVES.step((*(a.copy() for a in x0), np.zeros(4, bool)), y_r, f.limits(), 0.005, True)
+        x_r, _ = COMAU_DRIVES.step((*(a.copy() for a in x0), np.zeros(4, bool)), y_r, f.limits(), 0.005, False)
+        for a, b in zip(x_k, x_r, strict=True):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+        assert np.all((x_k[0] >= f.lower) & (x_k[0] <= f.upper))
+        # the winch: heave compensation from a fresh capture and with a target, then the drum
+        track, has = bool(k % 3), bool(k % 2)
+        target = rng.normal(0.0, 0.5, 3)
+        wl = np.array([1.0 + rng.uniform(0.0, 0.5)])
+        H2 = lab.layout.T_world_n2 @ StewartPlatform.pose_matrix(view[4])
+        tool = (rng.normal(0.0, 1.0, 3) + [0.0, 0.0, 3.0], rng.normal(0.0, 0.2, 3))
+        wu = (track, rng.uniform(-1.0, 1.0), wl, (0.1, -0.05), tool, (np.ascontiguousarray(H2), view[7], view[5]))
+        wp = (g[4], wf.speed)
+        (t_k, h_k), r_k = WINCH_LAW.step((target.copy(), has), wu, wp, 0.005, True)
+        (t_r, h_r), r_r = WINCH_LAW.step((target.copy(), has), wu, wp, 0.005, False)
+        assert bool(h_k) == bool(h_r) == (has or track)
+        np.testing.assert_allclose(r_k, r_r, rtol=0, atol=1e-12)
+        if track:
+            np.testing.assert_allclose(t_k, t_r, rtol=0, atol=1e-12)
+        drum_p = (wf.lower, wf.upper, wf.speed, wf.accel, wf.tau)
+        w0 = (wl, np.array([rng.normal(0.0, 0.1)]), np.zeros(1))
+        d_k, _ = WINCH_DRUM.step((*(a.copy() for a in w0), np.zeros(4, bool)), r_r, drum_p, 0.005, True)
+        d_r, _ = WINCH_DRUM.step((*(a.copy() for a in w0), np.zeros(4, bool)), r_r, drum_p, 0.005, False)
+        for a, b in zip(d_k, d_r, strict=True):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    assert seen_modes == {SETTLED, REMOTE, MOTION_COMP, BRAKE}

@@ -25,6 +25,7 @@ GROUPS = (
     robots.register,
     bench.register,
     reference.register_alarms,
+    reference.register_describe,
     study.register,
     vessel.register,
     sim.register,

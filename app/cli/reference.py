@@ -1,4 +1,4 @@
-"""``bosun alarms`` and ``bosun cli-reference``: the references generated from the code."""
+"""``bosun alarms``, ``bosun describe`` and ``bosun cli-reference``: the references generated from the code."""
 
 from __future__ import annotations
 
@@ -30,6 +30,33 @@ def cmd_alarms(args: argparse.Namespace) -> int:
         )
     )
     return 0
+
+
+def cmd_describe(args: argparse.Namespace) -> int:
+    from app.scenes.diagram import DIAGRAMS
+
+    diagram = DIAGRAMS[args.scene]
+    if args.json:
+        _print_json(diagram.as_dict() if args.diagram else {k: v for k, v in diagram.as_dict().items() if k != "wires"})
+    elif args.svg:
+        sys.stdout.write(diagram.svg())
+    else:
+        text = diagram.text()
+        sys.stdout.write(text if args.diagram else text.split("\nwires")[0].rstrip("\n") + "\n")
+    return 0
+
+
+def register_describe(sub) -> None:
+    """``bosun describe``."""
+    from app.scenes.diagram import DIAGRAMS
+
+    p = sub.add_parser("describe", help="a scene's blocks and, with --diagram, the wires between them")
+    p.add_argument("--scene", choices=sorted(DIAGRAMS), required=True, help="the scene")
+    p.add_argument("--diagram", action="store_true", help="the wires too: the scene's whole diagram")
+    out = p.add_mutually_exclusive_group()
+    out.add_argument("--json", action="store_true", help="machine-readable output")
+    out.add_argument("--svg", action="store_true", help="the diagram as an SVG figure (docs/figures/diagram-*.svg)")
+    p.set_defaults(func=cmd_describe)
 
 
 def cmd_cli_reference(args: argparse.Namespace) -> int:
