@@ -24,7 +24,10 @@ from collections.abc import Callable
 KERNEL_MODULES = {
     "app.models.kernels": 30.0,
     "app.marine.kernels": 2.0,
-    "app.sim.kernels": 25.0,
+    "app.models.lab_kernels": 4.0,
+    "app.sim.kernels": 9.0,
+    "app.control.lab_kernels": 6.0,
+    "app.scenes.lab_kernels": 10.0,
     "app.ik.ga_kernels": 25.0,
     "app.models.crane_head_kernels": 12.0,
     "app.control.tac_kernels": 8.0,

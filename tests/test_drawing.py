@@ -13,7 +13,7 @@ from app.models.delta import DeltaHead
 from app.models.registry import list_robots, load_spec
 from app.models.serial import SerialRobot
 from app.models.xml import parse_robot_xml
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 
 
 def _solids(rng):

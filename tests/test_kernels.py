@@ -307,7 +307,8 @@ def test_each_kernel_files_warm_up_writes_only_its_own_cache_entries():
         assert json.loads(out.stdout.strip().splitlines()[-1]) == [], name
     for workers in (1, 2, 3, 8):
         parts = shares(workers)
-        assert sorted(n for p in parts for n in p) == sorted(KERNEL_MODULES) and len(parts) == min(workers, 6)
+        assert sorted(n for p in parts for n in p) == sorted(KERNEL_MODULES)
+        assert len(parts) == min(workers, len(KERNEL_MODULES))
 
 
 def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(tmp_path):

@@ -11,10 +11,12 @@ import numpy as np
 import pytest
 
 from app.errors import RobotXmlError
+from app.models.comau import ComauKinematics, tool_on_platform
 from app.models.lab import load_lab, parse_lab_xml, quat_to_matrix
 from app.models.stewart import StewartPlatform
 from app.scenarios.vvmc import VvmcError, VvmcScenario, simulate, summarize
-from app.sim.motionlab import ComauKinematics, G, MotionLab, Pendulum, tool_on_platform
+from app.scenes.lab import MotionLab
+from app.sim.motionlab import G, Pendulum
 
 
 @pytest.fixture(scope="module")
@@ -414,7 +416,7 @@ def test_lab_profile_holds_in_a_long_remote_run_with_the_velocity_boundary_law(r
     """Issue 16: 300 s of the stick in REMOTE, full deflection in random directions held 3 s each, so the
     arm keeps running into its limits: never past the lab's limits or 5 rpm, and every step obeys the lab's
     velocity-boundary law with A = 1 rad/s² (Bosun's exact discrete bound is the stricter)."""
-    from app.sim.motionlab import REMOTE_TOOL_SPEED
+    from app.scenes.lab import REMOTE_TOOL_SPEED
 
     lab = MotionLab(load_lab(), at_work=True)
     f, dt = lab.joints, 0.01

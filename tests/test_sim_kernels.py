@@ -15,13 +15,14 @@ from hypothesis import strategies as st
 from app.bench.sim_speed import SimSpeedError, engine_speed
 from app.marine.vessel import VesselMotion, VesselParticulars, parametric_rao
 from app.marine.waves import wave_components
-from app.models import kernels
+from app.models import kernels, lab_kernels
+from app.models.comau import tool_on_platform
 from app.models.lab import load_lab
 from app.models.registry import load_robot
 from app.models.stewart import StewartPlatform, rotation_xyz
 from app.scenarios.vvmc import VvmcScenario, simulate
-from app.sim import kernels as sim
-from app.sim.motionlab import COMAU_MODES, WINCH_MODES, MotionLab, Pendulum, tool_on_platform
+from app.scenes.lab import COMAU_MODES, WINCH_MODES, MotionLab
+from app.sim.motionlab import Pendulum
 from app.sim.stewart import Generator, MotionFilter, Platform
 
 pytestmark = pytest.mark.skipif(not kernels.ENABLED, reason="numba not installed or BOSUN_JIT=0")
@@ -71,12 +72,14 @@ def test_platform_kinematics_equal_the_reference(platforms, rng):
         for _ in range(200):
             eta = random_pose(rng, p, 1.3)
             ed, edd = rng.normal(size=6), rng.normal(size=6) * 3
-            close(sim.rotation_xyz(*eta[3:]), rotation_xyz(eta[3:]))
-            close(sim.leg_lengths(p.a_n, p.b_b, eta), p.leg_lengths(eta))
-            for a, b in zip(sim.stewart_rates(eta, ed, edd), StewartPlatform.rotation_rates(eta, ed, edd), strict=True):
+            close(lab_kernels.rotation_xyz(*eta[3:]), rotation_xyz(eta[3:]))
+            close(lab_kernels.leg_lengths(p.a_n, p.b_b, eta), p.leg_lengths(eta))
+            for a, b in zip(
+                lab_kernels.stewart_rates(eta, ed, edd), StewartPlatform.rotation_rates(eta, ed, edd), strict=True
+            ):
                 close(a, b)
             T = np.ascontiguousarray(np.linalg.qr(rng.normal(size=(4, 4)))[0])
-            close(sim.pose_in(T, eta), T @ StewartPlatform.pose_matrix(eta))
+            close(lab_kernels.pose_in(T, eta), T @ StewartPlatform.pose_matrix(eta))
 
 
 def test_leg_clamp_equals_the_reference(platforms, rng):
@@ -125,14 +128,14 @@ def test_comau_tool_point_equals_the_reference(lab, rng):
     for _ in range(200):
         q = rng.uniform(lab.robot.lower, lab.robot.upper)
         qd, qdd = rng.normal(size=3), rng.normal(size=3) * 3
-        p, v, a, J = sim.comau_tool(cm, q, qd, qdd)
+        p, v, a, J = lab_kernels.comau_tool(cm, q, qd, qdd)
         close(p, c.position(q))
         close(v, c.velocity(q, qd))
         close(a, c.acceleration(q, qd, qdd))
         close(J, c.jacobian(q))
         eta, ed, edd = rng.uniform(-0.3, 0.3, 6), rng.normal(size=6) * 0.5, rng.normal(size=6)
-        rates = sim.stewart_rates(eta, ed, edd)
-        got = sim.tool_on_platform(cm, lab.layout.T_b1_r, eta, ed, edd, *rates, q, qd, qdd)
+        rates = lab_kernels.stewart_rates(eta, ed, edd)
+        got = lab_kernels.tool_on_platform(cm, lab.layout.T_b1_r, (eta, ed, edd), rates, (q, qd, qdd))
         for x, y in zip(got, tool_on_platform(c, lab.layout.T_b1_r, eta, ed, edd, q, qd, qdd), strict=True):
             close(x, y)
 
@@ -140,7 +143,7 @@ def test_comau_tool_point_equals_the_reference(lab, rng):
 def test_comau_ik_picks_the_reference_candidate(lab, rng):
     """Eqs. (7)–(20) and the nearest-inside choice of ``MotionLab._ik`` (NumPy candidates) within the
     joint limits in force (the layout's profile)."""
-    T_base, signs = lab._consts[0], lab._consts[1]
+    T_base, signs = lab._geometry[1], lab._geometry[2]
     lab.robot.use_kernels = False
     lo, hi = lab.joints.lower, lab.joints.upper
     found = 0
@@ -149,7 +152,7 @@ def test_comau_ik_picks_the_reference_candidate(lab, rng):
             q_true = rng.uniform(lo - 0.3, hi + 0.3)
             p_tr = lab.comau.position(q_true) * rng.choice([1.0, 1.0, 1.6])  # some out of reach
             q_near = np.ascontiguousarray(rng.uniform(lo, hi))
-            q, ok = sim.comau_ik(lab._comau, T_base, p_tr, q_near, signs, lab.joints.lower, lab.joints.upper)
+            q, ok = lab_kernels.comau_ik(lab._comau, T_base, p_tr, q_near, signs, lab.joints.lower, lab.joints.upper)
             ref = lab._ik(p_tr, q_near)
             assert ok == (ref is not None)
             if ok:
@@ -172,7 +175,7 @@ def test_lstsq3_equals_numpy_lstsq_also_near_and_at_singularities(rng):
         J = np.ascontiguousarray(J)
         b = rng.normal(size=3)
         x_ref = np.linalg.lstsq(J, b, rcond=1e-6)[0]
-        close(sim.lstsq3(J, b), x_ref, atol=ATOL * max(1.0, float(np.max(np.abs(x_ref)))))
+        close(lab_kernels.lstsq3(J, b), x_ref, atol=ATOL * max(1.0, float(np.max(np.abs(x_ref)))))
 
 
 # ----------------------------------------------------------------------------- pendulum

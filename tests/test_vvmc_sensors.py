@@ -12,7 +12,7 @@ from app.marine.sensors import MRU5, MotionSensor
 from app.models.lab import load_lab
 from app.scenarios.antisway import free_swing
 from app.scenarios.vvmc import VvmcError, VvmcScenario, simulate, summarize
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 
 
 def _reduction(sensors: str, duration: float = 45.0) -> tuple[float, dict]:

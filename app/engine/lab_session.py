@@ -1,6 +1,6 @@
 """Engine session for the Motion-Lab (``bosun server --plant lab``): the lab HMI's commands.
 
-Each tick advances :class:`~app.sim.motionlab.MotionLab` in steps of 0.01 s.  Commands (protocol
+Each tick advances :class:`~app.scenes.lab.MotionLab` in steps of 0.01 s.  Commands (protocol
 messages, see docs/protocol.md): ``lab_platform`` (neutral / settle / engage / disengage),
 ``lab_source`` (simulation, generator, remote, timeseries with their parameters), ``lab_remote_pose``,
 ``lab_comau_mode``, ``lab_winch`` (mode and / or spring-return speed), ``lab_vvmc`` (on/off), plus
@@ -11,7 +11,7 @@ winch in REMOTE (s_w, up to its speed limit).  After an E-STOP reset every machi
 stands until the operator commands it anew.
 
 The machines are driven through a plant backend (:mod:`app.plant`): ``simulated`` steps the
-:class:`~app.sim.motionlab.MotionLab`, ``plc`` (``--plc AMS_NET_ID``) drives the real lab through its
+:class:`~app.scenes.lab.MotionLab`, ``plc`` (``--plc AMS_NET_ID``) drives the real lab through its
 TwinCAT PLC and keeps the same model set to what the PLC reports; the scene does not know which.
 ``lab_plc_ack`` acknowledges a PLC error as the lab's HMI does.
 
@@ -61,7 +61,7 @@ from app.plant.base import GENERATOR_DEFAULT, LabBackend
 from app.plant.simulated import SimulatedLab
 from app.plc.symbols import GENERATOR_FREQUENCY_HZ, GENERATOR_PHASE_DEG
 from app.scenarios.swing import SwingControl
-from app.sim.motionlab import REMOTE_TOOL_SPEED, MotionLab
+from app.scenes.lab import REMOTE_TOOL_SPEED, MotionLab
 from app.teleop.pipeline import InputPipeline
 
 STEP = 0.01

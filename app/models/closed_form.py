@@ -7,7 +7,7 @@
 A family is matched from the robot's DH table, not its name, and its dimensions are read from the
 XML, so any robot of the same shape gets the closed form.  The solver choosing among the candidates
 is :class:`app.ik.analytic.AnalyticSolver`; the crane head (:mod:`app.models.crane_head`) and the
-Motion-Lab (:mod:`app.sim.motionlab`) use the families directly.
+Motion-Lab (:mod:`app.scenes.lab`) use the families directly.
 """
 
 from __future__ import annotations

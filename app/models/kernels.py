@@ -35,7 +35,10 @@ ENABLED = numba is not None and os.environ.get("BOSUN_JIT", "1") != "0"
 # machine code after an edit there: each file's cache is cleared when a kernel file it imports changes.
 KERNEL_FILES = (
     "models/kernels.py",
+    "models/lab_kernels.py",
     "sim/kernels.py",
+    "control/lab_kernels.py",
+    "scenes/lab_kernels.py",
     "marine/kernels.py",
     "ik/ga_kernels.py",
     "models/crane_head_kernels.py",

@@ -1,6 +1,6 @@
 """The interface of a Motion-Lab plant backend.
 
-The scene keeps one model of the lab, a :class:`~app.sim.motionlab.MotionLab` (``backend.lab``): its
+The scene keeps one model of the lab, a :class:`~app.scenes.lab.MotionLab` (``backend.lab``): its
 platforms, robot, winch and load are what the scene draws, publishes and raises alarms on.  The
 backend owns the machines behind that model:
 
@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from app.errors import BosunError
 from app.net.snapshots import MachineLight, MotionStatus, PlantLink
 from app.plc.symbols import GENERATOR_AMPLITUDE, GENERATOR_OMEGA, GENERATOR_PHASE
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 
 
 class BackendError(BosunError):

@@ -3,7 +3,7 @@
 Commands become writes of the lab PLC's symbols by name (:mod:`app.plc.symbols`, from the lab's own
 HMI), handed to the ADS bridge thread (:class:`app.plc.bridge.AdsBridge`) through its queue; what the
 bridge reads comes back through another queue, drained in :meth:`PlcLab.poll` at the start of every
-tick, and is mirrored into the scene's :class:`~app.sim.motionlab.MotionLab` (never stepped here), so
+tick, and is mirrored into the scene's :class:`~app.scenes.lab.MotionLab` (never stepped here), so
 the scene draws, publishes and raises alarms on the real machines as on simulated ones.
 
 Mapping (the lab PLC's FB_StewartInterface: ``eModeCmd`` selects SETTLED / NEUTRAL / SIMULATION /
@@ -73,7 +73,7 @@ from app.plc.symbols import (
     enum_name,
     wave_inputs,
 )
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 from app.sim.stewart import Generator
 
 DATA_STALE = 1.0  # s without a value from a connected PLC: the link is shown stale

@@ -1,4 +1,4 @@
-"""The simulated Motion-Lab (``bosun server --plant lab``): the scene's :class:`~app.sim.motionlab.MotionLab`
+"""The simulated Motion-Lab (``bosun server --plant lab``): the scene's :class:`~app.scenes.lab.MotionLab`
 is the plant, stepped here.
 
 The lab HMI's feedback (issue 16, item 5) is made from the model's own state, so the GUI shows it as it
@@ -36,7 +36,7 @@ from app.marine.vessels import vessel_rao
 from app.net.snapshots import MachineLight, MotionStatus, PlantLink
 from app.plant.base import GENERATOR_DEFAULT, REMOTE_TIMEOUT, BackendError, LabBackend
 from app.plc.symbols import decode_status, encode_status
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 from app.sim.stewart import Generator, Platform, WaveSimulation, parse_timeseries_csv
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from app.models.lab import load_lab
 from app.scenarios.swing import SwingControl
 from app.scenarios.vvmc import VvmcScenario, simulate, summarize
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 
 __all__ = ["antisway_study", "free_swing", "pendulum_band_rms"]
 

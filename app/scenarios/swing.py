@@ -1,7 +1,7 @@
 """The swing estimator and the anti-swing law on the simulated Motion-Lab (issue 16, item 4).
 
 :class:`SwingControl` wires the estimator and the law of :mod:`app.control.antisway` to a
-:class:`~app.sim.motionlab.MotionLab`: after every step it feeds the EKF the tool acceleration the lab
+:class:`~app.scenes.lab.MotionLab`: after every step it feeds the EKF the tool acceleration the lab
 knows (eq. 57 from the Comau's joints and the platform, with the noise ``sigma_accel``), then a wire
 measurement (the true swing plus noise: a wire-angle sensor, or the load's position from a tracker),
 and sets the law's offset for the next step (:meth:`MotionLab.set_tool_offset`, in {n1}).  The true
@@ -26,7 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.control.antisway import AntiSwing, AntiSwingDesign, SwingEkf
-from app.sim.motionlab import R_G_D, MotionLab
+from app.scenes.lab import MotionLab
+from app.sim.motionlab import R_G_D
 
 __all__ = ["SwingControl"]
 

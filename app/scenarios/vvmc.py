@@ -31,7 +31,7 @@ from app.marine.waves import SPECTRA, check_sea
 from app.models.lab import load_lab
 from app.models.registry import load_robot
 from app.scenarios.swing import SwingControl
-from app.sim.motionlab import MotionLab
+from app.scenes.lab import MotionLab
 from app.sim.stewart import WaveSimulation
 
 

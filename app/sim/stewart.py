@@ -135,30 +135,43 @@ class MotionFilter:
         """
         if self.use_kernels:
             use_v = v_ref is not None
-            sim_kernels.motion_filter_update(
-                self.x, self.v, self.a, np.ascontiguousarray(x_ref, dtype=float),
-                np.ascontiguousarray(v_ref, dtype=float) if use_v else self.x, use_v, self.lower, self.upper,
-                self.speed, self.accel, self.brake, float(self.tau), float(dt), float(speed_scale),
+            ref = (
+                np.ascontiguousarray(x_ref, dtype=float), np.ascontiguousarray(v_ref, dtype=float) if use_v else self.x,
+                use_v, float(speed_scale),
             )  # fmt: skip
+            sim_kernels.motion_filter_update((self.x, self.v, self.a), ref, self.limits(), float(dt))
             return self.x
         return self._step_reference(x_ref, v_ref, dt, speed_scale)
+
+    def limits(self) -> tuple:
+        """The filter's parameter record (lower, upper, speed, accel, brake, τ) of
+        :func:`app.sim.kernels.motion_filter_update` (the arrays themselves: limits set later are seen)."""
+        return (self.lower, self.upper, self.speed, self.accel, self.brake, float(self.tau))
 
     def _step_reference(
         self, x_ref: ArrayLike, v_ref: ArrayLike | None, dt: float, speed_scale: float = 1.0
     ) -> NDArray[np.float64]:
-        e = np.asarray(x_ref, dtype=float) - self.x
-        v_des = approach_speed(e, braking_speed(np.abs(e), self.accel, dt), max(self.tau, dt))
-        if v_ref is not None:
-            v_des = v_des + np.asarray(v_ref, dtype=float)
-        vmax = self.speed * speed_scale
-        hi = np.minimum.reduce([self.v + self.accel * dt, vmax, self._braking(self.upper - self.x, dt)])
-        lo = np.maximum.reduce([self.v - self.accel * dt, -vmax, -self._braking(self.x - self.lower, dt)])
-        hi = np.maximum(hi, lo)  # rounding only
-        v_new = np.clip(np.where(np.isfinite(v_des), v_des, 0.0), lo, hi)
-        self.a = (v_new - self.v) / dt
-        self.v = v_new
-        self.x = np.clip(self.x + v_new * dt, self.lower, self.upper)
+        ref = (x_ref, v_ref, v_ref is not None, speed_scale)
+        self.x, self.v, self.a = motion_filter_reference((self.x, self.v, self.a), ref, self.limits(), dt)
         return self.x
+
+
+def motion_filter_reference(state: tuple, ref: tuple, limits: tuple, dt: float) -> tuple:
+    """The NumPy reference of :func:`app.sim.kernels.motion_filter_update` on the same records, returning
+    (x⁺, v⁺, a) as new arrays."""
+    x, v, _ = state
+    x_ref, v_ref, use_v, speed_scale = ref
+    lower, upper, speed, accel, brake, tau = limits
+    e = np.asarray(x_ref, dtype=float) - x
+    v_des = approach_speed(e, braking_speed(np.abs(e), accel, dt), max(tau, dt))
+    if use_v:
+        v_des = v_des + np.asarray(v_ref, dtype=float)
+    vmax = speed * speed_scale
+    hi = np.minimum.reduce([v + accel * dt, vmax, braking_speed(upper - x, brake, dt)])
+    lo = np.maximum.reduce([v - accel * dt, -vmax, -braking_speed(x - lower, brake, dt)])
+    hi = np.maximum(hi, lo)  # rounding only
+    v_new = np.clip(np.where(np.isfinite(v_des), v_des, 0.0), lo, hi)
+    return np.clip(x + v_new * dt, lower, upper), v_new, (v_new - v) / dt
 
 
 # ----------------------------------------------------------------------------- sources
@@ -586,10 +599,10 @@ class Platform:
             # PLC's etaRef = LIMIT(etaRefMin, u, etaRefMax); a clipped DOF loses its feed-forward
             if self.use_kernels and not (self.transition == "disengaging" and self.gain <= 0.0):
                 m = self.model  # the scaled source clamped to the legs and filtered, in one call
+                source = (float(g), np.ascontiguousarray(eta_s, dtype=float), np.ascontiguousarray(v_s, dtype=float))
                 self.leg_clamped = sim_kernels.follow_clamped(
-                    m.a_n, m.b_b, *self.leg_band, float(g), np.ascontiguousarray(eta_s, dtype=float),
-                    np.ascontiguousarray(v_s, dtype=float), f.x, f.v, f.a, f.lower, f.upper, f.speed, f.accel,
-                    float(f.tau), float(dt),
+                    (m.a_n, m.b_b, *self.leg_band), source, (f.x, f.v, f.a),
+                    (f.lower, f.upper, f.speed, f.accel, float(f.tau)), float(dt),
                 )  # fmt: skip
                 return f.x.copy()
             u, u_dot = g * np.asarray(eta_s, dtype=float), g * np.asarray(v_s, dtype=float)

@@ -1,0 +1,445 @@
+"""The Motion-Lab scene: two Stewart platforms, the Comau robot on EM8000, its winch and the hanging load,
+wired with their controllers as one diagram (issue 29, items 2–3).
+
+Plants (:mod:`app.sim`): the platforms (:mod:`app.sim.stewart`), the Comau's drives, the winch drum and the load
+(:mod:`app.sim.motionlab`).  Controllers (:mod:`app.control.lab`): the Comau's law (REMOTE, MOTION_COMP) and the
+winch's heave compensation.  Sensors: the controllers see the platforms as measured (an MRU or a tracker,
+:meth:`MotionLab.set_sensors`) or true.  :data:`LAB_DIAGRAM` names the blocks and their connections;
+:meth:`MotionLab.step` runs it, compiled in one call (:func:`app.scenes.lab_kernels.lab_step`) or block by
+block in NumPy (the reference), tested equal in ``tests/test_sim_kernels.py``.
+
+Frames (Motion-Lab paper Table 4): world {g} (z-up), platform neutral frames {n1}, {n2} and body frames {b1},
+{b2} (z-down), robot base {r} (z-up), tool point {t}; the load in {d} (see :mod:`app.sim.motionlab`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from app.control.lab import BRAKE, COMAU_LAW, WINCH_LAW
+from app.errors import BosunError
+from app.models.closed_form import ComauArm
+from app.models.comau import ComauKinematics, nearest_ik, tool_on_platform
+from app.models.lab import LabLayout
+from app.models.registry import load_robot
+from app.models.stewart import StewartPlatform
+from app.scenes import lab_kernels
+from app.sim import kernels as sim_kernels
+from app.sim.motionlab import COMAU_DRIVES, R_G_D, WINCH_DRUM, Pendulum, Winch
+from app.sim.stewart import MotionFilter, Platform
+
+__all__ = ["COMAU_MODES", "REMOTE_TOOL_SPEED", "WINCH_MODES", "LabError", "LabSample", "MotionLab"]
+
+COMAU_MODES = ("settled", "remote", "motion_comp", "hold")  # hold: after an E-STOP reset, until commanded
+WINCH_MODES = ("local", "remote", "motion_comp")
+REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
+
+
+class LabError(BosunError):
+    """A Motion-Lab command that cannot be carried out (one line)."""
+
+
+# ----------------------------------------------------------------------------- the lab
+@dataclass
+class LabSample:
+    """One instant of the lab (all vectors as lists in the JSON snapshot; arrays here)."""
+
+    t: float
+    eta1: NDArray[np.float64]
+    eta2: NDArray[np.float64]
+    legs1: NDArray[np.float64]
+    legs2: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qd: NDArray[np.float64]
+    p_t_g: NDArray[np.float64]
+    v_t_g: NDArray[np.float64]
+    p_p_g: NDArray[np.float64]
+    p_w_g: NDArray[np.float64]
+    e_t_b2: NDArray[np.float64]  # tool point minus work point, in {b2}
+    L_w: float
+    L_w_dot: float
+    swing: tuple[float, float]
+    payload_height_error: float
+
+
+class MotionLab:
+    """The whole lab, stepped at a fixed dt: platforms → robot control → winch → pendulum.
+
+    With ``use_kernels`` (the default when numba is there) a step is a handful of compiled calls:
+    per platform its source (the vessel motion) and its clamped, filtered target, then
+    :func:`app.sim.kernels.lab_step` for the rest, which updates the state arrays (joints, winch,
+    tool point, rates) in place; with ``use_kernels = False`` every part runs its NumPy reference
+    method (the methods below), tested equal step by step (``tests/test_sim_kernels.py``).
+
+    Parameters
+    ----------
+    layout : LabLayout
+    at_work : bool   start with the tool on the work point (default: the park configuration)
+    comau_profile : str, optional
+        The Comau's joint-limit profile: ``datasheet`` (the robot file, Table 6) or one of the
+        layout's ``<joint_limits>`` (``lab``: the lab's program limits with its velocity-boundary
+        law); default the layout's ``<crane limits=…>``.
+
+    Attributes
+    ----------
+    profile : JointLimitProfile   the profile in force (``joints`` is the filter built from it:
+        its lower, upper, speed and the boundary deceleration ``brake``)
+    """
+
+    def __init__(self, layout: LabLayout, at_work: bool = False, comau_profile: str | None = None) -> None:
+        self.layout = layout
+        self.models = tuple(load_robot(robot) for _, robot in layout.platforms)
+        try:
+            self.platforms = tuple(
+                Platform(m, command_box=box) for m, box in zip(self.models, layout.command_boxes, strict=True)
+            )
+        except BosunError as err:
+            raise LabError(f"{layout.path}: {err}") from None
+        self.robot = load_robot(layout.crane_robot)
+        arm = ComauArm.match(self.robot)
+        if arm is None:
+            raise LabError(f"crane robot '{layout.crane_robot}' is not a Comau-type 3-DOF arm (Motion-Lab Table 3)")
+        self.arm = arm
+        self.comau = ComauKinematics.from_arm(arm)
+        self.profile = layout.profile(comau_profile)
+        prof = self.profile
+        lo = self.robot.lower if prof.lower is None else prof.lower
+        hi = self.robot.upper if prof.upper is None else prof.upper
+        speed = self.robot.speed if prof.speed is None else prof.speed
+        if np.any(lo < self.robot.lower - 1e-12) or np.any(hi > self.robot.upper + 1e-12):
+            raise LabError(f"{layout.path}: Comau profile '{prof.name}' leaves the robot file's joint limits")
+        accel = np.full(3, layout.crane_accel)
+        brake = None if prof.boundary_accel is None else np.full(3, prof.boundary_accel)
+        self.joints = MotionFilter(lo, hi, speed, accel, tau=0.05, brake=brake)
+        if not np.all((layout.park_q >= lo) & (layout.park_q <= hi)):
+            raise LabError(f"{layout.path}: the Comau's park configuration is outside its '{prof.name}' joint limits")
+        self.joints.reset(layout.park_q)
+        self.comau_mode = "remote"
+        self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]
+        self.winch = Winch(layout.winch)
+        self.pendulum = Pendulum(damping=layout.payload_damping)
+        self.T_n1_g = np.linalg.inv(layout.T_world_n1)
+        # constants and buffers of the compiled step (C-contiguous float64: one kernel signature)
+        self._rates_buf = np.zeros((2, 3, 3, 3))
+        self._rate_views = tuple((b[0], b[1], b[2]) for b in self._rates_buf)
+        self._comau = np.array([arm.a1, arm.d1, arm.a2, arm.a3, arm.L], dtype=float)
+        self._T_world_n = tuple(np.ascontiguousarray(T, dtype=float) for T in (layout.T_world_n1, layout.T_world_n2))
+        T_n1_n2 = self.T_n1_g @ layout.T_world_n2
+        c = tuple(np.ascontiguousarray(a, dtype=float) for a in (arm.T_world_base, ComauArm.SIGNS["auto"]))
+        c += (*self._T_world_n,)
+        c += tuple(np.ascontiguousarray(a, dtype=float) for a in (T_n1_n2, layout.T_b1_r, layout.work_point_b2))
+        c += (np.ascontiguousarray(layout.park_q, dtype=float),)
+        # the geometry record of lab_step: (cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r, w_b2, park_q, legs…)
+        m1, m2 = self.models
+        self._geometry = (self._comau, *c, m1.a_n, m1.b_b, m2.a_n, m2.b_b)
+        self._target = np.zeros(3)
+        self._out = tuple(np.zeros(n) for n in (3, 3, 3, 6, 6))  # e_t_b2, p_w_g, p_p_g, legs1, legs2
+        self._use_kernels = False  # the set-up below runs the reference; the flag is set at the end
+        self.payload_target_b2: NDArray[np.float64] | None = None
+        # what the controllers see of the platforms: None, the true states; else one streaming sensor per
+        # platform (app/marine/sensors.py: MRU or tracker), measured after the platforms' step
+        self.sensors: tuple | None = None
+        self.measured: tuple[tuple[NDArray, NDArray, NDArray], ...] | None = None
+        # an offset (position, velocity in {n1}) added to the work point the Comau tracks (anti-swing)
+        self.tool_offset = (np.zeros(3), np.zeros(3))
+        self.t = 0.0
+        self.frozen = False
+        self.at_limit = np.zeros(4, dtype=bool)  # joints 1–3, winch: at a position or speed limit
+        self.q_work = self.work_configuration()
+        if at_work:
+            self.joints.reset(self.q_work)
+        self._rates = self._rotation_rates()
+        self.last: LabSample | None = None
+        self._update_tool()
+        self.last = self._sample()
+        self.use_kernels = sim_kernels.ENABLED
+
+    @property
+    def use_kernels(self) -> bool:
+        return self._use_kernels
+
+    @use_kernels.setter
+    def use_kernels(self, on: bool) -> None:
+        """Compiled (True) or the NumPy reference (False) for the whole lab: step, platforms, filters,
+        sources, load and the robot's IK candidates."""
+        self._use_kernels = bool(on)
+        for p in self.platforms:
+            p.use_kernels = on
+        self.joints.use_kernels = self.winch.filter.use_kernels = self.pendulum.use_kernels = bool(on)
+        self.robot.use_kernels = bool(on)
+
+    # ------------------------------------------------------------------ geometry
+    def _rotation_rates(self) -> tuple[tuple[NDArray, NDArray, NDArray], ...]:
+        """(R, Ṙ, R̈) of each platform body (eqs. 33, 47, 51), computed once per step."""
+        return tuple(StewartPlatform.rotation_rates(p.eta, p.eta_dot, p.eta_ddot) for p in self.platforms)
+
+    def platform_pose(self, k: int) -> NDArray[np.float64]:
+        """H^g_bk: body frame of platform k (0 or 1) in the world, eq. (39)."""
+        p = self.platforms[k]
+        T_n = self.layout.T_world_n1 if k == 0 else self.layout.T_world_n2
+        if self._use_kernels:
+            return sim_kernels.pose_in(self._T_world_n[k], p.filter.x)
+        return T_n @ StewartPlatform.pose_matrix(p.eta)
+
+    def work_point(self, seen: bool = False) -> tuple[NDArray, NDArray, NDArray]:
+        """The work point fixed in {b2}: position, velocity, acceleration in {n1} (``seen``: as the
+        controllers see EM1500, :meth:`set_sensors`)."""
+        if seen:
+            eta, eta_dot, eta_ddot, (R, Rd, Rdd) = self._view(1)
+        else:
+            p2 = self.platforms[1]
+            eta, eta_dot, eta_ddot, (R, Rd, Rdd) = p2.eta, p2.eta_dot, p2.eta_ddot, self._rates[1]
+        w = self.layout.work_point_b2
+        T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
+        R12 = T_n1_n2[:3, :3]
+        p = T_n1_n2[:3, 3] + R12 @ (eta[:3] + R @ w)
+        v = R12 @ (eta_dot[:3] + Rd @ w)
+        a = R12 @ (eta_ddot[:3] + Rdd @ w)
+        return p, v, a
+
+    def to_robot_base(self, p_n1, v_n1, seen: bool = False) -> tuple[NDArray, NDArray]:
+        """Invert eqs. (54) and (56) for the tool point in {r} (position and velocity); ``seen``: with
+        EM8000 as the controllers see it."""
+        if seen:
+            eta, eta_dot, _, (R, Rd, _) = self._view(0)
+        else:
+            p1 = self.platforms[0]
+            eta, eta_dot, (R, Rd, _) = p1.eta, p1.eta_dot, self._rates[0]
+        R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
+        p_tr = R_r.T @ (R.T @ (p_n1 - eta[:3]) - p_r)
+        arm = p_r + R_r @ p_tr
+        v_tr = R_r.T @ (R.T @ (v_n1 - eta_dot[:3] - Rd @ arm))
+        return p_tr, v_tr
+
+    def work_configuration(self) -> NDArray[np.float64]:
+        """Joint angles that put the tool on the work point with both platforms at neutral."""
+        p_n1, _, _ = self._work_point_neutral()
+        R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
+        p_tr = R_r.T @ (p_n1 - p_r)
+        q = self._ik(p_tr, self.layout.park_q)
+        if q is None:
+            raise LabError("the work point of the lab layout is out of the robot's reach within its joint limits")
+        return q
+
+    def _work_point_neutral(self):
+        T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
+        return T_n1_n2[:3, :3] @ self.layout.work_point_b2 + T_n1_n2[:3, 3], None, None
+
+    def _ik(self, p_tr: NDArray[np.float64], q_near: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """Analytic IK (eqs. 7–20): the exact candidate inside the joint limits in force (the profile's)
+        nearest ``q_near``."""
+        use = bool(getattr(self.robot, "use_kernels", False))
+        return nearest_ik(self.arm, p_tr, q_near, self.joints.lower, self.joints.upper, use)
+
+    # ------------------------------------------------------------------ commands
+    def set_comau_mode(self, mode: str) -> None:
+        if mode not in COMAU_MODES:
+            raise LabError(f"Comau mode must be one of {', '.join(COMAU_MODES)}, got {mode!r}")
+        self.comau_mode = mode
+        self.tool_velocity_cmd = np.zeros(3)
+
+    def set_winch_mode(self, mode: str) -> None:
+        if mode not in WINCH_MODES:
+            raise LabError(f"winch mode must be one of {', '.join(WINCH_MODES)}, got {mode!r}")
+        self.winch.mode = mode
+        self.winch.speed_command = 0.0
+        self.payload_target_b2 = None  # captured on the next step
+
+    def set_vvmc(self, on: bool) -> None:
+        """VVMC on: Comau and winch in MOTION_COMP; off: both hold (Comau REMOTE, winch LOCAL, zero speed)."""
+        self.set_comau_mode("motion_comp" if on else "remote")
+        self.set_winch_mode("motion_comp" if on else "local")
+
+    def estop(self) -> None:
+        self.frozen = True
+        for p in self.platforms:
+            p.estop()
+        self.tool_velocity_cmd = np.zeros(3)
+        self.winch.speed_command = 0.0
+
+    def reset(self) -> None:
+        """After an E-STOP every machine holds where it stands until the operator commands it anew:
+        platforms SETTLED stay so, others HOLDING; the Comau HOLD; the winch LOCAL at zero speed."""
+        self.frozen = False
+        for p in self.platforms:
+            p.reset()
+        self.set_comau_mode("hold")
+        self.set_winch_mode("local")
+
+    # ------------------------------------------------------------------ sensors and offsets
+    def set_sensors(self, sensors: tuple | None) -> None:
+        """Let the controllers see the platforms through ``sensors`` (one
+        :class:`~app.marine.sensors.MotionSensor` per platform, EM8000 then EM1500), or the true
+        states (None).  The plant, the load and every score keep the true states."""
+        if sensors is not None and len(sensors) != len(self.platforms):
+            raise LabError(f"one sensor per platform ({len(self.platforms)}), got {len(sensors)}")
+        self.sensors = None if sensors is None else tuple(sensors)
+        self.measured = None
+
+    def set_tool_offset(self, p_n1: ArrayLike, v_n1: ArrayLike) -> None:
+        """Offset (position [m], velocity [m/s] in {n1}) added to the work point the Comau tracks in
+        MOTION_COMP, from the next step on (the anti-swing law's; zero: the work point itself)."""
+        p, v = np.asarray(p_n1, dtype=float), np.asarray(v_n1, dtype=float)
+        if p.shape != (3,) or v.shape != (3,) or not (np.all(np.isfinite(p)) and np.all(np.isfinite(v))):
+            raise LabError("a tool offset is a finite position and velocity (3 values each)")
+        self.tool_offset = (np.ascontiguousarray(p), np.ascontiguousarray(v))
+
+    def _measure(self) -> None:
+        if self.sensors is None:
+            self.measured = None
+            return
+        self.measured = tuple(
+            tuple(np.ascontiguousarray(a, dtype=float) for a in s.measure(p.eta, p.eta_dot, p.eta_ddot))
+            for s, p in zip(self.sensors, self.platforms, strict=True)
+        )
+
+    def _view(self, k: int) -> tuple[NDArray, NDArray, NDArray, tuple[NDArray, NDArray, NDArray]]:
+        """Platform k as the controllers see it: η, η̇, η̈ and (R, Ṙ, R̈)."""
+        if self.measured is None:
+            p = self.platforms[k]
+            return p.eta, p.eta_dot, p.eta_ddot, self._rates[k]
+        eta, eta_dot, eta_ddot = self.measured[k]
+        return eta, eta_dot, eta_ddot, StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+
+    # ------------------------------------------------------------------ step
+    def step(self, dt: float) -> LabSample:
+        self.t += dt
+        for p in self.platforms:
+            p.step(dt)
+        self._measure()
+        self.last = self._step_compiled(dt) if self._use_kernels else self._step_reference(dt)
+        return self.last
+
+    def refresh(self) -> LabSample:
+        """Recompute the derived state (rotation rates, tool point, the sample) from the machines' states
+        as they are, without stepping: the ``plc`` plant backend sets platform poses, joints and wire
+        length from the real lab's measurements and calls this (app/plant/plc.py)."""
+        self._rates = self._rotation_rates()
+        self._update_tool()
+        self.last = self._sample()
+        return self.last
+
+    def _records(self, dt: float) -> tuple[int, bool]:
+        """The Comau's mode for its law and whether the winch tracks (E-STOP: brake, winch at zero speed)."""
+        if self.frozen:
+            self.winch.speed_command = 0.0
+        mode = BRAKE if self.frozen else COMAU_MODES.index(self.comau_mode)  # hold and E-STOP brake alike
+        return mode, not self.frozen and self.winch.mode == "motion_comp"
+
+    def _step_compiled(self, dt: float) -> LabSample:
+        """The diagram after the platforms in one :func:`app.scenes.lab_kernels.lab_step` call."""
+        (p1, p2), f, w, pd = self.platforms, self.joints, self.winch, self.pendulum
+        wf = w.filter
+        mode, track = self._records(dt)
+        has = self.payload_target_b2 is not None
+        target = self.payload_target_b2 if has else self._target
+        e_b2, p_w_g, p_p_g, legs1, legs2 = self._out
+        true = (p1.filter.x, p1.filter.v, p1.filter.a, p2.filter.x, p2.filter.v, p2.filter.a)
+        seen = (False, *true) if self.measured is None else (True, *self.measured[0], *self.measured[1])
+        v_cmd = np.ascontiguousarray(self.tool_velocity_cmd, dtype=float)
+        x = ((f.x, f.v, f.a), (wf.x, wf.v, wf.a), (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot), (target, has))
+        u = (true, seen, (mode, v_cmd, self.tool_offset, track, float(w.speed_command)))
+        wire = (wf.lower, wf.upper, wf.speed, wf.accel, float(wf.tau))
+        p = (self._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)))
+        y = (self._rates_buf, self.p_t_n1, self.p_t_g, self.v_t_g, self.a_t_g, self.at_limit, *self._out)
+        has, pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, h_err = lab_kernels.lab_step(x, u, p, y, float(dt))
+        if has and self.payload_target_b2 is None:
+            self.payload_target_b2 = target.copy()
+        self._rates = self._rate_views
+        return LabSample(
+            t=self.t,
+            eta1=p1.filter.x.copy(),
+            eta2=p2.filter.x.copy(),
+            legs1=legs1.copy(),
+            legs2=legs2.copy(),
+            q=f.x.copy(),
+            qd=f.v.copy(),
+            p_t_g=self.p_t_g.copy(),
+            v_t_g=self.v_t_g.copy(),
+            p_p_g=p_p_g.copy(),
+            p_w_g=p_w_g.copy(),
+            e_t_b2=e_b2.copy(),
+            L_w=float(wf.x[0]),
+            L_w_dot=float(wf.v[0]),
+            swing=(pd.alpha, pd.beta),
+            payload_height_error=h_err,
+        )
+
+    def _step_reference(self, dt: float) -> LabSample:
+        """The diagram after the platforms block by block, each block's NumPy reference ."""
+        self._rates = self._rotation_rates()
+        f, wf, pd = self.joints, self.winch.filter, self.pendulum
+        mode, track = self._records(dt)
+        (e1, ed1, _, (R1, Rd1, _)), (e2, ed2, _, (R2, Rd2, _)) = self._view(0), self._view(1)
+        g = self._geometry
+        # the Comau: its law, then its drives
+        v_cmd = np.asarray(self.tool_velocity_cmd, dtype=float)
+        u = (mode, f.x, v_cmd, self.tool_offset, (e1, ed1, R1, Rd1, e2, ed2, R2, Rd2))
+        law_p = (*g[:3], *g[5:9], f.lower, f.upper)
+        _, command = COMAU_LAW.step((), u, law_p, dt, use_kernels=False)
+        (f.x, f.v, f.a, _), _ = COMAU_DRIVES.step((f.x, f.v, f.a, self.at_limit), command, f.limits(), dt, False)
+        self._update_tool()
+        # the winch: its law (EM1500 as the controllers see it, eq. 39), then its drum
+        H2 = self.layout.T_world_n2 @ StewartPlatform.pose_matrix(e2)
+        has = self.payload_target_b2 is not None
+        tool, swing = (self.p_t_g, self.v_t_g), (pd.alpha, pd.beta)
+        u = (track, float(self.winch.speed_command), wf.x, swing, tool, (H2, Rd2, ed2))
+        (target, has), ref = WINCH_LAW.step((self.payload_target_b2, has), u, (g[4], wf.speed), dt, False)
+        if has:
+            self.payload_target_b2 = target
+        wire = (wf.lower, wf.upper, wf.speed, wf.accel, wf.tau)
+        (wf.x, wf.v, wf.a, _), _ = WINCH_DRUM.step((wf.x, wf.v, wf.a, self.at_limit), ref, wire, dt, False)
+        # the load
+        self.pendulum.step(dt, R_G_D.T @ self.a_t_g, self.winch.length, self.winch.speed)
+        return self._sample()
+
+    def _update_tool(self) -> None:
+        p1 = self.platforms[0]
+        f = self.joints
+        p, v, a = tool_on_platform(
+            self.comau, self.layout.T_b1_r, p1.eta, p1.eta_dot, p1.eta_ddot, f.x, f.v, f.a, self._rates[0]
+        )
+        T = self.layout.T_world_n1
+        self.p_t_n1 = p
+        self.p_t_g = T[:3, :3] @ p + T[:3, 3]  # eq. (55)
+        self.v_t_g = T[:3, :3] @ v  # eq. (56), rotated into {g}
+        self.a_t_g = T[:3, :3] @ a  # eq. (57), rotated into {g}
+
+    def _b2_to_g(self) -> tuple[NDArray, NDArray]:
+        H = self.platform_pose(1)
+        return H[:3, :3], H[:3, 3]
+
+    def p_p_g(self) -> NDArray[np.float64]:
+        """Payload position in {g}, eq. (58)."""
+        return self.p_t_g + R_G_D @ (self.winch.length * self.pendulum.direction())
+
+    def _sample(self) -> LabSample:
+        R2, o2 = self._b2_to_g()
+        e_b2 = R2.T @ (self.p_t_g - o2) - self.layout.work_point_b2
+        if self.payload_target_b2 is not None:
+            target_g = R2 @ self.payload_target_b2 + o2
+            h_err = float(self.p_p_g()[2] - target_g[2])
+        else:
+            h_err = 0.0
+        p_w_g = R2 @ self.layout.work_point_b2 + o2
+        return LabSample(
+            t=self.t,
+            eta1=self.platforms[0].eta,
+            eta2=self.platforms[1].eta,
+            legs1=self.models[0].leg_lengths(self.platforms[0].eta),
+            legs2=self.models[1].leg_lengths(self.platforms[1].eta),
+            q=self.joints.x.copy(),
+            qd=self.joints.v.copy(),
+            p_t_g=self.p_t_g.copy(),
+            v_t_g=self.v_t_g.copy(),
+            p_p_g=self.p_p_g(),
+            p_w_g=p_w_g,
+            e_t_b2=e_b2,
+            L_w=self.winch.length,
+            L_w_dot=self.winch.speed,
+            swing=(self.pendulum.alpha, self.pendulum.beta),
+            payload_height_error=h_err,
+        )
