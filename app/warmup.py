@@ -30,7 +30,9 @@ KERNEL_MODULES = {
     "app.scenes.lab_kernels": 10.0,
     "app.ik.ga_kernels": 25.0,
     "app.models.crane_head_kernels": 12.0,
-    "app.control.tac_kernels": 8.0,
+    "app.control.tac_kernels": 2.0,
+    "app.sim.head_kernels": 1.0,
+    "app.scenes.tac_kernels": 8.0,
 }
 
 

@@ -160,3 +160,91 @@ def test_the_lab_controllers_and_plants_are_blocks_whose_kernels_equal_their_ref
         for a, b in zip(d_k, d_r, strict=True):
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
     assert seen_modes == {SETTLED, REMOTE, MOTION_COMP, BRAKE}
+
+
+# ----------------------------------------------------------------------------- the crane head's servo
+def _head_params():
+    """(pid, motors) records of the crane head (TAC paper Table 4: K_p 10, K_i 60, K_d 1, T_DC 0.2 s, K_DC 1;
+    the head file's 90°/s arm speed), as HeadServo makes them."""
+    from app.control.tac import HEAD_PID
+    from app.sim.head import HEAD_MOTORS
+
+    lower, upper = np.radians([-60.0, -60.0, -60.0]), np.radians([80.0, 80.0, 80.0])
+    margin = np.radians(10.0)
+    pid = HEAD_PID.record(
+        "params", kp=10.0, ki=60.0, kd=1.0, t_dc=0.2, k_dc=1.0, u_min=lower - margin, u_max=upper + margin
+    )
+    motors = HEAD_MOTORS.record("params", t_dc=0.2, k_dc=1.0, lower=lower, upper=upper, speed=np.full(3, np.pi / 2))
+    return pid, motors
+
+
+def test_the_head_motor_block_kernel_and_reference_give_the_same_numbers():
+    """The crane head's plant: the DC motors of TAC eq. (58), speed-limited, inside the mechanical stops."""
+    from app.sim.head import HEAD_MOTORS
+
+    _, p = _head_params()
+    rng = np.random.default_rng(58)
+    x_k, x_r = (np.zeros(3),), (np.zeros(3),)
+    seen = set()
+    for k in range(600):
+        spread = 0.05 if k % 3 else 3.0  # near the arms (eq. 58 alone) and far (the speed limit, the stops)
+        u = (x_r[0] + rng.normal(0.0, spread, 3),)
+        x_k, y_k = HEAD_MOTORS.step((x_k[0].copy(),), u, p, 0.01, use_kernels=True)
+        x_r, y_r = HEAD_MOTORS.step(x_r, u, p, 0.01, use_kernels=False)
+        np.testing.assert_allclose(x_k[0], x_r[0], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(y_k[0], y_r[0], rtol=1e-12, atol=1e-12)
+        np.testing.assert_array_equal(y_k[1], y_r[1])
+        assert np.all(x_r[0] >= p[2]) and np.all(x_r[0] <= p[3])
+        seen.update(bool(f) for f in y_r[1])
+    assert seen == {True, False}  # both branches of eq. (58) ran
+    assert HEAD_MOTORS.implementation(use_kernels=True).__name__ == "head_motors_block"
+
+
+def test_the_head_pid_block_kernel_and_reference_give_the_same_numbers():
+    """The crane head's controller: the PID of TAC eq. (57) solved for u with eq. (58)'s motor rate; its
+    state is committed by the scene (anti-windup), so a step returns its integral unchanged."""
+    from app.control.tac import HEAD_PID
+
+    p, _ = _head_params()
+    rng = np.random.default_rng(57)
+    integral = np.zeros(3)
+    seen = set()
+    for k in range(600):
+        spread = 0.05 if k % 3 else 3.0
+        alpha = rng.uniform(-1.0, 1.3, 3)
+        u = (alpha + rng.normal(0.0, spread, 3), rng.normal(0.0, 10 * spread, 3), alpha)
+        x_k, y_k = HEAD_PID.step((integral.copy(),), u, p, 0.01, use_kernels=True)
+        x_r, y_r = HEAD_PID.step((integral.copy(),), u, p, 0.01, use_kernels=False)
+        np.testing.assert_array_equal(x_k[0], integral)
+        np.testing.assert_array_equal(x_r[0], integral)
+        for a, b in zip(y_k[:2], y_r[:2], strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+        np.testing.assert_array_equal(y_k[2], y_r[2])
+        seen.update(bool(f) for f in y_r[2])
+        integral = np.where(y_r[2], integral, y_r[1])
+    assert seen == {True, False}  # limited and free
+    assert HEAD_PID.named("outputs", y_r)["limited"] is y_r[2]
+
+
+@pytest.mark.parametrize("use_kernels", [True, False])
+def test_the_head_servo_steps_through_the_pid_and_motor_blocks(use_kernels):
+    """HeadServo (app.scenes.tac) is PID → motors → the integral committed unless the input was limited or
+    the motor saturated in that step, bit for bit, compiled and in the reference."""
+    from app.control.tac import HEAD_PID, PidGains
+    from app.scenes.tac import HeadServo
+    from app.sim.head import HEAD_MOTORS
+
+    pid, motors = _head_params()
+    servo = HeadServo(PidGains(), motors[2], motors[3], np.zeros(3), motors[4], use_kernels=use_kernels)
+    rng = np.random.default_rng(29)
+    ref = rng.uniform(-1.0, 1.3, (300, 3))
+    ref_dot = rng.normal(0.0, 5.0, (300, 3))
+    x = (servo.alpha.copy(), servo.integral.copy())
+    alpha, u = servo.run(ref, ref_dot, 0.01)
+    for k in range(300):
+        _, (u_k, trial, limited) = HEAD_PID.step((x[1],), (ref[k], ref_dot[k], x[0]), pid, 0.01, use_kernels)
+        (a_k,), (_, saturated) = HEAD_MOTORS.step((x[0].copy(),), (u_k,), motors, 0.01, use_kernels)
+        x = (a_k, np.where(limited | saturated, x[1], trial))
+        np.testing.assert_array_equal(alpha[k], a_k)
+        np.testing.assert_array_equal(u[k], u_k)
+    np.testing.assert_array_equal(servo.integral, x[1])

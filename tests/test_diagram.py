@@ -29,7 +29,7 @@ def test_the_lab_diagram_holds_its_blocks_ports_and_their_floors():
     assert floors["comau_law"] == floors["winch_law"] == "controller"
     assert floors["drives"] == floors["drum"] == floors["load"] == "plant"
     # controllers live in app.control, plants in app.sim (issue 29, item 2)
-    for n in LAB_DIAGRAM.nodes:
+    for n in (n for d in DIAGRAMS.values() for n in d.nodes):
         if n.block is not None:
             assert n.where.startswith({"controller": "app.control.", "plant": "app.sim."}[n.floor]), n.name
     assert LAB_DIAGRAM.feedback(wire("drives.q -> comau_law.q"))
@@ -64,6 +64,10 @@ def test_describe_prints_the_diagram_and_its_json(capsys):
     assert main(["describe", "--scene", "tac", "--diagram", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert {n["name"] for n in data["nodes"]} >= {"vessel", "mru", "pid", "motors"}
+    assert {n["name"]: n["where"] for n in data["nodes"] if n["block"]} == {
+        "pid": "app.control.tac",
+        "motors": "app.sim.head",
+    }
     assert any(w["from"] == "pid" and w["to"] == "motors" for w in data["wires"])
 
 

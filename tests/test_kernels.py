@@ -227,8 +227,10 @@ from app.ik import ga_kernels as ga
 from app.marine import kernels as marine
 from app.control import tac_kernels as tac
 from app.models import crane_head_kernels as head
+from app.sim import head_kernels as motors
+from app.scenes import tac_kernels as tac_scene
 from app.warmup import warm_up
-MODULES = (kernels, sim, ga, marine, head, tac)
+MODULES = (kernels, sim, ga, marine, head, tac, motors, tac_scene)
 warm_up()
 before = {n: len(f.signatures) for m in MODULES for n, f in vars(m).items() if hasattr(f, "signatures")}
 from app.engine.session import Session

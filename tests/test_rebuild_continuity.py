@@ -18,12 +18,14 @@ import time
 import numpy as np
 import pytest
 
-from app.control import tac_kernels
-from app.control.tac import HeadServo, PidGains, motor_step
+from app.control.tac import PidGains
 from app.engine.scene import CommandError
 from app.engine.tac_session import TacSession
 from app.models.registry import load_robot
 from app.scenarios.tac import SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
+from app.scenes import tac_kernels
+from app.scenes.tac import HeadServo
+from app.sim.head import motor_step
 
 HEAD = load_robot("tac_delta_head")
 CRANE = load_robot("offshore_crane")

@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from app.control.tac import HeadServo, PidGains
+from app.control.tac import PidGains
 from app.geometry import euler_zyx_to_matrix
 from app.models.crane_head import CraneHead
 from app.models.registry import load_robot
 from app.scenarios.tac import BETA_EQ60, ScenarioError, TacScenario, TacSimulator, simulate
+from app.scenes.tac import HeadServo
 
 
 @pytest.fixture(scope="module")

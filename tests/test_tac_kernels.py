@@ -1,5 +1,6 @@
 """Issue 14, item 4: the compiled crane head (app/models/crane_head_kernels.py: kinematics and references;
-app/control/tac_kernels.py: servos and the simulation step) against the NumPy reference methods on the
+app/control/tac_kernels.py: the crane servo and the head's PID; app/sim/head_kernels.py: the head's motors;
+app/scenes/tac_kernels.py: the head servo and the simulation step) against the NumPy reference methods on the
 same seeded random inputs and states (equal to 1e-12), and whole simulations both ways
 (equal to 1e-9): every mode, MRU noise, and live mode changes, E-STOP and the crane's return in the
 engine's small chunks."""
@@ -10,13 +11,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.control import tac_kernels
-from app.control.tac import CraneServo, HeadServo, PidGains
+from app.control.tac import CraneServo, PidGains
 from app.models.crane_head import CraneHead
 from app.models.delta import DeltaHead
 from app.models.registry import load_robot, load_spec
 from app.models.xml import parse_robot_xml
 from app.scenarios.tac import BETA_EQ60, MODES, TacChunk, TacScenario, TacSimulator, simulate
+from app.scenes import tac_kernels
+from app.scenes.tac import HeadServo
 
 pytestmark = pytest.mark.skipif(not tac_kernels.ENABLED, reason="numba not installed or BOSUN_JIT=0")
 ATOL = 1e-12

@@ -11,7 +11,9 @@ whatever the block).  The compiled kernel and the NumPy reference are two implem
 with the same records and the same numbers; :meth:`Block.implementation` is the one place that chooses
 between them.  Nothing in a step keeps state: what changes is in ``x'``.
 
-The blocks so far: the joint actuators of a simulated arm (:data:`app.sim.actuators.JOINT_ACTUATORS`).
+The blocks so far: the joint actuators of a simulated arm (:data:`app.sim.actuators.JOINT_ACTUATORS`), the
+Motion-Lab's plants and controllers (:mod:`app.sim.motionlab`, :mod:`app.control.lab`) and the crane head's
+DC motors and PID (:data:`app.sim.head.HEAD_MOTORS`, :data:`app.control.tac.HEAD_PID`, TAC paper eqs. 57–58).
 """
 
 from __future__ import annotations

@@ -28,7 +28,8 @@ The formulas above use the papers' R_b^n; the code names it ``R_n_b`` (:mod:`app
 
 The batched references and the crane IK run compiled (:mod:`app.models.crane_head_kernels`) unless
 ``use_kernels`` is False; the NumPy code here is their reference.  The joint servos that follow these
-references are :mod:`app.control.tac`.
+references are :mod:`app.control.tac` (the head's PID and the crane servo) and :mod:`app.sim.head` (the head's
+motors), wired in :mod:`app.scenes.tac`.
 """
 
 from __future__ import annotations
@@ -91,7 +92,7 @@ class CraneHead:
         self.elbow_tcp = replace(elbow, L2=elbow.L2 + self.x_d)
         sol = head.ik(self.p_d_t)
         self.alpha_d = sol.alpha
-        # the compiled kernels' constants (app/control/kern.py)
+        # the compiled kernels' constants (app/models/crane_head_kernels.py)
         e = self.elbow_tcp
         self.kernel_elbow = (float(e.L0), float(e.L1), float(e.L2), kern.c_array(np.linalg.inv(e.T_world_1)))
         ws = self.workspace
@@ -166,11 +167,16 @@ class CraneHead:
         p_d_n_dot = np.zeros((n, 3)) if p_d_n_dot is None else np.broadcast_to(p_d_n_dot, (n, 3))
         if self.use_kernels:
             hold = self.alpha_d if alpha_hold is None else alpha_hold
-            args = (eta, nu, beta, beta_dot, p_d_n, p_d_n_dot, hold)
+            eta, nu, beta, beta_dot, p_d_n, p_d_n_dot, hold = (
+                kern.c_array(x) for x in (eta, nu, beta, beta_dot, p_d_n, p_d_n_dot, hold)
+            )
             out = kern.head_reference(
-                self.crane.kernel_args, self.head.kernel_args, self.kernel_hull,
-                *(kern.c_array(x) for x in args),
-            )  # fmt: skip
+                (self.crane.kernel_args, self.head.kernel_args, self.kernel_hull),
+                (eta, nu),
+                (beta, beta_dot),
+                (p_d_n, p_d_n_dot),
+                hold,
+            )
             return HeadReference(*out)
         R_n_b = euler_zyx_to_matrix(eta[:, 3:6])  # R_b^n, Fossen eq. (2.18)
         o_t_b, R_b_t = self.crane_pose(beta)

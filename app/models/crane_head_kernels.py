@@ -4,7 +4,8 @@ Same scheme as :mod:`app.models.kernels` (numba, cached on disk, ``BOSUN_JIT=0``
 path).  The NumPy methods stay the reference, tested equal on the same seeded inputs in
 ``tests/test_tac_kernels.py``: ``DeltaHead.ik`` and ``fk`` (:mod:`app.models.delta`, eqs. 8–25) and
 ``CraneHead.crane_ik_tcp`` and ``head_reference`` (:mod:`app.models.crane_head`, eqs. 42–56).  The
-joint servos and the whole simulation step built on these are :mod:`app.control.tac_kernels`.
+crane servo and the head's PID built on these are :mod:`app.control.tac_kernels`, the head's motors
+:mod:`app.sim.head_kernels`, the whole simulation step :mod:`app.scenes.tac_kernels`.
 
 Every array argument is C-contiguous float64 (another layout would make numba compile a second
 specialisation in an engine tick); the constants come in tuples built once by the models:
@@ -301,14 +302,19 @@ def _saturate(hull, p, out):
 
 # ----------------------------------------------------------------------------- references
 @_jit
-def _reference_point(
-    head, hull, eta, nu, o_t_b, R_b_t, v_t_b, w_t_b, p_d, p_d_dot, hold, R_n_b, o_t_n, R_n_t, p_ref_t, p_cmd,
-    v_ref_t, alpha_ref, alpha_dot_ref, c, d,
-):  # fmt: skip
+def _reference_point(geometry, vessel, tip, desired, hold, out, work):
     """Head references of TAC paper eqs. (49)–(56) at one instant (``CraneHead.head_reference``; the exact
-    eqs. 53–54 of :mod:`app.control.tac`), into the output rows; R_n_b (the papers' R_b^n) is that of η.  ``hold``: the
-    reference kept where the inverse kinematics has no solution.  Returns True when limited (saturated,
-    held or clipped)."""
+    eqs. 53–54 of :mod:`app.models.crane_head`), into the output rows.  Records: ``geometry`` (head, hull);
+    ``vessel`` (η, ν (6,), R_b^n of η, named R_n_b); ``tip`` (o_t^b, R_t^b, v_t^b, ω_t^b) of the jib tip (eqs.
+    41, 45); ``desired`` (p_d^n, ṗ_d^n); ``hold``: the reference kept where the inverse kinematics has no
+    solution; ``out`` (o_t^n, R_t^n, p_ref^t, p_cmd^t, v_ref^t, α_ref, α̇_ref), written; ``work`` (c, d) (3, 3)
+    scratch.  Returns True when limited (saturated, held or clipped)."""
+    head, hull = geometry
+    eta, nu, R_n_b = vessel
+    o_t_b, R_b_t, v_t_b, w_t_b = tip
+    p_d, p_d_dot = desired
+    o_t_n, R_n_t, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref = out
+    c, d = work
     p_ref_n, p_ref_n_dot, q = np.empty(3), np.empty(3), np.empty(3)
     for r in range(3):
         o_t_n[r] = (R_n_b[r, 0] * o_t_b[0] + R_n_b[r, 1] * o_t_b[1] + R_n_b[r, 2] * o_t_b[2]) + eta[r]  # eq. (49)
@@ -361,9 +367,15 @@ def _reference_point(
 
 
 @_jit
-def head_reference(chain, head, hull, eta, nu, beta, beta_dot, p_d, p_d_dot, hold):
-    """``CraneHead.head_reference`` (eqs. 49–56) for rows of η, ν (n, 6), β, β̇, p_d^n, ṗ_d^n (n, 3):
-    (o_t^n, R_t^n (n, 3, 3), p_ref^t, p_cmd^t, v_ref^t, α_ref, α̇_ref, limited (n,))."""
+def head_reference(system, vessel, crane, desired, hold):
+    """``CraneHead.head_reference`` (eqs. 49–56) for ``system`` (chain, head, hull), ``vessel`` (η, ν) (n, 6)
+    each, ``crane`` (β, β̇) and ``desired`` (p_d^n, ṗ_d^n) (n, 3) each, ``hold`` (3,) the reference kept where
+    the inverse kinematics has no solution: (o_t^n, R_t^n (n, 3, 3), p_ref^t, p_cmd^t, v_ref^t, α_ref, α̇_ref,
+    limited (n,))."""
+    chain, head, hull = system
+    eta, nu = vessel
+    beta, beta_dot = crane
+    p_d, p_d_dot = desired
     n = eta.shape[0]
     o_t_n, R_n_t = np.empty((n, 3)), np.empty((n, 3, 3))
     p_ref_t, p_cmd, v_ref_t = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
@@ -374,10 +386,9 @@ def head_reference(chain, head, hull, eta, nu, beta, beta_dot, p_d, p_d_dot, hol
     for k in range(n):
         _crane_pose(chain, beta[k], beta_dot[k], o, R, v, w)
         _rot_zyx(eta[k, 3], eta[k, 4], eta[k, 5], R_n_b)  # R_b^n, Fossen eq. (2.18)
-        limited[k] = _reference_point(
-            head, hull, eta[k], nu[k], o, R, v, w, p_d[k], p_d_dot[k], hold, R_n_b, o_t_n[k], R_n_t[k], p_ref_t[k],
-            p_cmd[k], v_ref_t[k], alpha_ref[k], alpha_dot_ref[k], c, d,
-        )  # fmt: skip
+        out = (o_t_n[k], R_n_t[k], p_ref_t[k], p_cmd[k], v_ref_t[k], alpha_ref[k], alpha_dot_ref[k])
+        vessel_k = (eta[k], nu[k], R_n_b)
+        limited[k] = _reference_point((head, hull), vessel_k, (o, R, v, w), (p_d[k], p_d_dot[k]), hold, out, (c, d))
         hold = alpha_ref[k]
     return o_t_n, R_n_t, p_ref_t, p_cmd, v_ref_t, alpha_ref, alpha_dot_ref, limited
 
@@ -399,5 +410,5 @@ def warm_up_steps() -> list:
         lambda: delta_ik(head, points),
         lambda: delta_fk(head, rows3),
         lambda: crane_ik_tcp(elbow, rows3, 0.0),
-        lambda: head_reference(chain, head, hull, rows6, rows6, rows3, rows3, rows3, rows3, z3),
+        lambda: head_reference((chain, head, hull), (rows6, rows6), (rows3, rows3), (rows3, rows3), z3),
     ]

@@ -23,7 +23,7 @@ and the loop closure |p_c^t − c_i^t| = l_r (eq. 6).
   joint limits, their convex hull, an inside test, and saturation of a reference onto the hull
   along the ray from the workspace centre.
 
-The inverse and forward kinematics run compiled (:mod:`app.control.tac_kernels`) unless
+The inverse and forward kinematics run compiled (:mod:`app.models.crane_head_kernels`) unless
 ``use_kernels`` is False; the NumPy code here is their reference.
 """
 

@@ -43,6 +43,8 @@ KERNEL_FILES = (
     "ik/ga_kernels.py",
     "models/crane_head_kernels.py",
     "control/tac_kernels.py",
+    "sim/head_kernels.py",
+    "scenes/tac_kernels.py",
 )
 
 

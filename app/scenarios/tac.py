@@ -6,14 +6,14 @@ and DC motors step by step, and e_c, e_s of eq. (61).  The CLI runs whole scenar
 the engine streams it to the GUI a tick at a time.
 
 With ``use_kernels`` (the default when numba is there) a chunk after the vessel motion is one
-compiled call, :func:`app.control.tac_kernels.tac_chunk`; with ``use_kernels = False`` every part
-runs its NumPy reference (tested equal in ``tests/test_tac_kernels.py``).
+compiled call, :func:`app.scenes.tac_kernels.tac_chunk` (the crane-head scene, :mod:`app.scenes.tac`); with
+``use_kernels = False`` every part runs its NumPy reference (tested equal in ``tests/test_tac_kernels.py``).
 
 Modes: ``off`` (head held at p_d^t = [x_d, 0, 0] by its servo: the uncompensated TCP), ``tac`` (the paper:
 crane still in the configuration of eq. (60), head compensates), ``cooperative`` (crane joints
 take a share of the motion within their speed and acceleration limits, head the rest).  Every arm and
 joint moves within its robot file's speed limit, also when a mode changes (the head's motors saturate in
-speed: :class:`~app.control.tac.HeadServo`).
+speed: :class:`~app.scenes.tac.HeadServo`).
 
 Live changes (the engine's ``set_sea``, ``set_vessel``): a new simulator takes over from the running one
 (:meth:`TacSimulator.continue_from`): its clock continues, the machine's states carry over, and the vessel's
@@ -30,8 +30,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.control import tac_kernels
-from app.control.tac import CraneServo, HeadServo, PidGains
+from app.control.tac import CraneServo, PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.marine import kernels as marine_kernels
@@ -41,6 +40,8 @@ from app.marine.waves import SPECTRA, check_sea, wave_components
 from app.models.crane_head import CraneHead
 from app.models.crane_head_kernels import c_array
 from app.models.registry import load_robot
+from app.scenes import tac_kernels
+from app.scenes.tac import HeadServo
 
 MODES = ("off", "tac", "cooperative")
 BETA_EQ60 = np.array([-math.pi / 2, math.pi / 4, -math.pi / 4])  # eq. (60)
@@ -287,7 +288,7 @@ class TacSimulator:
             crane.lower, crane.upper, crane.speed, crane.accel, self.beta_d, sc.crane_share, sc.crane_kp
         )
         # constants of the compiled chunk (C-contiguous float64)
-        self._pid_args, self._crane_args = self.head_servo.kernel_args(), self.crane_servo.kernel_args()
+        self._servo_args, self._crane_args = self.head_servo.kernel_args(), self.crane_servo.kernel_args()
         self._alpha_d, self._p_d_t = c_array(system.alpha_d), c_array(system.p_d_t)
         self._beta0_hint = float(self.beta_d[0])
         self._started = False
@@ -418,7 +419,7 @@ class TacSimulator:
         return TacChunk(t, true.eta, beta, p_ref_t, p_c_t, alpha_ref, alpha, u, p_c_n, p_s_n, e_c, e_s, saturated)
 
     def _advance_compiled(self, t: NDArray[np.float64], true, meas, frozen: bool) -> TacChunk:
-        """:meth:`advance` after the vessel motion in one call of :func:`~app.control.tac_kernels.tac_chunk`."""
+        """:meth:`advance` after the vessel motion in one call of :func:`~app.scenes.tac_kernels.tac_chunk`."""
         sc, sys_, tk = self.scenario, self.system, tac_kernels
         crane, head = self.crane_servo, self.head_servo
         beta_hold = self.beta_d
@@ -439,13 +440,12 @@ class TacSimulator:
         has_prev = self._beta_c_prev is not None
         beta_c_prev = np.array(self._beta_c_prev, dtype=float) if has_prev else np.zeros(3)
         f = c_array
-        out = tk.tac_chunk(
-            f(true.eta), f(meas.eta), f(meas.nu), meas is not true, float(sc.dt), crane_mode,
-            head_mode, f(beta_hold), f(alpha_lock),
-            self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t, sys_.crane.kernel_args, sys_.head.kernel_args,
-            sys_.kernel_hull, sys_.kernel_elbow, self._crane_args, self._pid_args, beta, beta_dot, beta_c_prev,
-            self._beta0_hint, has_prev, alpha, integral, u,
-        )  # fmt: skip
+        x = ((beta, beta_dot, beta_c_prev, self._beta0_hint, has_prev), (alpha, integral, u))
+        inputs = (f(true.eta), f(meas.eta), f(meas.nu), meas is not true)
+        setpoints = (f(beta_hold), f(alpha_lock), self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t)
+        kinematics = (sys_.crane.kernel_args, sys_.head.kernel_args, sys_.kernel_hull, sys_.kernel_elbow)
+        p = ((crane_mode, head_mode, *setpoints), *kinematics, self._crane_args, *self._servo_args)
+        out = tk.tac_chunk(x, inputs, p, float(sc.dt))
         n = t.size
         crane.beta, crane.beta_dot = beta, beta_dot
         if not frozen:

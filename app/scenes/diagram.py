@@ -21,9 +21,11 @@ import html
 from dataclasses import dataclass, field
 
 from app.control.lab import COMAU_LAW, WINCH_LAW
+from app.control.tac import HEAD_PID
 from app.errors import BosunError
 from app.models.block import Block
 from app.sim.actuators import JOINT_ACTUATORS
+from app.sim.head import HEAD_MOTORS
 from app.sim.motionlab import COMAU_DRIVES, PENDULUM, WINCH_DRUM
 
 FLOORS = ("operator", "controller", "plant", "sensor")
@@ -307,8 +309,8 @@ LAB_DIAGRAM = Diagram(
 TAC_DIAGRAM = Diagram(
     scene="tac",
     summary="the crane-head compensation: a supply vessel, its crane and the Delta head (TAC paper)",
-    runs="app.scenarios.tac.TacSimulator.advance: the vessel motion, then one compiled chunk of the rest, "
-    "or the NumPy reference",
+    runs="app.scenarios.tac.TacSimulator.advance: the vessel motion, then app.scenes.tac_kernels.tac_chunk "
+    "(one compiled call per chunk), or the NumPy reference",
     nodes=(
         Node("operator", "operator", "app.engine.tac_session", outputs=("mode", "p_d"), note="HMI: mode, set-point"),
         Node("vessel", "plant", "app.marine.vessel", outputs=("eta", "nu"), note="vessel in irregular seas"),
@@ -321,37 +323,30 @@ TAC_DIAGRAM = Diagram(
             note="motion reference unit",
         ),
         Node(
-            "crane_servo",
+            "crane",
             "controller",
             "app.control.tac",
-            inputs=("mode", "p_d", "eta_m", "beta"),
-            outputs=("beta_cmd",),
-            note="cooperative crane, eqs. 42-44",
+            inputs=("mode", "p_d", "eta_m"),
+            outputs=("beta",),
+            note="cooperative crane servo, eqs. 42-44",
         ),
-        Node("crane", "plant", "app.control.tac", inputs=("beta_cmd",), outputs=("beta",), note="crane joints"),
         Node(
             "head_ref",
             "controller",
             "app.models.crane_head",
             inputs=("p_d", "eta_m", "nu_m", "beta"),
-            outputs=("alpha_ref",),
+            outputs=("alpha_ref", "alpha_dot_ref"),
             note="head references, eqs. 49-56",
         ),
+        Node("pid", "controller", "app.control.tac", HEAD_PID, note="joint PID, eq. 57"),
+        Node("motors", "plant", "app.sim.head", HEAD_MOTORS, note="DC motors, eq. 58"),
         Node(
-            "pid",
+            "windup",
             "controller",
-            "app.control.tac",
-            inputs=("alpha_ref", "alpha", "saturated"),
-            outputs=("u",),
-            note="joint PID, eq. 57",
-        ),
-        Node(
-            "motors",
-            "plant",
-            "app.control.tac",
-            inputs=("u",),
-            outputs=("alpha", "saturated"),
-            note="DC motors, eq. 58",
+            "app.scenes.tac_kernels",
+            inputs=("trial", "limited", "saturated"),
+            outputs=("integral",),
+            note="PID anti-windup commit",
         ),
         Node(
             "head_fk",
@@ -367,19 +362,20 @@ TAC_DIAGRAM = Diagram(
         for w in (
             "vessel.eta -> mru.eta",
             "vessel.nu -> mru.nu",
-            "operator.mode -> crane_servo.mode",
-            "operator.p_d -> crane_servo.p_d",
-            "mru.eta_m -> crane_servo.eta_m",
-            "crane.beta -> crane_servo.beta",
-            "crane_servo.beta_cmd -> crane.beta_cmd",
+            "operator.mode -> crane.mode",
+            "operator.p_d -> crane.p_d",
+            "mru.eta_m -> crane.eta_m",
             "operator.p_d -> head_ref.p_d",
             "mru.eta_m -> head_ref.eta_m",
             "mru.nu_m -> head_ref.nu_m",
             "crane.beta -> head_ref.beta",
             "head_ref.alpha_ref -> pid.alpha_ref",
+            "head_ref.alpha_dot_ref -> pid.alpha_dot_ref",
             "motors.alpha -> pid.alpha",
-            "motors.saturated -> pid.saturated",
             "pid.u -> motors.u",
+            "pid.trial -> windup.trial",
+            "pid.limited -> windup.limited",
+            "motors.saturated -> windup.saturated",
             "motors.alpha -> head_fk.alpha",
             "crane.beta -> head_fk.beta",
             "vessel.eta -> head_fk.eta",
