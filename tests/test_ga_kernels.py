@@ -5,6 +5,9 @@ targets (or velocity commands) must give the same answers, generations, reasons 
 1e-12.  Both paths draw from their own ``numpy.random.Generator`` in the same order (numba shares the
 bit generator), so the streams stay in step for as long as the results agree."""
 
+import ast
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -96,8 +99,8 @@ def test_one_compiled_generation_is_the_reference_generation(population):
             x = robot.position(ga.random_q())
             twin.uniform(robot.lower, robot.upper)
             cost = ga.cost(pop, x)
-            rules = (CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_PROBABILITY, MUTATION_AMPLITUDE)
-            compiled = ga_kernels._evolve(pop, cost, ga.span, ga.n_elite, *rules, twin)
+            rules = (ga.span, ga.n_elite, CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_PROBABILITY, MUTATION_AMPLITUDE)
+            compiled = ga_kernels._evolve(pop, cost, rules, twin)
             np.testing.assert_array_equal(compiled, ga.evolve(pop, cost))
 
 
@@ -124,6 +127,18 @@ def test_compiled_costs_equal_the_reference_on_random_chains(seed, n):
         # (the normalised cost divides by it) while a penalised cost is 100 × that
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
     assert np.any(costs[0][0] >= 1.0)  # some chromosomes were penalised
+
+
+def test_no_compiled_function_takes_more_than_8_arguments():
+    """Issue 29: the constants and per-call values come in records (tuples, one argument each)."""
+    tree = ast.parse(Path(ga_kernels.__file__).read_text(encoding="utf-8"))
+    jitted = {
+        f.name: len(f.args.args)
+        for f in tree.body
+        if isinstance(f, ast.FunctionDef) and any(getattr(d, "id", None) == "_jit" for d in f.decorator_list)
+    }
+    kernels_ = {"_tool_points", "position_costs", "velocity_costs", "_evolve", "evolve_position", "evolve_velocity"}
+    assert kernels_ <= set(jitted) and max(jitted.values()) <= 8, jitted
 
 
 def test_compiled_solve_keeps_the_time_budget():

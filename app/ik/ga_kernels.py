@@ -12,8 +12,34 @@ agree with the NumPy FK to an ulp, as :mod:`app.models.kernels`' do).
 Nothing here reads a clock (numba cannot): a call runs at most ``generations`` generations and
 stops early at the target cost; the solver checks its time budget between calls.
 
-Chain constants as in :mod:`app.models.kernels` (``SerialRobot.kernel_args``):
-θ₀, d₀, a, cos α, sin α (L,), M_θ, M_d (L, n), T_world_base, T_flange_tool (4, 4).
+No kernel takes more than 8 arguments (issue 29): the constants and the per-call values come in
+records, tuples that numba takes as one argument, each built where its values stop changing (every
+array C-contiguous float64, one numba specialisation):
+
+* ``chain`` (the robot; ``SerialRobot.kernel_args``, built once per robot): θ₀ [rad], d₀ [m], a [m],
+  cos α, sin α (L,) of the DH links A = Rz(θ) Tz(d) Tx(a) Rx(α) (TAC paper eq. 39), the joint maps
+  M_θ, M_d (L, n) (θ = θ₀ + M_θ q, d = d₀ + M_d q), T_world_base, T_flange_tool (4, 4) [m];
+* ``limits`` (the position cost's constants; built once per solver): lower, upper (n,), the joint
+  limits [rad, m] a gene must keep to; box_lower, box_extent (3,) [m], the workspace box that
+  normalises positions (step 2: x̂ = (x − box_lower) / box_extent); penalty, the factor (100) on the
+  cost of a chromosome with a gene outside its limits (at least +1);
+* ``rules`` (the operators of steps 5–7; built once per solver and mapping): span (n,), the range the
+  mutation amplitude refers to (the joint ranges [rad, m] in the position mapping, the one-tick speed
+  window 2 × speed [rad/s, m/s] in the velocity mapping); n_elite, the individuals kept unaltered
+  (13 of 125); single_point_probability (½), the chance a pair is crossed single-point rather than
+  uniform; mutation_probability (0.5 %), the chance a gene mutates; amplitude (5 %), the mutation's
+  U(±amplitude)·span;
+* ``target`` (a velocity solve's local target; per call, from the tick's values): θ_a (n,) [rad, m],
+  the joint position the genes θ̇ start from; Δt [s], the tick; x_t (3,) [m], the local target
+  x_a + ẋ_ds Δt (eq. 7); u (3,), the unit commanded direction; w (``CROSS_TRACK_WEIGHT``, 3.0), the
+  weight of the error across u in the cost c(e) = |e·u| + w |e − (e·u)u| [m];
+* ``window`` (a velocity solve's; per call): lo, hi (n,) [rad/s, m/s], the bounds the genes θ̇ are
+  kept in (``GeneticSolver.velocity_window``: ±8 × speed, and θ_a + θ̇Δt within the joint limits);
+* ``stop`` (per call): the stop cost (the normalised target cost, or the velocity tolerance [m]) and
+  the number of generations this call may run.
+
+The per-call state stays in plain arguments: the population ``pop`` (m, n), its costs ``cost`` (m,),
+the target position ``x_t`` (3,) [m] of the position mapping, and the solver's generator ``rng``.
 """
 
 from __future__ import annotations
@@ -28,10 +54,11 @@ __all__ = ["ENABLED", "evolve_position", "evolve_velocity", "position_costs", "v
 
 
 @_jit
-def _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q):
-    """Tool points (m, 3) of configurations Q (m, n): :func:`app.models.kernels.position` row by row in
-    one loop (θ = θ₀ + M_θ q, d = d₀ + M_d q), with cos θ, sin θ of a link that no joint turns (a
-    prismatic joint's or a fixed link) computed once instead of once per row."""
+def _tool_points(chain, Q):
+    """Tool points (m, 3) of configurations Q (m, n) of the ``chain``: :func:`app.models.kernels.position`
+    row by row in one loop (θ = θ₀ + M_θ q, d = d₀ + M_d q), with cos θ, sin θ of a link that no joint
+    turns (a prismatic joint's or a fixed link) computed once instead of once per row."""
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = chain
     L, n = M_theta.shape
     c0, s0, turns = np.empty(L), np.empty(L), np.zeros(L, dtype=np.bool_)
     for i in range(L):
@@ -60,13 +87,12 @@ def _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q):
 
 
 @_jit
-def position_costs(
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, x_t, lower, upper, box_lower, box_extent, penalty
-):  # fmt: skip
+def position_costs(chain, pop, x_t, limits):
     """``GeneticSolver.cost``: normalised distance to x_t (eq. 5 on the workspace box), × ``penalty`` (at
     least +1) for a chromosome with a gene outside its limits.  pop (m, n) → (m,)."""
+    lower, upper, box_lower, box_extent, penalty = limits
     m, n = pop.shape
-    P = _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop)
+    P = _tool_points(chain, pop)
     t0 = (x_t[0] - box_lower[0]) / box_extent[0]
     t1 = (x_t[1] - box_lower[1]) / box_extent[1]
     t2 = (x_t[2] - box_lower[2]) / box_extent[2]
@@ -84,15 +110,16 @@ def position_costs(
 
 
 @_jit
-def velocity_costs(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, q_a, dt, x_t, u, cross_weight):
+def velocity_costs(chain, pop, target):
     """``GeneticSolver.velocity_cost``: c(x(θ_a + θ̇Δt) − x_t) with c(e) = |e·u| + w|e − (e·u)u| (eqs. 5, 7).
     pop (m, n) of joint velocities θ̇ → (m,) [m]."""
+    q_a, dt, x_t, u, cross_weight = target
     m, n = pop.shape
     Q = np.empty((m, n))
     for k in range(m):
         for j in range(n):
             Q[k, j] = q_a[j] + pop[k, j] * dt
-    P = _tool_points(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q)
+    P = _tool_points(chain, Q)
     out = np.empty(m)
     for k in range(m):
         e0, e1, e2 = P[k, 0] - x_t[0], P[k, 1] - x_t[1], P[k, 2] - x_t[2]
@@ -103,10 +130,11 @@ def velocity_costs(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, q_a
 
 
 @_jit
-def _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probability, amplitude, rng):
+def _evolve(pop, cost, rules, rng):
     """One generation as ``GeneticSolver.evolve`` (steps 5–7): the n_elite best unaltered, then children
     of SUS-selected parents (Baker 1987, on fitness 1/cost) paired at random, crossed single-point or
-    uniform 50/50, each gene mutated with probability 0.5 % by U(±5 %)·span."""
+    uniform 50/50, each gene mutated with probability 0.5 % by U(±5 %)·span (the ``rules`` record)."""
+    span, n_elite, single_point_probability, mutation_probability, amplitude = rules
     size, n = pop.shape
     n_children = size - n_elite
     out = np.empty((size, n))
@@ -160,36 +188,32 @@ def _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probabi
 
 
 @_jit
-def evolve_position(
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, cost, x_t, lower, upper, box_lower, box_extent, penalty,
-    span, n_elite, single_point_probability, mutation_probability, amplitude, target_cost, generations, rng,
-):  # fmt: skip
+def evolve_position(chain, pop, cost, x_t, limits, rules, stop, rng):
     """Up to ``generations`` generations of the position mapping, stopping when the best cost is below
-    ``target_cost`` (step 8): (population, cost, generations run)."""
+    ``target_cost`` (step 8; ``stop`` = (target_cost, generations)): (population, cost, generations run)."""
+    target_cost, generations = stop
     ran = 0
     while ran < generations and cost.min() >= target_cost:
-        pop = _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probability, amplitude, rng)
-        cost = position_costs(
-            theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, x_t, lower, upper, box_lower, box_extent, penalty
-        )
+        pop = _evolve(pop, cost, rules, rng)
+        cost = position_costs(chain, pop, x_t, limits)
         ran += 1
     return pop, cost, ran
 
 
 @_jit
-def evolve_velocity(
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, cost, q_a, dt, x_t, u, cross_weight, lo, hi, span,
-    n_elite, single_point_probability, mutation_probability, amplitude, tolerance, generations, rng,
-):  # fmt: skip
+def evolve_velocity(chain, pop, cost, target, window, rules, stop, rng):
     """Up to ``generations`` generations of the velocity mapping (genes θ̇, kept inside the window
-    [lo, hi]), stopping when the best cost is below ``tolerance``: (population, cost, generations run)."""
+    [lo, hi]), stopping when the best cost is below ``tolerance`` (``stop`` = (tolerance, generations)):
+    (population, cost, generations run)."""
+    lo, hi = window
+    tolerance, generations = stop
     ran = 0
     while ran < generations and cost.min() >= tolerance:
-        pop = _evolve(pop, cost, span, n_elite, single_point_probability, mutation_probability, amplitude, rng)
+        pop = _evolve(pop, cost, rules, rng)
         for k in range(pop.shape[0]):
             for j in range(pop.shape[1]):
                 pop[k, j] = min(max(pop[k, j], lo[j]), hi[j])
-        cost = velocity_costs(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, pop, q_a, dt, x_t, u, cross_weight)
+        cost = velocity_costs(chain, pop, target)
         ran += 1
     return pop, cost, ran
 
@@ -199,14 +223,15 @@ def warm_up_steps() -> list:
     GA passes (for :func:`app.warmup.warm_up`)."""
     L, n = 3, 3
     z3, zLn, eye = np.zeros(L), np.zeros((L, n)), np.eye(4)
-    args = (z3, z3, np.ones(L), np.ones(L), z3, np.eye(L, n), zLn, eye, eye)  # a serial chain's kernel_args
-    pop, cost = np.zeros((4, n)), np.ones(4)
-    box = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
-    window = (-np.ones(n), np.ones(n), np.ones(n))  # velocity window and mutation span
-    rules = (1, 0.5, 0.005, 0.05, 0.01, 1, np.random.default_rng(0))  # elite, operators, stop, generations, rng
+    chain = (z3, z3, np.ones(L), np.ones(L), z3, np.eye(L, n), zLn, eye, eye)  # a serial chain's kernel_args
+    pop, cost, rng = np.zeros((4, n)), np.ones(4), np.random.default_rng(0)
+    limits = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
+    rules = (np.ones(n), 1, 0.5, 0.005, 0.05)  # mutation span, elite, operators
+    target = (np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0)  # θ_a, Δt, x_t, u, w
+    window, stop = (-np.ones(n), np.ones(n)), (0.01, 1)  # velocity window; stop cost, generations
     return [
-        lambda: position_costs(*args, pop, np.zeros(3), *box),
-        lambda: velocity_costs(*args, pop, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0),
-        lambda: evolve_position(*args, pop, cost, np.zeros(3), *box, np.ones(n), *rules),
-        lambda: evolve_velocity(*args, pop, cost, np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0, *window, *rules),
+        lambda: position_costs(chain, pop, np.zeros(3), limits),
+        lambda: velocity_costs(chain, pop, target),
+        lambda: evolve_position(chain, pop, cost, np.zeros(3), limits, rules, stop, rng),
+        lambda: evolve_velocity(chain, pop, cost, target, window, rules, stop, rng),
     ]

@@ -241,6 +241,12 @@ class GeneticSolver(Solver):
         self._lower, self._upper = np.array(robot.lower, dtype=float), np.array(robot.upper, dtype=float)
         self._box_lower = np.array(self.box.lower, dtype=float)
         self._box_extent = np.array(self.box.extent, dtype=float)
+        # ... and the kernels' records (module docstring of ga_kernels), made once: the robot's limits and speeds
+        # are fixed once it is loaded (the chain record is the robot's own kernel_args)
+        self._limits = (self._lower, self._upper, self._box_lower, self._box_extent, PENALTY_FACTOR)
+        operators = (self.n_elite, CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_PROBABILITY, MUTATION_AMPLITUDE)
+        self._position_rules = (self.span, *operators)
+        self._velocity_rules = (np.ascontiguousarray(2.0 * robot.speed, dtype=float), *operators)
         if not 0.0 < velocity_tolerance < 1.0:
             raise ValueError("velocity_tolerance must be between 0 and 1 (a fraction of the step)")
         self.velocity_tolerance = velocity_tolerance
@@ -264,9 +270,8 @@ class GeneticSolver(Solver):
         """Normalised distance |x̂_t − x̂_a| (eq. 5 on normalised positions), penalised outside limits."""
         if self.compiled and np.ndim(genes) == 2:
             return ga_kernels.position_costs(
-                *self.robot.kernel_args, np.ascontiguousarray(genes, dtype=float),
-                np.ascontiguousarray(x_t, dtype=float), self._lower, self._upper, self._box_lower, self._box_extent,
-                PENALTY_FACTOR,
+                self.robot.kernel_args, np.ascontiguousarray(genes, dtype=float),
+                np.ascontiguousarray(x_t, dtype=float), self._limits,
             )  # fmt: skip
         reached = self.box.normalise(self.robot.position(genes))
         d = np.linalg.norm(reached - self.box.normalise(x_t), axis=-1)
@@ -326,10 +331,8 @@ class GeneticSolver(Solver):
         if self.compiled:
             pop, cost = np.ascontiguousarray(pop, dtype=float), np.ascontiguousarray(cost, dtype=float)
             return ga_kernels.evolve_position(
-                *self.robot.kernel_args, pop, cost, np.ascontiguousarray(x_t, dtype=float), self._lower, self._upper,
-                self._box_lower, self._box_extent, PENALTY_FACTOR, self.span, self.n_elite,
-                CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_PROBABILITY, MUTATION_AMPLITUDE, float(self.target_cost),
-                generations, self.rng,
+                self.robot.kernel_args, pop, cost, np.ascontiguousarray(x_t, dtype=float), self._limits,
+                self._position_rules, (float(self.target_cost), generations), self.rng,
             )  # fmt: skip
         ran = 0
         while ran < generations and cost.min() >= self.target_cost:
@@ -422,7 +425,7 @@ class GeneticSolver(Solver):
         """Cost of joint velocities: the distance from x(θ_a + θ̇Δt) to the local target x_t (eqs. 5, 7) [m]."""
         if self.compiled and np.ndim(qdot) == 2:
             qdot, q_a, x_t, u = (np.ascontiguousarray(v, dtype=float) for v in (qdot, q_a, x_t, u))
-            return ga_kernels.velocity_costs(*self.robot.kernel_args, qdot, q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT)
+            return ga_kernels.velocity_costs(self.robot.kernel_args, qdot, (q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT))
         return self.command_distance(self.robot.position(q_a + qdot * dt) - x_t, u)
 
     def _evolve_velocity(
@@ -445,10 +448,8 @@ class GeneticSolver(Solver):
         if self.compiled:
             pop, cost = np.ascontiguousarray(pop, dtype=float), np.ascontiguousarray(cost, dtype=float)
             return ga_kernels.evolve_velocity(
-                *self.robot.kernel_args, pop, cost, q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT, lo, hi, mutation_span,
-                self.n_elite,
-                CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_PROBABILITY, MUTATION_AMPLITUDE, float(tolerance),
-                generations, self.rng,
+                self.robot.kernel_args, pop, cost, (q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT), (lo, hi),
+                self._velocity_rules, (float(tolerance), generations), self.rng,
             )  # fmt: skip
         ran = 0
         while ran < generations and cost.min() >= tolerance:
