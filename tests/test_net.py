@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.net.codec import ProtocolError, decode, encode
-from app.net.messages import CLIENT_MESSAGES, MAX_MESSAGE_BYTES
+from app.net.messages import CLIENT, CLIENT_MESSAGES, MAX_MESSAGE_BYTES
 from app.net.transport import Client, TransportError, check_url, is_local
 from app.teleop.client import run_joystick_client
 from app.teleop.devices import PygameJoysticks
@@ -64,7 +64,8 @@ def test_round_trip_every_client_message():
     }
     assert set(samples) == set(CLIENT_MESSAGES)
     for mtype, fields in samples.items():
-        assert decode(encode(mtype, **fields)) == {"type": mtype, **fields}
+        msg = decode(encode(mtype, **fields))
+        assert type(msg) is CLIENT[mtype] and msg.fields() == fields
 
 
 @pytest.mark.parametrize(
@@ -128,8 +129,8 @@ def test_fuzz_structured_messages_valid_or_rejected(mtype, fields):
     except ProtocolError:
         return
     # accepted messages are clean: known type, known fields, finite numbers
-    assert msg["type"] in CLIENT_MESSAGES and set(msg) - {"type"} <= set(CLIENT_MESSAGES[msg["type"]])
-    for v in msg.values():
+    assert msg.TYPE in CLIENT_MESSAGES and set(msg.fields()) <= set(CLIENT_MESSAGES[msg.TYPE])
+    for v in msg.fields().values():
         if isinstance(v, float):
             assert np.isfinite(v)
 
@@ -352,8 +353,8 @@ def test_every_scene_command_is_a_protocol_message_and_each_scene_runs_its_own()
     from app.engine.tac_session import TacSession
     from app.net.messages import SCENE_MESSAGES
 
-    tables = {cls: set(cls.COMMANDS) for cls in (Session, TacSession, LabSession)}
+    tables = {cls: {kind.TYPE for kind in cls.COMMANDS} for cls in (Session, TacSession, LabSession)}
     assert set().union(*tables.values()) == set(SCENE_MESSAGES)
     assert tables[LabSession] >= {"lab_winch", "lab_vvmc", "lab_antisway", "set_vessel"}
     assert "set_robot" in tables[Session] and "set_robot" not in tables[LabSession]
-    assert all(fn.__name__ == mtype for cls in tables for mtype, fn in cls.COMMANDS.items())
+    assert all(fn.__name__ == kind.TYPE for cls in tables for kind, fn in cls.COMMANDS.items())

@@ -105,10 +105,10 @@ def hold_steady(op, seconds: float, between=None):
             between(sent)
         while op.sub.poll(1):
             msg = decode_engine(op.sub.recv())
-            if msg["type"] == "state":
-                last = snapshot_from_wire(msg["state"])
-            elif msg["type"] == "log":
-                logs.append(msg["text"])
+            if msg.TYPE == "state":
+                last = snapshot_from_wire(msg.state)
+            elif msg.TYPE == "log":
+                logs.append(msg.text)
         time.sleep(0.02)
     return last, sent, logs
 

@@ -58,8 +58,8 @@ def _input_refusal(client: Client, timeout: float) -> str:
             msg = decode_engine(client.dealer.recv())
         except ProtocolError:
             continue
-        if msg["type"] == "reply" and not msg["ok"] and msg.get("re") == "input":
-            return msg.get("error", "")
+        if msg.TYPE == "reply" and not msg.ok and msg.re == "input":
+            return msg.error or ""
     return ""
 
 
@@ -122,7 +122,7 @@ def _ask(sock, mtype, timeout=10.0, **fields):
         if not sock.poll(int(1000 * left) + 1):
             break
         msg = decode_engine(sock.recv())
-        if msg["type"] == "welcome" or (msg["type"] == "reply" and msg.get("re") == mtype):
+        if msg.TYPE == "welcome" or (msg.TYPE == "reply" and msg.re == mtype):
             return msg
     return None
 
@@ -211,19 +211,19 @@ def test_token_guessing_never_keeps_the_right_token_out_and_each_refusal_says_wh
             ok = Client(srv.url, role="viewer", name=f"right{k}", token="s3cret", timeout=10.0)
             ok.close()
         reply = _ask(stopper, "estop", reason="stop during guessing", token="s3cret")
-        assert reply is not None and reply["ok"], reply
+        assert reply is not None and reply.ok, reply
     finally:
         stop.set()
         th.join(timeout=10)
     elapsed = time.monotonic() - started
     try:
-        assert None not in answers and all(a["type"] == "reply" and not a["ok"] for a in answers)
-        refusals = [a["error"] for a in answers]
+        assert None not in answers and all(a.TYPE == "reply" and not a.ok for a in answers)
+        refusals = [a.error for a in answers]
         assert refusals[0] == "hello with a wrong token"
         assert any("not checked" in r and "wrong tokens" in r and "from this client" in r for r in refusals)
         # the guesser itself cannot go on: its next right token is refused unexamined (guessing is slowed)
         late = _ask(guesser, "hello", role="viewer", name="g", token="s3cret")
-        assert late is not None and late["type"] == "reply" and "not checked" in late["error"], late
+        assert late is not None and late.TYPE == "reply" and "not checked" in late.error, late
         with pytest.raises(TransportError, match="hello without a token"):
             Client(srv.url, role="viewer", name="none", timeout=5.0)
         # the guesser's tries were examined at most 10 a second (an upper bound: a slow machine tries fewer)
@@ -289,8 +289,8 @@ def test_the_role_lapses_only_after_the_timeout_with_a_warning_and_the_displaced
                 from app.net.codec import decode_engine
 
                 m = decode_engine(msg[0])
-                if m["type"] == "log":
-                    logs.append(m["text"])
+                if m.TYPE == "log":
+                    logs.append(m.text)
         assert any("operator first silent for 0.5 s" in t for t in logs)  # every client is warned
         time.sleep(1.2)
         second = Client(srv.url, role="operator", name="second", timeout=3.0)

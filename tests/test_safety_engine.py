@@ -46,7 +46,7 @@ def test_estop_reaches_a_restarted_engine_without_a_new_hello():
         # anything else before hello is answered with a hint to say hello again (no silent drop)
         gui.send("reset")
         reply = gui._wait_for(("reply",), re="reset")
-        assert not reply["ok"] and "say hello" in reply["error"]
+        assert not reply.ok and "say hello" in reply.error
     finally:
         gui.close()
         viewer.close()
@@ -66,11 +66,11 @@ def test_estop_without_hello_needs_the_token_where_one_is_set():
     try:
         raw.send(encode("estop", reason="no token"))
         assert raw.poll(3000)
-        assert not decode_engine(raw.recv())["ok"]
+        assert not decode_engine(raw.recv()).ok
         assert not viewer.latest_state().estop
         raw.send(encode("estop", reason="with token", token="s3cret"))
         assert raw.poll(3000)
-        assert decode_engine(raw.recv())["ok"]
+        assert decode_engine(raw.recv()).ok
         assert wait_for(viewer, lambda s: s.estop)
     finally:
         raw.close(0)

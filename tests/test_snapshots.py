@@ -49,7 +49,7 @@ def scenes():
 
 def _over_the_wire(obj):
     """What a client receives: the server's msgpack bytes of ``to_wire(obj)``, decoded."""
-    return decode_engine(encode("state", state=to_wire(obj)))["state"]
+    return decode_engine(encode("state", state=to_wire(obj))).state
 
 
 def test_every_scene_has_one_snapshot_and_one_description_class():
@@ -152,9 +152,9 @@ def _study_messages(client: Client, until: float):
         if not client.sub.poll(200):
             continue
         msg = decode_engine(client.sub.recv())
-        if msg["type"] == "study":
-            seen.append(msg["study"])
-            if msg["study"]["status"] in ("done", "cancelled", "failed"):
+        if msg.TYPE == "study":
+            seen.append(msg.study)
+            if msg.study["status"] in ("done", "cancelled", "failed"):
                 return seen
     raise AssertionError(f"no final study message; seen {[m['status'] for m in seen]}")
 

@@ -24,8 +24,8 @@ import zmq
 
 from app.engine.clients import clean_name
 from app.errors import printable
-from app.net.codec import ProtocolError, decode, encode
-from app.net.messages import OPERATOR_ONLY
+from app.net.codec import ProtocolError, decode, encode_message
+from app.net.messages import OPERATOR_ONLY, Hello, Reply, Welcome
 from app.teleop.devices import InputSample
 
 if TYPE_CHECKING:
@@ -87,10 +87,8 @@ class EngineIO:
 
     # ------------------------------------------------------------------ answers
     def reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
-        fields: dict[str, Any] = {"re": re, "ok": ok}
-        if error:
-            fields["error"] = error[:1000]
-        self.srv.router.send_multipart([ident, encode("reply", **fields)], zmq.NOBLOCK)
+        answer = Reply(re=re, ok=ok, error=error[:1000] if error else None)
+        self.srv.router.send_multipart([ident, encode_message(answer)], zmq.NOBLOCK)
 
     def reject(self, ident: bytes, reason: str, re: str | None = None) -> None:
         self.srv.rejected += 1
@@ -179,7 +177,7 @@ class EngineIO:
         except ProtocolError as err:
             self.reject(ident, str(err), re="invalid")
             return
-        mtype = msg["type"]
+        mtype = msg.TYPE
         self._current_type = mtype
         if mtype == "hello":
             self._hello(ident, msg, now)
@@ -187,11 +185,11 @@ class EngineIO:
         client = book.clients.get(ident)
         if client is None:
             if mtype == "estop":  # STOP must never fail: accepted before or without hello
-                why = self.credential(ident, msg.get("token"), srv.token, "token")
+                why = self.credential(ident, msg.token, srv.token, "token")
                 if why:
                     self.reject(ident, f"estop {why}", re="estop")
                     return
-                self._estop(ident, f"an unregistered client ({msg.get('reason', 'no reason')})", now)
+                self._estop(ident, f"an unregistered client ({msg.reason or 'no reason'})", now)
                 return
             srv.rejected += 1
             if now - self._unknown_logged.get(ident, -math.inf) > 5.0:  # a re-hello hint, not a log flood
@@ -227,12 +225,12 @@ class EngineIO:
                 self.reject(ident, f"{mtype}: only the operator may do this", re=mtype)
             return
         if mtype == "input":
-            sample = InputSample(tuple(msg["axes"]), tuple(msg["buttons"]), msg["device"], now)
-            if not srv.inbox.put_input(ident, sample, msg.get("t_send")):
+            sample = InputSample(tuple(msg.axes), tuple(msg.buttons), msg.device, now)
+            if not srv.inbox.put_input(ident, sample, msg.t_send):
                 srv.rejected += 1
             return
         if mtype == "device_lost":
-            if not srv.inbox.put(("lost", ident, bool(msg.get("released", False)), now)):
+            if not srv.inbox.put(("lost", ident, bool(msg.released), now)):
                 srv.rejected += 1
             return
         if not srv.inbox.put(("command", ident, mtype, msg, client.name, now)):
@@ -255,15 +253,15 @@ class EngineIO:
             re=mtype,
         )
 
-    def _hello(self, ident: bytes, msg: dict[str, Any], now: float) -> None:
+    def _hello(self, ident: bytes, msg: Hello, now: float) -> None:
         srv = self.srv
-        why = self.credential(ident, msg.get("token"), srv.token, "token")
+        why = self.credential(ident, msg.token, srv.token, "token")
         if why:
             self.reject(ident, f"hello {why}", re="hello")
             return
-        name = clean_name(msg["name"])
-        wants = msg["role"] == "operator"
-        why = self.credential(ident, msg.get("secret"), srv.operator_secret, "launch secret") if wants else ""
+        name = clean_name(msg.name)
+        wants = msg.role == "operator"
+        why = self.credential(ident, msg.secret, srv.operator_secret, "launch secret") if wants else ""
         if why:
             role, note = srv.book.join(ident, name, False, now)
             note = (
@@ -275,14 +273,10 @@ class EngineIO:
         if role == "operator":  # a new (or reconnected) operator starts disarmed: before any of its input
             srv.inbox.put(("operator", name))
         srv._note("info", f"{name} connected as {role}")
-        welcome: dict[str, Any] = {
-            "client_id": ident.decode(errors="replace")[:64],
-            "role": role,
-            "state_url": srv.state_url,
-        }
-        if note:
-            welcome["note"] = note
-        srv.router.send_multipart([ident, encode("welcome", **welcome)], zmq.NOBLOCK)
+        welcome = Welcome(
+            client_id=ident.decode(errors="replace")[:64], role=role, state_url=srv.state_url, note=note or None
+        )
+        srv.router.send_multipart([ident, encode_message(welcome)], zmq.NOBLOCK)
         srv.router.send_multipart([ident, srv._description], zmq.NOBLOCK)  # the scene's static data
 
     # ------------------------------------------------------------------ the thread

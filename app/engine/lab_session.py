@@ -542,7 +542,7 @@ class LabSession(Scene):
         return LabDescription(
             seq=self.describe_seq,
             title="Motion-Lab",
-            commands=sorted(self.COMMANDS),
+            commands=sorted(kind.TYPE for kind in self.COMMANDS),
             lab_xml=resolve_lab(self.lab_name).read_text(encoding="utf-8"),
             platforms=plats,
             comau_xml=read_robot_file(resolve(self.layout.crane_robot)),

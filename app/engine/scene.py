@@ -4,9 +4,10 @@ The server owns sockets and time; a scene owns its machines.  A scene has
 
 * ``describe()``: its static data (a :class:`~app.net.snapshots.Description`), sent on join and
   whenever it changes (``describe_seq`` increments, :meth:`changed`);
-* a **command table** ``COMMANDS``: protocol message type → the method that runs it (the scene's methods
-  marked ``@command``, named as their message), called with the message's fields as keywords; a command
-  of another scene is refused by name, and nothing is looked up by a string from the wire;
+* a **command table** ``COMMANDS``: a scene command's class (:data:`app.net.messages.SCENE_COMMANDS`) → the
+  method that runs it (the scene's methods marked ``@command``, named as their message), called by
+  :meth:`Scene.run` with the typed message's fields as keywords; a command of another scene is refused, and
+  nothing is looked up by a string from the wire;
 * ``tick(now, dt, solve_budget)``, ``snapshot()`` (a typed :class:`~app.net.snapshots.Snapshot`),
   ``estop(source)``, ``reset()``, ``pause(on)``;
 * one log (``note``), one input pipeline (``input``) and one alarm list (``alarms``);
@@ -27,6 +28,7 @@ from typing import Any, ClassVar
 
 from app.engine.jobs import Jobs
 from app.errors import BosunError
+from app.net.messages import SCENE_COMMANDS, Message
 from app.net.snapshots import Alarm, Description, InputFlags, Snapshot
 
 
@@ -43,9 +45,12 @@ class LogEntry:
 
 
 def command(fn: Callable[..., Any]) -> Callable[..., Any]:
-    """Marks a scene method as the handler of the protocol message of its name (one of
-    :data:`app.net.messages.SCENE_MESSAGES`): the scene's ``COMMANDS`` table is made of them."""
-    fn.command_type = fn.__name__
+    """Marks a scene method as the handler of the scene command of its name (a class of
+    :data:`app.net.messages.SCENE_COMMANDS`): the scene's ``COMMANDS`` table is made of them.  A name that is
+    no scene command is a TypeError when the class is made."""
+    if fn.__name__ not in SCENE_COMMANDS:
+        raise TypeError(f"@command {fn.__name__}: no scene command of that name in app.net.messages")
+    fn.command_type = SCENE_COMMANDS[fn.__name__]
     return fn
 
 
@@ -54,14 +59,14 @@ class Scene(abc.ABC):
 
     KIND: ClassVar[str] = ""
     TITLE: ClassVar[str] = ""
-    #: protocol message type -> the method that runs it (fields as keywords); built from the ``@command``
+    #: scene command class -> the method that runs it (fields as keywords); built from the ``@command``
     #: methods of the class and its bases
-    COMMANDS: ClassVar[dict[str, Callable[..., Any]]] = {}
+    COMMANDS: ClassVar[dict[type[Message], Callable[..., Any]]] = {}
 
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)
         own = vars(cls)  # an override of an inherited command runs, marked again or not
-        table = {mtype: own.get(mtype, fn) for mtype, fn in cls.COMMANDS.items()}
+        table = {kind: own.get(kind.TYPE, fn) for kind, fn in cls.COMMANDS.items()}
         for fn in own.values():
             mtype = getattr(fn, "command_type", None)
             if mtype is not None:
@@ -87,13 +92,21 @@ class Scene(abc.ABC):
         self.describe_seq += 1
 
     # ------------------------------------------------------------------ commands
+    def run(self, msg: Message) -> Any:
+        """Run a typed scene command (validated once, when it was decoded) from the table; :class:`CommandError`
+        for one of another scene.  Returns what the command returns: a :class:`~app.engine.jobs.Deferred` when
+        its work went off the loop."""
+        handler = self.COMMANDS.get(type(msg))
+        if handler is None:
+            raise CommandError(f"{msg.TYPE}: this engine runs {self.TITLE}, not the scene of that command")
+        return handler(self, **msg.fields())
+
     def command(self, mtype: str, **fields: Any) -> Any:
-        """Run a scene command from the table; :class:`CommandError` for one of another scene.  Returns what
-        the command returns: a :class:`~app.engine.jobs.Deferred` when its work went off the loop."""
-        run = self.COMMANDS.get(mtype)
-        if run is None:
-            raise CommandError(f"{mtype}: this engine runs {self.TITLE}, not the scene of that command")
-        return run(self, **fields)
+        """:meth:`run` for a command built in this process (by type and fields: studies, benches, tests)."""
+        kind = SCENE_COMMANDS.get(mtype)
+        if kind is None:
+            raise CommandError(f"{mtype}: no such scene command")
+        return self.run(kind(**fields))
 
     def pause(self, on: bool) -> None:
         """Stand time still (no client shows this scene) or let it run again.  Pausing and resuming

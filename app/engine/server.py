@@ -49,7 +49,6 @@ import sys
 import threading
 import time
 from collections import deque
-from typing import Any
 
 import zmq
 
@@ -60,8 +59,8 @@ from app.engine.io import EngineIO, IOWindow
 from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene
 from app.errors import BosunError
-from app.net.codec import encode
-from app.net.messages import SCENE_MESSAGES
+from app.net.codec import encode_message
+from app.net.messages import ENGINE, SCENE_MESSAGES, Description, Log, Message, Reply, State
 from app.net.security import AuthThrottle, CurveAuthenticator, ServerCurve
 from app.net.snapshots import EngineInfo, to_wire
 from app.net.transport import TransportError, check_url, is_local, state_url_for
@@ -229,11 +228,9 @@ class EngineServer:
     # ------------------------------------------------------------------ loop: applying what came in
     def _send_reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
         """A reply from the loop, through the I/O thread."""
-        fields: dict[str, Any] = {"re": re, "ok": ok}
-        if error:
-            fields["error"] = error[:1000]
+        answer = Reply(re=re, ok=ok, error=error[:1000] if error else None)
         with contextlib.suppress(zmq.ZMQError):
-            self._reply_out.send_multipart([ident, encode("reply", **fields)], zmq.NOBLOCK)
+            self._reply_out.send_multipart([ident, encode_message(answer)], zmq.NOBLOCK)
 
     def _apply_inbox(self) -> None:
         """E-STOPs first; then commands and input in arrival order.  An E-STOP that came after a
@@ -269,7 +266,7 @@ class EngineServer:
                     if t_recv > t:
                         self.session.estop(source=source)
 
-    def _command(self, ident: bytes, mtype: str, msg: dict[str, Any], name: str) -> None:
+    def _command(self, ident: bytes, mtype: str, msg: Message, name: str) -> None:
         try:
             if ident != self.operator:
                 raise CommandError(f"{mtype}: {name} is no longer the operator")
@@ -277,21 +274,21 @@ class EngineServer:
                 self.session.reset()
             elif mtype == "ack_alarm":
                 alarms = getattr(self.session, "alarms", None)
-                n = alarms.ack(msg.get("key") or None) if alarms is not None else 0
+                n = alarms.ack(msg.key or None) if alarms is not None else 0
                 self.session.note("info", f"{name} acknowledged {n} alarm{'s' if n != 1 else ''}")
             elif mtype == "shelve_alarm":
-                minutes = float(msg.get("minutes", SHELVE_DEFAULT_S / 60))
+                minutes = float(SHELVE_DEFAULT_S / 60 if msg.minutes is None else msg.minutes)
                 try:
                     if minutes == 0:
-                        self.session.alarms.unshelve(msg["key"], f"by {name}")
+                        self.session.alarms.unshelve(msg.key, f"by {name}")
                     else:
-                        self.session.alarms.shelve(msg["key"], 60.0 * minutes, who=name)
+                        self.session.alarms.shelve(msg.key, 60.0 * minutes, who=name)
                 except ValueError as err:
                     raise CommandError(str(err)) from None
             elif mtype == "pause":
-                self.session.pause(bool(msg["on"]))
+                self.session.pause(bool(msg.on))
             elif mtype in SCENE_MESSAGES:
-                done = self.session.command(mtype, **{k: v for k, v in msg.items() if k not in ("v", "type")})
+                done = self.session.run(msg)
                 if isinstance(done, Deferred):  # its work runs off the loop: the reply when it is swapped in
                     self._deferred[done.ticket] = (ident, mtype)
                     return
@@ -327,7 +324,7 @@ class EngineServer:
         """Encode the scene's description when it changed (the I/O thread answers ``describe`` with it)."""
         seq = self.session.describe_seq
         if seq != self._described:
-            self._description = encode("description", description=to_wire(self.session.describe()))
+            self._description = encode_message(Description(description=to_wire(self.session.describe())))
             self._described = seq
             if self._io_thread is not None:  # announced to every subscriber; late joiners ask for it
                 with contextlib.suppress(zmq.ZMQError):
@@ -353,14 +350,14 @@ class EngineServer:
             max_tick_ms=round(1e3 * self.max_tick, 1),
             paused=self.session.paused,
         )
-        self.pub.send(encode("state", state=to_wire(snap)), zmq.NOBLOCK)
+        self.pub.send(encode_message(State(state=to_wire(snap))), zmq.NOBLOCK)
         while self.session.events:
             mtype, fields = self.session.events.popleft()
             with contextlib.suppress(zmq.ZMQError):
-                self.pub.send(encode(mtype, **{mtype: fields}), zmq.NOBLOCK)
+                self.pub.send(encode_message(ENGINE[mtype](**{mtype: fields})), zmq.NOBLOCK)
         for e in self.session.log:
             if e.seq > self._log_sent:
-                self.pub.send(encode("log", level=e.level, text=e.text[:1000], t=e.t), zmq.NOBLOCK)
+                self.pub.send(encode_message(Log(level=e.level, text=e.text[:1000], t=e.t)), zmq.NOBLOCK)
                 self._log_sent = e.seq
 
     # ------------------------------------------------------------------ loop

@@ -465,7 +465,7 @@ class Session(Scene):
         return TeleopDescription(
             seq=self.describe_seq,
             title="Teleoperation",
-            commands=sorted(self.COMMANDS),
+            commands=sorted(kind.TYPE for kind in self.COMMANDS),
             robots=list(library_entries(str(robots_dir()))),
             robot=self.robot_name,
             robot_xml=self.robot_xml,

@@ -254,7 +254,7 @@ class TacSession(Scene):
         return TacDescription(
             seq=self.describe_seq,
             title="Crane head",
-            commands=sorted(self.COMMANDS),
+            commands=sorted(kind.TYPE for kind in self.COMMANDS),
             crane_xml=read_robot_file(resolve(sc.crane)),
             head_xml=read_robot_file(resolve(sc.head)),
             vessel=self.vessel.label,

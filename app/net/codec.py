@@ -1,7 +1,8 @@
 """Bytes ⇄ protocol messages: msgpack bodies validated against :mod:`app.net.messages`.
 
-:func:`decode` never raises anything but :class:`ProtocolError` (with a one-line reason),
-whatever the bytes: a server can log the reason and carry on.
+:func:`decode` validates a message once and returns an instance of its class (a typed
+:class:`~app.net.messages.Message`); it never raises anything but :class:`ProtocolError` (with a one-line
+reason), whatever the bytes: a server can log the reason and carry on.  :func:`encode_message` sends one.
 """
 
 from __future__ import annotations
@@ -13,11 +14,14 @@ import msgpack
 
 from app.errors import BosunError
 from app.net.messages import (
+    CLIENT,
     CLIENT_MESSAGES,
+    ENGINE,
     ENGINE_MESSAGES,
     MAX_ENGINE_MESSAGE_BYTES,
     MAX_MESSAGE_BYTES,
     PROTOCOL_VERSION,
+    Message,
 )
 
 
@@ -108,25 +112,43 @@ def validate(msg: Any, schema: dict[str, dict[str, tuple]]) -> dict[str, Any]:
 
 
 def encode(mtype: str, **fields: Any) -> bytes:
-    """Encode one message (not validated: the engine and clients build their own messages)."""
+    """Encode one message by type and fields (not validated: the engine and clients build their own messages;
+    :func:`encode_message` checks the fields against the message's class first)."""
     return msgpack.packb({"v": PROTOCOL_VERSION, "type": mtype, **fields}, use_bin_type=True)
 
 
-def decode(
-    data: bytes, schema: dict[str, dict[str, tuple]] = CLIENT_MESSAGES, limit: int = MAX_MESSAGE_BYTES
-) -> dict[str, Any]:
-    """Decode and validate; any failure is a :class:`ProtocolError`."""
+def encode_message(msg: Message) -> bytes:
+    """Encode a typed message (its set fields)."""
+    return encode(msg.TYPE, **msg.fields())
+
+
+def build(mtype: str, **fields: Any) -> Message:
+    """The client message ``mtype`` with ``fields`` as its class (a TypeError names an unknown or missing field: a
+    sender's bug, not the peer's)."""
+    cls = CLIENT.get(mtype)
+    if cls is None:
+        raise TypeError(f"no client message {mtype!r}")
+    return cls(**fields)
+
+
+def _unpack(data: bytes, limit: int) -> Any:
     if not isinstance(data, bytes | bytearray | memoryview):
         raise ProtocolError("message is not bytes")
     if len(data) > limit:
         raise ProtocolError(f"message of {len(data)} bytes exceeds the limit of {limit}")
     try:
-        msg = msgpack.unpackb(bytes(data), raw=False, strict_map_key=True)
+        return msgpack.unpackb(bytes(data), raw=False, strict_map_key=True)
     except Exception as err:  # msgpack raises many types on garbage; all mean "not msgpack"
         raise ProtocolError(f"not a msgpack message ({type(err).__name__})") from None
-    return validate(msg, schema)
 
 
-def decode_engine(data: bytes) -> dict[str, Any]:
-    """Decode a message sent by the engine (client side)."""
-    return decode(data, ENGINE_MESSAGES, MAX_ENGINE_MESSAGE_BYTES)
+def decode(data: bytes, limit: int = MAX_MESSAGE_BYTES) -> Message:
+    """Decode and validate a client's message: an instance of its class; any failure is a :class:`ProtocolError`."""
+    fields = validate(_unpack(data, limit), CLIENT_MESSAGES)
+    return CLIENT[fields.pop("type")](**fields)
+
+
+def decode_engine(data: bytes) -> Message:
+    """Decode and validate a message sent by the engine (client side): an instance of its class."""
+    fields = validate(_unpack(data, MAX_ENGINE_MESSAGE_BYTES), ENGINE_MESSAGES)
+    return ENGINE[fields.pop("type")](**fields)

@@ -25,7 +25,9 @@ from typing import Any
 
 import zmq
 
-from app.net.codec import ProtocolError, decode_engine, encode
+from app.net.codec import ProtocolError, build, decode_engine, encode_message
+from app.net.messages import Description as DescriptionMessage
+from app.net.messages import Log, Reply, State, Study, Welcome
 from app.net.snapshots import Description, Snapshot, SnapshotError, description_from_wire, snapshot_from_wire
 from app.net.transport import Client, client_view_of
 
@@ -96,7 +98,12 @@ class EngineConnection(threading.Thread):
     # ------------------------------------------------------------------ the thread
     def _send(self, mtype: str, **fields: Any) -> bool:
         try:
-            self.client.dealer.send(encode(mtype, **fields), zmq.NOBLOCK)
+            msg = build(mtype, **fields)
+        except TypeError as err:  # a sender's bug: said, not sent, and the link goes on
+            self.events.append(("log", "error", f"{mtype} not sent: {err}"[:300]))
+            return False
+        try:
+            self.client.dealer.send(encode_message(msg), zmq.NOBLOCK)
             return True
         except (zmq.ZMQError, ProtocolError):
             return False
@@ -105,15 +112,15 @@ class EngineConnection(threading.Thread):
         self._last_hello = now
         self._send("hello", **dict(self.client.hello_fields, role=self.role_wanted))
 
-    def _welcome(self, msg: dict[str, Any]) -> None:
-        self.role = msg["role"]
-        url = client_view_of(msg["state_url"], self.client.url)
+    def _welcome(self, msg: Welcome) -> None:
+        self.role = msg.role
+        url = client_view_of(msg.state_url, self.client.url)
         if url != self.client.state_url:
             with contextlib.suppress(zmq.ZMQError):
                 self.client.sub.disconnect(self.client.state_url)
             self.client.sub.connect(url)
             self.client.state_url = url
-        self.events.append(("welcome", self.role, msg.get("note", "")))
+        self.events.append(("welcome", self.role, msg.note or ""))
 
     def _flush(self, now: float) -> None:
         with self.lock:
@@ -168,10 +175,9 @@ class EngineConnection(threading.Thread):
                     msg = decode_engine(data)
                 except ProtocolError:
                     continue
-                t = msg["type"]
-                if t == "state":
+                if isinstance(msg, State):
                     try:
-                        snap = snapshot_from_wire(msg["state"])
+                        snap = snapshot_from_wire(msg.state)
                     except SnapshotError as err:
                         self.events.append(("log", "error", f"engine state not understood: {err}"[:300]))
                         continue
@@ -184,9 +190,9 @@ class EngineConnection(threading.Thread):
                     if (d is None or d.seq != snap.describe_seq) and now - self._last_describe > DESCRIBE_RETRY:
                         self._last_describe = now
                         self._send("describe")
-                elif t == "description":
+                elif isinstance(msg, DescriptionMessage):
                     try:
-                        desc = description_from_wire(msg["description"])
+                        desc = description_from_wire(msg.description)
                     except SnapshotError as err:
                         self.events.append(("log", "error", f"engine description not understood: {err}"[:300]))
                         continue
@@ -197,20 +203,20 @@ class EngineConnection(threading.Thread):
                     ):
                         self.description = desc
                         self.events.append(("description", desc))
-                elif t == "study":
-                    self.events.append(("study", msg["study"]))
-                elif t == "log":
-                    self.events.append(("log", msg["level"], msg["text"]))
-                elif t == "welcome":
+                elif isinstance(msg, Study):
+                    self.events.append(("study", msg.study))
+                elif isinstance(msg, Log):
+                    self.events.append(("log", msg.level, msg.text))
+                elif isinstance(msg, Welcome):
                     self._welcome(msg)
-                elif t == "reply":
-                    err = msg.get("error", "")
-                    if not msg["ok"] and "before hello" in err:
+                elif isinstance(msg, Reply):
+                    err = msg.error or ""
+                    if not msg.ok and "before hello" in err:
                         if now - self._last_hello > 0.2:  # the engine restarted under us: greet it
                             self._hello(now)
                         continue
-                    if msg["re"] != "ping":
-                        self.events.append(("reply", msg["re"], msg["ok"], err))
+                    if msg.re != "ping":
+                        self.events.append(("reply", msg.re, msg.ok, err))
 
     def run(self) -> None:
         poller = zmq.Poller()

@@ -19,8 +19,9 @@ from urllib.parse import urlsplit
 import zmq
 
 from app.errors import BosunError
-from app.net.codec import ProtocolError, decode_engine, encode
-from app.net.messages import PROTOCOL_VERSION
+from app.net.codec import ProtocolError, build, decode_engine, encode, encode_message
+from app.net.messages import PROTOCOL_VERSION, Reply, State
+from app.net.messages import Description as DescriptionMessage
 from app.net.security import ClientCurve
 from app.net.snapshots import Description, Snapshot, SnapshotError, description_from_wire, snapshot_from_wire
 
@@ -179,13 +180,13 @@ class Client:
                 with contextlib.suppress(zmq.ZMQError):
                     self.dealer.disable_monitor()
                 monitor.close(0)
-        if welcome["type"] == "reply":
+        if isinstance(welcome, Reply):
             self.close()
-            raise TransportError(f"engine refused the connection: {welcome.get('error', 'no reason given')}")
-        self.role = welcome["role"]
-        self.client_id = welcome["client_id"]
-        self.note = welcome.get("note", "")
-        self.state_url = client_view_of(welcome["state_url"], self.url)
+            raise TransportError(f"engine refused the connection: {welcome.error or 'no reason given'}")
+        self.role = welcome.role
+        self.client_id = welcome.client_id
+        self.note = welcome.note or ""
+        self.state_url = client_view_of(welcome.state_url, self.url)
         self.sub = self.ctx.socket(zmq.SUB)
         self.sub.setsockopt(zmq.LINGER, 0)
         self.sub.setsockopt(zmq.CONFLATE, 0)
@@ -196,6 +197,12 @@ class Client:
 
     # ------------------------------------------------------------------ sending
     def send(self, mtype: str, **fields: Any) -> None:
+        """Send a client message, built as its class first (a misspelt or missing field is a TypeError here)."""
+        self.dealer.send(encode_message(build(mtype, **fields)), zmq.NOBLOCK)
+
+    def send_unchecked(self, mtype: str, **fields: Any) -> None:
+        """Send a message as given, unchecked: for probing an engine with what no client should send (the
+        hostile tests, the fuzzers); the engine validates it and refuses what is wrong."""
         self.dealer.send(encode(mtype, **fields), zmq.NOBLOCK)
 
     def send_input(self, axes, buttons, device: str) -> None:
@@ -209,12 +216,12 @@ class Client:
             device=device,
         )
 
-    def request(self, mtype: str, **fields: Any) -> dict[str, Any]:
+    def request(self, mtype: str, **fields: Any) -> Reply:
         """Send a command and wait for its reply; raises TransportError when refused or silent."""
         self.send(mtype, **fields)
         reply = self._wait_for(("reply",), re=mtype)
-        if not reply["ok"]:
-            raise TransportError(reply.get("error", f"{mtype} refused"))
+        if not reply.ok:
+            raise TransportError(reply.error or f"{mtype} refused")
         return reply
 
     def describe(self) -> Description:
@@ -222,12 +229,12 @@ class Client:
         self.send("describe")
         msg = self._wait_for(("description",))
         try:
-            return description_from_wire(msg["description"])
+            return description_from_wire(msg.description)
         except SnapshotError as err:
             raise TransportError(f"the engine's description does not fit protocol {PROTOCOL_VERSION}: {err}") from None
 
     # ------------------------------------------------------------------ receiving
-    def _wait_for(self, types: tuple[str, ...], re: str | None = None) -> dict[str, Any]:
+    def _wait_for(self, types: tuple[str, ...], re: str | None = None) -> Any:
         deadline = time.monotonic() + self.timeout
         while (left := deadline - time.monotonic()) > 0:
             if not self.dealer.poll(int(left * 1000) + 1):
@@ -236,10 +243,10 @@ class Client:
                 msg = decode_engine(self.dealer.recv())
             except ProtocolError:
                 continue
-            if msg["type"] == "description":  # sent after welcome and on request: keep the newest
+            if isinstance(msg, DescriptionMessage):  # sent after welcome and on request: keep the newest
                 with contextlib.suppress(SnapshotError):
-                    self.description = description_from_wire(msg["description"])
-            if msg["type"] in types and (re is None or msg.get("re") == re):
+                    self.description = description_from_wire(msg.description)
+            if msg.TYPE in types and (re is None or getattr(msg, "re", None) == re):
                 return msg
         raise TransportError(f"no answer from the engine at {self.url} within {self.timeout:g} s")
 
@@ -253,9 +260,9 @@ class Client:
                 msg = decode_engine(self.sub.recv())
             except ProtocolError:
                 continue
-            if msg["type"] == "state":
+            if isinstance(msg, State):
                 try:
-                    return snapshot_from_wire(msg["state"])
+                    return snapshot_from_wire(msg.state)
                 except SnapshotError:
                     continue
         return None
