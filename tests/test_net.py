@@ -358,3 +358,25 @@ def test_every_scene_command_is_a_protocol_message_and_each_scene_runs_its_own()
     assert tables[LabSession] >= {"lab_winch", "lab_vvmc", "lab_antisway", "set_vessel"}
     assert "set_robot" in tables[Session] and "set_robot" not in tables[LabSession]
     assert all(fn.__name__ == kind.TYPE for cls in tables for kind, fn in cls.COMMANDS.items())
+
+
+def test_typed_messages_refuse_a_misspelt_field_at_the_sender_and_an_unknown_command_at_the_scene():
+    """Issue 29, item 5: a message is its class; a sender's bug fails where it is made, not on the wire."""
+    from app.engine.scene import command
+    from app.net.codec import build
+    from app.net.messages import SCENE_COMMANDS, SetMode
+
+    assert build("set_mode", mode="position") == SetMode(mode="position")
+    with pytest.raises(TypeError, match="mdoe"):
+        build("set_mode", mdoe="position")
+    with pytest.raises(TypeError, match="mode"):
+        build("set_mode")
+    with pytest.raises(TypeError, match="no client message"):
+        build("set_moed", mode="position")
+
+    def set_moed(self, mode):  # a handler whose name is no scene command
+        return mode
+
+    with pytest.raises(TypeError, match="no scene command"):
+        command(set_moed)
+    assert "set_mode" in SCENE_COMMANDS
