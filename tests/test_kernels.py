@@ -176,6 +176,35 @@ def test_compiled_closed_form_candidates_and_choice_equal_the_reference(name, el
             assert a.success and a.reason == b.reason and abs(a.error - b.error) <= 1e-12
 
 
+def test_no_serial_kernel_takes_more_than_8_arguments_and_the_records_are_built_once():
+    """Issue 29: no compiled function of app/models/kernels.py takes more than 8 arguments; what stays
+    fixed travels as a record built once by its owner (robot, solver, arm), the same tuple on every call."""
+    import ast
+    import inspect
+
+    tree = ast.parse(inspect.getsource(kernels))
+    jitted = {
+        f.name: len(f.args.args)
+        for f in tree.body
+        if isinstance(f, ast.FunctionDef) and any(getattr(d, "id", None) == "_jit" for d in f.decorator_list)
+    }
+    assert {"frames", "position", "descend", "select_candidate", "comau_candidates"} <= set(jitted)
+    assert {name: n for name, n in jitted.items() if n > 8} == {}
+    robot = load_robot("comau_smart5_3dof")
+    jac, ana = make_solver("jacobian", robot), make_solver("analytic", robot)
+
+    def records():
+        return robot.kernel_record, jac.kernel_settings, ana._limits, ana.arm.kernel_record
+
+    first = records()
+    assert all(type(r) is tuple for r in first)
+    x = robot.position(np.full(3, 0.3))
+    for _ in range(2):
+        jac.solve_position(x, np.zeros(3))
+        ana.solve_position(x)
+    assert all(a is b for a, b in zip(records(), first, strict=True))
+
+
 # ---------------------------------------------------------------------------- plant updates
 def lockstep(make, drive, steps):
     """Two plants, compiled and reference, driven alike; every state compared after every step."""

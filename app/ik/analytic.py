@@ -67,6 +67,8 @@ class AnalyticSolver(Solver):
         self._mid = self.default_q0()
         self.tolerance = tolerance
         self._refiner: JacobianSolver | None = None
+        # the candidate selection's limits record (app/models/kernels.py), built once
+        self._limits = (robot.lower, robot.upper, self._revolute)
 
     def _closed_form(self, x_t, ref):
         """The best candidate: (q clipped, tool point or None, error, exact, inside)."""
@@ -74,7 +76,7 @@ class AnalyticSolver(Solver):
         if getattr(r, "use_kernels", False):
             Q, ex = self.arm.kernel_candidates(x_t, float(ref[0]), self._signs)
             return kernels.select_candidate(
-                *r.kernel_args, Q, ex, r.lower, r.upper, self._revolute, np.ascontiguousarray(ref, dtype=float),
+                r.kernel_record, self._limits, Q, ex, np.ascontiguousarray(ref, dtype=float),
                 np.ascontiguousarray(x_t, dtype=float),
             )  # fmt: skip
         best, best_key = None, None

@@ -75,7 +75,13 @@ class JacobianSolver(Solver):
         self.lambda_max = 0.1 * scale
         self.e_ref = 0.05 * scale
         self.max_step = np.where(np.array(robot.joint_kinds) == "revolute", 0.3, 0.1 * (robot.upper - robot.lower))
-        self._kernel_tail: tuple | None = None
+        # the compiled kernels' settings record (app/models/kernels.py), in their types: built once here (the
+        # settings are fixed after construction), not on every solve
+        self.kernel_settings = (
+            robot.lower, robot.upper, np.ascontiguousarray(self.max_step, dtype=float), float(self.lambda_max),
+            float(self.epsilon), float(self.e_ref), float(self.k_avoid), float(self.tolerance),
+            int(self.max_iterations),
+        )  # fmt: skip
         self._seed_table: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
     # ---------------------------------------------------------------- damped inverse
@@ -89,13 +95,7 @@ class JacobianSolver(Solver):
                 np.ascontiguousarray(J, dtype=float),
                 np.ascontiguousarray(e, dtype=float),
                 np.ascontiguousarray(q, dtype=float),
-                self.robot.lower,
-                self.robot.upper,
-                self.max_step,
-                float(self.lambda_max),
-                float(self.epsilon),
-                float(self.e_ref),
-                float(self.k_avoid),
+                self.kernel_settings,
                 bool(avoid),
             )
         n = J.shape[1]
@@ -144,25 +144,13 @@ class JacobianSolver(Solver):
         NumPy reference below."""
         if getattr(self.robot, "use_kernels", False):
             best_q, best_err, iterations = kernels.descend(
-                *self.robot.kernel_args,
+                self.robot.kernel_record,
+                self.kernel_settings,
                 np.ascontiguousarray(q, dtype=float),
                 np.ascontiguousarray(x_t, dtype=float),
-                *self._tail(),
             )
             return best_q, float(best_err), int(iterations)
         return self._descend_reference(q, x_t, deadline)
-
-    def _tail(self) -> tuple:
-        """The descent kernel's arguments after (q, x_t), in its types: built once per solver (its
-        settings are fixed after construction), not on every solve."""
-        if self._kernel_tail is None:
-            r = self.robot
-            self._kernel_tail = (
-                r.lower, r.upper, np.ascontiguousarray(self.max_step, dtype=float), float(self.lambda_max),
-                float(self.epsilon), float(self.e_ref), float(self.k_avoid), float(self.tolerance),
-                int(self.max_iterations),
-            )  # fmt: skip
-        return self._kernel_tail
 
     def solve_position(
         self, target: ArrayLike, q0: ArrayLike | None = None, *, time_budget: float | object | None = DEFAULT
@@ -175,7 +163,7 @@ class JacobianSolver(Solver):
             x_t = self.check_target(target)
             q_s = self.check_q0(q0)
             q, p, error, cost, iterations = kernels.descend_to(
-                *self.robot.kernel_args, np.ascontiguousarray(q_s), np.ascontiguousarray(x_t), *self._tail()
+                self.robot.kernel_record, self.kernel_settings, np.ascontiguousarray(q_s), np.ascontiguousarray(x_t)
             )
             if cost <= self.tolerance:
                 return IKResult(

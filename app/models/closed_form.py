@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -42,12 +43,20 @@ class ComauArm:
     #: elbow branch → sign of the square root in eq. (13): + is elbow up (eq. 15)
     SIGNS: ClassVar[dict[str, tuple[float, ...]]] = {"auto": (1.0, -1.0), "up": (1.0,), "down": (-1.0,)}
 
+    @cached_property
+    def kernel_record(self) -> tuple:
+        """The arm's record for :func:`app.models.kernels.comau_candidates` (a1, d1, a2, a3, L,
+        T_world_base), in the kernel's types: built on first use, then kept."""
+        return (
+            float(self.a1), float(self.d1), float(self.a2), float(self.a3), float(self.L),
+            np.ascontiguousarray(self.T_world_base, dtype=float),
+        )  # fmt: skip
+
     def kernel_candidates(self, p_world, q1_hint: float, signs):
         """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
         return kernels.comau_candidates(
-            float(self.a1), float(self.d1), float(self.a2), float(self.a3), float(self.L),
-            np.ascontiguousarray(self.T_world_base, dtype=float), np.ascontiguousarray(p_world, dtype=float),
-            float(q1_hint), np.ascontiguousarray(signs, dtype=float),
+            self.kernel_record, np.ascontiguousarray(p_world, dtype=float), float(q1_hint),
+            np.ascontiguousarray(signs, dtype=float),
         )  # fmt: skip
 
     @staticmethod

@@ -7,9 +7,28 @@ Either way the plain-NumPy methods of :class:`~app.models.serial.SerialRobot` an
 :class:`~app.ik.jacobian.JacobianSolver` stay as the reference path: ``tests/test_kernels.py``
 runs both on the same seeded inputs and asserts equal results (1e-12).
 
-The chain's constants are passed as arrays (``SerialRobot.kernel_args``):
-θ₀, d₀, a, cos α, sin α (L,), M_θ, M_d (L, n), T_world_base, T_flange_tool (4, 4).
-The DH link is A = Rz(θ) Tz(d) Tx(a) Rx(α) (standard DH, TAC paper eq. 39).
+No kernel takes more than 8 arguments (issue 29): what stays fixed between calls travels as one record,
+a plain tuple (numba takes it as one argument), built once by its owner and kept, never per call; the
+per-call inputs (q, a target, candidates) stay arguments of their own (a lone array takes numba's fast
+type check; a tuple is type-checked element by element, so records are kept to a few elements).
+
+* ``robot``, the chain (``SerialRobot.kernel_record``, built once per robot): (dh, M, T), float64,
+  C-contiguous: dh (5, L) the links' constant DH values θ₀, d₀, a and the cosine and sine of their
+  twists α, one row each; M (2, L, n) the joint map M_θ, M_d (θ = θ₀ + M_θ q, d = d₀ + M_d q);
+  T (2, 4, 4) T_world_base, T_flange_tool.  Three arrays, not the nine of ``SerialRobot.kernel_args``:
+  a record of nine arrays cost about 0.2 µs a call more than nine separate arguments (its type
+  fingerprint outgrows numba's 40-byte buffer), three cost less.  :func:`_chain` gives the nine
+  arrays (views).  The DH link is A = Rz(θ) Tz(d) Tx(a) Rx(α) (standard DH, TAC paper eq. 39).
+* ``settings``, the damped-least-squares solver's (``JacobianSolver.kernel_settings``, built once per
+  solver): (lower, upper, max_step, lambda_max, epsilon, e_ref, k_avoid, tolerance, max_iterations):
+  joint limits and largest step per joint (n,) float64; the largest damping λ_max, the singular region
+  ε (σ_min below it is damped) and e_ref (the damping fades as |e| drops below it), floats; the
+  limit-avoidance gain (float); the success tolerance [m] (float) and the iterations per descent (int).
+  :func:`damped_step` reads the first seven.
+* ``limits``, the analytic solver's (``AnalyticSolver._limits``, built once per solver): (lower, upper
+  (n,) float64, revolute (n,) bool).
+* ``arm``, a Comau-type arm's (``ComauArm.kernel_record``, built once per arm): (a1, d1, a2, a3, L
+  float, T_world_base (4, 4) float64), Motion-Lab Table 3.
 """
 
 from __future__ import annotations
@@ -103,8 +122,17 @@ def matmul_into(A, B, C):
 
 
 @_jit
-def frames(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q):
-    """World poses of frame 0, every DH frame and the tool: (L + 2, 4, 4)."""
+def _chain(robot):
+    """The robot record's arrays as (θ₀, d₀, a, cos α, sin α, M_θ, M_d, T_world_base, T_flange_tool): views,
+    nothing copied."""
+    dh, M, T = robot
+    return dh[0], dh[1], dh[2], dh[3], dh[4], M[0], M[1], T[0], T[1]
+
+
+@_jit
+def frames(robot, q):
+    """World poses of frame 0, every DH frame and the tool: (L + 2, 4, 4).  ``robot``: the chain record."""
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = _chain(robot)
     L = theta0.shape[0]
     theta = theta0 + M_theta @ q
     d = d0 + M_d @ q
@@ -147,8 +175,10 @@ def jacobian_from_frames(F, M_theta, M_d):
 
 
 @_jit
-def position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q):
-    """Tool point (3,): the links applied to it last link first (no 4×4 products)."""
+def position(robot, q):
+    """Tool point (3,): the links applied to it last link first (no 4×4 products).  ``robot``: the chain
+    record."""
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = _chain(robot)
     L = theta0.shape[0]
     theta = theta0 + M_theta @ q
     d = d0 + M_d @ q
@@ -165,17 +195,20 @@ def position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q):
 
 
 @_jit
-def positions(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q):
-    """Tool points of many configurations: Q (m, n) → (m, 3)."""
+def positions(robot, Q):
+    """Tool points of many configurations: Q (m, n) → (m, 3).  ``robot``: the chain record."""
     out = np.empty((Q.shape[0], 3))
     for k in range(Q.shape[0]):
-        out[k] = position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q[k])
+        out[k] = position(robot, Q[k])
     return out
 
 
 @_jit
-def damped_step(J, e, q, lo, hi, max_step, lambda_max, epsilon, e_ref, k_avoid, avoid):
-    """One DLS step with active-set clamping (the same steps as ``JacobianSolver.damped_step``)."""
+def damped_step(J, e, q, settings, avoid):
+    """One DLS step with active-set clamping (the same steps as ``JacobianSolver.damped_step``): J (m, n),
+    the task error e (m,) at q (n,); ``settings``: the solver's record (its first seven fields); ``avoid``:
+    add the limit-avoidance term."""
+    lo, hi, max_step, lambda_max, epsilon, e_ref, k_avoid = settings[:7]
     m, n = J.shape
     active = np.ones(n)
     dq = np.zeros(n)
@@ -216,15 +249,15 @@ def damped_step(J, e, q, lo, hi, max_step, lambda_max, epsilon, e_ref, k_avoid, 
 
 
 @_jit
-def descend(
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q, x_t, lo, hi, max_step, lambda_max, epsilon, e_ref,
-    k_avoid, tolerance, max_iterations,
-):  # fmt: skip
-    """Position-only DLS descent from q (``JacobianSolver._descend`` without its clock): (best_q, best_err, it)."""
+def descend(robot, settings, q, x_t):
+    """Position-only DLS descent from q to the tool point x_t (``JacobianSolver._descend`` without its
+    clock): (best_q, best_err, it).  ``robot``: the chain record; ``settings``: the solver's record."""
+    M_theta, M_d = robot[1][0], robot[1][1]
+    lo, hi, tolerance, max_iterations = settings[0], settings[1], settings[7], settings[8]
     best_q, best_err, iterations, stall = q, np.inf, 0, 0
     while iterations < max_iterations:
         iterations += 1
-        F = frames(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q)
+        F = frames(robot, q)
         J = jacobian_from_frames(F, M_theta, M_d)[:3].copy()
         e = x_t - F[F.shape[0] - 1, :3, 3]
         err = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
@@ -235,22 +268,16 @@ def descend(
             stall += 1
         if err <= tolerance or stall > 15:
             break
-        step = damped_step(J, e, q, lo, hi, max_step, lambda_max, epsilon, e_ref, k_avoid, True)
+        step = damped_step(J, e, q, settings, True)
         q = np.minimum(np.maximum(q + step, lo), hi)
     return best_q, best_err, iterations
 
 
 @_jit
-def descend_to(
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q, x_t, lo, hi, max_step, lambda_max, epsilon, e_ref,
-    k_avoid, tolerance, max_iterations,
-):  # fmt: skip
+def descend_to(robot, settings, q, x_t):
     """:func:`descend`, then the reached tool point and its distance to x_t: (q, p, error, cost, iterations)."""
-    best_q, best_err, iterations = descend(
-        theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q, x_t, lo, hi, max_step, lambda_max, epsilon, e_ref,
-        k_avoid, tolerance, max_iterations,
-    )  # fmt: skip
-    p = position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, best_q)
+    best_q, best_err, iterations = descend(robot, settings, q, x_t)
+    p = position(robot, best_q)
     d = p - x_t
     return best_q, p, math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), best_err, iterations
 
@@ -266,8 +293,11 @@ def _inverse_apply(T, x, y, z):
 
 
 @_jit
-def comau_candidates(a1, d1, a2, a3, L, T_base, p, q1_hint, signs):
-    """Motion-Lab eqs. (7)–(20) for every base branch and elbow sign: (q (k, 3), exact (k,))."""
+def comau_candidates(arm, p, q1_hint, signs):
+    """Motion-Lab eqs. (7)–(20) for every base branch and elbow sign: (q (k, 3), exact (k,)).  ``arm``: the
+    arm's record; p (3,) the tool point in the world; q1_hint: q1 where the point is on the base axis;
+    signs (k,) float64: the elbow signs of eq. (13)."""
+    a1, d1, a2, a3, L, T_base = arm
     v = _inverse_apply(T_base, p[0], p[1], p[2])
     x, y, z = v[0], v[1], v[2]
     q1_front = -math.atan2(y, x) if math.hypot(x, y) > 1e-9 else q1_hint  # eq. (7)
@@ -330,10 +360,12 @@ def crane_candidates(L0, L1, L2, T_world_1, p, beta0_hint, signs):
 
 
 @_jit
-def select_candidate(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q, exact, lo, hi, revolute, ref, x_t):
-    """The analytic solver's choice among candidates (``AnalyticSolver._search``): revolute joints
-    wrapped into their limits, then valid first, the smaller error (to 1e-9 m), the nearest to ref.
-    Returns (q clipped, tool point, error, exact, inside)."""
+def select_candidate(robot, limits, Q, exact, ref, x_t):
+    """The analytic solver's choice among candidates Q (k, n) with their flags exact (k,) for the tool
+    point x_t (``AnalyticSolver._search``): revolute joints wrapped into their limits, then valid first, the
+    smaller error (to 1e-9 m), the nearest to ref (n,).  ``robot``: the chain record; ``limits``: the
+    solver's (lower, upper, revolute).  Returns (q clipped, tool point, error, exact, inside)."""
+    lo, hi, revolute = limits
     best_q = np.zeros(Q.shape[1])
     best_p = np.zeros(3)
     best = (2, np.inf, np.inf)
@@ -351,7 +383,7 @@ def select_candidate(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, Q, exa
             if q[i] < lo[i] - 1e-9 or q[i] > hi[i] + 1e-9:
                 inside = False
         q_c = np.minimum(np.maximum(q, lo), hi)
-        p = position(theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool, q_c)
+        p = position(robot, q_c)
         d = p - x_t
         err = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
         dq = q_c - ref
@@ -368,28 +400,24 @@ def warm_up_steps() -> list:
     L, n = 3, 3
     z3, zLn = np.zeros(L), np.zeros((L, n))
     eye = np.eye(4)
-    args = (z3, z3, np.ones(L), np.ones(L), z3, np.eye(L, n), zLn, eye, eye)
+    dh = np.stack((z3, z3, np.ones(L), np.ones(L), z3))
+    robot = (dh, np.stack((np.eye(L, n), zLn)), np.stack((eye, eye)))  # a chain's record
+    settings = (-np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2)  # a DLS solver's record
+    limits = (-np.ones(n), np.ones(n), np.ones(n, dtype=np.bool_))  # the analytic solver's record
+    arm = (0.1, 0.5, 1.0, 0.2, 1.0, eye)  # a Comau arm's record
     steps = [
-        lambda: frames(*args, np.zeros(n)),
-        lambda: jacobian_from_frames(frames(*args, np.zeros(n)), np.eye(L, n), zLn),
-        lambda: positions(*args, np.zeros((2, n))),
-        lambda: position(*args, np.zeros(n)),
-        lambda: descend(
-            *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
-        ),
-        lambda: descend_to(
-            *args, np.zeros(n), np.ones(3), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2
-        ),
-        lambda: damped_step(
-            np.ones((3, n)), np.ones(3), np.zeros(n), -np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, False
-        ),
+        lambda: frames(robot, np.zeros(n)),
+        lambda: jacobian_from_frames(frames(robot, np.zeros(n)), np.eye(L, n), zLn),
+        lambda: positions(robot, np.zeros((2, n))),
+        lambda: position(robot, np.zeros(n)),
+        lambda: descend(robot, settings, np.zeros(n), np.ones(3)),
+        lambda: descend_to(robot, settings, np.zeros(n), np.ones(3)),
+        lambda: damped_step(np.ones((3, n)), np.ones(3), np.zeros(n), settings, False),
         lambda: select_candidate(
-            *args,
-            comau_candidates(0.1, 0.5, 1.0, 0.2, 1.0, eye, np.ones(3), 0.0, np.ones(2))[0],
+            robot,
+            limits,
+            comau_candidates(arm, np.ones(3), 0.0, np.ones(2))[0],
             crane_candidates(0.5, 1.0, 1.0, eye, np.ones(3), 0.0, np.ones(2))[1],
-            -np.ones(n),
-            np.ones(n),
-            np.ones(n, dtype=np.bool_),
             np.zeros(n),
             np.ones(3),
         ),

@@ -288,7 +288,7 @@ def tool_on_platform(cm, T_b1_r, platform, rates, joints):
 def comau_ik(cm, T_base, p_tr, q_near, signs, lower, upper):
     """``app.models.comau.nearest_ik``: the exact candidate of eqs. (7)–(20) inside the joint limits nearest q_near,
     q1 wrapped to within half a turn of it: (q, found)."""
-    Q, exact = model_kernels.comau_candidates(cm[0], cm[1], cm[2], cm[3], cm[4], T_base, p_tr, q_near[0], signs)
+    Q, exact = model_kernels.comau_candidates((cm[0], cm[1], cm[2], cm[3], cm[4], T_base), p_tr, q_near[0], signs)
     best = q_near.copy()
     best_d = np.inf
     found = False

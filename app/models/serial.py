@@ -86,12 +86,20 @@ class SerialRobot:
             offset[joint.link] += joint.offset
             for k, factor in joint.coupling:
                 M[joint.link, k] += factor
-        # the compiled kernels' arguments (app/models/kernels.py); use_kernels=False: the NumPy reference
+        # the chain's constants for compiled kernels, built once here; use_kernels=False: the NumPy reference.
+        # kernel_args, nine arrays, for the GA, crane-head and TAC kernels; kernel_record, the same numbers in
+        # three arrays (dh (5, L), M (2, L, n), T (2, 4, 4)), the robot record of app/models/kernels.py, passed
+        # whole as one argument (three arrays: numba's per-call type check of a tuple grows with its elements)
         self.kernel_args = tuple(
             np.ascontiguousarray(x, dtype=float)
             for x in (self._theta0, self._d0, self._a, self._cos_alpha, self._sin_alpha, self._M_theta, self._M_d,
                       self.T_world_base, self.T_flange_tool)
         )  # fmt: skip
+        self.kernel_record = (
+            np.stack(self.kernel_args[:5]),
+            np.stack(self.kernel_args[5:7]),
+            np.stack(self.kernel_args[7:]),
+        )
         self.use_kernels = kernels.ENABLED
 
     # ------------------------------------------------------------------ input
@@ -143,7 +151,7 @@ class SerialRobot:
         """
         q = np.asarray(q, dtype=float)
         if self.use_kernels and q.ndim == 1 and q.shape[0] == self.n_joints:
-            return kernels.frames(*self.kernel_args, np.ascontiguousarray(q))
+            return kernels.frames(self.kernel_record, np.ascontiguousarray(q))
         theta, d = self.dh_variables(q)
         A = dh_transform(theta, d, self._a, self._alpha)  # (..., L, 4, 4)
         batch = A.shape[:-3]
@@ -170,8 +178,8 @@ class SerialRobot:
         q = np.asarray(q, dtype=float)
         if self.use_kernels and q.shape[-1:] == (self.n_joints,) and q.ndim <= 2:
             if q.ndim == 1:
-                return kernels.position(*self.kernel_args, np.ascontiguousarray(q))
-            return kernels.positions(*self.kernel_args, np.ascontiguousarray(q))
+                return kernels.position(self.kernel_record, np.ascontiguousarray(q))
+            return kernels.positions(self.kernel_record, np.ascontiguousarray(q))
         if q.ndim == 1:
             return self._position_one(q)
         theta, d = self.dh_variables(q)
@@ -214,7 +222,7 @@ class SerialRobot:
         """
         q = np.asarray(q, dtype=float)
         if self.use_kernels and q.ndim == 1 and q.shape[0] == self.n_joints:
-            F = kernels.frames(*self.kernel_args, np.ascontiguousarray(q))
+            F = kernels.frames(self.kernel_record, np.ascontiguousarray(q))
             return kernels.jacobian_from_frames(F, self._M_theta, self._M_d)
         F = self.frames(q)
         z = F[..., :-2, :3, 2]  # z_{i-1} for links i = 1..L, shape (..., L, 3)
