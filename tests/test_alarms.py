@@ -15,7 +15,8 @@ import threading
 import numpy as np
 import pytest
 
-from app.engine.alarm_catalog import CATALOG, SHELVE_MAX_S, SOURCES, definition, reference_markdown
+from app.engine import alarm_catalog
+from app.engine.alarm_catalog import SHELVE_MAX_S, SOURCES, catalog, definition, reference_markdown
 from app.engine.alarms import AlarmList
 from app.engine.lab_session import LabSession
 from app.engine.server import EngineServer
@@ -29,7 +30,7 @@ from tests.helpers import ROOT, needs_source, wait_for
 def test_the_alarm_reference_is_generated_from_the_table():
     page = (ROOT / "docs" / "alarms.md").read_text(encoding="utf-8")
     assert page == reference_markdown(), "docs/alarms.md is stale: bosun alarms --markdown > docs/alarms.md"
-    for a in CATALOG:
+    for a in catalog():
         assert a.cause and a.consequence and a.action and a.title, a.key
         assert a.priority in ("critical", "warning")
         assert set(a.sources) <= set(SOURCES)
@@ -47,7 +48,36 @@ def test_every_alarm_the_code_raises_is_in_the_table():
         keys |= set(pattern.findall(path.read_text(encoding="utf-8")))
     assert keys, "the scan found nothing"
     missing = sorted(k for k in keys if definition(k) is None)
-    assert not missing, f"alarms raised in code without a definition in app/engine/alarm_catalog.py: {missing}"
+    assert not missing, f"alarms raised in code without a definition in app/engine/alarms.toml: {missing}"
+
+
+_GOOD = {"key": '"x"', "title": '"X"', "sources": '["lab"]', "priority": '"warning"', "cause": '"c"',
+         "consequence": '"c"', "action": '"a"'}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("change", "error"),
+    [
+        ({"priority": '"urgent"'}, "alarm 1 (x): priority 'urgent' is not one of critical, warning"),
+        ({"sources": '["deck"]'}, "alarm 1 (x): unknown source(s) deck"),
+        (
+            {"consequence": None},
+            "alarm 1 (x): AlarmDef.__init__() missing 1 required positional argument: 'consequence'",
+        ),
+        ({"title": None, "titel": '"X"'}, "alarm 1 (x): unknown field(s) titel"),
+    ],
+)
+def test_a_broken_alarm_table_names_the_alarm_and_the_fault(tmp_path, monkeypatch, change, error):
+    fields = {k: v for k, v in {**_GOOD, **change}.items() if v is not None}
+    bad = tmp_path / "alarms.toml"
+    bad.write_text("[[alarm]]\n" + "".join(f"{k} = {v}\n" for k, v in fields.items()), encoding="utf-8")
+    monkeypatch.setattr(alarm_catalog, "CATALOG_FILE", bad)
+    alarm_catalog.catalog.cache_clear()
+    try:
+        with pytest.raises(ValueError, match=re.escape(f"alarms.toml: {error}")):
+            alarm_catalog.catalog()
+    finally:
+        alarm_catalog.catalog.cache_clear()
 
 
 # ---------------------------------------------------------------------------- chatter

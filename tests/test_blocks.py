@@ -248,3 +248,74 @@ def test_the_head_servo_steps_through_the_pid_and_motor_blocks(use_kernels):
         np.testing.assert_array_equal(alpha[k], a_k)
         np.testing.assert_array_equal(u[k], u_k)
     np.testing.assert_array_equal(servo.integral, x[1])
+
+
+# ----------------------------------------------------------------------------- the cooperative crane
+def _crane_params():
+    """(law, joints) records of the crane in robots/tac_crane.xml-like limits, as CraneServo makes them."""
+    from app.control.tac import CRANE_LAW
+    from app.sim.head import CRANE_JOINTS
+
+    lower, upper = np.radians([-720.0, -20.0, -150.0]), np.radians([720.0, 80.0, -20.0])
+    speed, accel = np.radians([6.0, 4.0, 4.0]), np.radians([3.0, 2.0, 2.0])
+    law = CRANE_LAW.record("params", lower=lower, upper=upper, speed=speed, accel=accel, share=0.3, k_p=1.0)
+    joints = CRANE_JOINTS.record("params", lower=lower, upper=upper, accel=accel)
+    return law, joints
+
+
+def test_the_crane_law_and_joint_blocks_kernel_and_reference_give_the_same_numbers():
+    """The crane's law (share of β_c, its rate, a P correction, within speed and braking limits) and its
+    joints (rate drives, acceleration-limited, inside the limits): compiled and reference agree, and the
+    joints never leave their limits nor change rate faster than they may."""
+    from app.control.tac import CRANE_LAW
+    from app.sim.head import CRANE_JOINTS
+
+    law, joints = _crane_params()
+    lower, upper, speed, accel = law[:4]
+    rng = np.random.default_rng(42)
+    x = (np.radians([0.0, 70.0, -30.0]), np.zeros(3))  # boom and jib 10° from their upper limits
+    beta_d = x[0].copy()
+    near_limit = 0
+    for k in range(2000):
+        spread = 0.02 if k % 5 else 2.0  # small moves, and jumps to the speed, braking and position limits
+        beta_c = upper + 3.0 if 1000 <= k < 1600 else x[0] + rng.normal(0.0, spread, 3)  # a while beyond the limits
+        u = (beta_d, beta_c, rng.normal(0.0, 0.1, 3), x[0])
+        _, (c_k,) = CRANE_LAW.step((), u, law, 0.01, use_kernels=True)
+        _, (c_r,) = CRANE_LAW.step((), u, law, 0.01, use_kernels=False)
+        np.testing.assert_array_equal(c_k, c_r)
+        assert np.all(np.abs(c_r) <= speed)
+        x_k, _ = CRANE_JOINTS.step(tuple(a.copy() for a in x), (c_r,), joints, 0.01, use_kernels=True)
+        x_r, _ = CRANE_JOINTS.step(x, (c_r,), joints, 0.01, use_kernels=False)
+        for a, b in zip(x_k, x_r, strict=True):
+            np.testing.assert_array_equal(a, b)
+        assert np.all(np.abs(x_r[1] - x[1]) <= accel * 0.01 * (1 + 1e-12))
+        assert np.all(x_r[0] >= lower) and np.all(x_r[0] <= upper)
+        near_limit += bool(np.any(np.minimum(x_r[0] - lower, upper - x_r[0]) < 0.05))
+        x = x_r
+    assert near_limit > 0  # the run reached a position limit
+    assert CRANE_LAW.implementation(use_kernels=True).__name__ == "crane_law_block"
+    assert CRANE_JOINTS.implementation(use_kernels=True).__name__ == "crane_joints_block"
+
+
+@pytest.mark.parametrize("use_kernels", [True, False])
+def test_the_crane_servo_steps_through_the_law_and_joint_blocks(use_kernels):
+    """CraneServo (app.scenes.tac) is law → joints, bit for bit, compiled and in the reference."""
+    from app.control.tac import CRANE_LAW
+    from app.scenes.tac import CraneServo
+    from app.sim.head import CRANE_JOINTS
+
+    law, joints = _crane_params()
+    beta_d = np.radians([0.0, 30.0, -90.0])
+    servo = CraneServo(*law[:4], beta_d, share=0.3, k_p=1.0, use_kernels=use_kernels)
+    rng = np.random.default_rng(44)
+    beta_c = beta_d + np.cumsum(rng.normal(0.0, 0.02, (300, 3)), axis=0)
+    rate = rng.normal(0.0, 0.2, (300, 3))
+    out_b, out_v = servo.run(beta_d, beta_c, rate, 0.01)
+    x = (beta_d.copy(), np.zeros(3))
+    for k in range(300):
+        _, cmd = CRANE_LAW.reference((), (beta_d, beta_c[k], rate[k], x[0]), law, 0.01)
+        x, _ = CRANE_JOINTS.reference(x, cmd, joints, 0.01)
+        np.testing.assert_array_equal(out_b[k], x[0])
+        np.testing.assert_array_equal(out_v[k], x[1])
+    np.testing.assert_array_equal(servo.beta, x[0])
+    np.testing.assert_array_equal(servo.beta_dot, x[1])

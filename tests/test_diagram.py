@@ -65,6 +65,8 @@ def test_describe_prints_the_diagram_and_its_json(capsys):
     data = json.loads(capsys.readouterr().out)
     assert {n["name"] for n in data["nodes"]} >= {"vessel", "mru", "pid", "motors"}
     assert {n["name"]: n["where"] for n in data["nodes"] if n["block"]} == {
+        "crane_law": "app.control.tac",
+        "crane": "app.sim.head",
         "pid": "app.control.tac",
         "motors": "app.sim.head",
     }

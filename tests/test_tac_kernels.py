@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.control.tac import CraneServo, PidGains
+from app.control.tac import PidGains
 from app.models.crane_head import CraneHead
 from app.models.delta import DeltaHead
 from app.models.registry import load_robot, load_spec
 from app.models.xml import parse_robot_xml
 from app.scenarios.tac import BETA_EQ60, MODES, TacChunk, TacScenario, TacSimulator, simulate
 from app.scenes import tac_kernels
-from app.scenes.tac import HeadServo
+from app.scenes.tac import CraneServo, HeadServo
 
 pytestmark = pytest.mark.skipif(not tac_kernels.ENABLED, reason="numba not installed or BOSUN_JIT=0")
 ATOL = 1e-12

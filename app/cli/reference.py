@@ -14,18 +14,18 @@ from app.cli.common import (
 def cmd_alarms(args: argparse.Namespace) -> int:
     from dataclasses import asdict
 
-    from app.engine.alarm_catalog import CATALOG, SOURCES, reference_markdown
+    from app.engine.alarm_catalog import SOURCES, catalog, reference_markdown
 
     if args.markdown:
         sys.stdout.write(reference_markdown())
         return 0
     if args.json:
-        _print_json({"alarms": [asdict(a) for a in CATALOG]})
+        _print_json({"alarms": [asdict(a) for a in catalog()]})
         return 0
     print(
         _table(
             ["key", "priority", "source", "alarm", "operator action"],
-            [[a.key, a.priority, ", ".join(SOURCES[s] for s in a.sources), a.title, a.action] for a in CATALOG],
+            [[a.key, a.priority, ", ".join(SOURCES[s] for s in a.sources), a.title, a.action] for a in catalog()],
             last_col_max=70,
         )
     )

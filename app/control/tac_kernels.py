@@ -1,15 +1,15 @@
-"""Compiled controllers of the crane-head compensation (TAC paper §8): the cooperative crane servo and the
+"""Compiled controllers of the crane-head compensation (TAC paper §8): the cooperative crane law and the
 head's joint PID (eq. 57).
 
 Same scheme as :mod:`app.models.kernels` (numba, cached on disk, ``BOSUN_JIT=0`` for the interpreted
-path).  The NumPy code stays the reference, tested equal on the same seeded inputs: ``CraneServo.run``
-(:mod:`app.control.tac`) in ``tests/test_tac_kernels.py``, the PID block :data:`app.control.tac.HEAD_PID` in
-``tests/test_blocks.py``.  The plant the PID drives, the DC motors of eq. (58), is :mod:`app.sim.head_kernels`;
-the scene that wires them with the crane, the head references and the head's kinematics (and the whole
-simulation step, ``tac_chunk``) is :mod:`app.scenes.tac_kernels`.  Every array argument is C-contiguous
+path).  The NumPy code stays the reference, tested equal on the same seeded inputs in ``tests/test_blocks.py``:
+the blocks :data:`app.control.tac.CRANE_LAW` and :data:`app.control.tac.HEAD_PID`.  The plants they drive, the
+crane's joints and the head's DC motors of eq. (58), are :mod:`app.sim.head_kernels`; the scene that wires them
+with the head references and the head's kinematics (and the whole simulation step, ``tac_chunk``) is
+:mod:`app.scenes.tac_kernels`.  Every array argument is C-contiguous
 float64, and
 
-* ``crane``: (β_min, β_max, β̇_max, β̈_max, share, k_p) of the cooperative crane servo;
+* the crane law's parameters: (β_min, β_max, β̇_max, β̈_max, share, k_p) of the cooperative crane;
 * the PID's parameters: (K_p, K_i, K_d, T_DC, K_DC, u_min, u_max) of eqs. (57)–(58).
 """
 
@@ -23,40 +23,36 @@ from app.models.kernels import ENABLED, _jit
 
 __all__ = [
     "ENABLED",
-    "crane_servo",
+    "crane_command",
+    "crane_law_block",
     "head_pid_block",
     "warm_up_steps",
 ]
 
 
-# ----------------------------------------------------------------------------- crane servo
+# ----------------------------------------------------------------------------- cooperative crane law
 @_jit
-def _crane_step(crane, beta_d, beta_c, beta_c_dot, dt, beta, beta_dot):
-    """One step of the cooperative crane (``CraneServo``): β̇_cmd = s β̇_c + k_p (β_d + s (β_c − β_d) − β),
-    limited in speed, braking distance and acceleration; β, β̇ in place (they carry the crane terms of
-    eqs. 45–48 into the head reference)."""
-    lower, upper, speed, accel, share, k_p = crane
+def crane_command(u, p, cmd):
+    """:data:`app.control.tac.CRANE_LAW`'s output into ``cmd`` (3,): β̇_cmd = s β̇_c + k_p (β_d + s (β_c − β_d) − β),
+    limited to each joint's speed and to the speed it can still brake from before its position limits."""
+    beta_d, beta_c, beta_c_dot, beta = u
+    lower, upper, speed, accel, share, k_p = p
     for j in range(beta.shape[0]):
         target = beta_d[j] + share * (beta_c[j] - beta_d[j])
-        cmd = share * beta_c_dot[j] + k_p * (target - beta[j])
-        cmd = min(max(cmd, -speed[j]), speed[j])
+        c = share * beta_c_dot[j] + k_p * (target - beta[j])
+        c = min(max(c, -speed[j]), speed[j])
         room_hi = math.sqrt(2 * accel[j] * max(upper[j] - beta[j], 0.0))
         room_lo = -math.sqrt(2 * accel[j] * max(beta[j] - lower[j], 0.0))
-        cmd = min(max(cmd, room_lo), room_hi)
-        dv = accel[j] * dt
-        beta_dot[j] = beta_dot[j] + min(max(cmd - beta_dot[j], -dv), dv)
-        beta[j] = min(max(beta[j] + beta_dot[j] * dt, lower[j]), upper[j])
+        cmd[j] = min(max(c, room_lo), room_hi)
 
 
 @_jit
-def crane_servo(crane, beta_d, beta_c, beta_c_dot, dt, beta, beta_dot):
-    """``CraneServo.run``: the crane following β_c (n, 3) with rates β̇_c; (β, β̇) after each step, state in place."""
-    n = beta_c.shape[0]
-    out_b, out_v = np.empty((n, 3)), np.empty((n, 3))
-    for k in range(n):
-        _crane_step(crane, beta_d, beta_c[k], beta_c_dot[k], dt, beta, beta_dot)
-        out_b[k], out_v[k] = beta, beta_dot
-    return out_b, out_v
+def crane_law_block(x, u, p, dt):
+    """The cooperative crane law as a block (:data:`app.control.tac.CRANE_LAW`): no state; u = (β_d, β_c, β̇_c,
+    β) (3,) each; p = (β_min, β_max, β̇_max, β̈_max, share, k_p); y = (β̇_cmd,), a new array."""
+    cmd = np.empty(u[3].shape[0])
+    crane_command(u, p, cmd)
+    return x, (cmd,)
 
 
 # ----------------------------------------------------------------------------- head PID
@@ -99,8 +95,7 @@ def warm_up_steps() -> list:
     z3, o3 = np.zeros(3), np.ones(3)
     crane = (-o3, o3, o3, o3, 0.3, 1.0)
     pid = (10.0, 60.0, 1.0, 0.2, 1.0, -o3, o3)
-    rows3 = np.zeros((2, 3))
     return [
-        lambda: crane_servo(crane, z3, rows3, rows3, 0.01, z3.copy(), z3.copy()),
+        lambda: crane_law_block((), (z3, z3, z3, z3), crane, 0.01),
         lambda: head_pid_block((z3.copy(),), (z3, z3, z3), pid, 0.01),
     ]

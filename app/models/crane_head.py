@@ -28,8 +28,8 @@ The formulas above use the papers' R_b^n; the code names it ``R_n_b`` (:mod:`app
 
 The batched references and the crane IK run compiled (:mod:`app.models.crane_head_kernels`) unless
 ``use_kernels`` is False; the NumPy code here is their reference.  The joint servos that follow these
-references are :mod:`app.control.tac` (the head's PID and the crane servo) and :mod:`app.sim.head` (the head's
-motors), wired in :mod:`app.scenes.tac`.
+references are :mod:`app.control.tac` (the head's PID and the cooperative crane law) and :mod:`app.sim.head`
+(the crane's joints and the head's motors), wired in :mod:`app.scenes.tac`.
 """
 
 from __future__ import annotations

@@ -4,8 +4,8 @@ Same scheme as :mod:`app.models.kernels` (numba, cached on disk, ``BOSUN_JIT=0``
 path).  The NumPy methods stay the reference, tested equal on the same seeded inputs in
 ``tests/test_tac_kernels.py``: ``DeltaHead.ik`` and ``fk`` (:mod:`app.models.delta`, eqs. 8–25) and
 ``CraneHead.crane_ik_tcp`` and ``head_reference`` (:mod:`app.models.crane_head`, eqs. 42–56).  The
-crane servo and the head's PID built on these are :mod:`app.control.tac_kernels`, the head's motors
-:mod:`app.sim.head_kernels`, the whole simulation step :mod:`app.scenes.tac_kernels`.
+crane law and the head's PID built on these are :mod:`app.control.tac_kernels`, the crane's joints and the
+head's motors :mod:`app.sim.head_kernels`, the whole simulation step :mod:`app.scenes.tac_kernels`.
 
 Every array argument is C-contiguous float64 (another layout would make numba compile a second
 specialisation in an engine tick); the constants come in tuples built once by the models:

@@ -30,8 +30,9 @@ protocol page.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, dataclass_transform
 
 PROTOCOL_VERSION = 3
 MAX_MESSAGE_BYTES = 65_536  # a client's message
@@ -75,49 +76,64 @@ ENGINE: dict[str, type[Message]] = {}
 SCENE_COMMANDS: dict[str, type[Message]] = {}
 
 
-def client_message(cls: type[Message]) -> type[Message]:
-    CLIENT[cls.TYPE] = cls
-    return cls
+def _message(wire_type: str, *books: dict[str, type[Message]]) -> Callable[[type], type[Message]]:
+    """Make a class a message: a frozen, keyword-only dataclass with ``TYPE`` = ``wire_type``, entered in ``books``."""
+
+    def declare(cls: type) -> type[Message]:
+        cls.TYPE = wire_type
+        made = dataclass(frozen=True, kw_only=True)(cls)
+        for book in books:
+            book[wire_type] = made
+        return made
+
+    return declare
 
 
-def scene_command(cls: type[Message]) -> type[Message]:
-    SCENE_COMMANDS[cls.TYPE] = cls
-    return client_message(cls)
+@dataclass_transform(frozen_default=True, kw_only_default=True, field_specifiers=(spec,))
+def client_message(wire_type: str) -> Callable[[type], type[Message]]:
+    """A message a client sends (the server's own: hello, input, STOP, alarms …)."""
+    return _message(wire_type, CLIENT)
 
 
-def engine_message(cls: type[Message]) -> type[Message]:
-    ENGINE[cls.TYPE] = cls
-    return cls
+@dataclass_transform(frozen_default=True, kw_only_default=True, field_specifiers=(spec,))
+def scene_command(wire_type: str) -> Callable[[type], type[Message]]:
+    """A message a client sends that the server hands to the scene's command table."""
+    return _message(wire_type, CLIENT, SCENE_COMMANDS)
+
+
+@dataclass_transform(frozen_default=True, kw_only_default=True, field_specifiers=(spec,))
+def engine_message(wire_type: str) -> Callable[[type], type[Message]]:
+    """A message an engine sends."""
+    return _message(wire_type, ENGINE)
 
 
 # ------------------------------------------------------------------ client -> engine
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("hello")
 class Hello(Message):
-    TYPE: ClassVar[str] = "hello"
+    """Join an engine as ``operator`` or ``viewer`` (``token``/``secret``: a remote engine's access)."""
+
     role: str = spec("enum", ROLES)
     name: str = spec("str", 64)
     token: str | None = spec("str", 256, optional=True)
     secret: str | None = spec("str", 256, optional=True)
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("bye")
 class Bye(Message):
-    TYPE: ClassVar[str] = "bye"
+    """Leave: the engine forgets this client (an operator's role is free again)."""
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("ping")
 class Ping(Message):
-    TYPE: ClassVar[str] = "ping"
+    """Ask for a reply, to measure the round trip and keep the role."""
+
     seq: int | None = spec("int", 2**62, optional=True)
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("input")
 class Input(Message):
-    TYPE: ClassVar[str] = "input"
+    """The operator's device: axes in [−1, 1] and buttons, numbered by ``seq``."""
+
     seq: int = spec("int", 2**62)
     t_send: float | None = spec("float", 1e12, optional=True)
     axes: list[float] = spec("unit_floats", 16)
@@ -125,117 +141,112 @@ class Input(Message):
     device: str = spec("str", 128)
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("device_lost")
 class DeviceLost(Message):
-    TYPE: ClassVar[str] = "device_lost"
+    """The device is gone (unplugged, focus lost, a key release lost): the engine halts."""
+
     device: str | None = spec("str", 128, optional=True)
     released: bool | None = spec("bool", optional=True)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("set_robot")
 class SetRobot(Message):
-    TYPE: ClassVar[str] = "set_robot"
+    """Load a robot by name, path, or the XML sent with it."""
+
     robot: str = spec("str", 1024)
     xml: str | None = spec("str", 60_000, optional=True)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("set_solver")
 class SetSolver(Message):
-    TYPE: ClassVar[str] = "set_solver"
+    """Choose the IK solver by name (``bosun robots solvers``)."""
+
     solver: str = spec("str", 64)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("set_mode")
 class SetMode(Message):
-    TYPE: ClassVar[str] = "set_mode"
+    """Choose the position or the velocity workspace."""
+
     mode: str = spec("enum", MODES)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("set_scaling")
 class SetScaling(Message):
-    TYPE: ClassVar[str] = "set_scaling"
+    """The workspaces' scaling: position gain, workspace half-size, velocity gain (each x, y, z)."""
+
     k_p: list[float] | None = spec("vec3", 1e4, optional=True)
     x_w: list[float] | None = spec("vec3", 1e5, optional=True)
     k_v: list[float] | None = spec("vec3", 1000.0, optional=True)
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("estop")
 class Estop(Message):
-    TYPE: ClassVar[str] = "estop"
+    """STOP: anyone's, always; ``token`` lets a remote engine check it."""
+
     reason: str | None = spec("str", 256, optional=True)
     token: str | None = spec("str", 256, optional=True)
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("ack_alarm")
 class AckAlarm(Message):
-    TYPE: ClassVar[str] = "ack_alarm"
+    """Acknowledge one alarm (``key``) or all."""
+
     key: str | None = spec("str", 64, optional=True)
 
 
-# shelve one alarm for ``minutes`` (ISA-18.2 §12.3; at most 60, default 10; 0 unshelves it now)
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("shelve_alarm")
 class ShelveAlarm(Message):
-    TYPE: ClassVar[str] = "shelve_alarm"
+    """Shelve one alarm for ``minutes`` (ISA-18.2 §12.3; at most 60, default 10; 0 unshelves it now)."""
+
     key: str = spec("str", 64)
     minutes: float | None = spec("float", 60.0, optional=True)
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("reset")
 class Reset(Message):
-    TYPE: ClassVar[str] = "reset"
+    """Clear the E-STOP latch; nothing moves until a fresh operator command."""
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("release_operator")
 class ReleaseOperator(Message):
-    TYPE: ClassVar[str] = "release_operator"
+    """Give up the operator role."""
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("describe")
 class Describe(Message):
-    TYPE: ClassVar[str] = "describe"
+    """Ask for the engine's description (robot files, limits, geometry)."""
 
 
-@client_message
-@dataclass(frozen=True, kw_only=True)
+@client_message("pause")
 class Pause(Message):
-    TYPE: ClassVar[str] = "pause"
+    """Pause or resume the simulation clock."""
+
     on: bool = spec("bool")
 
 
-# teleop scene: IK studies in a worker process the engine owns
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+# ------------------------------------------------------------------ teleop scene
+@scene_command("study_start")
 class StudyStart(Message):
-    TYPE: ClassVar[str] = "study_start"
+    """Teleop scene: start an IK study in a worker process the engine owns."""
+
     study: str = spec("enum", ("distribution", "tracking"))
     solver: str | None = spec("str", 64, optional=True)
     grid: int | None = spec("int", 40, optional=True)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("study_cancel")
 class StudyCancel(Message):
-    TYPE: ClassVar[str] = "study_cancel"
+    """Teleop scene: cancel the running IK study."""
 
 
-# crane-head scene (``bosun server --plant tac``)
-# the crane-head scene's vessel (issue 17, item 2): a name (``bosun vessel list``) or an RAO table in Bosun's CSV,
-# sent in parts of ≤ 60 000 characters (``part`` 0 … ``parts`` − 1, in order; a part 0 starts anew)
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+# ------------------------------------------------------------------ crane-head scene (``bosun server --plant tac``)
+@scene_command("set_vessel")
 class SetVessel(Message):
-    TYPE: ClassVar[str] = "set_vessel"
+    """Crane-head scene: the vessel (issue 17, item 2), a name (``bosun vessel list``) or an RAO table in
+    Bosun's CSV, sent in parts of ≤ 60 000 characters (``part`` 0 … ``parts`` − 1, in order; a part 0 starts
+    anew)."""
+
     vessel: str | None = spec("str", 64, optional=True)
     csv: str | None = spec("str", 60_000, optional=True)
     part: int | None = spec("int", 63, optional=True)
@@ -243,36 +254,36 @@ class SetVessel(Message):
     label: str | None = spec("str", 256, optional=True)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("set_sea")
 class SetSea(Message):
-    TYPE: ClassVar[str] = "set_sea"
+    """Crane-head scene: the sea state (spectrum, Hs, Tp, heading in degrees)."""
+
     spectrum: str = spec("enum", ("jonswap", "pm", "torsethaugen"))
     hs: float = spec("float", 30.0)
     tp: float = spec("float", 40.0)
     heading: float = spec("float", 720.0)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("set_tac_mode")
 class SetTacMode(Message):
-    TYPE: ClassVar[str] = "set_tac_mode"
+    """Crane-head scene: no compensation, TAC, or cooperative crane and head."""
+
     mode: str = spec("enum", ("off", "tac", "cooperative"))
 
 
-# Motion-Lab (``bosun server --plant lab``)
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+# ------------------------------------------------------------------ Motion-Lab (``bosun server --plant lab``)
+@scene_command("lab_platform")
 class LabPlatform(Message):
-    TYPE: ClassVar[str] = "lab_platform"
+    """Motion-Lab (``bosun server --plant lab``): move a Stewart platform to neutral, settle, engage or disengage it."""
+
     platform: str = spec("str", 32)
     action: str = spec("enum", ("neutral", "settle", "engage", "disengage"))
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_source")
 class LabSource(Message):
-    TYPE: ClassVar[str] = "lab_source"
+    """Motion-Lab: a platform's motion source (simulation, generator, remote, time series) and its settings."""
+
     platform: str = spec("str", 32)
     source: str = spec("enum", ("simulation", "generator", "remote", "timeseries"))
     amplitude: list[float] | None = spec("floats", 6, optional=True)
@@ -288,107 +299,107 @@ class LabSource(Message):
     name: str | None = spec("str", 256, optional=True)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_remote_pose")
 class LabRemotePose(Message):
-    TYPE: ClassVar[str] = "lab_remote_pose"
+    """Motion-Lab: a platform's pose in REMOTE (η: x, y, z, φ, θ, ψ)."""
+
     platform: str = spec("str", 32)
     eta: list[float] = spec("floats", 6)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_comau_mode")
 class LabComauMode(Message):
-    TYPE: ClassVar[str] = "lab_comau_mode"
+    """Motion-Lab: the Comau's mode."""
+
     mode: str = spec("enum", ("settled", "remote", "motion_comp"))
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_winch")
 class LabWinch(Message):
-    TYPE: ClassVar[str] = "lab_winch"
+    """Motion-Lab: the winch's mode and jog speed."""
+
     mode: str | None = spec("enum", ("local", "remote", "motion_comp"), optional=True)
     speed: float | None = spec("float", 10.0, optional=True)
 
 
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_vvmc")
 class LabVvmc(Message):
-    TYPE: ClassVar[str] = "lab_vvmc"
+    """Motion-Lab: vessel-to-vessel motion compensation on or off."""
+
     on: bool = spec("bool")
 
 
-# the real lab's PLC (``--plc``): acknowledge its error as the lab HMI does (``platform``: only that one)
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_plc_ack")
 class LabPlcAck(Message):
-    TYPE: ClassVar[str] = "lab_plc_ack"
+    """The real lab's PLC (``--plc``): acknowledge its error as the lab HMI does (``platform``: only that
+    one)."""
+
     platform: str | None = spec("str", 32, optional=True)
 
 
-# the Comau's joint jog (issue 16, item 5): ``joint`` 1–3 (q1–q3), ``speed`` a fraction of the profile's
-# joint speed; resent while held, zero when let go (a speed not refreshed for 0.3 s returns to zero)
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_comau_jog")
 class LabComauJog(Message):
-    TYPE: ClassVar[str] = "lab_comau_jog"
+    """The Comau's joint jog (issue 16, item 5): ``joint`` 1–3 (q1–q3), ``speed`` a fraction of the
+    profile's joint speed; resent while held, zero when let go (a speed not refreshed for 0.3 s returns to
+    zero)."""
+
     joint: int = spec("int", 3)
     speed: float = spec("float", 1.0)
 
 
-# the load-swing estimator and anti-swing law (issue 16, item 4; the lab HMI's "Pendel Estimator" buttons)
-@scene_command
-@dataclass(frozen=True, kw_only=True)
+@scene_command("lab_antisway")
 class LabAntisway(Message):
-    TYPE: ClassVar[str] = "lab_antisway"
+    """The load-swing estimator and anti-swing law (issue 16, item 4; the lab HMI's "Pendel Estimator"
+    buttons)."""
+
     action: str = spec("enum", ("activate", "deactivate", "reset"))
 
 
 # ------------------------------------------------------------------ engine -> client
-@engine_message
-@dataclass(frozen=True, kw_only=True)
+@engine_message("welcome")
 class Welcome(Message):
-    TYPE: ClassVar[str] = "welcome"
+    """The engine's answer to ``hello``: this client's id, its role, and where the state is published."""
+
     client_id: str = spec("str", 64)
     role: str = spec("enum", ROLES)
     state_url: str = spec("str", 1024)
     note: str | None = spec("str", 256, optional=True)
 
 
-@engine_message
-@dataclass(frozen=True, kw_only=True)
+@engine_message("reply")
 class Reply(Message):
-    TYPE: ClassVar[str] = "reply"
+    """The engine's answer to a command (``re``): done, or refused with the reason."""
+
     re: str = spec("str", 32)
     ok: bool = spec("bool")
     error: str | None = spec("str", 1024, optional=True)
 
 
-@engine_message
-@dataclass(frozen=True, kw_only=True)
+@engine_message("state")
 class State(Message):
-    TYPE: ClassVar[str] = "state"
+    """A state snapshot (:mod:`app.net.snapshots`)."""
+
     state: dict[str, Any] = spec("map")
 
 
-@engine_message
-@dataclass(frozen=True, kw_only=True)
+@engine_message("description")
 class Description(Message):
-    TYPE: ClassVar[str] = "description"
+    """The engine's static description, the answer to ``describe``."""
+
     description: dict[str, Any] = spec("map")
 
 
-@engine_message
-@dataclass(frozen=True, kw_only=True)
+@engine_message("study")
 class Study(Message):
-    TYPE: ClassVar[str] = "study"
+    """An IK study's progress or result."""
+
     study: dict[str, Any] = spec("map")
 
 
-@engine_message
-@dataclass(frozen=True, kw_only=True)
+@engine_message("log")
 class Log(Message):
-    TYPE: ClassVar[str] = "log"
+    """A line for the operator's log."""
+
     level: str = spec("enum", ("info", "warning", "error"))
     text: str = spec("str", 1024)
     t: float = spec("float", 1e12)

@@ -30,7 +30,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.control.tac import CraneServo, PidGains
+from app.control.tac import PidGains
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.marine import kernels as marine_kernels
@@ -41,7 +41,7 @@ from app.models.crane_head import CraneHead
 from app.models.crane_head_kernels import c_array
 from app.models.registry import load_robot
 from app.scenes import tac_kernels
-from app.scenes.tac import HeadServo
+from app.scenes.tac import CraneServo, HeadServo
 
 MODES = ("off", "tac", "cooperative")
 BETA_EQ60 = np.array([-math.pi / 2, math.pi / 4, -math.pi / 4])  # eq. (60)

@@ -21,11 +21,11 @@ import html
 from dataclasses import dataclass, field
 
 from app.control.lab import COMAU_LAW, WINCH_LAW
-from app.control.tac import HEAD_PID
+from app.control.tac import CRANE_LAW, HEAD_PID
 from app.errors import BosunError
 from app.models.block import Block
 from app.sim.actuators import JOINT_ACTUATORS
-from app.sim.head import HEAD_MOTORS
+from app.sim.head import CRANE_JOINTS, HEAD_MOTORS
 from app.sim.motionlab import COMAU_DRIVES, PENDULUM, WINCH_DRUM
 
 FLOORS = ("operator", "controller", "plant", "sensor")
@@ -81,6 +81,12 @@ def wire(text: str) -> Wire:
     source, ports = left.split(".", 1)
     target, port = right.split(".", 1)
     return Wire(source, tuple(p.strip() for p in ports.split(",")), target, port)
+
+
+def part(name: str, floor: str, where: str, ports: str, note: str = "") -> Node:
+    """A node that is not a block, its ports declared as ``"in, … -> out, …"`` (either side may be empty)."""
+    left, right = (tuple(p.strip() for p in side.split(",") if p.strip()) for side in ports.split("->"))
+    return Node(name, floor, where, inputs=left, outputs=right, note=note)
 
 
 @dataclass(frozen=True)
@@ -231,42 +237,15 @@ LAB_DIAGRAM = Diagram(
     runs="app.scenes.lab.MotionLab.step: the platforms, then app.scenes.lab_kernels.lab_step (one compiled call), "
     "or each block's NumPy reference",
     nodes=(
-        Node(
-            "operator",
-            "operator",
-            "app.engine.lab_session",
-            outputs=("comau_mode", "v_cmd", "winch_mode", "winch_speed"),
-            note="HMI and joystick",
-        ),
-        Node("waves", "plant", "app.sim.stewart", outputs=("eta8000", "eta1500"), note="vessel motion / generator"),
-        Node("em8000", "plant", "app.sim.stewart", inputs=("source",), outputs=("eta",), note="EM8000 platform"),
-        Node("em1500", "plant", "app.sim.stewart", inputs=("source",), outputs=("eta",), note="EM1500 platform"),
-        Node(
-            "sensors",
-            "sensor",
-            "app.marine.sensors",
-            inputs=("eta1", "eta2"),
-            outputs=("view", "view2"),
-            note="MRU / tracker or true",
-        ),
-        Node(
-            "antisway",
-            "controller",
-            "app.control.antisway",
-            inputs=("swing",),
-            outputs=("offset",),
-            note="EKF + LQR anti-swing",
-        ),
+        part("operator", "operator", "app.engine.lab_session", "-> comau_mode, v_cmd, winch_mode, winch_speed", "HMI"),
+        part("waves", "plant", "app.sim.stewart", "-> eta8000, eta1500", "vessel motion / generator"),
+        part("em8000", "plant", "app.sim.stewart", "source -> eta", "EM8000 platform"),
+        part("em1500", "plant", "app.sim.stewart", "source -> eta", "EM1500 platform"),
+        part("sensors", "sensor", "app.marine.sensors", "eta1, eta2 -> view, view2", "MRU / tracker or true"),
+        part("antisway", "controller", "app.control.antisway", "swing -> offset", "EKF + LQR anti-swing"),
         Node("comau_law", "controller", "app.control.lab", COMAU_LAW, note="REMOTE / MOTION_COMP"),
         Node("drives", "plant", "app.sim.motionlab", COMAU_DRIVES, note="Comau joint drives"),
-        Node(
-            "tool",
-            "sensor",
-            "app.models.comau",
-            inputs=("q", "eta1"),
-            outputs=("tool", "a_t_d"),
-            note="tool point, eqs. 54-57",
-        ),
+        part("tool", "sensor", "app.models.comau", "q, eta1 -> tool, a_t_d", "tool point, eqs. 54-57"),
         Node("winch_law", "controller", "app.control.lab", WINCH_LAW, note="heave compensation"),
         Node("drum", "plant", "app.sim.motionlab", WINCH_DRUM),
         Node("load", "plant", "app.sim.motionlab", PENDULUM, note="load, eqs. 29-30"),
@@ -312,63 +291,48 @@ TAC_DIAGRAM = Diagram(
     runs="app.scenarios.tac.TacSimulator.advance: the vessel motion, then app.scenes.tac_kernels.tac_chunk "
     "(one compiled call per chunk), or the NumPy reference",
     nodes=(
-        Node("operator", "operator", "app.engine.tac_session", outputs=("mode", "p_d"), note="HMI: mode, set-point"),
-        Node("vessel", "plant", "app.marine.vessel", outputs=("eta", "nu"), note="vessel in irregular seas"),
-        Node(
-            "mru",
-            "sensor",
-            "app.marine.sensors",
-            inputs=("eta", "nu"),
-            outputs=("eta_m", "nu_m"),
-            note="motion reference unit",
-        ),
-        Node(
-            "crane",
+        part("operator", "operator", "app.engine.tac_session", "-> mode, p_d", "HMI: mode, set-point"),
+        part("vessel", "plant", "app.marine.vessel", "-> eta, nu", "vessel in irregular seas"),
+        part("mru", "sensor", "app.marine.sensors", "eta, nu -> eta_m, nu_m", "motion reference unit"),
+        part(
+            "crane_ref",
             "controller",
-            "app.control.tac",
-            inputs=("mode", "p_d", "eta_m"),
-            outputs=("beta",),
-            note="cooperative crane servo, eqs. 42-44",
+            "app.models.crane_head",
+            "mode, p_d, eta_m -> beta_d, beta_c, beta_c_dot",
+            "crane targets, IK",
         ),
-        Node(
+        Node("crane_law", "controller", "app.control.tac", CRANE_LAW, note="cooperative crane law"),
+        Node("crane", "plant", "app.sim.head", CRANE_JOINTS, note="crane joints"),
+        part(
             "head_ref",
             "controller",
             "app.models.crane_head",
-            inputs=("p_d", "eta_m", "nu_m", "beta"),
-            outputs=("alpha_ref", "alpha_dot_ref"),
-            note="head references, eqs. 49-56",
+            "p_d, eta_m, nu_m, beta, beta_dot -> alpha_ref, alpha_dot_ref",
+            "references, eqs. 49-56",
         ),
         Node("pid", "controller", "app.control.tac", HEAD_PID, note="joint PID, eq. 57"),
         Node("motors", "plant", "app.sim.head", HEAD_MOTORS, note="DC motors, eq. 58"),
-        Node(
-            "windup",
-            "controller",
-            "app.scenes.tac_kernels",
-            inputs=("trial", "limited", "saturated"),
-            outputs=("integral",),
-            note="PID anti-windup commit",
-        ),
-        Node(
-            "head_fk",
-            "sensor",
-            "app.models.crane_head",
-            inputs=("alpha", "beta", "eta"),
-            outputs=("p_c",),
-            note="Delta FK, eqs. 17-25",
-        ),
+        part("windup", "controller", "app.scenes.tac_kernels", "trial, limited, saturated -> integral", "anti-windup"),
+        part("head_fk", "sensor", "app.models.crane_head", "alpha, beta, eta -> p_c", "Delta FK, eqs. 17-25"),
     ),
     wires=tuple(
         wire(w)
         for w in (
             "vessel.eta -> mru.eta",
             "vessel.nu -> mru.nu",
-            "operator.mode -> crane.mode",
-            "operator.p_d -> crane.p_d",
-            "mru.eta_m -> crane.eta_m",
+            "operator.mode -> crane_ref.mode",
+            "operator.p_d -> crane_ref.p_d",
+            "mru.eta_m -> crane_ref.eta_m",
+            "crane_ref.beta_d -> crane_law.beta_d",
+            "crane_ref.beta_c -> crane_law.beta_c",
+            "crane_ref.beta_c_dot -> crane_law.beta_c_dot",
+            "crane.beta -> crane_law.beta",
+            "crane_law.beta_dot_cmd -> crane.beta_dot_cmd",
             "operator.p_d -> head_ref.p_d",
             "mru.eta_m -> head_ref.eta_m",
             "mru.nu_m -> head_ref.nu_m",
             "crane.beta -> head_ref.beta",
+            "crane.beta_dot -> head_ref.beta_dot",
             "head_ref.alpha_ref -> pid.alpha_ref",
             "head_ref.alpha_dot_ref -> pid.alpha_dot_ref",
             "motors.alpha -> pid.alpha",
@@ -388,33 +352,14 @@ TELEOP_DIAGRAM = Diagram(
     summary="any manipulator from a robot file, driven by any joystick through a pluggable solver",
     runs="app.engine.session.TeleopSession.tick: each block in turn at the engine's rate",
     nodes=(
-        Node("device", "operator", "app.teleop.devices", outputs=("axes", "buttons"), note="joystick / keyboard"),
-        Node(
-            "pipeline",
-            "controller",
-            "app.teleop.pipeline",
-            inputs=("axes", "buttons"),
-            outputs=("command",),
-            note="profile, deadzone, deadman, stale halt",
+        part("device", "operator", "app.teleop.devices", "-> axes, buttons", "joystick / keyboard"),
+        part(
+            "pipeline", "controller", "app.teleop.pipeline", "axes, buttons -> command", "deadzone, deadman, stale halt"
         ),
-        Node(
-            "mapping",
-            "controller",
-            "app.teleop.mapping",
-            inputs=("command", "q"),
-            outputs=("target",),
-            note="position / velocity workspace",
-        ),
-        Node(
-            "solver",
-            "controller",
-            "app.ik",
-            inputs=("target", "q"),
-            outputs=("q_ref",),
-            note="GA, Jacobian or analytic IK",
-        ),
+        part("mapping", "controller", "app.teleop.mapping", "command, q -> target", "position / velocity workspace"),
+        part("solver", "controller", "app.ik", "target, q -> q_ref", "GA, Jacobian or analytic IK"),
         Node("actuators", "plant", "app.sim.actuators", JOINT_ACTUATORS, note="joint actuators"),
-        Node("fk", "sensor", "app.models.serial", inputs=("q",), outputs=("tool",), note="forward kinematics"),
+        part("fk", "sensor", "app.models.serial", "q -> tool", "forward kinematics"),
     ),
     wires=tuple(
         wire(w)

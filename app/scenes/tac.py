@@ -1,12 +1,13 @@
 """The crane-head scene (TAC paper §8–10): the head's joint PID (eq. 57) driving its DC motors (eq. 58), with the
 cooperative crane and the head references (eqs. 49–56), wired as one diagram (issue 29).
 
-Plant (:mod:`app.sim.head`): the DC motors, :data:`~app.sim.head.HEAD_MOTORS`.  Controllers
-(:mod:`app.control.tac`): the PID, :data:`~app.control.tac.HEAD_PID`, and the cooperative crane servo.  The
-head servo, PID then motors then the integral committed (anti-windup on the motor's flag of the same step), is
-:class:`HeadServo`; the whole simulation step after the vessel motion is compiled in one call
-(:func:`app.scenes.tac_kernels.tac_chunk`, driven by :class:`app.scenarios.tac.TacSimulator`) or run block by
-block in NumPy (the reference), tested equal in ``tests/test_tac_kernels.py``.
+Plants (:mod:`app.sim.head`): the crane's joints, :data:`~app.sim.head.CRANE_JOINTS`, and the DC motors,
+:data:`~app.sim.head.HEAD_MOTORS`.  Controllers (:mod:`app.control.tac`): the cooperative crane law,
+:data:`~app.control.tac.CRANE_LAW`, and the PID, :data:`~app.control.tac.HEAD_PID`.  The crane servo, law then
+joints, is :class:`CraneServo`; the head servo, PID then motors then the integral committed (anti-windup on the
+motor's flag of the same step), is :class:`HeadServo`; the whole simulation step after the vessel motion is
+compiled in one call (:func:`app.scenes.tac_kernels.tac_chunk`, driven by :class:`app.scenarios.tac.TacSimulator`)
+or run block by block in NumPy (the reference), tested equal in ``tests/test_tac_kernels.py``.
 """
 
 from __future__ import annotations
@@ -17,12 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.control.tac import HEAD_PID, PidGains
+from app.control.tac import CRANE_LAW, HEAD_PID, PidGains
 from app.models.crane_head_kernels import c_array
 from app.scenes import tac_kernels
-from app.sim.head import HEAD_MOTORS
+from app.sim.head import CRANE_JOINTS, HEAD_MOTORS
 
-__all__ = ["HeadServo", "PidGains"]
+__all__ = ["CraneServo", "HeadServo", "PidGains"]
 
 
 @dataclass
@@ -105,3 +106,53 @@ class HeadServo:
             out_a[k], out_u[k] = alpha, u
         self.alpha, self.integral, self.u = alpha, integral, u
         return out_a, out_u
+
+
+@dataclass
+class CraneServo:
+    """The crane's joints in cooperative mode: the law :data:`~app.control.tac.CRANE_LAW` (β̇_cmd from the
+    share of β_c, its rate and a proportional correction, within speed and braking limits) driving the joints
+    :data:`~app.sim.head.CRANE_JOINTS` (rate drives, acceleration-limited, inside their limits)."""
+
+    lower: NDArray[np.float64]
+    upper: NDArray[np.float64]
+    speed: NDArray[np.float64]
+    accel: NDArray[np.float64]
+    beta: NDArray[np.float64]
+    share: float = 1.0
+    k_p: float = 1.0
+    use_kernels: bool = field(default=tac_kernels.ENABLED, repr=False)  # False: the NumPy reference
+
+    def __post_init__(self) -> None:
+        self.beta = np.array(self.beta, dtype=float)
+        self.beta_dot = np.zeros(3)
+
+    def kernel_args(self) -> tuple:
+        """(law, joints): the parameter records of :data:`~app.control.tac.CRANE_LAW` (β_min, β_max, β̇_max,
+        β̈_max, share, k_p) and :data:`~app.sim.head.CRANE_JOINTS` (β_min, β_max, β̈_max), C-contiguous float64
+        (the ``crane`` of :mod:`app.scenes.tac_kernels`)."""
+        lower, upper, speed, accel = (c_array(x) for x in (self.lower, self.upper, self.speed, self.accel))
+        return (lower, upper, speed, accel, float(self.share), float(self.k_p)), (lower, upper, accel)
+
+    def run(
+        self, beta_d: NDArray[np.float64], beta_c: NDArray[np.float64], beta_c_dot: NDArray[np.float64], dt: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Advance len(beta_c) steps towards β_d + share (β_c − β_d); returns β and β̇ after each step, each (n, 3)."""
+        params = self.kernel_args()
+        if self.use_kernels:
+            x = (np.array(self.beta, dtype=float), np.array(self.beta_dot, dtype=float))  # fresh: in place
+            u = tuple(c_array(v) for v in (beta_d, beta_c, beta_c_dot))
+            out = tac_kernels.crane_servo(x, u, params, float(dt))
+            self.beta, self.beta_dot = x
+            return out
+        # the reference: the diagram block by block, law → joints
+        law_p, joints_p = params
+        n = beta_c.shape[0]
+        out_b, out_v = np.empty((n, 3)), np.empty((n, 3))
+        x = (self.beta, self.beta_dot)
+        for k in range(n):
+            _, cmd = CRANE_LAW.reference((), (beta_d, beta_c[k], beta_c_dot[k], x[0]), law_p, dt)
+            x, _ = CRANE_JOINTS.reference(x, cmd, joints_p, dt)
+            out_b[k], out_v[k] = x
+        self.beta, self.beta_dot = x
+        return out_b, out_v

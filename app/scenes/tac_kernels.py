@@ -6,13 +6,14 @@ path).  The references are the same diagram run block by block in NumPy, tested 
 inputs in ``tests/test_tac_kernels.py``: ``HeadServo.run`` (:mod:`app.scenes.tac`) and a whole
 :func:`app.scenarios.tac.simulate` in each mode.  The blocks wired here: the head's PID of eq. (57)
 (:func:`app.control.tac_kernels.head_pid_block`), its DC motors of eq. (58) (:func:`app.sim.head_kernels.
-head_motors_block`) and the cooperative crane servo (``app.control.tac_kernels._crane_step``); the kinematics
+head_motors_block`) and the cooperative crane law driving the crane's joints (:func:`app.control.tac_kernels.
+crane_command`, :func:`app.sim.head_kernels.crane_joints`); the kinematics
 they build on (crane pose and IK, Delta IK/FK, head references of eqs. 49–56) are
 :mod:`app.models.crane_head_kernels`.
 
 Records (every array C-contiguous float64; ``chain``, ``head``, ``hull`` and ``elbow`` are described in
-:mod:`app.models.crane_head_kernels`, ``crane`` and ``pid`` in :mod:`app.control.tac_kernels`, ``motors`` in
-:mod:`app.sim.head_kernels`):
+:mod:`app.models.crane_head_kernels`, ``pid`` in :mod:`app.control.tac_kernels`, ``motors`` in
+:mod:`app.sim.head_kernels`; ``crane`` = (law, joints), the records of :class:`app.scenes.tac.CraneServo`):
 
 * the head servo's state (α, ∫α̃, u) (3,) each, in place: the arm angles, the PID's integral and its last input;
 * :func:`tac_chunk`'s ``x`` = (crane, servo): crane (β, β̇, β_c of the last step (3,) each, in place; the slew
@@ -28,7 +29,7 @@ import math
 
 import numpy as np
 
-from app.control.tac_kernels import _crane_step, head_pid_block
+from app.control.tac_kernels import crane_command, head_pid_block
 from app.models.crane_head_kernels import (
     _crane_pose,
     _delta_fk_point,
@@ -41,10 +42,11 @@ from app.models.crane_head_kernels import (
     _unwrap,
 )
 from app.models.kernels import ENABLED, _jit
-from app.sim.head_kernels import head_motors_block
+from app.sim.head_kernels import crane_joints, head_motors_block
 
 __all__ = [
     "ENABLED",
+    "crane_servo",
     "head_servo",
     "tac_chunk",
     "warm_up_steps",
@@ -52,6 +54,31 @@ __all__ = [
 
 CRANE_HOLD, CRANE_COOPERATIVE, CRANE_RETURN = 0, 1, 2  # crane modes of tac_chunk
 HEAD_LOCK, HEAD_SERVO, HEAD_HOLD = 0, 1, 2  # head modes of tac_chunk
+
+
+# ----------------------------------------------------------------------------- crane servo
+@_jit
+def _crane_step(x, u, p, dt, cmd):
+    """One step of the crane servo (``CraneServo.run``), in place: the cooperative crane law
+    (:func:`app.control.tac_kernels.crane_command`) into ``cmd``, then the crane's joints
+    (:func:`app.sim.head_kernels.crane_joints`).  x = (β, β̇); u = (β_d, β_c, β̇_c); p = (law, joints)."""
+    beta_d, beta_c, beta_c_dot = u
+    law, joints = p
+    crane_command((beta_d, beta_c, beta_c_dot, x[0]), law, cmd)
+    crane_joints(x, cmd, joints, dt)
+
+
+@_jit
+def crane_servo(x, u, p, dt):
+    """``CraneServo.run``: len(β_c) steps of :func:`_crane_step`; u = (β_d (3,), β_c, β̇_c (n, 3)); returns (β,
+    β̇) after each step, (n, 3) each, the state x = (β, β̇) in place."""
+    beta_d, beta_c, beta_c_dot = u
+    n = beta_c.shape[0]
+    out_b, out_v, cmd = np.empty((n, 3)), np.empty((n, 3)), np.empty(3)
+    for k in range(n):
+        _crane_step(x, (beta_d, beta_c[k], beta_c_dot[k]), p, dt, cmd)
+        out_b[k], out_v[k] = x
+    return out_b, out_v
 
 
 # ----------------------------------------------------------------------------- head servo
@@ -117,7 +144,7 @@ def tac_chunk(x, u, p, dt):
     R_n_b, R_n_b_true, R_n_t = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     c, d = np.empty((3, 3)), np.empty((3, 3))
     o_t_n, p_cmd, v_ref_t, alpha_dot_ref = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    target, beta_c, beta_c_dot, zero = np.empty(3), np.empty(3), np.zeros(3), np.zeros(3)
+    target, beta_c, beta_c_dot, zero, cmd = np.empty(3), np.empty(3), np.zeros(3), np.zeros(3), np.empty(3)
     p_tcp = np.empty(3)
     geometry, tip, work, servo_p = (head, hull), (o, R, v, w), (c, d), (pid, motors)
     # the uncompensated TCP in {b}: crane at β_d, head locked at p_d^t
@@ -154,9 +181,9 @@ def tac_chunk(x, u, p, dt):
                 for j in range(3):
                     beta_c_dot[j] = (beta_c[j] - beta_c_prev[j]) / dt
                 beta_c_prev[:] = beta_c
-                _crane_step(crane, beta_d, beta_c, beta_c_dot, dt, beta, beta_dot)
+                _crane_step((beta, beta_dot), (beta_d, beta_c, beta_c_dot), crane, dt, cmd)
             else:
-                _crane_step(crane, beta_d, beta_d, zero, dt, beta, beta_dot)
+                _crane_step((beta, beta_dot), (beta_d, beta_d, zero), crane, dt, cmd)
             out_beta[k] = beta
             _crane_pose(chain, beta, beta_dot, o, R, v, w)
         # head reference (eqs. 49–56), servo (eqs. 57–58) and forward kinematics (eqs. 17–25)
@@ -201,7 +228,7 @@ def warm_up_steps() -> list:
     head = (3.25, -0.75, 7.0, rot_x(np.radians([150.0, 270.0, 30.0])), -o3, o3)  # TAC paper Table 4
     hull = (np.array([[1.0, 0.0, 0.0, -1.0]]), z3, 1.0)
     elbow = (3.0, 19.2, 16.0, eye)
-    crane = (-o3, o3, o3, o3, 0.3, 1.0)
+    crane = ((-o3, o3, o3, o3, 0.3, 1.0), (-o3, o3, o3))
     servo_p = ((10.0, 60.0, 1.0, 0.2, 1.0, -o3, o3), (0.2, 1.0, -o3, o3, o3))
     rows3, rows6 = np.zeros((2, 3)), np.zeros((2, 6))
 
@@ -214,6 +241,7 @@ def warm_up_steps() -> list:
         tac_chunk(x, (rows6, rows6, rows6, False), (modes, chain, head, hull, elbow, crane, *servo_p), 0.01)
 
     return [
+        lambda: crane_servo((z3.copy(), z3.copy()), (z3, rows3, rows3), crane, 0.01),
         lambda: head_servo(servo(), (rows3, rows3), servo_p, 0.01),
         lambda: chunk(CRANE_COOPERATIVE, HEAD_SERVO),
     ]

@@ -1,4 +1,9 @@
-"""The crane head's plant: the Delta head's three DC motors (TAC paper eq. 58, Table 4: T_DC 0.2 s, K_DC 1).
+"""The crane head's plant: the crane's three joints and the Delta head's three DC motors (TAC paper eq. 58,
+Table 4: T_DC 0.2 s, K_DC 1).
+
+The crane's joints (slew, boom, jib) are rate drives, :data:`CRANE_JOINTS`: each joint's rate follows the
+commanded rate within its acceleration limit, its angle stays inside its limits.  The law that commands them
+in cooperative mode is :data:`app.control.tac.CRANE_LAW`.
 
 Each arm is driven by a DC motor modelled as α/u = K_DC/(T_DC s + 1) (eq. 58), discretised exactly (zero-order
 hold), its speed saturating at the head file's arm speed (90°/s for ``robots/tac_delta_head.xml``), its angle
@@ -18,7 +23,29 @@ import numpy as np
 from app.models.block import Block
 from app.sim import head_kernels
 
-__all__ = ["HEAD_MOTORS", "motor_step"]
+__all__ = ["CRANE_JOINTS", "HEAD_MOTORS", "motor_step"]
+
+
+def _crane_joints_reference(x, u, p, dt):
+    """The NumPy reference of :data:`CRANE_JOINTS` (the kernel: ``app.sim.head_kernels.crane_joints_block``)."""
+    beta, beta_dot = x
+    lower, upper, accel = p
+    dv = accel * dt
+    beta_dot = beta_dot + np.clip(u[0] - beta_dot, -dv, dv)
+    beta = np.minimum(np.maximum(beta + beta_dot * dt, lower), upper)
+    return (beta, beta_dot), (beta, beta_dot)
+
+
+#: the crane's three joints as a block (app.models.block): rate drives, acceleration-limited, inside the limits
+CRANE_JOINTS = Block(
+    "crane joints",
+    state=("beta", "beta_dot"),
+    inputs=("beta_dot_cmd",),
+    outputs=("beta", "beta_dot"),
+    params=("lower", "upper", "accel"),
+    reference=_crane_joints_reference,
+    kernel=head_kernels.crane_joints_block,
+)
 
 
 def motor_step(

@@ -1,11 +1,15 @@
-"""Compiled plant of the crane head: the Delta head's three DC motors (TAC paper eq. 58).
+"""Compiled plant of the crane head: the crane's three joints and the Delta head's three DC motors (TAC paper
+eq. 58).
 
 Same scheme as :mod:`app.models.kernels` (numba, cached on disk, ``BOSUN_JIT=0`` for the interpreted
-path).  The NumPy reference is :mod:`app.sim.head` (:data:`~app.sim.head.HEAD_MOTORS`), tested equal on the
-same seeded inputs in ``tests/test_blocks.py``; the scene that wires these motors with their PID
-(:func:`app.control.tac_kernels.head_pid_block`, eq. 57) is :mod:`app.scenes.tac_kernels`.
+path).  The NumPy references are :mod:`app.sim.head` (:data:`~app.sim.head.CRANE_JOINTS`,
+:data:`~app.sim.head.HEAD_MOTORS`), tested equal on the same seeded inputs in ``tests/test_blocks.py``; the
+scene that wires them with their controllers (:mod:`app.control.tac_kernels`: the cooperative crane law, the
+PID of eq. 57) is :mod:`app.scenes.tac_kernels`.
 
-The block takes records, (x, u, p, dt), and updates its state array in place (see :mod:`app.sim.kernels`):
+The blocks take records, (x, u, p, dt), and update their state arrays in place (see :mod:`app.sim.kernels`).
+The crane's joints: ``x`` = (β, β̇) (3,) each [rad, rad/s], in place; ``u`` = (β̇_cmd,) (3,); ``p`` = (β_min,
+β_max, β̈_max) (3,) each; ``y`` = (β, β̇).  The head's motors:
 
 * ``x`` = (α,): the arm angles (3,) [rad], in place;
 * ``u`` = (u,): the motors' inputs (3,) [rad] (K_DC u is the angle each motor settles at);
@@ -22,7 +26,26 @@ import numpy as np
 
 from app.models.kernels import ENABLED, _jit
 
-__all__ = ["ENABLED", "head_motors_block", "warm_up_steps"]
+__all__ = ["ENABLED", "crane_joints", "crane_joints_block", "head_motors_block", "warm_up_steps"]
+
+
+@_jit
+def crane_joints(x, cmd, p, dt):
+    """:data:`app.sim.head.CRANE_JOINTS`' step on x = (β, β̇) in place: each joint's rate follows β̇_cmd within
+    its acceleration limit, its angle stays inside [β_min, β_max]."""
+    beta, beta_dot = x
+    lower, upper, accel = p
+    for j in range(beta.shape[0]):
+        dv = accel[j] * dt
+        beta_dot[j] = beta_dot[j] + min(max(cmd[j] - beta_dot[j], -dv), dv)
+        beta[j] = min(max(beta[j] + beta_dot[j] * dt, lower[j]), upper[j])
+
+
+@_jit
+def crane_joints_block(x, u, p, dt):
+    """The crane's joints as a block (:data:`app.sim.head.CRANE_JOINTS`), in place; returns (x', y), y = (β, β̇)."""
+    crane_joints(x, u[0], p, dt)
+    return x, x
 
 
 @_jit
@@ -60,7 +83,10 @@ def head_motors_block(x, u, p, dt):
 
 # ----------------------------------------------------------------------------- warm-up
 def warm_up_steps() -> list:
-    """A zero-argument call that compiles (or loads) :func:`head_motors_block` with the argument types its
-    callers pass (for :func:`app.warmup.warm_up`)."""
+    """Zero-argument calls that compile (or load) the blocks with the argument types their callers pass (for
+    :func:`app.warmup.warm_up`)."""
     z3, o3 = np.zeros(3), np.ones(3)
-    return [lambda: head_motors_block((z3.copy(),), (o3,), (0.2, 1.0, -o3, o3, o3), 0.01)]
+    return [
+        lambda: head_motors_block((z3.copy(),), (o3,), (0.2, 1.0, -o3, o3, o3), 0.01),
+        lambda: crane_joints_block((z3.copy(), z3.copy()), (o3,), (-o3, o3, o3), 0.01),
+    ]
