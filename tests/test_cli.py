@@ -228,3 +228,19 @@ def test_an_interrupt_inside_a_compiled_kernel_is_one_line_and_130(tmp_path, sig
             proc.kill()
     assert proc.returncode == 130 and err == "bosun: interrupted\n", err[-800:]
     assert not (tmp_path / "a").exists()
+
+
+# ---------------------------------------------------------------------------- choices kept as constants
+def test_the_choices_of_the_parser_are_those_of_the_code():
+    """The parser's choices are constants of app/cli, so that building it (every start) imports no
+    simulation or sensor module; each must stay equal to what it stands for."""
+    from app.cli.args import SPECTRA, TAC_MODES
+    from app.cli.sim import _SENSOR_NAMES
+    from app.marine.sensors import SENSORS
+    from app.marine.waves import SPECTRA as WAVE_SPECTRA
+    from app.scenarios.tac import MODES
+
+    assert tuple(WAVE_SPECTRA) == SPECTRA
+    assert tuple(MODES) == TAC_MODES
+    assert tuple(_SENSOR_NAMES) == ("true", *SENSORS)
+

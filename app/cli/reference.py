@@ -5,10 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.cli.common import (
-    _print_json,
-    _table,
-)
+from app.cli.args import add_json, command
+from app.cli.common import _print_json, _table
 
 
 def cmd_alarms(args: argparse.Namespace) -> int:
@@ -50,13 +48,13 @@ def register_describe(sub) -> None:
     """``bosun describe``."""
     from app.scenes.diagram import DIAGRAMS
 
-    p = sub.add_parser("describe", help="a scene's blocks and, with --diagram, the wires between them")
-    p.add_argument("--scene", choices=sorted(DIAGRAMS), required=True, help="the scene")
-    p.add_argument("--diagram", action="store_true", help="the wires too: the scene's whole diagram")
-    out = p.add_mutually_exclusive_group()
-    out.add_argument("--json", action="store_true", help="machine-readable output")
-    out.add_argument("--svg", action="store_true", help="the diagram as an SVG figure (docs/figures/diagram-*.svg)")
-    p.set_defaults(func=cmd_describe)
+    describe_help = "a scene's blocks and, with --diagram, the wires between them"
+    with command(sub, "describe", cmd_describe, json=False, help=describe_help) as p:
+        p.add_argument("--scene", choices=sorted(DIAGRAMS), required=True, help="the scene")
+        p.add_argument("--diagram", action="store_true", help="the wires too: the scene's whole diagram")
+        out = p.add_mutually_exclusive_group()
+        add_json(out)
+        out.add_argument("--svg", action="store_true", help="the diagram as an SVG figure (docs/figures/diagram-*.svg)")
 
 
 def cmd_cli_reference(args: argparse.Namespace) -> int:
@@ -138,10 +136,9 @@ def cli_reference_markdown(parser: argparse.ArgumentParser) -> str:
 
 def register_alarms(sub) -> None:
     """``bosun alarms``."""
-    p = sub.add_parser("alarms", help="the alarm reference: every alarm, its cause, consequence and action")
-    p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.set_defaults(func=cmd_alarms)
+    alarms_help = "the alarm reference: every alarm, its cause, consequence and action"
+    with command(sub, "alarms", cmd_alarms, help=alarms_help) as p:
+        p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
 
 
 def register(sub) -> None:
