@@ -8,6 +8,10 @@ import sys
 from app.cli.args import add_json, command
 from app.cli.common import _print_json, _table
 
+# the scenes of ``bosun describe``: app.scenes.diagram.DIAGRAMS' keys, sorted (tests/test_cli.py keeps them
+# equal); a constant, so that building the parser does not import the diagrams at every start
+SCENES = ("lab", "tac", "teleop")
+
 
 def cmd_alarms(args: argparse.Namespace) -> int:
     from dataclasses import asdict
@@ -46,11 +50,9 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
 def register_describe(sub) -> None:
     """``bosun describe``."""
-    from app.scenes.diagram import DIAGRAMS
-
     describe_help = "a scene's blocks and, with --diagram, the wires between them"
     with command(sub, "describe", cmd_describe, json=False, help=describe_help) as p:
-        p.add_argument("--scene", choices=sorted(DIAGRAMS), required=True, help="the scene")
+        p.add_argument("--scene", choices=list(SCENES), required=True, help="the scene")
         p.add_argument("--diagram", action="store_true", help="the wires too: the scene's whole diagram")
         out = p.add_mutually_exclusive_group()
         add_json(out)
