@@ -253,3 +253,14 @@ def test_building_the_parser_does_not_import_the_diagrams():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "False"
+
+
+def test_alarms_json_has_every_alarm_and_null_for_a_boolean_ones_limit(capsys):
+    from app.engine.alarm_catalog import CATALOG
+
+    code, out, _ = run(capsys, "alarms", "--json")
+    assert code == 0
+    alarms = {a["key"]: a for a in json.loads(out)["alarms"]}
+    assert set(alarms) == {a.key for a in CATALOG}
+    assert alarms["estop"]["limit"] is None
+    assert all(alarms[a.key]["limit"] == a.limit for a in CATALOG if a.analog)

@@ -22,7 +22,8 @@ def cmd_alarms(args: argparse.Namespace) -> int:
         sys.stdout.write(reference_markdown())
         return 0
     if args.json:
-        _print_json({"alarms": [asdict(a) for a in CATALOG]})
+        # a boolean alarm's limit is nan in the catalog: null in JSON, which has no nan
+        _print_json({"alarms": [{**asdict(a), "limit": a.limit if a.analog else None} for a in CATALOG]})
         return 0
     print(
         _table(
