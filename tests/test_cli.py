@@ -228,3 +228,39 @@ def test_an_interrupt_inside_a_compiled_kernel_is_one_line_and_130(tmp_path, sig
             proc.kill()
     assert proc.returncode == 130 and err == "bosun: interrupted\n", err[-800:]
     assert not (tmp_path / "a").exists()
+
+
+# ---------------------------------------------------------------------------- choices kept as constants
+def test_the_choices_of_the_parser_are_those_of_the_code():
+    """The parser's choices are constants of app/cli, so that building it (every start) imports no scene,
+    simulation or sensor module; each must stay equal to what it stands for."""
+    from app.cli.args import SPECTRA, TAC_MODES
+    from app.cli.reference import SCENES
+    from app.cli.sim import _SENSOR_NAMES
+    from app.marine.sensors import SENSORS
+    from app.marine.waves import SPECTRA as WAVE_SPECTRA
+    from app.scenarios.tac import MODES
+    from app.scenes.diagram import DIAGRAMS
+
+    assert list(SCENES) == sorted(DIAGRAMS)
+    assert tuple(WAVE_SPECTRA) == SPECTRA
+    assert tuple(MODES) == TAC_MODES
+    assert tuple(_SENSOR_NAMES) == ("true", *SENSORS)
+
+
+def test_building_the_parser_does_not_import_the_diagrams():
+    code = "import sys; from app.cli import build_parser; build_parser(); print('app.scenes.diagram' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "False"
+
+
+def test_alarms_json_has_every_alarm_and_null_for_a_boolean_ones_limit(capsys):
+    from app.engine.alarm_catalog import CATALOG
+
+    code, out, _ = run(capsys, "alarms", "--json")
+    assert code == 0
+    alarms = {a["key"]: a for a in json.loads(out)["alarms"]}
+    assert set(alarms) == {a.key for a in CATALOG}
+    assert alarms["estop"]["limit"] is None
+    assert all(alarms[a.key]["limit"] == a.limit for a in CATALOG if a.analog)

@@ -4,26 +4,32 @@ from __future__ import annotations
 
 import argparse
 
-from app.cli.common import (
-    _kernels_on,
-    _machine,
-    _Parser,
-    _positive_float,
-    _positive_int,
-    _print_json,
-    _progress_bar,
-    _table,
-)
+from app.cli.args import command, group
+from app.cli.common import _kernels_on, _machine, _positive_float, _positive_int, _print_json, _progress_bar, _table
 from app.errors import BosunError
+
+
+def _serial_robots(names: list[str] | None) -> list[str]:
+    """The robots given, or by default every serial robot of the library."""
+    from app.models.registry import list_robots, load_spec
+
+    return names or [n for n in list_robots() if load_spec(n).type == "serial"]
+
+
+def _print_bench_json(benchmark: str, fields: dict) -> None:
+    _print_json({"benchmark": benchmark, "machine": _machine(), **fields})
+
+
+def _machine_line() -> str:
+    return f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}"
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from app.analysis.ik_studies import bench_ik
-    from app.models.registry import list_robots, load_robot, load_spec
+    from app.models.registry import load_robot
     from app.warmup import warm_up
 
-    names = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
-    robots = [load_robot(n) for n in names]
+    robots = [load_robot(n) for n in _serial_robots(args.robots)]
     warm_up()  # compiled (or loaded) before the clock runs, never inside a timed solve
     rows = bench_ik(robots, targets=args.targets, seed=args.seed, progress=_progress_bar("bench ik"))
     peers_missing: list[str] = []
@@ -37,23 +43,22 @@ def cmd_bench(args: argparse.Namespace) -> int:
             base = ref.get((r["robot"], r["start"]))
             r["ratio_to_rtb_cpp"] = r["median_ms"] / base if base else None
     if args.json:
-        _print_json(
+        _print_bench_json(
+            "ik",
             {
-                "benchmark": "ik",
-                "machine": _machine(),
                 "kernels": _kernels_on(),
                 "targets": args.targets,
                 "seed": args.seed,
                 "peers_missing": peers_missing,
                 "results": rows,
-            }
+            },
         )
         return 0
     print(
         f"bosun bench ik: {args.targets} seeded reachable targets per robot; cold = default start, warm = targets "
         "1 cm apart from the previous solution; success = error < 1 mm inside the limits; budget 100 ms"
     )
-    print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
+    print(_machine_line())
     if peers_missing:
         print(f"peers not installed (pip install -e '.[bench]'): {', '.join(peers_missing)}")
     header = ["robot", "solver", "start", "median [ms]", "p95 [ms]", "p99 [ms]", "success", "own test", "median err"]
@@ -88,10 +93,10 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
     cases = [(k, m) for k in args.kinds for m in ((False, True) if k == "lab" else (False,))]
     rows = [engine_speed(kind, seconds=args.seconds, motion=motion) for kind, motion in cases]
     if args.json:
-        _print_json({"benchmark": "sim", "machine": _machine(), "results": rows})
+        _print_bench_json("sim", {"results": rows})
         return 0
     print(f"bosun bench sim: engine plants ticked back to back at their default rate, {args.seconds:g} s simulated")
-    print(f"machine: {_machine()}; compiled kernels: {'on' if _kernels_on() else 'off'}")
+    print(_machine_line())
     labels = {("lab", False): "lab (as it starts)", ("lab", True): "lab (VVMC in waves)", ("tac", False): "crane head"}
     print(
         _table(
@@ -112,9 +117,8 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
 
 def cmd_bench_hold(args: argparse.Namespace) -> int:
     from app.bench.hold import HOLD_TOLERANCE, bench_hold
-    from app.models.registry import list_robots, load_spec
 
-    robots = args.robots or [n for n in list_robots() if load_spec(n).type == "serial"]
+    robots = _serial_robots(args.robots)
     if not 1.0 <= args.rate <= 1000.0:
         raise BosunError(f"--rate must be between 1 and 1000 Hz, got {args.rate:g}")
     rows = bench_hold(
@@ -122,7 +126,7 @@ def cmd_bench_hold(args: argparse.Namespace) -> int:
         progress=_progress_bar("hold", unit="sequence"),
     )  # fmt: skip
     if args.json:
-        _print_json({"benchmark": "hold", "machine": _machine(), "rate": args.rate, "results": rows})
+        _print_bench_json("hold", {"rate": args.rate, "results": rows})
         return 0
     print(f"bosun bench hold: {args.sequences} seeded stick sequences per case ending still, {args.rate:g} Hz")
     print(f"held: overrun past the braking stop and drift once at rest both < {HOLD_TOLERANCE * 100:g} cm")
@@ -151,7 +155,7 @@ def cmd_bench_alarms(args: argparse.Namespace) -> int:
 
     rep = run(args.minutes, progress=_progress_bar("session", unit="s")).report()
     if args.json:
-        _print_json({"benchmark": "alarms", "machine": _machine(), **rep})
+        _print_bench_json("alarms", rep)
         return 0
     print(f"bosun bench alarms: a scripted {args.minutes:g}-minute session, three engines (machine: {_machine()})")
     print(f"  E-STOPs by the operator (counted apart): {rep['operator_estops']}")
@@ -176,7 +180,7 @@ def cmd_bench_plc_soak(args: argparse.Namespace) -> int:
 
     rep = run(args.minutes * 60.0, seed=args.seed, progress=_progress_bar("soak", unit="s"))
     if args.json:
-        _print_json({"benchmark": "plc-soak", "machine": _machine(), **rep.to_dict()})
+        _print_bench_json("plc-soak", rep.to_dict())
         return 0 if rep.ok else 1
     print(f"bosun bench plc-soak: the lab engine against a misbehaving PLC (pyads' test server), {rep.seconds:g} s")
     print(f"  phases: {rep.phases} (normal, NaN/inf/out of range, wrong sizes + STOP unusable, link gone, slow)")
@@ -246,54 +250,45 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
 
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
-    p = sub.add_parser("bench", help="benchmarks (not tests): bench ik, loop, sim, hold, alarms, plc-soak")
-    bench = p.add_subparsers(dest="bench", metavar="WHAT", parser_class=_Parser, required=True)
-    b = bench.add_parser("ik", help="median/p95 solve time and success per robot and solver")
-    b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
-    b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
-    b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
-    b.add_argument(
-        "--peers",
-        action="store_true",
-        help="also robotics-toolbox-python (ik_LM, ikine_LM) and ikpy on the same targets (extra 'bench')",
-    )
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_bench)
-    b = bench.add_parser("loop", help="engine tick period, jitter, missed deadlines and input latency")
-    b.add_argument("--rate", type=float, choices=[500.0, 1000.0], default=500.0, help="loop rate [Hz] (500 or 1000)")
-    b.add_argument("--seconds", type=_positive_float, default=30.0, help="duration [s] (default 30)")
-    b.add_argument("--robot", default="comau_smart5_3dof", help="robot (default comau_smart5_3dof)")
-    b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
-    b.add_argument("--flood", type=int, default=0, metavar="N", help="one more client sending N junk messages a second")
-    b.add_argument("--burn", action="store_true", help="another process keeps one core busy")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_bench_loop)
-    b = bench.add_parser("sim", help="how fast the lab and crane-head engines run unthrottled")
-    b.add_argument("--kinds", nargs="+", choices=["lab", "tac"], default=["lab", "tac"], help="engines (default both)")
-    b.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated time [s] (default 20)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_bench_sim)
-    b = bench.add_parser(
-        "hold", help="hold means hold: seeded stick sequences ending still, tool drift after braking (issue 26)"
-    )
-    b.add_argument("--sequences", type=_positive_int, default=1000, help="sequences per robot × solver × mode")
-    b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
-    b.add_argument("--modes", nargs="+", choices=["velocity", "position"], default=["velocity", "position"])
-    b.add_argument("--rate", type=float, default=1000.0, help="engine rate [Hz] (default 1000, as the engine runs)")
-    b.add_argument("--seed", type=int, default=0, help="seed of the stick sequences (default 0)")
-    b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_bench_hold)
-    b = bench.add_parser(
-        "alarms", help="alarm rates of a scripted session (three engines, a study, VVMC, two STOPs) vs EEMUA 191"
-    )
-    b.add_argument("--minutes", type=_positive_float, default=10.0, help="session length (default 10)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_bench_alarms)
-    b = bench.add_parser(
-        "plc-soak", help="the lab engine against a PLC test server injecting NaN, wrong sizes, link loss, slowness"
-    )
-    b.add_argument("--minutes", type=_positive_float, default=10.0, help="soak length (default 10)")
-    b.add_argument("--seed", type=int, default=27, help="seed of the injections and commands (default 27)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_bench_plc_soak)
+    bench = group(sub, "bench", "benchmarks (not tests): bench ik, loop, sim, hold, alarms, plc-soak", "bench")
+    with command(bench, "ik", cmd_bench, help="median/p95 solve time and success per robot and solver") as b:
+        b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
+        b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
+        b.add_argument("--robots", nargs="+", default=None, help="robots to bench (default: every serial robot)")
+        b.add_argument(
+            "--peers",
+            action="store_true",
+            help="also robotics-toolbox-python (ik_LM, ikine_LM) and ikpy on the same targets (extra 'bench')",
+        )
+    loop_help = "engine tick period, jitter, missed deadlines and input latency"
+    with command(bench, "loop", cmd_bench_loop, help=loop_help) as b:
+        b.add_argument(
+            "--rate", type=float, choices=[500.0, 1000.0], default=500.0, help="loop rate [Hz] (500 or 1000)"
+        )
+        b.add_argument("--seconds", type=_positive_float, default=30.0, help="duration [s] (default 30)")
+        b.add_argument("--robot", default="comau_smart5_3dof", help="robot (default comau_smart5_3dof)")
+        b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")
+        b.add_argument(
+            "--flood", type=int, default=0, metavar="N", help="one more client sending N junk messages a second"
+        )
+        b.add_argument("--burn", action="store_true", help="another process keeps one core busy")
+    with command(bench, "sim", cmd_bench_sim, help="how fast the lab and crane-head engines run unthrottled") as b:
+        b.add_argument(
+            "--kinds", nargs="+", choices=["lab", "tac"], default=["lab", "tac"], help="engines (default both)"
+        )
+        b.add_argument("--seconds", type=_positive_float, default=20.0, help="simulated time [s] (default 20)")
+    hold_help = "hold means hold: seeded stick sequences ending still, tool drift after braking (issue 26)"
+    with command(bench, "hold", cmd_bench_hold, help=hold_help) as b:
+        b.add_argument("--sequences", type=_positive_int, default=1000, help="sequences per robot × solver × mode")
+        b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
+        b.add_argument("--modes", nargs="+", choices=["velocity", "position"], default=["velocity", "position"])
+        b.add_argument("--rate", type=float, default=1000.0, help="engine rate [Hz] (default 1000, as the engine runs)")
+        b.add_argument("--seed", type=int, default=0, help="seed of the stick sequences (default 0)")
+        b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
+    alarms_help = "alarm rates of a scripted session (three engines, a study, VVMC, two STOPs) vs EEMUA 191"
+    with command(bench, "alarms", cmd_bench_alarms, help=alarms_help) as b:
+        b.add_argument("--minutes", type=_positive_float, default=10.0, help="session length (default 10)")
+    soak_help = "the lab engine against a PLC test server injecting NaN, wrong sizes, link loss, slowness"
+    with command(bench, "plc-soak", cmd_bench_plc_soak, help=soak_help) as b:
+        b.add_argument("--minutes", type=_positive_float, default=10.0, help="soak length (default 10)")
+        b.add_argument("--seed", type=int, default=27, help="seed of the injections and commands (default 27)")

@@ -146,6 +146,31 @@ def _atomic_dir(out: Path):
         raise
 
 
+def _write_run(args: argparse.Namespace, out: Path, save) -> dict[str, Any]:
+    """Write a run's files into ``out`` as a whole (:func:`_atomic_dir`) with ``save(folder)``, which returns the
+    run's summary; with ``--json`` print that summary and the folder.  Returns the summary."""
+    with _atomic_dir(out) as tmp:
+        doc = save(tmp)
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+    return doc
+
+
+@contextlib.contextmanager
+def _as_usage_error(*errors: type[Exception]):
+    """A refusal of the model (a bad scenario, vessel or study: ``errors``) is the user's mistake: a
+    BosunError, one line and exit 2."""
+    try:
+        yield
+    except errors as err:
+        raise BosunError(str(err)) from None
+
+
+def _fields(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options ``names`` as keyword arguments, for a scenario whose fields are named as they are."""
+    return {name: getattr(args, name) for name in names}
+
+
 def _machine() -> str:
     import os
     import platform

@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.cli.common import (
-    _print_json,
-    _table,
-)
+from app.cli.args import add_json, command
+from app.cli.common import _print_json, _table
+
+# the scenes of ``bosun describe``: app.scenes.diagram.DIAGRAMS' keys, sorted (tests/test_cli.py keeps them
+# equal); a constant, so that building the parser does not import the diagrams at every start
+SCENES = ("lab", "tac", "teleop")
 
 
 def cmd_alarms(args: argparse.Namespace) -> int:
@@ -20,7 +22,8 @@ def cmd_alarms(args: argparse.Namespace) -> int:
         sys.stdout.write(reference_markdown())
         return 0
     if args.json:
-        _print_json({"alarms": [asdict(a) for a in catalog()]})
+        # a boolean alarm's limit is nan in the catalog: null in JSON, which has no nan
+        _print_json({"alarms": [{**asdict(a), "limit": a.limit if a.analog else None} for a in catalog()]})
         return 0
     print(
         _table(
@@ -48,15 +51,13 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
 def register_describe(sub) -> None:
     """``bosun describe``."""
-    from app.scenes.diagram import DIAGRAMS
-
-    p = sub.add_parser("describe", help="a scene's blocks and, with --diagram, the wires between them")
-    p.add_argument("--scene", choices=sorted(DIAGRAMS), required=True, help="the scene")
-    p.add_argument("--diagram", action="store_true", help="the wires too: the scene's whole diagram")
-    out = p.add_mutually_exclusive_group()
-    out.add_argument("--json", action="store_true", help="machine-readable output")
-    out.add_argument("--svg", action="store_true", help="the diagram as an SVG figure (docs/figures/diagram-*.svg)")
-    p.set_defaults(func=cmd_describe)
+    describe_help = "a scene's blocks and, with --diagram, the wires between them"
+    with command(sub, "describe", cmd_describe, json=False, help=describe_help) as p:
+        p.add_argument("--scene", choices=list(SCENES), required=True, help="the scene")
+        p.add_argument("--diagram", action="store_true", help="the wires too: the scene's whole diagram")
+        out = p.add_mutually_exclusive_group()
+        add_json(out)
+        out.add_argument("--svg", action="store_true", help="the diagram as an SVG figure (docs/figures/diagram-*.svg)")
 
 
 def cmd_cli_reference(args: argparse.Namespace) -> int:
@@ -138,10 +139,9 @@ def cli_reference_markdown(parser: argparse.ArgumentParser) -> str:
 
 def register_alarms(sub) -> None:
     """``bosun alarms``."""
-    p = sub.add_parser("alarms", help="the alarm reference: every alarm, its cause, consequence and action")
-    p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.set_defaults(func=cmd_alarms)
+    alarms_help = "the alarm reference: every alarm, its cause, consequence and action"
+    with command(sub, "alarms", cmd_alarms, help=alarms_help) as p:
+        p.add_argument("--markdown", action="store_true", help="docs/alarms.md, as generated")
 
 
 def register(sub) -> None:

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from app.cli.args import add_json, add_out, command
 from app.cli.common import (
     EXIT_USAGE,
-    _atomic_dir,
     _finite_float,
     _out_dir,
     _positive_float,
@@ -22,6 +22,7 @@ from app.cli.common import (
     _progress_bar,
     _solver_options,
     _table,
+    _write_run,
 )
 from app.errors import BosunError
 from app.geometry import matrix_to_euler_zyx
@@ -62,16 +63,19 @@ def cmd_robots(args: argparse.Namespace) -> int:
     return EXIT_USAGE if problems else 0
 
 
+def _joint_values(robot, values: list[float], deg: bool) -> np.ndarray:
+    """``--q`` or ``--q0`` of a serial arm, checked against it; with ``--deg`` its revolute values are degrees."""
+    q = robot.check_q(values)
+    return np.where(np.array(robot.joint_kinds) == "revolute", np.deg2rad(q), q) if deg else q
+
+
 def _serial_robot_and_q(args: argparse.Namespace):
     from app.models.registry import load_robot
 
     robot = load_robot(args.robot)
     if getattr(robot, "kind", "serial") != "serial":
         raise BosunError(f"{robot.name} is a {robot.kind} mechanism; this command takes a serial arm")
-    q = robot.check_q(args.q)
-    if args.deg:
-        q = np.where(np.array(robot.joint_kinds) == "revolute", np.deg2rad(q), q)
-    return robot, q
+    return robot, _joint_values(robot, args.q, args.deg)
 
 
 def _joint_report(robot, q: np.ndarray) -> list[dict[str, Any]]:
@@ -233,11 +237,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     solver = make_solver(args.solver, robot, seed=args.seed, **_solver_options(args))
-    q0 = None
-    if args.q0 is not None:
-        q0 = robot.check_q(args.q0)
-        if args.deg:
-            q0 = np.where(np.array(robot.joint_kinds) == "revolute", np.deg2rad(q0), q0)
+    q0 = None if args.q0 is None else _joint_values(robot, args.q0, args.deg)
     res = solver.solve_position(args.target, q0)
     joints = _joint_report(robot, res.q)
     if args.json:
@@ -272,110 +272,104 @@ def _study_setup(args: argparse.Namespace, kind: str):
     return robot, opts, _out_dir(args, kind)
 
 
-def _save_study(result, out: Path, stem: str, plot) -> dict[str, Any]:
-    """Write a study's STEM.csv, STEM.png and summary.json into ``out``; returns the summary."""
+def _run_study(args: argparse.Namespace, kind: str, stem: str, plot, study):
+    """An IK study from its command's options: ``study(robot, solver_options, progress)`` gives the result,
+    written as STEM.csv, STEM.png and summary.json into the output folder (printed with --json).
+    Returns the robot, the summary and the folder."""
     from app.analysis.ik_studies import write_json
 
-    result.write_csv(out / f"{stem}.csv")
-    plot(result, out / f"{stem}.png")
-    summary = result.summary()
-    write_json(summary, out / "summary.json")
-    return summary
+    robot, opts, out = _study_setup(args, kind)
+    result = study(robot, opts, _progress_bar(f"{robot.name}/{args.solver}"))
+
+    def save(tmp: Path) -> dict[str, Any]:
+        result.write_csv(tmp / f"{stem}.csv")
+        plot(result, tmp / f"{stem}.png")
+        summary = result.summary()
+        write_json(summary, tmp / "summary.json")
+        return summary
+
+    return robot, _write_run(args, out, save), out
 
 
 def cmd_analyze(args: argparse.Namespace) -> int:
     from app.analysis.ik_studies import error_distribution, plot_error_distribution
 
-    robot, opts, out = _study_setup(args, "analyze")
-    result = error_distribution(
-        robot,
-        args.solver,
-        args.grid,
-        seed=args.seed,
-        solver_options=opts,
-        progress=_progress_bar(f"{robot.name}/{args.solver}"),
-    )
-    with _atomic_dir(out) as tmp:
-        summary = _save_study(result, tmp, "error_distribution", plot_error_distribution)
+    def study(robot, opts, progress):
+        return error_distribution(robot, args.solver, args.grid, seed=args.seed, solver_options=opts, progress=progress)
+
+    robot, summary, out = _run_study(args, "analyze", "error_distribution", plot_error_distribution, study)
     if args.json:
-        _print_json({**summary, "out": str(out)})
-    else:
-        e = summary["error_m"]
-        print(
-            f"{robot.name} / {args.solver}: {summary['targets']} targets ({args.grid}³), "
-            f"{summary['reachable']} reachable, {summary['success']} solved "
-            f"({summary['success_rate']:.0%}; {summary['success_rate_reachable'] or 0:.0%} of reachable)"
-        )
-        print(f"  error [m]  median {e['median']:.3g}   p95 {e['p95']:.3g}   max {e['max']:.3g}")
-        tm = summary["time_s"]
-        print(f"  time [ms]  median {tm['median'] * 1e3:.3g}   p95 {tm['p95'] * 1e3:.3g}")
-        print(f"  wrote {out}/error_distribution.csv, error_distribution.png, summary.json")
+        return 0
+    e = summary["error_m"]
+    print(
+        f"{robot.name} / {args.solver}: {summary['targets']} targets ({args.grid}³), "
+        f"{summary['reachable']} reachable, {summary['success']} solved "
+        f"({summary['success_rate']:.0%}; {summary['success_rate_reachable'] or 0:.0%} of reachable)"
+    )
+    print(f"  error [m]  median {e['median']:.3g}   p95 {e['p95']:.3g}   max {e['max']:.3g}")
+    tm = summary["time_s"]
+    print(f"  time [ms]  median {tm['median'] * 1e3:.3g}   p95 {tm['p95'] * 1e3:.3g}")
+    print(f"  wrote {out}/error_distribution.csv, error_distribution.png, summary.json")
     return 0
 
 
 def cmd_track(args: argparse.Namespace) -> int:
     from app.analysis.ik_studies import plot_tracking, track
 
-    robot, opts, out = _study_setup(args, "track")
-    result = track(
-        robot,
-        args.solver,
-        duration=args.duration,
-        dt=args.dt,
-        seed=args.seed,
-        solver_options=opts,
-        progress=_progress_bar(f"{robot.name}/{args.solver}"),
-    )
-    with _atomic_dir(out) as tmp:
-        summary = _save_study(result, tmp, "tracking", plot_tracking)
+    def study(robot, opts, progress):
+        return track(
+            robot, args.solver, duration=args.duration, dt=args.dt, seed=args.seed, solver_options=opts,
+            progress=progress,
+        )  # fmt: skip
+
+    robot, summary, out = _run_study(args, "track", "tracking", plot_tracking, study)
     if args.json:
-        _print_json({**summary, "out": str(out)})
-    else:
-        print(
-            f"{robot.name} / {args.solver}: {summary['samples']} targets over {summary['duration_s']:.1f} s, "
-            f"rms error {summary['rms_error_m']:.3g} m, max {summary['max_error_m']:.3g} m, "
-            f"solved {summary['success_rate']:.0%}"
-        )
-        print(f"  wrote {out}/tracking.csv, tracking.png, summary.json")
+        return 0
+    print(
+        f"{robot.name} / {args.solver}: {summary['samples']} targets over {summary['duration_s']:.1f} s, "
+        f"rms error {summary['rms_error_m']:.3g} m, max {summary['max_error_m']:.3g} m, "
+        f"solved {summary['success_rate']:.0%}"
+    )
+    print(f"  wrote {out}/tracking.csv, tracking.png, summary.json")
     return 0
+
+
+def _add_joint_values(p: argparse.ArgumentParser, flag: str, help: str, deg_help: str, required: bool) -> None:
+    """FLAG Q [Q ...], joint values in joint order (read by :func:`_joint_values`), and --deg."""
+    p.add_argument(flag, nargs="+", type=_finite_float, required=required, default=None, metavar="Q", help=help)
+    p.add_argument("--deg", action="store_true", help=deg_help)
 
 
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
-    p = sub.add_parser("robots", help="list the robot library (name, type, DOF, source)")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument(
-        "--schema-markdown", action="store_true",
-        help="the robot file reference from robot.xsd (docs/robot-files.md, as generated)",
-    )  # fmt: skip
-    p.set_defaults(func=cmd_robots)
+    with command(sub, "robots", cmd_robots, json=False, help="list the robot library (name, type, DOF, source)") as p:
+        add_json(p)
+        p.add_argument(
+            "--schema-markdown", action="store_true",
+            help="the robot file reference from robot.xsd (docs/robot-files.md, as generated)",
+        )  # fmt: skip
 
-    p = sub.add_parser(
+    with command(
+        sub,
         "check",
+        cmd_check,
+        json=False,
         help="validate robot files (schema, physical bounds, geometry) as the engine loads them",
         description="One line per file: ok, or why it is refused (file:line: what is wrong). "
         "Exit 0 when every file loads, 2 when any is refused.",
-    )
-    p.add_argument("robots", nargs="+", metavar="ROBOT", help="library names or paths to XML files")
-    p.set_defaults(func=cmd_check)
+    ) as p:
+        p.add_argument("robots", nargs="+", metavar="ROBOT", help="library names or paths to XML files")
 
     for name, func, text in [
         ("fk", cmd_fk, "forward kinematics: tool pose for joint values"),
         ("jacobian", cmd_jacobian, "geometric Jacobian of the tool point for joint values"),
     ]:
-        p = sub.add_parser(name, help=text, description=text)
-        p.add_argument("robot", help="robot name from the library (see 'bosun robots') or path to an XML file")
-        p.add_argument(
-            "--q",
-            nargs="+",
-            type=_finite_float,
-            required=True,
-            metavar="Q",
-            help="joint values in joint order: rad and m (or degrees for revolute joints with --deg)",
-        )
-        p.add_argument("--deg", action="store_true", help="revolute joint values are in degrees")
-        p.add_argument("--json", action="store_true", help="machine-readable output")
-        p.set_defaults(func=func)
+        with command(sub, name, func, help=text, description=text) as p:
+            p.add_argument("robot", help="robot name from the library (see 'bosun robots') or path to an XML file")
+            _add_joint_values(
+                p, "--q", "joint values in joint order: rad and m (or degrees for revolute joints with --deg)",
+                "revolute joint values are in degrees", required=True,
+            )  # fmt: skip
 
     from app.ik import solver_names
 
@@ -396,50 +390,47 @@ def register(sub) -> None:
             default=None,
             help="branch for --solver analytic (default auto: the valid one nearest the start)",
         )
-        p.add_argument("--json", action="store_true", help="machine-readable output")
+        add_json(p)
 
-    p = sub.add_parser(
+    with command(
+        sub,
         "ik",
+        cmd_ik,
+        json=False,
         help="inverse kinematics: joint values reaching a tool position",
         description="Solve one target. Exit 0 when solved, 1 when not (the closest solution is "
         "printed), 2 on a usage error.",
-    )
-    add_solver_args(p)
-    p.add_argument(
-        "--target",
-        nargs=3,
-        type=_finite_float,
-        required=True,
-        metavar=("X", "Y", "Z"),
-        help="tool position in the world frame [m]",
-    )
-    p.add_argument(
-        "--q0",
-        nargs="+",
-        type=_finite_float,
-        default=None,
-        metavar="Q",
-        help="start configuration (rad/m, or degrees with --deg)",
-    )
-    p.add_argument("--deg", action="store_true", help="--q0 revolute values are in degrees")
-    p.set_defaults(func=cmd_ik)
+    ) as p:
+        add_solver_args(p)
+        p.add_argument(
+            "--target",
+            nargs=3,
+            type=_finite_float,
+            required=True,
+            metavar=("X", "Y", "Z"),
+            help="tool position in the world frame [m]",
+        )
+        _add_joint_values(
+            p, "--q0", "start configuration (rad/m, or degrees with --deg)", "--q0 revolute values are in degrees",
+            required=False,
+        )  # fmt: skip
 
-    p = sub.add_parser("analyze", help="error distribution over the grid³ targets of the workspace box (Fig. 5)")
-    add_solver_args(p)
-    p.add_argument(
-        "--grid",
-        type=int,
-        default=8,
-        choices=range(2, 41),
-        metavar="N",
-        help="targets per axis, 2..40 (default 8: 512 targets)",
-    )
-    p.add_argument("--out", default=None, help="output folder (default out/analyze_ROBOT_SOLVER)")
-    p.set_defaults(func=cmd_analyze)
+    analyze_help = "error distribution over the grid³ targets of the workspace box (Fig. 5)"
+    with command(sub, "analyze", cmd_analyze, json=False, help=analyze_help) as p:
+        add_solver_args(p)
+        p.add_argument(
+            "--grid",
+            type=int,
+            default=8,
+            choices=range(2, 41),
+            metavar="N",
+            help="targets per axis, 2..40 (default 8: 512 targets)",
+        )
+        add_out(p, "analyze_ROBOT_SOLVER")
 
-    p = sub.add_parser("track", help="trajectory tracking: X, Y, Z target vs reached (Fig. 4)")
-    add_solver_args(p)
-    p.add_argument("--duration", type=_positive_float, default=20.0, help="path duration [s] (default 20)")
-    p.add_argument("--dt", type=_positive_float, default=0.1, help="time between targets [s] (default 0.1)")
-    p.add_argument("--out", default=None, help="output folder (default out/track_ROBOT_SOLVER)")
-    p.set_defaults(func=cmd_track)
+    track_help = "trajectory tracking: X, Y, Z target vs reached (Fig. 4)"
+    with command(sub, "track", cmd_track, json=False, help=track_help) as p:
+        add_solver_args(p)
+        p.add_argument("--duration", type=_positive_float, default=20.0, help="path duration [s] (default 20)")
+        p.add_argument("--dt", type=_positive_float, default=0.1, help="time between targets [s] (default 0.1)")
+        add_out(p, "track_ROBOT_SOLVER")

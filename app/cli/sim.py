@@ -4,41 +4,51 @@ from __future__ import annotations
 
 import argparse
 
+from app.cli.args import (
+    TAC_MODES,
+    add_duration,
+    add_hs,
+    add_json,
+    add_out,
+    add_spectrum,
+    add_tp,
+    add_vessel,
+    add_wave_seed,
+    command,
+    group,
+)
 from app.cli.common import (
-    _atomic_dir,
+    _as_usage_error,
+    _fields,
     _finite_float,
     _make_out,
-    _Parser,
     _positive_float,
-    _print_json,
     _progress_bar,
     _table,
+    _write_run,
 )
 from app.errors import BosunError
+
+# the options of sim tac and tac-sweep that are TacScenario's fields by the same name (hs and mode aside)
+_TAC_FIELDS = (
+    "tp", "heading", "spectrum", "spreading", "duration", "dt", "seed", "rao", "roll_damping", "crane_share",
+    "crane_kp", "mru_noise",
+)  # fmt: skip
+# those of sim vvmc, VvmcScenario's fields
+_VVMC_FIELDS = (
+    "hs", "tp", "spectrum", "heading1", "heading2", "duration", "dt", "seed", "rao", "sensors", "antisway",
+)  # fmt: skip
 
 
 def _scenario(args: argparse.Namespace, **over):
     from app.scenarios.tac import ScenarioError, TacScenario
 
-    try:
+    with _as_usage_error(ScenarioError):
         return TacScenario(
+            **_fields(args, *_TAC_FIELDS),
             hs=over.get("hs", getattr(args, "hs", 3.0)),
-            tp=args.tp,
-            heading=args.heading,
-            spectrum=args.spectrum,
-            spreading=args.spreading,
-            duration=args.duration,
-            dt=args.dt,
-            seed=args.seed,
             mode=over.get("mode", getattr(args, "mode", "tac")),
-            rao=args.rao,
-            roll_damping=args.roll_damping,
-            crane_share=args.crane_share,
-            crane_kp=args.crane_kp,
-            mru_noise=args.mru_noise,
         )
-    except ScenarioError as err:
-        raise BosunError(str(err)) from None
 
 
 def cmd_sim_vvmc(args: argparse.Namespace) -> int:
@@ -48,22 +58,8 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     from app.marine.vessels import vessel_label
     from app.scenarios.vvmc import VvmcError, VvmcScenario, simulate
 
-    try:
-        sc = VvmcScenario(
-            hs=args.hs,
-            tp=args.tp,
-            spectrum=args.spectrum,
-            heading1=args.heading1,
-            heading2=args.heading2,
-            duration=args.duration,
-            dt=args.dt,
-            seed=args.seed,
-            rao=args.rao,
-            sensors=args.sensors,
-            antisway=args.antisway,
-        )
-    except VvmcError as err:
-        raise BosunError(str(err)) from None
+    with _as_usage_error(VvmcError):
+        sc = VvmcScenario(**_fields(args, *_VVMC_FIELDS))
     out = _make_out(args, f"vvmc_hs{sc.hs:g}_seed{sc.seed}_{sc.sensors}" + ("_antisway" if sc.antisway else ""))
     n = round(sc.duration / sc.dt)
     bar = _progress_bar("sim vvmc", unit="step")
@@ -71,35 +67,33 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     on = simulate(sc, True, progress=lambda k: bar(k, 2 * n))
     off = simulate(sc, False, progress=lambda k: bar(n + k, 2 * n))
     speed = 2 * sc.duration / (time.perf_counter() - t0)
-    with _atomic_dir(out) as tmp:
-        doc = save_runs(sc, on, off, tmp, speed)
+    doc = _write_run(args, out, lambda tmp: save_runs(sc, on, off, tmp, speed))
     if args.json:
-        _print_json({**doc, "out": str(out)})
-    else:
-        c, u = doc["compensated"], doc["uncompensated"]
-        print(
-            f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, EM8000 heading {sc.heading1:g}°, EM1500 {sc.heading2:g}°, "
-            f"{sc.duration:g} s, seed {sc.seed} (vessel {vessel_label(sc.rao)}); "
-            f"the controllers see the platforms through: {_SENSOR_NAMES[sc.sensors]}"
-            + ("; anti-swing on" if sc.antisway else "")
-        )
-        print(
-            f"  tool point rel. EM1500, rms: {1000 * u['rms_tool_error_m']:.1f} mm without, "
-            f"{1000 * c['rms_tool_error_m']:.2f} mm with VVMC  (reduction {doc['reduction_percent']:.1f} %)"
-        )
-        print(
-            f"  payload swing rms {c['payload_swing_rms_deg']:.2f}° (max {c['payload_swing_max_deg']:.2f}°), "
-            f"height error rms {1000 * c['rms_payload_height_error_m']:.1f} mm"
-        )
-        util = ", ".join(f"{100 * v:.0f}" for v in c["joint_speed_utilisation"])
-        print(
-            f"  joint speed use [%]: {util}; winch speed use {100 * c['winch_speed_utilisation']:.0f} %; "
-            f"time at a limit {c['time_at_limit_s']:.1f} s"
-        )
-        print(
-            f"  {speed:.1f}× real time; wrote {out}/timeseries.csv, platforms.png, tool_error.png, "
-            "robot_winch_load.png, summary.json"
-        )
+        return 0
+    c, u = doc["compensated"], doc["uncompensated"]
+    print(
+        f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, EM8000 heading {sc.heading1:g}°, EM1500 {sc.heading2:g}°, "
+        f"{sc.duration:g} s, seed {sc.seed} (vessel {vessel_label(sc.rao)}); "
+        f"the controllers see the platforms through: {_SENSOR_NAMES[sc.sensors]}"
+        + ("; anti-swing on" if sc.antisway else "")
+    )
+    print(
+        f"  tool point rel. EM1500, rms: {1000 * u['rms_tool_error_m']:.1f} mm without, "
+        f"{1000 * c['rms_tool_error_m']:.2f} mm with VVMC  (reduction {doc['reduction_percent']:.1f} %)"
+    )
+    print(
+        f"  payload swing rms {c['payload_swing_rms_deg']:.2f}° (max {c['payload_swing_max_deg']:.2f}°), "
+        f"height error rms {1000 * c['rms_payload_height_error_m']:.1f} mm"
+    )
+    util = ", ".join(f"{100 * v:.0f}" for v in c["joint_speed_utilisation"])
+    print(
+        f"  joint speed use [%]: {util}; winch speed use {100 * c['winch_speed_utilisation']:.0f} %; "
+        f"time at a limit {c['time_at_limit_s']:.1f} s"
+    )
+    print(
+        f"  {speed:.1f}× real time; wrote {out}/timeseries.csv, platforms.png, tool_error.png, "
+        "robot_winch_load.png, summary.json"
+    )
     return 0
 
 
@@ -118,10 +112,8 @@ def cmd_sim_antisway(args: argparse.Namespace) -> int:
     from app.scenarios.antisway import antisway_study, free_swing
     from app.scenarios.vvmc import VvmcError, VvmcScenario
 
-    try:
-        sc = VvmcScenario(hs=args.hs, tp=args.tp, duration=args.duration, seed=args.seed, sensors=args.sensors)
-    except VvmcError as err:
-        raise BosunError(str(err)) from None
+    with _as_usage_error(VvmcError):
+        sc = VvmcScenario(**_fields(args, "hs", "tp", "duration", "seed", "sensors"))
     out = _make_out(args, f"antisway_hs{sc.hs:g}_seed{sc.seed}")
     n = round(sc.duration / sc.dt)
     bar = _progress_bar("sim antisway", unit="step")
@@ -136,10 +128,8 @@ def cmd_sim_antisway(args: argparse.Namespace) -> int:
 
     study = antisway_study(sc, progress=progress)
     wall = time.perf_counter() - t0
-    with _atomic_dir(out) as tmp:
-        doc = save_antisway(sc, free, study, tmp, wall)
+    doc = _write_run(args, out, lambda tmp: save_antisway(sc, free, study, tmp, wall))
     if args.json:
-        _print_json({**doc, "out": str(out)})
         return 0
     f0, f1 = doc["free_swing"]
     print("Anti-swing (LQR at L = 3 m, c = 0.1, Ts = 5 ms, scheduled over L; EKF on the wire angle):")
@@ -174,21 +164,19 @@ def cmd_sim_tac(args: argparse.Namespace) -> int:
     out = _make_out(args, f"tac_{sc.mode}_hs{sc.hs:g}")
     bar = _progress_bar(f"sim tac {sc.mode}", unit="step")
     result = simulate(sc, progress=bar)
-    with _atomic_dir(out) as tmp:
-        doc = save_run(result, tmp)
+    doc = _write_run(args, out, lambda tmp: save_run(result, tmp))
     if args.json:
-        _print_json({**doc, "out": str(out)})
-    else:
-        print(
-            f"TAC {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, {sc.duration:g} s "
-            f"(vessel {vessel_label(sc.rao)})"
-        )
-        print(
-            f"  e_c rms {doc['rms_e_c_m']:.3f} m (max {doc['max_e_c_m']:.3f})   e_s rms {doc['rms_e_s_m']:.3f} m "
-            f"(max {doc['max_e_s_m']:.3f})   ratio {doc['ratio_rms']:.2%}   saturated {doc['saturated_pct']:.1f} %"
-        )
-        print(f"  x_d = {doc['x_d_m']:.3f} m   {doc['speed_x_realtime']:.0f}× real time")
-        print(f"  wrote {out}/timeseries.csv, fig08–fig12 PNG, summary.json")
+        return 0
+    print(
+        f"TAC {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, {sc.duration:g} s "
+        f"(vessel {vessel_label(sc.rao)})"
+    )
+    print(
+        f"  e_c rms {doc['rms_e_c_m']:.3f} m (max {doc['max_e_c_m']:.3f})   e_s rms {doc['rms_e_s_m']:.3f} m "
+        f"(max {doc['max_e_s_m']:.3f})   ratio {doc['ratio_rms']:.2%}   saturated {doc['saturated_pct']:.1f} %"
+    )
+    print(f"  x_d = {doc['x_d_m']:.3f} m   {doc['speed_x_realtime']:.0f}× real time")
+    print(f"  wrote {out}/timeseries.csv, fig08–fig12 PNG, summary.json")
     return 0
 
 
@@ -207,53 +195,44 @@ def cmd_sim_sweep(args: argparse.Namespace) -> int:
         _scenario(args, hs=hs)
     out = _make_out(args, "tac_sweep")
     rows = sweep(base, hs_values, modes, jobs=args.jobs, progress=_progress_bar("tac sweep", unit="run"))
-    with _atomic_dir(out) as tmp:
-        doc = save_sweep(rows, base, tmp)
+    doc = _write_run(args, out, lambda tmp: save_sweep(rows, base, tmp))
     if args.json:
-        _print_json({**doc, "out": str(out)})
-    else:
-        table = [
-            [f"{r['hs']:g}", r["mode"], f"{r['ratio_rms']:.2%}", f"{r['rms_e_c_m']:.3f}", f"{r['saturated_pct']:.1f}"]
-            for r in rows
-        ]
-        print(_table(["Hs [m]", "mode", "rms e_c/e_s", "rms e_c [m]", "saturated %"], table))
-        for m, v in doc["max_hs_ratio_le_5pct"].items():
-            print(f"  {m}: ratio ≤ 5 % up to Hs = {'—' if v is None else f'{v:g} m'}")
-        print(f"  wrote {out}/sweep.csv, sweep.png, sweep.json")
+        return 0
+    table = [
+        [f"{r['hs']:g}", r["mode"], f"{r['ratio_rms']:.2%}", f"{r['rms_e_c_m']:.3f}", f"{r['saturated_pct']:.1f}"]
+        for r in rows
+    ]
+    print(_table(["Hs [m]", "mode", "rms e_c/e_s", "rms e_c [m]", "saturated %"], table))
+    for m, v in doc["max_hs_ratio_le_5pct"].items():
+        print(f"  {m}: ratio ≤ 5 % up to Hs = {'—' if v is None else f'{v:g} m'}")
+    print(f"  wrote {out}/sweep.csv, sweep.png, sweep.json")
     return 0
 
 
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
-    p = sub.add_parser(
-        "sim", help="simulations: sim tac, sim tac-sweep (crane head), sim vvmc, sim antisway (Motion-Lab)"
+    sims = group(
+        sub, "sim", "simulations: sim tac, sim tac-sweep (crane head), sim vvmc, sim antisway (Motion-Lab)", "sim"
     )
-    sims = p.add_subparsers(dest="sim", metavar="WHAT", parser_class=_Parser, required=True)
 
     def add_sea_args(p: argparse.ArgumentParser) -> None:
-        p.add_argument("--tp", type=_positive_float, default=9.0, help="peak period [s] (default 9)")
+        add_tp(p, 9.0)
         p.add_argument(
             "--heading",
             type=_finite_float,
             default=90.0,
             help="wave heading [deg], 0 following, 90 beam, 180 head (default 90)",
         )
-        p.add_argument(
-            "--spectrum", choices=["jonswap", "pm", "torsethaugen"], default="jonswap", help="default jonswap"
-        )
+        add_spectrum(p)
         p.add_argument(
             "--spreading", type=int, default=None, metavar="S", help="short-crested cos^2s sea (default long-crested)"
         )
-        p.add_argument("--duration", type=_positive_float, default=600.0, help="simulated time [s] (default 600)")
+        add_duration(p, 600.0)
         p.add_argument("--dt", type=_positive_float, default=0.01, help="time step [s] (default 0.01)")
-        p.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
-        p.add_argument(
-            "--vessel",
-            "--rao",
-            dest="rao",
-            default=None,
-            metavar="NAME|FILE",
-            help="vessel: supply (default: RAOs by boundary elements), supply-closed-form, or an RAO table "
+        add_wave_seed(p)
+        add_vessel(
+            p,
+            "vessel: supply (default: RAOs by boundary elements), supply-closed-form, or an RAO table "
             "(.mat MSS vessel or .csv); bosun vessel list",
         )
         p.add_argument(
@@ -271,52 +250,52 @@ def register(sub) -> None:
         p.add_argument(
             "--mru-noise", type=_finite_float, default=0.0, help="MRU noise scale, 1 = 2 cm / 0.05° (default 0: none)"
         )
-        p.add_argument("--json", action="store_true", help="machine-readable output")
 
-    b = sims.add_parser("tac", help="one run: vessel in waves, crane and Delta head (CSV, Figs. 8–12, JSON)")
-    b.add_argument("--hs", type=_positive_float, default=3.0, help="significant wave height [m] (default 3)")
-    b.add_argument("--mode", choices=["off", "tac", "cooperative"], default="tac", help="default tac")
-    add_sea_args(b)
-    b.add_argument("--out", default=None, help="output folder (default out/tac_MODE_hsHS)")
-    b.set_defaults(func=cmd_sim_tac)
-    b = sims.add_parser("tac-sweep", help="rms(e_c)/rms(e_s) against Hs for each mode (table and plot)")
-    b.add_argument("--hs", default="0.5:5:0.5", help="START:STOP:STEP or a,b,c [m] (default 0.5:5:0.5)")
-    b.add_argument("--modes", nargs="+", choices=["off", "tac", "cooperative"], default=["tac", "cooperative"])
-    b.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1)")
-    add_sea_args(b)
-    b.add_argument("--out", default=None, help="output folder (default out/tac_sweep)")
-    b.set_defaults(func=cmd_sim_sweep)
-    b = sims.add_parser("vvmc", help="vessel-to-vessel motion compensation in the Motion-Lab (CSV, plots, JSON)")
-    b.add_argument("--hs", type=_positive_float, default=2.0, help="significant wave height [m] (default 2)")
-    b.add_argument("--tp", type=_positive_float, default=8.0, help="peak period [s] (default 8)")
-    b.add_argument("--spectrum", choices=["jonswap", "pm", "torsethaugen"], default="jonswap", help="default jonswap")
-    b.add_argument("--heading1", type=_finite_float, default=150.0, help="EM8000 vessel wave heading [deg] (150)")
-    b.add_argument("--heading2", type=_finite_float, default=90.0, help="EM1500 vessel wave heading [deg] (90)")
-    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time [s] (default 300)")
-    b.add_argument(
-        "--dt", type=_positive_float, default=0.005, help="time step [s] (default 0.005: the lab PLC's task)"
-    )
-    b.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
-    b.add_argument(
-        "--vessel", "--rao", dest="rao", default=None, metavar="NAME|FILE",
-        help="the platforms' vessel: supply (default: RAOs by boundary elements), supply-closed-form, or an RAO file",
-    )  # fmt: skip
-    b.add_argument(
-        "--sensors",
-        choices=["true", "mru", "tracker"],
-        default="true",
-        help="what the controllers see of the platforms: the true states, an MRU H on each, or a laser tracker",
-    )
-    b.add_argument("--antisway", action="store_true", help="add the load-swing estimator and anti-swing law")
-    b.add_argument("--out", default=None, help="output folder (default out/vvmc_hsHS_seedSEED_SENSORS)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_sim_vvmc)
-    b = sims.add_parser("antisway", help="load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)")
-    b.add_argument("--hs", type=_positive_float, default=2.0, help="significant wave height [m] (default 2)")
-    b.add_argument("--tp", type=_positive_float, default=8.0, help="peak period [s] (default 8)")
-    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time in waves [s] (300)")
-    b.add_argument("--seed", type=int, default=1, help="seed of the wave phases (default 1)")
-    b.add_argument("--sensors", choices=["true", "mru", "tracker"], default="true", help="as for sim vvmc")
-    b.add_argument("--out", default=None, help="output folder (default out/antisway_hsHS_seedSEED)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_sim_antisway)
+    # the crane head's two take the sea's options, then --json, then --out
+    tac_help = "one run: vessel in waves, crane and Delta head (CSV, Figs. 8–12, JSON)"
+    with command(sims, "tac", cmd_sim_tac, json=False, help=tac_help) as b:
+        add_hs(b, 3.0)
+        b.add_argument("--mode", choices=list(TAC_MODES), default="tac", help="default tac")
+        add_sea_args(b)
+        add_json(b)
+        add_out(b, "tac_MODE_hsHS")
+    sweep_help = "rms(e_c)/rms(e_s) against Hs for each mode (table and plot)"
+    with command(sims, "tac-sweep", cmd_sim_sweep, json=False, help=sweep_help) as b:
+        b.add_argument("--hs", default="0.5:5:0.5", help="START:STOP:STEP or a,b,c [m] (default 0.5:5:0.5)")
+        b.add_argument("--modes", nargs="+", choices=list(TAC_MODES), default=["tac", "cooperative"])
+        b.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1)")
+        add_sea_args(b)
+        add_json(b)
+        add_out(b, "tac_sweep")
+    vvmc_help = "vessel-to-vessel motion compensation in the Motion-Lab (CSV, plots, JSON)"
+    with command(sims, "vvmc", cmd_sim_vvmc, help=vvmc_help) as b:
+        add_hs(b, 2.0)
+        add_tp(b, 8.0)
+        add_spectrum(b)
+        b.add_argument("--heading1", type=_finite_float, default=150.0, help="EM8000 vessel wave heading [deg] (150)")
+        b.add_argument("--heading2", type=_finite_float, default=90.0, help="EM1500 vessel wave heading [deg] (90)")
+        add_duration(b, 300.0)
+        b.add_argument(
+            "--dt", type=_positive_float, default=0.005, help="time step [s] (default 0.005: the lab PLC's task)"
+        )
+        add_wave_seed(b)
+        add_vessel(
+            b,
+            "the platforms' vessel: supply (default: RAOs by boundary elements), supply-closed-form, or an RAO file",
+        )
+        b.add_argument(
+            "--sensors",
+            choices=list(_SENSOR_NAMES),
+            default="true",
+            help="what the controllers see of the platforms: the true states, an MRU H on each, or a laser tracker",
+        )
+        b.add_argument("--antisway", action="store_true", help="add the load-swing estimator and anti-swing law")
+        add_out(b, "vvmc_hsHS_seedSEED_SENSORS")
+    antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"
+    with command(sims, "antisway", cmd_sim_antisway, help=antisway_help) as b:
+        add_hs(b, 2.0)
+        add_tp(b, 8.0)
+        b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time in waves [s] (300)")
+        add_wave_seed(b)
+        b.add_argument("--sensors", choices=list(_SENSOR_NAMES), default="true", help="as for sim vvmc")
+        add_out(b, "antisway_hsHS_seedSEED")

@@ -5,14 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from app.cli.common import (
-    _finite_float,
-    _Parser,
-    _positive_float,
-    _positive_int,
-    _print_json,
-    _progress_bar,
-)
+from app.cli.args import SPECTRA, TAC_MODES, command, group
+from app.cli.common import _as_usage_error, _finite_float, _positive_float, _positive_int, _print_json, _progress_bar
 from app.errors import BosunError
 
 
@@ -29,7 +23,7 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
         save,
     )
 
-    try:
+    with _as_usage_error(OperabilityError):
         # a bad scheduler first: refused within seconds, before the vessel and the simulation are loaded
         scheduler = check_scheduler(args.scheduler) if args.scheduler else None
         scatter = load_scatter(args.scatter)
@@ -49,8 +43,6 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
             progress=_progress_bar("study operability", unit="sim"), max_runs=args.max_runs,
         )  # fmt: skip
         doc = save(result, out)
-    except OperabilityError as err:
-        raise BosunError(str(err)) from None
     if args.json:
         _print_json({**doc, "out": str(out)})
         return 0
@@ -80,43 +72,50 @@ def register(sub) -> None:
     from app.analysis.operability import MAX_RUNS as MAX_STUDY_RUNS
     from app.analysis.operability import RUNS_CEILING as STUDY_RUNS_CEILING
 
-    p = sub.add_parser(
-        "study", help="studies on a Dask cluster: study operability (scatter diagram × headings × seeds)"
+    stu = group(
+        sub, "study", "studies on a Dask cluster: study operability (scatter diagram × headings × seeds)", "study_cmd"
     )
-    stu = p.add_subparsers(dest="study_cmd", metavar="WHAT", parser_class=_Parser, required=True)
-    b = stu.add_parser(
-        "operability", help="crane-head compensation over a wave scatter diagram: one simulation per cell (Dask)"
-    )
-    b.add_argument("--mode", choices=["off", "tac", "cooperative"], default="tac", help="compensation (default tac)")
-    b.add_argument(
-        "--scatter", required=True, metavar="NAME|FILE",
-        help="north-atlantic (IACS Rec. 34, Hs × Tz) or a CSV: hs\\tp,TP1,… (or hs\\tz,TZ1,…) then HS,p1,…",
-    )  # fmt: skip
-    b.add_argument(
-        "--headings", type=_finite_float, nargs="+", default=[90.0, 135.0, 180.0],
-        help="[deg], each within ±360 (default 90 135 180)",
-    )  # fmt: skip
-    b.add_argument("--seeds", type=_positive_int, default=2, help="wave seeds per cell and heading, 1–1000 (default 2)")
-    b.add_argument(
-        "--max-runs", type=_positive_int, default=MAX_STUDY_RUNS, metavar="N",
-        help=f"the largest study run: cells with a probability × headings × seeds (default {MAX_STUDY_RUNS}; "
-        f"at most {STUDY_RUNS_CEILING}); a bigger one is refused before any work",
-    )  # fmt: skip
-    b.add_argument("--duration", type=_positive_float, default=300.0, help="simulated time per run [s], ≤ 10800 (300)")
-    b.add_argument("--criterion", type=_positive_float, default=0.1, help="workable: rms(e_c) ≤ this [m] (0.1)")
-    b.add_argument("--vessel", default=None, metavar="NAME|FILE", help="vessel (default supply); bosun vessel list")
-    b.add_argument(
-        "--spectrum", choices=["jonswap", "pm", "torsethaugen"], default=None,
-        help="default: pm for a Tz diagram (as IACS Rec. 34 states it), jonswap for a Tp one",
-    )  # fmt: skip
-    b.add_argument(
-        "--scheduler", default=None, metavar="tcp://HOST:8786",
-        help="a Dask scheduler (default: a local cluster); a peer that does not answer as a scheduler within 4 s "
-        "is refused",
-    )  # fmt: skip
-    b.add_argument(
-        "--workers", type=_positive_int, default=None, help="local cluster's worker processes, 1–64 (default: cores)"
-    )
-    b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_study_operability)
+    with command(
+        stu,
+        "operability",
+        cmd_study_operability,
+        help="crane-head compensation over a wave scatter diagram: one simulation per cell (Dask)",
+    ) as b:
+        b.add_argument("--mode", choices=list(TAC_MODES), default="tac", help="compensation (default tac)")
+        b.add_argument(
+            "--scatter", required=True, metavar="NAME|FILE",
+            help="north-atlantic (IACS Rec. 34, Hs × Tz) or a CSV: hs\\tp,TP1,… (or hs\\tz,TZ1,…) then HS,p1,…",
+        )  # fmt: skip
+        b.add_argument(
+            "--headings", type=_finite_float, nargs="+", default=[90.0, 135.0, 180.0],
+            help="[deg], each within ±360 (default 90 135 180)",
+        )  # fmt: skip
+        b.add_argument(
+            "--seeds", type=_positive_int, default=2, help="wave seeds per cell and heading, 1–1000 (default 2)"
+        )
+        b.add_argument(
+            "--max-runs", type=_positive_int, default=MAX_STUDY_RUNS, metavar="N",
+            help=f"the largest study run: cells with a probability × headings × seeds (default {MAX_STUDY_RUNS}; "
+            f"at most {STUDY_RUNS_CEILING}); a bigger one is refused before any work",
+        )  # fmt: skip
+        b.add_argument(
+            "--duration", type=_positive_float, default=300.0, help="simulated time per run [s], ≤ 10800 (300)"
+        )
+        b.add_argument("--criterion", type=_positive_float, default=0.1, help="workable: rms(e_c) ≤ this [m] (0.1)")
+        b.add_argument("--vessel", default=None, metavar="NAME|FILE", help="vessel (default supply); bosun vessel list")
+        b.add_argument(
+            "--spectrum", choices=list(SPECTRA), default=None,
+            help="default: pm for a Tz diagram (as IACS Rec. 34 states it), jonswap for a Tp one",
+        )  # fmt: skip
+        b.add_argument(
+            "--scheduler", default=None, metavar="tcp://HOST:8786",
+            help="a Dask scheduler (default: a local cluster); a peer that does not answer as a scheduler within 4 s "
+            "is refused",
+        )  # fmt: skip
+        b.add_argument(
+            "--workers",
+            type=_positive_int,
+            default=None,
+            help="local cluster's worker processes, 1–64 (default: cores)",
+        )
+        b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")

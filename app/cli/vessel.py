@@ -6,12 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from app.cli.common import (
-    _Parser,
-    _positive_float,
-    _print_json,
-    _progress_bar,
-)
+from app.cli.args import command, group
+from app.cli.common import _as_usage_error, _fields, _positive_float, _print_json, _progress_bar
 from app.errors import BosunError
 
 
@@ -38,24 +34,20 @@ def cmd_vessel_rao(args: argparse.Namespace) -> int:
     from app.marine.vessel import VesselError, VesselParticulars, rao_to_csv
 
     names = ("lpp", "beam", "draft", "cb", "gm_t", "gm_l", "r44", "r55", "r66", "mass")
-    given = {n: getattr(args, n) for n in names if getattr(args, n) is not None}
-    try:
+    given = {n: v for n, v in _fields(args, *names).items() if v is not None}
+    with _as_usage_error(BemError, HullError, VesselError):
         name = args.name or ("MSS supply vessel" if not given else "monohull")
         vessel = VesselParticulars(**given, name=name)
-        inputs = BemInputs(
-            vessel=vessel, cwp=args.cwp, roll_damping=args.roll_damping, nx=args.nx, nz=args.nz,
-            w_min=args.w_min, w_max=args.w_max, n_w=args.n_w, heading_step=args.heading_step,
-        )  # fmt: skip
+        bem = ("cwp", "roll_damping", "nx", "nz", "w_min", "w_max", "n_w", "heading_step")
+        inputs = BemInputs(vessel=vessel, **_fields(args, *bem))
         out = Path(args.out)
         if out.is_dir():
             raise BosunError(f"--out {out} is a folder; give a .csv file")
         result = compute_raos(inputs, progress=_progress_bar("vessel rao", unit="frequency"))
-    except (BemError, HullError, VesselError) as err:
-        raise BosunError(str(err)) from None
     argv = getattr(args, "argv", None) or []
-    command = "bosun " + " ".join(shlex.quote(a) for a in argv) if argv else "bosun vessel rao"
+    made_by = "bosun " + " ".join(shlex.quote(a) for a in argv) if argv else "bosun vessel rao"
     header = {
-        "command": command,
+        "command": made_by,
         "inputs": inputs.to_dict(),
         "vessel": dataclasses.asdict(vessel),
         "info": result.info,
@@ -63,7 +55,7 @@ def cmd_vessel_rao(args: argparse.Namespace) -> int:
     text = rao_to_csv(result.table)
     lines = text.splitlines(keepends=True)
     meta = "".join(f"# {line}\n" for line in json.dumps(header, indent=1, sort_keys=True).splitlines())
-    body = lines[0] + "# made by: " + command + "\n" + meta + "".join(lines[1:])
+    body = lines[0] + "# made by: " + made_by + "\n" + meta + "".join(lines[1:])
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = out.with_name(f".{out.name}.partial")
@@ -93,40 +85,36 @@ def cmd_vessel_rao(args: argparse.Namespace) -> int:
 
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
-    p = sub.add_parser("vessel", help="vessels: vessel list, vessel rao (RAOs from main particulars, Capytaine)")
-    ves = p.add_subparsers(dest="vessel_cmd", metavar="WHAT", parser_class=_Parser, required=True)
-    b = ves.add_parser("list", help="the vessels known by name (the default first)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_vessel_list)
-    b = ves.add_parser(
-        "rao", help="6-DOF motion RAOs of a monohull from its main particulars (boundary elements, extra 'marine')"
-    )
-    for flag, unit, what in (
-        ("--lpp", "m", "length between perpendiculars"), ("--beam", "m", "beam"), ("--draft", "m", "draft"),
-        ("--cb", "", "block coefficient"), ("--gm-t", "m", "transverse metacentric height"),
-        ("--gm-l", "m", "longitudinal metacentric height"), ("--r44", "m", "roll radius of gyration"),
-        ("--r55", "m", "pitch radius of gyration"), ("--r66", "m", "yaw radius of gyration"), ("--mass", "kg", "mass"),
-    ):  # fmt: skip
+    ves = group(sub, "vessel", "vessels: vessel list, vessel rao (RAOs from main particulars, Capytaine)", "vessel_cmd")
+    with command(ves, "list", cmd_vessel_list, help="the vessels known by name (the default first)"):
+        pass  # --json only
+    rao_help = "6-DOF motion RAOs of a monohull from its main particulars (boundary elements, extra 'marine')"
+    with command(ves, "rao", cmd_vessel_rao, help=rao_help) as b:
+        for flag, unit, what in (
+            ("--lpp", "m", "length between perpendiculars"), ("--beam", "m", "beam"), ("--draft", "m", "draft"),
+            ("--cb", "", "block coefficient"), ("--gm-t", "m", "transverse metacentric height"),
+            ("--gm-l", "m", "longitudinal metacentric height"), ("--r44", "m", "roll radius of gyration"),
+            ("--r55", "m", "pitch radius of gyration"), ("--r66", "m", "yaw radius of gyration"),
+            ("--mass", "kg", "mass"),
+        ):  # fmt: skip
+            b.add_argument(
+                flag, dest=flag[2:].replace("-", "_"), type=_positive_float, default=None,
+                help=f"{what}{' [' + unit + ']' if unit else ''} (default: the MSS supply vessel's; "
+                "physical range: README)",
+            )  # fmt: skip
+        b.add_argument("--name", default=None, help="the vessel's name (in the table's header)")
         b.add_argument(
-            flag, dest=flag[2:].replace("-", "_"), type=_positive_float, default=None,
-            help=f"{what}{' [' + unit + ']' if unit else ''} (default: the MSS supply vessel's; "
-            "physical range: README)",
-        )  # fmt: skip
-    b.add_argument("--name", default=None, help="the vessel's name (in the table's header)")
-    b.add_argument(
-        "--cwp", type=_positive_float, default=None, help="waterplane coefficient (default: from GM_L − GM_T)"
-    )
-    b.add_argument(
-        "--roll-damping", type=_positive_float, default=0.15, help="total ζ44 at the roll natural frequency (0.15)"
-    )
-    b.add_argument("--nx", type=int, default=40, help="panels along the half hull, 4–200 (default 40)")
-    b.add_argument("--nz", type=int, default=8, help="panels down its girth, 2–50; nx × nz ≤ 2000 (default 8)")
-    b.add_argument("--w-min", type=_positive_float, default=0.1, help="lowest wave frequency [rad/s], ≥ 0.01 (0.1)")
-    b.add_argument("--w-max", type=_positive_float, default=2.0, help="highest wave frequency [rad/s], ≤ 20 (2.0)")
-    b.add_argument("--n-w", type=int, default=40, help="number of frequencies, 2–200 (default 40)")
-    b.add_argument(
-        "--heading-step", type=_positive_float, default=10.0, help="heading step [deg], 1–180, divides 360 (10)"
-    )
-    b.add_argument("--out", default="out/vessel_rao.csv", help="the RAO table (CSV; default out/vessel_rao.csv)")
-    b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.set_defaults(func=cmd_vessel_rao)
+            "--cwp", type=_positive_float, default=None, help="waterplane coefficient (default: from GM_L − GM_T)"
+        )
+        b.add_argument(
+            "--roll-damping", type=_positive_float, default=0.15, help="total ζ44 at the roll natural frequency (0.15)"
+        )
+        b.add_argument("--nx", type=int, default=40, help="panels along the half hull, 4–200 (default 40)")
+        b.add_argument("--nz", type=int, default=8, help="panels down its girth, 2–50; nx × nz ≤ 2000 (default 8)")
+        b.add_argument("--w-min", type=_positive_float, default=0.1, help="lowest wave frequency [rad/s], ≥ 0.01 (0.1)")
+        b.add_argument("--w-max", type=_positive_float, default=2.0, help="highest wave frequency [rad/s], ≤ 20 (2.0)")
+        b.add_argument("--n-w", type=int, default=40, help="number of frequencies, 2–200 (default 40)")
+        b.add_argument(
+            "--heading-step", type=_positive_float, default=10.0, help="heading step [deg], 1–180, divides 360 (10)"
+        )
+        b.add_argument("--out", default="out/vessel_rao.csv", help="the RAO table (CSV; default out/vessel_rao.csv)")
