@@ -6,6 +6,7 @@ import re
 import signal
 import subprocess
 import sys
+import textwrap
 import threading
 import time
 from pathlib import Path
@@ -365,3 +366,42 @@ def test_ctrl_c_at_any_moment_of_start_up_prints_no_traceback(args):
             quiet += 1
             assert proc.returncode in (0, 130, -signal.SIGINT), (delay, proc.returncode, err)
     assert quiet >= 4
+
+
+def test_ctrl_c_that_an_extension_turns_into_its_own_error_is_still_an_interrupt():
+    """A Ctrl-C inside an extension module's import can come out as that module's ImportError with no
+    trace of the KeyboardInterrupt (NumPy's ``PyCapsule_Import could not import module datetime``, seen in
+    CI).  Emulated here by an ``app.cli`` whose import takes the SIGINT and raises an unrelated error: the
+    start-up still ends with one line and status 130 (the C handler's note in the wakeup pipe)."""
+    script = textwrap.dedent(
+        """
+        import importlib.abc, importlib.util, os, signal, sys, time
+
+        class SwallowingLoader(importlib.abc.Loader):
+            def create_module(self, spec):
+                return None
+
+            def exec_module(self, module):
+                try:
+                    os.kill(os.getpid(), signal.SIGINT)
+                    time.sleep(5)
+                except KeyboardInterrupt:
+                    pass  # as C code does: the interrupt cleared, an error of its own raised outside
+                raise ImportError("PyCapsule_Import could not import module 'datetime'")
+
+        class Finder(importlib.abc.MetaPathFinder):
+            def find_spec(self, name, path, target=None):
+                if name == "app.cli":
+                    return importlib.util.spec_from_loader(name, SwallowingLoader())
+                return None
+
+        sys.meta_path.insert(0, Finder())
+        from app import launch
+
+        sys.exit(launch.main())
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert proc.stderr.strip() == "bosun: interrupted"
+    assert proc.returncode == 130
