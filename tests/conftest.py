@@ -62,26 +62,20 @@ def mss_table():
 
 @pytest.fixture
 def serve():
-    """Start engines on 127.0.0.1 (free port) in threads: ``serve(session, token=None, rate=200, **server_kw)``
-    returns (server, thread); every one is stopped and closed after the test."""
-    import threading
-
-    from app.engine.server import EngineServer
+    """Start engines on 127.0.0.1 (free port) in threads: ``serve(session, token=None, rate=200, publish_rate=None,
+    duration=120.0, **server_kw)`` (tests.helpers.start_engine) returns (server, thread); every one is stopped
+    and closed after the test, after the fixtures that use this one (a window closes before its engines stop)."""
+    from tests.helpers import start_engine, stop_engine
 
     started = []
 
     def start(session, token=None, rate=200, **kw):
-        srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 50), token=token, **kw)
-        th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-        th.start()
-        started.append((srv, th))
-        return srv, th
+        started.append(start_engine(session, rate, token=token, **kw))
+        return started[-1]
 
     yield start
     for srv, th in started:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
+        stop_engine(srv, th)
 
 
 def pytest_configure(config):

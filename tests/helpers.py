@@ -69,6 +69,40 @@ def arm_and_hold(client, axes, state_of, flag: str, sends: int = 40) -> dict:
     return state
 
 
+def start_engine(session, rate: float = 200, publish_rate: float | None = None, duration: float = 120.0, **server_kw):
+    """An engine for ``session`` on 127.0.0.1 (a free port), run in a daemon thread for at most ``duration`` [s];
+    it publishes its state at ``publish_rate`` [Hz], by default min(rate, 50).  Returns (server, thread); stop
+    it with :func:`stop_engine`."""
+    import threading
+
+    from app.engine.server import EngineServer
+
+    publish_rate = min(rate, 50) if publish_rate is None else publish_rate
+    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=publish_rate, **server_kw)
+    th = threading.Thread(target=srv.run, kwargs={"duration": duration}, daemon=True)
+    th.start()
+    return srv, th
+
+
+def stop_engine(srv, th) -> None:
+    """Stop an engine from :func:`start_engine`, wait for its thread (5 s at most) and close its sockets."""
+    srv.stop()
+    th.join(timeout=5)
+    srv.close()
+
+
+def reported_url(proc, lines: int) -> str:
+    """The request address that a ``bosun server`` process prints ("requests on tcp://…,"), read from its
+    first ``lines`` lines of standard output (a text pipe)."""
+    import re
+
+    for _ in range(lines):
+        m = re.search(r"requests on (tcp://\S+),", proc.stdout.readline())
+        if m:
+            return m.group(1)
+    raise AssertionError("server did not report its address")
+
+
 def process_running(pid: int) -> bool:
     """True while the process exists and is not a zombie (Linux /proc)."""
     try:

@@ -1,49 +1,28 @@
 """Crane-head tab (pytest-qt offscreen) against a real crane-head engine over 127.0.0.1."""
 
-import threading
-
 import numpy as np
 import pytest
 
 pytest.importorskip("PyQt5")
-from PyQt5.QtCore import QSettings
 
-from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.transport import Client, TransportError
+from tests.gui_rig import main_window
 from tests.helpers import GUI_WAIT
 from ui.link import EngineLink
-from ui.main_window import MainWindow
 from ui.marine_tab import SceneView2D
 
 
-def _serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-    th.start()
-    return srv, th
-
-
 @pytest.fixture
-def engines():
-    teleop = _serve(Session(robot_name="comau_smart5_3dof"), 200)
-    tac = _serve(TacSession(), 50)
-    yield teleop[0], tac[0]
-    for srv, th in (teleop, tac):
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
+def engines(serve):
+    teleop, _ = serve(Session(robot_name="comau_smart5_3dof"), rate=200, publish_rate=25)
+    tac, _ = serve(TacSession(), rate=50, publish_rate=25)
+    return teleop, tac
 
 
 def _window(qtbot, teleop_url, tmp_path, factory):
-    win = MainWindow(
-        EngineLink(teleop_url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
-        marine_link_factory=factory,
-        use_gl=False,
-    )
+    win = main_window(teleop_url, tmp_path / "s.ini", marine_link_factory=factory)
     qtbot.addWidget(win)
     return win
 

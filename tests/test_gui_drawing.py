@@ -1,29 +1,12 @@
 """The machine views' pixels: the offshore crane right way up in OpenGL (Xvfb + Mesa), the lab's load above
 EM1500's deck, and the 2D fallback without stray bars (offscreen)."""
 
-import json
-import os
-import shutil
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
 pytest.importorskip("PyQt5")
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def _rgb(image) -> np.ndarray:
-    """A QImage as an (h, w, 3) uint8 array."""
-    from PyQt5.QtGui import QImage
-
-    img = image.convertToFormat(QImage.Format_RGB888)
-    w, h = img.width(), img.height()
-    ptr = img.constBits()
-    ptr.setsize(img.bytesPerLine() * h)
-    return np.frombuffer(ptr, np.uint8).reshape(h, img.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
+from tests.gui_rig import image_rgb, run_under_xvfb
 
 
 def _orange(a: np.ndarray) -> np.ndarray:
@@ -36,14 +19,9 @@ def _orange(a: np.ndarray) -> np.ndarray:
 GL_SCRIPT = r"""
 import json, sys
 import numpy as np
-from PyQt5.QtCore import QCoreApplication, Qt
-QCoreApplication.setAttribute(Qt.AA_ShareOpenGLContexts)
-from PyQt5.QtWidgets import QApplication
-app = QApplication(sys.argv[:1])
-from ui.glprobe import gl_available
-if not gl_available():
-    sys.exit(77)
-from tests.test_gui_drawing import _orange, _rgb
+from tests.gui_rig import gl_app, image_rgb
+app = gl_app()
+from tests.test_gui_drawing import _orange
 from app.engine.lab_session import LabSession
 from app.engine.session import Session
 from app.models.drawing import up_rotation
@@ -60,7 +38,7 @@ view.resize(640, 480); view.show(); app.processEvents()
 desc, state = s.describe(), s.snapshot()
 view.set_description(desc); view.update_state(state)
 view.machines.set_preset("side"); app.processEvents()
-img = _rgb(view.grab_image())
+img = image_rgb(view.grab_image())
 spec = parse_robot_xml(desc.robot_xml)
 F = SerialRobot(spec).frames(np.asarray(state.q))[:, :3, 3] @ up_rotation(spec.serial.up).T
 px = view.machines.project(F)  # base (CO), crane base on deck, boom foot, boom tip, jib tip, tool
@@ -75,7 +53,7 @@ out["crane"] = {
     "top_orange_row": int(rows.min()) if rows.size else -1, "bottom_orange_row": int(rows.max()) if rows.size else -1,
 }
 view.machines.set_preset("top"); app.processEvents()
-out["crane"]["orange_from_above"] = int(_orange(_rgb(view.grab_image())).sum())
+out["crane"]["orange_from_above"] = int(_orange(image_rgb(view.grab_image())).sum())
 img.tofile(sys.argv[1] + ".crane.raw")
 
 # the lab at rest, from the side: the red load above the blue EM1500 deck
@@ -85,7 +63,7 @@ lab.resize(640, 480); lab.show(); app.processEvents()
 lab.set_description(ls.describe()); sc = ls.snapshot().scene; lab.update_scene(sc)
 lab.machines.set_preset("side"); app.processEvents()
 lab.grab_image().save(sys.argv[1] + ".lab.png")
-a = _rgb(lab.grab_image())
+a = image_rgb(lab.grab_image())
 r, g, b = (a[..., i].astype(int) for i in range(3))
 red = (r > 80) & (r > 2.2 * g) & (r > 2.2 * b)
 blue = (b > 80) & (b > 1.3 * r) & (b > 1.25 * g) & (g > 0.8 * r)  # the decks, not the green work point
@@ -104,44 +82,9 @@ print("RESULT " + json.dumps(out))
 """
 
 
-def _run_under_xvfb(script: str, tmp_path, screen: str = "1280x1024", timeout: float = 180) -> dict:
-    if shutil.which("Xvfb") is None:
-        pytest.skip("Xvfb is not installed")
-    r_fd, w_fd = os.pipe()
-    xvfb = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(w_fd), "-screen", "0", f"{screen}x24", "-nolisten", "tcp"],
-        pass_fds=(w_fd,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(w_fd)
-    try:
-        with os.fdopen(r_fd) as fh:
-            number = fh.readline().strip()  # Xvfb writes its display number once it is ready
-        if not number:
-            pytest.skip("Xvfb did not start")
-        env = {**os.environ, "DISPLAY": f":{number}", "QT_QPA_PLATFORM": "xcb", "PYTHONPATH": ROOT}
-        res = subprocess.run(
-            [sys.executable, "-c", script, str(tmp_path / "img")],
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=ROOT,
-        )
-    finally:
-        xvfb.terminate()
-        xvfb.wait(timeout=10)
-    if res.returncode == 77:
-        pytest.skip("no OpenGL context under Xvfb here")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    line = next(x for x in res.stdout.splitlines() if x.startswith("RESULT "))
-    return json.loads(line[len("RESULT ") :])
-
-
 @pytest.mark.gl
 def test_gl_views_draw_the_machines_the_right_way_up(tmp_path):
-    out = _run_under_xvfb(GL_SCRIPT, tmp_path)
+    out = run_under_xvfb(GL_SCRIPT, tmp_path)
     c = out["crane"]
     px = np.array(c["px"])
     # the offshore crane (vessel frame z down) seen from the side: boom tip and jib tip are orange pixels,
@@ -173,16 +116,28 @@ def _plot_pixels(pw, pts_uv) -> np.ndarray:
     return np.array(out, dtype=float)
 
 
+def _outside_box(mask: np.ndarray, pix: np.ndarray, margin: float = 4) -> int:
+    """How many pixels of ``mask`` lie outside the box around the pixel positions ``pix``, widened by ``margin``."""
+    lo, hi = pix.min(axis=0) - margin, pix.max(axis=0) + margin
+    ys, xs = np.nonzero(mask)
+    return int(((xs < lo[0]) | (xs > hi[0]) | (ys < lo[1]) | (ys > hi[1])).sum())
+
+
+def _shown(qtbot, view, width: int, height: int):
+    """``view`` in qtbot's care, resized, shown and exposed."""
+    qtbot.addWidget(view)
+    view.resize(width, height)
+    view.show()
+    qtbot.waitExposed(view)
+    return view
+
+
 def test_2d_polylines_draw_no_stray_bars(qtbot):
     """A repeated point, or a segment seen end-on (a vertical wire from above), drew a bar across the plot:
     the views drop them, so the line's colour stays inside the line's own box."""
     from ui.widgets.machines3d import MachineView2D
 
-    view = MachineView2D()
-    qtbot.addWidget(view)
-    view.resize(800, 400)
-    view.show()
-    qtbot.waitExposed(view)
+    view = _shown(qtbot, MachineView2D(), 800, 400)
     view.set_extent([-5, -5, -5], [5, 5, 5])
     color = (255, 0, 255)
     pts = [[0, 0, 0], [0, 0, 0], [1, 0, 2], [1, 0, 2], [1, 0, 3], [1, 0, 3]]  # repeats; vertical from above
@@ -190,16 +145,13 @@ def test_2d_polylines_draw_no_stray_bars(qtbot):
     qtbot.wait(50)
     for key, v in view.plots.items():
         pw = v["plot"]
-        a = _rgb(pw.grab().toImage())
+        a = image_rgb(pw.grab().toImage())
         r, g, b = (a[..., i].astype(int) for i in range(3))
         magenta = (r > 200) & (g < 60) & (b > 200)
         uv = np.asarray(pts, float) @ v["P"].T
-        pix = _plot_pixels(pw, uv)
-        lo, hi = pix.min(axis=0) - 4, pix.max(axis=0) + 4
-        ys, xs = np.nonzero(magenta)
-        outside = (xs < lo[0]) | (xs > hi[0]) | (ys < lo[1]) | (ys > hi[1])
+        outside = _outside_box(magenta, _plot_pixels(pw, uv))
         assert magenta.sum() > (10 if key == "side" else 3)
-        assert outside.sum() == 0, f"{key}: {outside.sum()} line pixels outside the line's box"
+        assert outside == 0, f"{key}: {outside} line pixels outside the line's box"
 
 
 def test_2d_lab_view_has_no_stray_bars_and_the_load_above_the_deck(qtbot):
@@ -208,11 +160,7 @@ def test_2d_lab_view_has_no_stray_bars_and_the_load_above_the_deck(qtbot):
     from ui.lab.scene import LabScene2D
 
     s = LabSession()
-    view = LabScene2D()
-    qtbot.addWidget(view)
-    view.resize(1000, 600)
-    view.show()
-    qtbot.waitExposed(view)
+    view = _shown(qtbot, LabScene2D(), 1000, 600)
     view.set_description(s.describe())
     sc = s.snapshot().scene
     view.update_scene(sc)
@@ -221,18 +169,15 @@ def test_2d_lab_view_has_no_stray_bars_and_the_load_above_the_deck(qtbot):
     robot = [m for m in meshes if m.name.startswith(("link", "joint", "base"))]
     for key, v in view.machines.plots.items():
         pw = v["plot"]
-        a = _rgb(pw.grab().toImage())
+        a = image_rgb(pw.grab().toImage())
         orange = _orange(a)
         assert orange.sum() > 200, key  # the Comau is drawn
         uv = np.concatenate([outline(m, v["P"]) for m in robot])
-        pix = _plot_pixels(pw, uv)
-        lo, hi = pix.min(axis=0) - 4, pix.max(axis=0) + 4
-        ys, xs = np.nonzero(orange)
-        outside = (xs < lo[0]) | (xs > hi[0]) | (ys < lo[1]) | (ys > hi[1])
-        assert outside.sum() == 0, f"{key}: {outside.sum()} orange pixels beyond the robot (a stray bar)"
+        outside = _outside_box(orange, _plot_pixels(pw, uv))
+        assert outside == 0, f"{key}: {outside} orange pixels beyond the robot (a stray bar)"
     # side view: the load's red square above the EM1500 deck's blue, in the load's column
     pw, P = view.machines.plots["side"]["plot"], view.machines.plots["side"]["P"]
-    a = _rgb(pw.grab().toImage())
+    a = image_rgb(pw.grab().toImage())
     r, g, b = (a[..., i].astype(int) for i in range(3))
     red = (r > 150) & (g < 110) & (b < 110)
     blue = (b > 150) & (b > 1.3 * r) & (b > 1.25 * g)
@@ -250,17 +195,13 @@ def test_2d_teleop_view_draws_the_offshore_crane_up(qtbot):
     from ui.widgets.view3d import RobotView2D
 
     s = Session(robot_name="offshore_crane")
-    view = RobotView2D()
-    qtbot.addWidget(view)
-    view.resize(900, 500)
-    view.show()
-    qtbot.waitExposed(view)
+    view = _shown(qtbot, RobotView2D(), 900, 500)
     view.set_description(s.describe())
     state = s.snapshot()
     view.update_state(state)
     qtbot.wait(50)
     pw = view.plots["side"]["plot"]
-    orange = _orange(_rgb(pw.grab().toImage()))
+    orange = _orange(image_rgb(pw.grab().toImage()))
     ys, _ = np.nonzero(orange)
     base = next(m for m in view.draw.meshes(state) if m.name == "base")
     ((_, y_base),) = _plot_pixels(pw, [[base.vertices[:, 0].mean(), base.vertices[:, 2].max()]])

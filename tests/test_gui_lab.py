@@ -1,62 +1,42 @@
 """Motion-Lab tab (pytest-qt offscreen) against a real lab engine over 127.0.0.1."""
 
-import threading
-
 import numpy as np
 import pytest
 
 pytest.importorskip("PyQt5")
-from PyQt5.QtCore import QSettings
 
 from app.engine.lab_session import LabSession
-from app.engine.server import EngineServer
 from app.engine.session import Session
+from tests.gui_rig import color_px, main_window
 from tests.helpers import GUI_WAIT
 from ui.lab.scene import LabScene2D
 from ui.link import EngineLink
-from ui.main_window import MainWindow
-
-
-def _serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-    th.start()
-    return srv, th
 
 
 @pytest.fixture
-def window(qtbot, tmp_path):
-    teleop, lab = _serve(Session(robot_name="comau_smart5_3dof"), 200), _serve(LabSession(), 50)
+def window(qtbot, tmp_path, serve):
+    teleop, _ = serve(Session(robot_name="comau_smart5_3dof"), rate=200, publish_rate=25)
+    lab, _ = serve(LabSession(), rate=50, publish_rate=25)
     made = []
 
     def factory():
-        made.append(EngineLink(lab[0].url, name="gui-lab"))
+        made.append(EngineLink(lab.url, name="gui-lab"))
         return made[-1]
 
-    win = MainWindow(
-        EngineLink(teleop[0].url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
-        lab_link_factory=factory,
-        use_gl=False,
-    )
+    win = main_window(teleop.url, tmp_path / "s.ini", lab_link_factory=factory)
     qtbot.addWidget(win)
     win.show()
     yield win, made
     win.close()
-    for srv, th in (teleop, lab):
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
 
 
 @pytest.fixture
-def lab_alone(qtbot):
+def lab_alone(qtbot, serve):
     """A Motion-Lab tab of its own against a lab engine in this process: (session, server, thread, tab, notices)."""
     from ui.lab_tab import MotionLabTab
 
     ses = LabSession()
-    srv, th = _serve(ses, 50)
+    srv, th = serve(ses, rate=50, publish_rate=25)
     notices: list[str] = []
     tab = MotionLabTab(link_factory=lambda: EngineLink(srv.url, name="gui-lab"), use_gl=False)
     qtbot.addWidget(tab)
@@ -67,9 +47,6 @@ def lab_alone(qtbot):
     qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
     yield ses, srv, th, tab, notices
     tab.close_link()
-    srv.stop()
-    th.join(timeout=5)
-    srv.close()
 
 
 def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
@@ -189,14 +166,6 @@ def test_winch_slider_is_the_labs_and_the_operational_box_is_shown(qtbot, window
 
 
 # ---------------------------------------------------------------------------- the lab HMI's parity (issue 16, item 5)
-def _color_px(widget, rgb: tuple[int, int, int], tol: int = 40) -> int:
-    """Pixels of ``widget`` (as it paints) within ``tol`` of ``rgb``."""
-    from tests.test_gui_drawing import _rgb
-
-    a = _rgb(widget.grab().toImage()).astype(int)
-    return int((np.abs(a - np.array(rgb)).max(axis=2) <= tol).sum())
-
-
 def test_status_word_lights_and_generator_defaults_as_the_lab_hmi(qtbot, window):
     """Item 5: each platform shows its Rexroth status (operation state, system status, operation mode) and
     follows it (SETTLED → TRANSIT while raising); the machine and sensor lights are green where the model
@@ -216,10 +185,10 @@ def test_status_word_lights_and_generator_defaults_as_the_lab_hmi(qtbot, window)
     qtbot.waitUntil(lambda: lights["em8000"].state == "ok", timeout=GUI_WAIT)
     green, grey = (tuple(int(LIGHT[k][i : i + 2], 16) for i in (1, 3, 5)) for k in ("ok", "off"))
     for name in ("em8000", "em1500", "comau", "mru1", "mru2"):
-        assert lights[name].state == "ok" and _color_px(lights[name], green) > 30, name
+        assert lights[name].state == "ok" and color_px(lights[name], green) > 30, name
     for name in ("tracker", "remote"):
-        assert lights[name].state == "off" and _color_px(lights[name], grey, 12) > 30, name
-        assert _color_px(lights[name], green) == 0 and "not connected" in lights[name].toolTip()
+        assert lights[name].state == "off" and color_px(lights[name], grey, 12) > 30, name
+        assert color_px(lights[name], green) == 0 and "not connected" in lights[name].toolTip()
     # the generator as the lab's HMI: 0.2 m heave, 2° roll and pitch at 0.1 Hz; 0.01-1 Hz step 0.02, ±180° step 10
     values = [(a.value(), f.value(), p.value()) for a, f, p in em8000.gen]
     assert [v[0] for v in values] == pytest.approx([0, 0, 0.2, 2.0, 2.0, 0], abs=1e-9)

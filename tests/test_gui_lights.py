@@ -3,57 +3,32 @@
 what an operator sees: the lights shown on screen, the platform page's words and colours, the buttons the
 engine would refuse."""
 
-import threading
-
-import numpy as np
 import pytest
 
 pytest.importorskip("PyQt5")
-from PyQt5.QtCore import QSettings, Qt
+from PyQt5.QtCore import Qt
 
 from app.engine.lab_session import LabSession
-from app.engine.server import EngineServer
 from app.engine.session import Session
-from app.engine.tac_session import TacSession
+from tests.gui_rig import color_px, main_window, scene_engines
 from tests.helpers import GUI_WAIT
-from ui.link import EngineLink
-from ui.main_window import MainWindow
 from ui.widgets.status import LIGHT, StatusLight
 
 
-def _serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    th = threading.Thread(target=srv.run, kwargs={"duration": 180.0}, daemon=True)
-    th.start()
-    return srv, th
-
-
 @pytest.fixture
-def window(qtbot, tmp_path):
+def window(qtbot, tmp_path, serve):
     """The main window with its three engines; the lab's platforms start at rest at NEUTRAL (a scenario's
     start, as app/scenarios/vvmc.py places them: no 0.9 m raise to wait for)."""
     lab = LabSession()
     for p in lab.lab.platforms:
         p.place_at_neutral()
-    served = [_serve(Session(robot_name="comau_smart5_3dof"), 100), _serve(TacSession(), 50), _serve(lab, 50)]
-    (teleop, _), (tac, _), (lab_srv, _) = served
-    win = MainWindow(
-        EngineLink(teleop.url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
-        marine_link_factory=lambda: EngineLink(tac.url, name="gui-tac"),
-        lab_link_factory=lambda: EngineLink(lab_srv.url, name="gui-lab"),
-        use_gl=False,
-    )
+    teleop, _ = serve(Session(robot_name="comau_smart5_3dof"), rate=100, publish_rate=25, duration=180.0)
+    win = main_window(teleop.url, tmp_path / "s.ini", **scene_engines(serve, 180.0, lab))
     qtbot.addWidget(win)
     win.resize(1280, 800)
     win.show()
     yield win
     win.close()
-    for srv, th in served:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
 
 
 def shown_lights(win) -> list[str]:
@@ -63,17 +38,6 @@ def shown_lights(win) -> list[str]:
 
 def _has(win, prefix: str) -> bool:
     return any(t.startswith(prefix) for t in shown_lights(win))
-
-
-def _px(widget, color: str, tol: int = 40) -> int:
-    """Pixels of ``widget`` (as it paints) within ``tol`` of the colour ``#rrggbb`` or ``#rgb``."""
-    from tests.test_gui_drawing import _rgb
-
-    h = color.lstrip("#")
-    h = "".join(c * 2 for c in h) if len(h) == 3 else h
-    rgb = np.array([int(h[i : i + 2], 16) for i in (0, 2, 4)])
-    a = _rgb(widget.grab().toImage()).astype(int)
-    return int((np.abs(a - rgb).max(axis=2) <= tol).sum())
 
 
 def _open_lab(qtbot, win):
@@ -96,13 +60,13 @@ def test_item5_estop_on_a_platform_page_shows_the_latched_stop_not_a_green_engag
     qtbot.waitUntil(lambda: tab.state.platforms[0].status == "engaged", timeout=GUI_WAIT)
     qtbot.waitUntil(lambda: em8000.buttons["disengage"].isEnabled(), timeout=GUI_WAIT)
     green = "#3c9"
-    assert "ENGAGED" in em8000.status.text() and _px(em8000.status, green) > 20
+    assert "ENGAGED" in em8000.status.text() and color_px(em8000.status, green) > 20
     win.estop("Space")
     qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)  # the engine confirmed the stop
     qtbot.waitUntil(lambda: not any(tab.state.platforms[0].eta_dot), timeout=GUI_WAIT)  # at rest
     qtbot.wait(300)  # the page has shown a few of these states
     assert "ENGAGED — E-STOP latched: stopped" in em8000.status.text()
-    assert _px(em8000.status, green) == 0 and _px(em8000.status, "#e33") > 20  # no green on the page's status
+    assert color_px(em8000.status, green) == 0 and color_px(em8000.status, "#e33") > 20  # no green on the page's status
     assert not any(b.isEnabled() for b in em8000.buttons.values())  # DISENGAGE too: the engine refuses it
     for widget in (tab.comau.comau_mode, tab.comau.winch_mode, tab.comau.vvmc, tab.comau.winch_slider):
         assert not widget.isEnabled()
@@ -111,7 +75,7 @@ def test_item5_estop_on_a_platform_page_shows_the_latched_stop_not_a_green_engag
     qtbot.waitUntil(lambda: not tab.state.estop and "HOLDING" in em8000.status.text(), timeout=GUI_WAIT)
     qtbot.waitUntil(lambda: em8000.buttons["neutral"].isEnabled(), timeout=GUI_WAIT)
     assert em8000.buttons["settle"].isEnabled() and not em8000.buttons["disengage"].isEnabled()
-    assert _px(em8000.status, "#e33") == 0 and _px(em8000.status, "#fa3") > 20  # holding is not a stop
+    assert color_px(em8000.status, "#e33") == 0 and color_px(em8000.status, "#fa3") > 20  # holding is not a stop
     assert _has(win, "● plant: holding: EM8000")
 
 
@@ -144,14 +108,14 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     # the engine has seen the enable held (deadman) and refused it: the light says so (before that state came,
     # the input was idle: enable released)
     qtbot.waitUntil(lambda: tab.state.flags.deadman and _has(win, "● input: not armed"), timeout=GUI_WAIT)
-    assert not tab.state.flags.enabled and _px(enable, LIGHT["ok"]) == 0
+    assert not tab.state.flags.enabled and color_px(enable, LIGHT["ok"]) == 0
     qtbot.mouseRelease(enable, Qt.LeftButton)
     tab.stick.key(Qt.Key_Right, False)
     # the engine sees the enable released at neutral before the new press (arming takes a fresh press)
     qtbot.waitUntil(lambda: not tab.state.flags.deadman, timeout=GUI_WAIT)
     tab.stick.key(Qt.Key_Shift, True)
     qtbot.waitUntil(lambda: tab.state.flags.enabled and enable.text().startswith("ENABLED"), timeout=GUI_WAIT)
-    assert _px(enable, LIGHT["ok"]) > 50 and _has(win, "● input: enabled")
+    assert color_px(enable, LIGHT["ok"]) > 50 and _has(win, "● input: enabled")
     plus = tab.comau.jog_buttons[(1, 1)]
     qtbot.mousePress(plus, Qt.LeftButton)
     qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 1, timeout=GUI_WAIT)

@@ -13,48 +13,20 @@ import pytest
 
 pytest.importorskip("PyQt5")
 
-from tests.test_gui_drawing import _run_under_xvfb
+from tests.gui_rig import run_under_xvfb
 
 SCRIPT = r"""
-import json, sys, tempfile, threading, time
+import json, sys
 import numpy as np
-from ui.glprobe import gl_available, share_gl_contexts
-share_gl_contexts()
-from PyQt5.QtCore import QPoint, QSettings, Qt
+from tests.gui_rig import gl_app, image_rgb, open_window, pump, scene_link, screen_rgb, wait
+app = gl_app()
+from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtGui import QGuiApplication
 from PyQt5.QtTest import QTest
-from PyQt5.QtWidgets import QApplication
-app = QApplication(sys.argv[:1])
-if not gl_available():
-    sys.exit(77)
 from app.engine.lab_session import LabSession
-from app.engine.server import EngineServer
 from app.engine.session import Session
-from tests.test_gui_drawing import _rgb
-from ui.link import EngineLink
-from ui.main_window import MainWindow
+from tests.helpers import start_engine
 from ui.widgets.glwindow import GLViewWindow, grab_window
-
-def serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    threading.Thread(target=srv.run, kwargs={"duration": 170.0}, daemon=True).start()
-    return srv
-
-def pump(s):
-    end = time.monotonic() + s
-    while time.monotonic() < end:
-        app.processEvents(); time.sleep(0.005)
-
-def wait(pred, s=60.0):
-    end = time.monotonic() + s
-    while time.monotonic() < end:
-        if pred():
-            return True
-        pump(0.05)
-    return False
-
-def screen_rgb():
-    return _rgb(QGuiApplication.primaryScreen().grabWindow(0).toImage())
 
 def global_rect(w):
     p = w.mapToGlobal(QPoint(0, 0))
@@ -67,14 +39,9 @@ def crop(img, rect):
 def near(a, rgb, tol=8):
     return (np.abs(a - np.array(rgb)).max(axis=-1) <= tol)
 
-teleop, lab = serve(Session(robot_name="comau_smart5_3dof"), 200), serve(LabSession(), 50)
-settings = QSettings(tempfile.mktemp(suffix=".ini"), QSettings.IniFormat)
-win = MainWindow(EngineLink(teleop.url), settings=settings, dialogs=False,
-                 lab_link_factory=lambda: EngineLink(lab.url, name="gui-lab"))
-win.show()
-win.raise_()
-win.activateWindow()  # Xvfb has no window manager to do it
-assert wait(lambda: win.teleop.state is not None), "no state"
+teleop, _ = start_engine(Session(robot_name="comau_smart5_3dof"), 200, publish_rate=25, duration=170.0)
+lab, _ = start_engine(LabSession(), 50, publish_rate=25, duration=170.0)
+win = open_window(teleop.url, lab_link_factory=scene_link(lab, "lab"))
 assert wait(lambda: win.isActiveWindow(), 20.0), "the window never became active"
 pump(1.5)
 out = {}
@@ -90,14 +57,14 @@ bg = (20, 24, 30)  # RobotView3D's background
 shot = screen_rgb()
 on_screen = crop(shot, global_rect(m.box))
 out["view_drawn_fraction"] = float(1.0 - near(on_screen, bg, 12).mean())
-comp = _rgb(grab_window(win).toImage())
+comp = image_rgb(grab_window(win).toImage())
 p = m.box.mapTo(win, QPoint(0, 0))
 in_grab = crop(comp, (p.x(), p.y(), m.box.width(), m.box.height()))
 def mean_diff(a, b):
     return float(np.abs(a - b).mean()) if a.shape == b.shape else 999.0
 
 out["grab_vs_screen_mean_diff"] = mean_diff(in_grab, on_screen)
-plain = crop(_rgb(win.grab().toImage()), (p.x(), p.y(), m.box.width(), m.box.height()))
+plain = crop(image_rgb(win.grab().toImage()), (p.x(), p.y(), m.box.width(), m.box.height()))
 out["plain_grab_vs_screen_mean_diff"] = mean_diff(plain, on_screen)
 
 # 2. a click into the 3D view, then the keyboard: the stick's keys and STOP (Space) still work
@@ -147,7 +114,7 @@ out["lab_view_partly_hidden"] = seen.height() < lab_view.box.height()
 s = screen_rgb()
 status = crop(s, global_rect(win.status))
 out["lab_bg_on_status"] = float(near(status, (18, 26, 38), 6).mean())
-comp = _rgb(grab_window(win).toImage())
+comp = image_rgb(grab_window(win).toImage())
 p = win.status.mapTo(win, QPoint(0, 0))
 status_in_grab = crop(comp, (p.x(), p.y(), win.status.width(), win.status.height()))
 out["lab_bg_on_status_in_grab"] = float(near(status_in_grab, (18, 26, 38), 6).mean())
@@ -160,7 +127,7 @@ os._exit(0)
 
 @pytest.mark.gl
 def test_native_gl_views_on_a_1280x800_screen(tmp_path):
-    out = _run_under_xvfb(SCRIPT, tmp_path, screen="1280x800")
+    out = run_under_xvfb(SCRIPT, tmp_path, screen="1280x800")
     # the window fits the screen in every tab
     for w, h in [out["frame"][2:], *out["frames"]]:
         assert w <= out["screen"][0] and h <= out["screen"][1], out

@@ -19,7 +19,6 @@ import os
 import shutil
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -45,9 +44,9 @@ from PyQt5.QtWidgets import (
 )
 
 from app.engine.lab_session import LabSession
-from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.engine.tac_session import TacSession
+from tests.gui_rig import main_window, xvfb
 from tests.helpers import GUI_WAIT
 from ui.link import EngineLink
 from ui.main_window import MainWindow
@@ -55,35 +54,25 @@ from ui.main_window import MainWindow
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    th = threading.Thread(target=srv.run, kwargs={"duration": 300.0}, daemon=True)
-    th.start()
-    return srv, th
-
-
 @pytest.fixture
-def page(qtbot, tmp_path):
+def page(qtbot, tmp_path, serve):
     """The main window against a teleop engine (and crane-head and lab engines for their tabs), 2D views."""
-    served = [_serve(Session(robot_name="comau_smart5_3dof"), 200)]
+    teleop, _ = serve(Session(robot_name="comau_smart5_3dof"), rate=200, publish_rate=25, duration=300.0)
     scene = {}
 
     def factory(kind, session):
         def make():
             if kind not in scene:
-                scene[kind] = _serve(session(), 50)
-                served.append(scene[kind])
-            return EngineLink(scene[kind][0].url, name=f"gui-{kind}")
+                scene[kind], _ = serve(session(), rate=50, publish_rate=25, duration=300.0)
+            return EngineLink(scene[kind].url, name=f"gui-{kind}")
 
         return make
 
-    win = MainWindow(
-        EngineLink(served[0][0].url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
+    win = main_window(
+        teleop.url,
+        tmp_path / "s.ini",
         marine_link_factory=factory("tac", TacSession),
         lab_link_factory=factory("lab", LabSession),
-        use_gl=False,
     )
     qtbot.addWidget(win)
     win.show()
@@ -91,10 +80,6 @@ def page(qtbot, tmp_path):
     qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
     yield win
     win.close()
-    for srv, th in served:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
 
 
 def estop_latched(win):
@@ -405,30 +390,14 @@ def test_item10_bosun_robot_opens_the_gui_with_that_robot(qtbot):
 
 # ------------------------------------------------------------------------------- real X input under Xvfb
 XSCRIPT = r"""
-import json, subprocess, sys, tempfile, threading, time
-from PyQt5.QtCore import QPoint, QSettings, Qt
+import json, subprocess, sys
 from PyQt5.QtWidgets import QAbstractScrollArea, QApplication
 app = QApplication(sys.argv[:1])
-from app.engine.server import EngineServer
 from app.engine.session import Session
-from ui.link import EngineLink
-from ui.main_window import MainWindow
+from tests.gui_rig import open_window, pump, wait
+from tests.helpers import start_engine
 
-srv = EngineServer(Session(robot_name="comau_smart5_3dof"), bind="tcp://127.0.0.1:0", rate=200, publish_rate=25)
-threading.Thread(target=srv.run, kwargs={"duration": 300.0}, daemon=True).start()
-
-def pump(s):
-    end = time.monotonic() + s
-    while time.monotonic() < end:
-        app.processEvents(); time.sleep(0.005)
-
-def wait(pred, s=60.0):
-    end = time.monotonic() + s
-    while time.monotonic() < end:
-        if pred():
-            return True
-        pump(0.05)
-    return False
+srv, _ = start_engine(Session(robot_name="comau_smart5_3dof"), 200, publish_rate=25, duration=300.0)
 
 def xdo(*args):
     subprocess.run(["xdotool", *map(str, args)], check=True)
@@ -442,10 +411,7 @@ def click(xy):
     xdo("mousemove", *xy)
     xdo("click", 1)
 
-settings = QSettings(tempfile.mktemp(suffix=".ini"), QSettings.IniFormat)
-win = MainWindow(EngineLink(srv.url), settings=settings, dialogs=False, use_gl=False)
-win.show(); win.raise_(); win.activateWindow()
-assert wait(lambda: win.teleop.state is not None), "no state"
+win = open_window(srv.url, use_gl=False)
 assert wait(lambda: win.isActiveWindow(), 20.0), "the window never became active"
 pump(1.5)
 out = {}
@@ -539,9 +505,9 @@ os._exit(0)
 
 @pytest.mark.skipif(shutil.which("xdotool") is None, reason="xdotool is not installed")
 def test_real_x_input_sequence_typing_ctrl_space_wheel_and_overlay(tmp_path):
-    from tests.test_gui_drawing import _run_under_xvfb
+    from tests.gui_rig import run_under_xvfb
 
-    out = _run_under_xvfb(XSCRIPT, tmp_path, screen="1280x800", timeout=420)
+    out = run_under_xvfb(XSCRIPT, tmp_path, screen="1280x800", timeout=420)
     # item 2: Space, click Reset, click where Open XML… was: Open XML's chooser, not the solver's list
     assert out["space_stops"] and out["reset"], out
     assert out["open_xml_opened"] and not out["solver_popup"], out
@@ -592,6 +558,17 @@ def fits(frame) -> bool:
     return y == 0 and x >= 0 and x + w <= 1280 and y + h <= 800 and h >= 780 and w >= 1270
 
 
+def _terminate_all(procs) -> None:
+    """Terminate the processes that still run, the last started first; kill one that takes over 20 s."""
+    for p in reversed(procs):
+        if p.poll() is None:
+            p.terminate()
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
 @pytest.mark.skipif(
     any(shutil.which(t) is None for t in ("Xvfb", "openbox", "xdotool", "xwininfo", "xprop")),
     reason="needs Xvfb, a window manager (openbox), xdotool, xwininfo and xprop",
@@ -599,77 +576,60 @@ def fits(frame) -> bool:
 def test_item10_the_windows_frame_opens_at_the_top_of_a_1280x800_screen(tmp_path):
     """``bosun --robot knuckle_boom_crane``, then ``bosun --connect URL`` (its saved geometry restored), under
     a window manager that adds a 20-px title bar: the frame's top at the screen's top, the frame inside it."""
-    r_fd, w_fd = os.pipe()
-    xvfb = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(w_fd), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
-        pass_fds=(w_fd,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(w_fd)
-    procs = []
-    try:
-        with os.fdopen(r_fd) as fh:
-            number = fh.readline().strip()
-        env = {
-            **os.environ,
-            "DISPLAY": f":{number}",
-            "QT_QPA_PLATFORM": "xcb",
-            "PYTHONPATH": str(ROOT),
-            "XDG_CONFIG_HOME": str(tmp_path / "config"),
-        }
-        wm = subprocess.Popen(["openbox"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        procs.append(wm)
-        server = subprocess.Popen(
-            [sys.executable, "-m", "app", "server", "--bind", "tcp://127.0.0.1:0", "--duration", "300"],
-            env=env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.DEVNULL,
-            text=True,
-        )
-        procs.append(server)
-        url = None
-        deadline = time.monotonic() + 120
-        while url is None and time.monotonic() < deadline:
-            line = server.stdout.readline()
-            if "requests on" in line:
-                url = line.split("requests on")[1].split()[0].strip(" ,;")
-        assert url, "the engine did not start"
-        frames = {}
-        for name, args in (
-            ("own engine", ["--robot", "knuckle_boom_crane"]),
-            ("--connect", ["--connect", url]),
-        ):
-            gui = subprocess.Popen(
-                [sys.executable, "-m", "app", *args, "--quit-after", "900"],  # ended below; a busy machine
-                # took over 60 s to frame the window, and the GUI had quit (its window gone) before it was read
+    with xvfb("1280x800") as number:
+        procs = []
+        try:
+            env = {
+                **os.environ,
+                "DISPLAY": f":{number}",
+                "QT_QPA_PLATFORM": "xcb",
+                "PYTHONPATH": str(ROOT),
+                "XDG_CONFIG_HOME": str(tmp_path / "config"),
+            }
+            wm = subprocess.Popen(["openbox"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            procs.append(wm)
+            server = subprocess.Popen(
+                [sys.executable, "-m", "app", "server", "--bind", "tcp://127.0.0.1:0", "--duration", "300"],
                 env=env,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.DEVNULL,
                 text=True,
             )
-            procs.append(gui)
-            find = ("xdotool", "search", "--sync", "--onlyvisible", "--name", "Bosun: universal")
-            ids = _search(*find, env=env, timeout=240)
-            deadline = time.monotonic() + 60
-            while time.monotonic() < deadline:  # the window manager frames the window some time after it shows
-                time.sleep(1.0)
-                frame = _frame(ids[0], env)
-                if fits(frame):
-                    break
-            time.sleep(3.0)
-            frames[name] = _frame(ids[0], env)  # and it stays so
-            gui.terminate()  # closes the window (saves its geometry for the next start)
-            gui.wait(timeout=60)
-        for name, frame in frames.items():
-            assert fits(frame), (name, frames)
-    finally:
-        for p in reversed(procs):
-            if p.poll() is None:
-                p.terminate()
-                try:
-                    p.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    p.kill()
-        xvfb.terminate()
-        xvfb.wait(timeout=10)
+            procs.append(server)
+            url = None
+            deadline = time.monotonic() + 120
+            while url is None and time.monotonic() < deadline:
+                line = server.stdout.readline()
+                if "requests on" in line:
+                    url = line.split("requests on")[1].split()[0].strip(" ,;")
+            assert url, "the engine did not start"
+            frames = {}
+            for name, args in (
+                ("own engine", ["--robot", "knuckle_boom_crane"]),
+                ("--connect", ["--connect", url]),
+            ):
+                gui = subprocess.Popen(
+                    [sys.executable, "-m", "app", *args, "--quit-after", "900"],  # ended below; a busy machine
+                    # took over 60 s to frame the window, and the GUI had quit (its window gone) before it was read
+                    env=env,
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.PIPE,
+                    text=True,
+                )
+                procs.append(gui)
+                find = ("xdotool", "search", "--sync", "--onlyvisible", "--name", "Bosun: universal")
+                ids = _search(*find, env=env, timeout=240)
+                deadline = time.monotonic() + 60
+                while time.monotonic() < deadline:  # the window manager frames the window some time after it shows
+                    time.sleep(1.0)
+                    frame = _frame(ids[0], env)
+                    if fits(frame):
+                        break
+                time.sleep(3.0)
+                frames[name] = _frame(ids[0], env)  # and it stays so
+                gui.terminate()  # closes the window (saves its geometry for the next start)
+                gui.wait(timeout=60)
+            for name, frame in frames.items():
+                assert fits(frame), (name, frames)
+        finally:
+            _terminate_all(procs)

@@ -3,26 +3,23 @@ columns, unapplied edits kept until Apply or Esc, plots refitted when their tab 
 elide instead of being cut, and scene engines paused while no tab shows them (STOP still latches)."""
 
 import itertools
-import threading
 
 import numpy as np
 import pytest
 
 pytest.importorskip("PyQt5")
 import pyqtgraph as pg
-from PyQt5.QtCore import QSettings, Qt
+from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QTabWidget
 
 from app.engine.lab_session import LabSession
-from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.snapshots import TeleopSnapshot
+from tests.gui_rig import image_rgb, main_window, scene_engines
 from tests.helpers import GUI_WAIT
 from ui.lab.scene import LabScene2D
 from ui.lab_tab import MotionLabTab
-from ui.link import EngineLink
-from ui.main_window import MainWindow
 from ui.marine_tab import CraneHeadTab, SceneView2D
 from ui.widgets.fields import DIRTY_COLOR
 from ui.widgets.labels import ElidedLabel
@@ -32,34 +29,15 @@ from ui.widgets.view3d import RobotView2D
 MACHINE_VIEWS = (RobotView2D, SceneView2D, LabScene2D)  # drawings of the machines, not plots of signals
 
 
-def _serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-    th.start()
-    return srv, th
-
-
 @pytest.fixture
-def window(qtbot, tmp_path):
-    served = [_serve(Session(robot_name="comau_smart5_3dof"), 200), _serve(TacSession(), 50), _serve(LabSession(), 50)]
-    (teleop, _), (tac, _), (lab, _) = served
-    win = MainWindow(
-        EngineLink(teleop.url),
-        settings=QSettings(str(tmp_path / "s.ini"), QSettings.IniFormat),
-        dialogs=False,
-        marine_link_factory=lambda: EngineLink(tac.url, name="gui-tac"),
-        lab_link_factory=lambda: EngineLink(lab.url, name="gui-lab"),
-        use_gl=False,
-    )
+def window(qtbot, tmp_path, serve):
+    teleop, _ = serve(Session(robot_name="comau_smart5_3dof"), rate=200, publish_rate=25)
+    win = main_window(teleop.url, tmp_path / "s.ini", **scene_engines(serve))
     qtbot.addWidget(win)
     win.show()
     qtbot.waitUntil(lambda: win.teleop.state is not None and win.teleop.state.scaling is not None, timeout=GUI_WAIT)
     yield win
     win.close()
-    for srv, th in served:
-        srv.stop()
-        th.join(timeout=5)
-        srv.close()
 
 
 def _show(qtbot, win, tab):
@@ -358,47 +336,46 @@ def test_plots_are_pyqtgraph_plot_items(qtbot):
     assert len(plot_items(w)) == 3 and pw.getPlotItem() in plot_items(w)
 
 
-def test_legends_reflow_so_a_narrow_panel_shows_whole_plots(qtbot):
-    """A legend row is a plot's minimum width: five entries in one row pushed the teleop plots out of a
-    280 px panel and cut their right side ("solver ta", "time be").  The legends reflow to the width."""
+def _crane_plots(qtbot, width: int) -> LivePlots:
+    """The teleop plots of the knuckle-boom crane, shown ``width`` × 600 px."""
     plots = LivePlots()
     qtbot.addWidget(plots)
     plots.set_description(Session(robot_name="knuckle_boom_crane").describe())
-    plots.resize(280, 600)
+    plots.resize(width, 600)
     plots.show()
     qtbot.waitExposed(plots)
+    return plots
 
-    def right_edges():
-        return [p.mapRectToScene(p.boundingRect()).right() for p in (plots.p_xyz, plots.p_q, plots.p_s)]
 
+def _right_edges(plots: LivePlots) -> list[float]:
+    """The right edges of the three plots in their scene [px], to compare with the view's width."""
+    return [p.mapRectToScene(p.boundingRect()).right() for p in (plots.p_xyz, plots.p_q, plots.p_s)]
+
+
+def test_legends_reflow_so_a_narrow_panel_shows_whole_plots(qtbot):
+    """A legend row is a plot's minimum width: five entries in one row pushed the teleop plots out of a
+    280 px panel and cut their right side ("solver ta", "time be").  The legends reflow to the width."""
+    plots = _crane_plots(qtbot, 280)
     # the layout settles over a few events (slow on a loaded machine); with one-row legends it never fits
-    qtbot.waitUntil(lambda: max(right_edges()) <= plots.glw.viewport().width() + 1, timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: max(_right_edges(plots)) <= plots.glw.viewport().width() + 1, timeout=GUI_WAIT)
     assert plots.p_xyz.legend.columnCount < 5
     plots.resize(1100, 600)
     qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount == 5, timeout=GUI_WAIT)
-    assert max(right_edges()) <= plots.glw.viewport().width() + 1
+    assert max(_right_edges(plots)) <= plots.glw.viewport().width() + 1
 
 
 def test_plots_narrowed_after_a_wide_start_are_laid_out_in_the_narrow_view(qtbot):
     """In the 1280×800 window the plot panel is first laid out wide (five legend entries a row), then the
     splitter narrows it to ~265 px: the legends reflowed, but the plots kept the wide layout and were cut at
     the right (no right axes, no "0" on the time axis).  The plots follow the view's width."""
-    plots = LivePlots()
-    qtbot.addWidget(plots)
-    plots.set_description(Session(robot_name="knuckle_boom_crane").describe())
-    plots.resize(1100, 600)
-    plots.show()
-    qtbot.waitExposed(plots)
+    plots = _crane_plots(qtbot, 1100)
     qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount == 5, timeout=GUI_WAIT)
     qtbot.wait(100)
     plots.resize(265, 600)
-
-    def right_edges():
-        return [p.mapRectToScene(p.boundingRect()).right() for p in (plots.p_xyz, plots.p_q, plots.p_s)]
-
     qtbot.waitUntil(lambda: plots.p_xyz.legend.columnCount < 5, timeout=GUI_WAIT)
     qtbot.wait(300)
-    assert max(right_edges()) <= plots.glw.viewport().width() + 1, (right_edges(), plots.glw.viewport().width())
+    width = plots.glw.viewport().width()
+    assert max(_right_edges(plots)) <= width + 1, (_right_edges(plots), width)
     # the right axes (solve time, prismatic joints) are inside the view
     for twin in (plots.s_twin, plots.q_twin):
         ax = twin.axis
@@ -473,7 +450,6 @@ def test_error_distribution_projections_fit_the_box_with_a_scale_and_marked_unre
     on both axes, side by side with height, a colour scale, and the unreachable targets ringed red under a
     legend entry that says what the ring means."""
     from app.analysis.ik_studies import ErrorDistribution
-    from tests.test_gui_drawing import _rgb
     from ui.analysis_tab import UNREACHABLE_PEN, AnalysisTab
 
     lo, hi = np.array([-25.0, -25.0, -10.0]), np.array([25.0, 25.0, 25.0])
@@ -511,7 +487,7 @@ def test_error_distribution_projections_fit_the_box_with_a_scale_and_marked_unre
     texts = [label.text for _, label in tab.key.items]
     assert "target" not in texts and any("not reachable (32 of 64)" in t for t in texts), texts
     # the pixels: a red ring around an unreachable target, none around a reachable one (top view)
-    img = _rgb(tab.glw.grab().toImage()).astype(int)
+    img = image_rgb(tab.glw.grab().toImage()).astype(int)
     red = np.abs(img - np.array(UNREACHABLE_PEN)).max(axis=-1) < 40
     top = tab.projections[0]
 

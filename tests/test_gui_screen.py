@@ -21,49 +21,20 @@ import pytest
 
 pytest.importorskip("PyQt5")
 
-from tests.test_gui_drawing import _run_under_xvfb
+from tests.gui_rig import run_under_xvfb
 
 SCRIPT = r"""
-import json, sys, tempfile, threading, time
+import json, sys
 import numpy as np
-from ui.glprobe import gl_available, share_gl_contexts
-share_gl_contexts()
-from PyQt5.QtCore import QPoint, QSettings
-from PyQt5.QtGui import QGuiApplication
-from PyQt5.QtWidgets import QApplication, QTabWidget
-app = QApplication(sys.argv[:1])
-if not gl_available():
-    sys.exit(77)
+from tests.gui_rig import gl_app, image_rgb, open_window, pump, scene_engines, screen_rgb, wait
+app = gl_app()
 import pyqtgraph as pg
-from app.engine.lab_session import LabSession
-from app.engine.server import EngineServer
+from PyQt5.QtCore import QPoint
+from PyQt5.QtGui import QGuiApplication
+from PyQt5.QtWidgets import QTabWidget
 from app.engine.session import Session
-from app.engine.tac_session import TacSession
-from tests.test_gui_drawing import _rgb
-from ui.link import EngineLink
-from ui.main_window import MainWindow
+from tests.helpers import start_engine
 from ui.widgets.plots import plot_items
-
-def serve(session, rate):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=min(rate, 25))
-    threading.Thread(target=srv.run, kwargs={"duration": 400.0}, daemon=True).start()
-    return srv
-
-def pump(s):
-    end = time.monotonic() + s
-    while time.monotonic() < end:
-        app.processEvents(); time.sleep(0.005)
-
-def wait(pred, s=60.0):
-    end = time.monotonic() + s
-    while time.monotonic() < end:
-        if pred():
-            return True
-        pump(0.05)
-    return False
-
-def screen_rgb():
-    return _rgb(QGuiApplication.primaryScreen().grabWindow(0).toImage())
 
 def origin(w):
     p = w.mapToGlobal(QPoint(0, 0))
@@ -98,14 +69,8 @@ def ring_at(mask, x, y, r_in=4, r_out=9):
     d = np.hypot(xx - x, yy - y)
     return bool(mask[(d >= r_in) & (d <= r_out)].sum() >= 6)
 
-teleop = serve(Session(robot_name="knuckle_boom_crane"), 100)
-tac, lab = serve(TacSession(), 50), serve(LabSession(), 50)
-settings = QSettings(tempfile.mktemp(suffix=".ini"), QSettings.IniFormat)
-win = MainWindow(EngineLink(teleop.url), settings=settings, dialogs=False,
-                 marine_link_factory=lambda: EngineLink(tac.url, name="gui-tac"),
-                 lab_link_factory=lambda: EngineLink(lab.url, name="gui-lab"))
-win.show(); win.raise_(); win.activateWindow()
-assert wait(lambda: win.teleop.state is not None), "no state"
+teleop, _ = start_engine(Session(robot_name="knuckle_boom_crane"), 100, publish_rate=25, duration=400.0)
+win = open_window(teleop.url, **scene_engines(start_engine, 400.0))
 pump(2.0)
 out = {"frame": [win.frameGeometry().width(), win.frameGeometry().height()]}
 
@@ -237,7 +202,7 @@ for size in ((520, 520), (760, 330)):
     for key in PRESETS:
         mv.set_preset(key)
         pump(0.2)
-        img = _rgb(mv.grab_image())
+        img = image_rgb(mv.grab_image())
         h, w = img.shape[:2]
         r, g, b = (img[..., i].astype(int) for i in range(3))
         magenta = (r > 150) & (g < 90) & (b > 150)
@@ -259,7 +224,7 @@ os._exit(0)
 
 @pytest.mark.gl
 def test_every_tab_readable_on_a_1280x800_screen(tmp_path):
-    out = _run_under_xvfb(SCRIPT, tmp_path, screen="1280x800", timeout=420)
+    out = run_under_xvfb(SCRIPT, tmp_path, screen="1280x800", timeout=420)
     assert out["frame"][0] <= 1280 and out["frame"][1] <= 800
     # no page scrolls: plots and views get the visible height
     assert out["teleop_scrolls"] == 0 and out["crane_scrolls"] == 0 and out["analysis_scrolls"] == 0, out

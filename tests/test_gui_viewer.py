@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import threading
-
 import pytest
 
 pytest.importorskip("PyQt5")
 
 from PyQt5.QtCore import QSettings
 
-from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.transport import Client, TransportError
@@ -20,29 +17,14 @@ from ui.main_window import MainWindow
 from ui.viewer import ViewerWindow
 
 
-def _serve(session, rate=200):
-    srv = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=25)
-    th = threading.Thread(target=srv.run, kwargs={"duration": 120.0}, daemon=True)
-    th.start()
-    return srv, th
+@pytest.fixture
+def teleop_engine(serve):
+    return serve(Session(), rate=200, publish_rate=25)[0]
 
 
 @pytest.fixture
-def teleop_engine():
-    srv, th = _serve(Session())
-    yield srv
-    srv.stop()
-    th.join(timeout=5)
-    srv.close()
-
-
-@pytest.fixture
-def tac_engine():
-    srv, th = _serve(TacSession(), rate=50)
-    yield srv
-    srv.stop()
-    th.join(timeout=5)
-    srv.close()
+def tac_engine(serve):
+    return serve(TacSession(), rate=50, publish_rate=25)[0]
 
 
 def test_viewer_shows_the_arm_commands_nothing_and_can_stop(qtbot, teleop_engine):

@@ -19,7 +19,7 @@ from app.net.transport import Client, TransportError, check_url, is_local
 from app.teleop.client import run_joystick_client
 from app.teleop.devices import PygameJoysticks
 from app.teleop.virtual import VirtualJoystick
-from tests.helpers import arm, arm_and_hold, needs_pygame, wait_for
+from tests.helpers import arm, arm_and_hold, needs_pygame, reported_url, wait_for
 
 
 # ------------------------------------------------------------------ codec
@@ -274,7 +274,6 @@ def test_token_and_malformed_messages(engine):
 @needs_pygame
 def test_separate_processes_server_joystick_viewer():
     """bosun server and bosun joystick --virtual as their own processes; this test is the viewer."""
-    import re
     import subprocess
     import sys
     from pathlib import Path
@@ -288,14 +287,7 @@ def test_separate_processes_server_joystick_viewer():
     )
     js = None
     try:
-        url = None
-        for _ in range(5):
-            line = srv.stdout.readline()
-            m = re.search(r"requests on (tcp://\S+),", line)
-            if m:
-                url = m.group(1)
-                break
-        assert url, "server did not report its address"
+        url = reported_url(srv, lines=5)
         viewer = Client(url, role="viewer", name="test-viewer", timeout=10)
         try:
             p0 = np.array(viewer.recv_state(5.0).tool)

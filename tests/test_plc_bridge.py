@@ -480,7 +480,7 @@ def test_a_symbol_of_another_size_is_named_and_never_written():
 def test_bosun_server_drives_the_plc_end_to_end(lab_plc):
     """``bosun server --plant lab --plc …`` as its own process; this test is the operator."""
     from app.net.transport import Client
-    from tests.helpers import wait_for
+    from tests.helpers import reported_url, wait_for
 
     plc = lab_plc
     exe = str(Path(sys.executable).with_name("bosun"))
@@ -488,13 +488,7 @@ def test_bosun_server_drives_the_plc_end_to_end(lab_plc):
     cmd += ["--plc", f"{plc.ip}.1.1:851"]
     srv = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        url = None
-        for _ in range(8):
-            m = re.search(r"requests on (tcp://\S+),", srv.stdout.readline())
-            if m:
-                url = m.group(1)
-                break
-        assert url, "server did not report its address"
+        url = reported_url(srv, lines=8)
         op = Client(url, role="operator", name="test-operator", timeout=10)
         try:
             assert op.describe().backend == "plc"
