@@ -234,9 +234,11 @@ def test_an_interrupt_inside_a_compiled_kernel_is_one_line_and_130(tmp_path, sig
 def test_the_choices_of_the_parser_are_those_of_the_code():
     """The parser's choices are constants of app/cli, so that building it (every start) imports no scene,
     simulation or sensor module; each must stay equal to what it stands for."""
+    from app.analysis.operability import MAX_RUNS, RUNS_CEILING
     from app.cli.args import SPECTRA, TAC_MODES
     from app.cli.reference import SCENES
     from app.cli.sim import _SENSOR_NAMES
+    from app.cli.study import MAX_STUDY_RUNS, STUDY_RUNS_CEILING
     from app.marine.sensors import SENSORS
     from app.marine.waves import SPECTRA as WAVE_SPECTRA
     from app.scenarios.tac import MODES
@@ -246,21 +248,25 @@ def test_the_choices_of_the_parser_are_those_of_the_code():
     assert tuple(WAVE_SPECTRA) == SPECTRA
     assert tuple(MODES) == TAC_MODES
     assert tuple(_SENSOR_NAMES) == ("true", *SENSORS)
+    assert (MAX_STUDY_RUNS, STUDY_RUNS_CEILING) == (MAX_RUNS, RUNS_CEILING)
 
 
-def test_building_the_parser_does_not_import_the_diagrams():
-    code = "import sys; from app.cli import build_parser; build_parser(); print('app.scenes.diagram' in sys.modules)"
+def test_building_the_parser_does_not_import_the_diagrams_nor_the_studies():
+    code = (
+        "import sys; from app.cli import build_parser; build_parser(); "
+        "print('app.scenes.diagram' in sys.modules, 'app.analysis.operability' in sys.modules)"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "False"
+    assert done.stdout.strip() == "False False"
 
 
 def test_alarms_json_has_every_alarm_and_null_for_a_boolean_ones_limit(capsys):
-    from app.engine.alarm_catalog import CATALOG
+    from app.engine.alarm_catalog import catalog
 
     code, out, _ = run(capsys, "alarms", "--json")
     assert code == 0
     alarms = {a["key"]: a for a in json.loads(out)["alarms"]}
-    assert set(alarms) == {a.key for a in CATALOG}
+    assert set(alarms) == {a.key for a in catalog()}
     assert alarms["estop"]["limit"] is None
-    assert all(alarms[a.key]["limit"] == a.limit for a in CATALOG if a.analog)
+    assert all(alarms[a.key]["limit"] == a.limit for a in catalog() if a.analog)

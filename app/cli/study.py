@@ -67,11 +67,14 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
     return 0
 
 
+# app.analysis.operability's MAX_RUNS and RUNS_CEILING (tests/test_cli.py keeps them equal): constants here, so
+# that building the parser does not import the study (NumPy, Dask's set-up) at every start
+MAX_STUDY_RUNS = 10_000
+STUDY_RUNS_CEILING = 100_000
+
+
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
-    from app.analysis.operability import MAX_RUNS as MAX_STUDY_RUNS
-    from app.analysis.operability import RUNS_CEILING as STUDY_RUNS_CEILING
-
     stu = group(
         sub, "study", "studies on a Dask cluster: study operability (scatter diagram × headings × seeds)", "study_cmd"
     )
