@@ -89,12 +89,13 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.ik import ga_kernels
-from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver
+from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver, SolverOptions
 
 POPULATION = 125
 ELITE_FRACTION = 0.10
@@ -216,20 +217,18 @@ class GeneticSolver(Solver):
     """
 
     name = "ga"
-    default_time_budget = 0.1
 
     def __init__(
         self,
         robot,
         *,
-        time_budget: float | object | None = DEFAULT,
-        rng: np.random.Generator | None = None,
         target_cost: float = TARGET_COST,
         population: int = POPULATION,
         max_generations: int | None = None,
         velocity_tolerance: float = VELOCITY_TOLERANCE,
+        **common: Unpack[SolverOptions],
     ) -> None:
-        super().__init__(robot, time_budget=time_budget, rng=rng)
+        super().__init__(robot, **common)
         if population < 4:
             raise ValueError("population must be at least 4")
         self.target_cost = target_cost
