@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.errors import BosunError
 from app.geometry import euler_to_matrix, skew
+from app.models.model import Model
 from app.models.spec import RobotSpec
 
 __all__ = [
@@ -100,7 +101,7 @@ class StewartFK:
     iterations: int
 
 
-class StewartPlatform:
+class StewartPlatform(Model):
     """Kinematic model of a six-leg Stewart platform read from a ``type="stewart"`` robot file.
 
     Attributes
@@ -112,13 +113,11 @@ class StewartPlatform:
     """
 
     kind = "stewart"
+    wrong_type = StewartError
 
     def __init__(self, spec: RobotSpec) -> None:
-        if spec.stewart is None:
-            raise StewartError(f"robot '{spec.name}' is not a Stewart platform")
+        super().__init__(spec)
         s = spec.stewart
-        self.spec = spec
-        self.name = spec.name
         # C-contiguous float64: the compiled leg kernels have one signature
         self.a_n = np.ascontiguousarray(s.base_joints_n, dtype=float)
         self.b_b = np.ascontiguousarray(s.platform_joints_b, dtype=float)
