@@ -72,27 +72,56 @@ class ReachabilityReference:
         return self.solver.solve_position(x).error <= self.tol
 
 
-# ----------------------------------------------------------------------------- error distribution
+# ----------------------------------------------------------------------------- results
 @dataclass
-class ErrorDistribution:
-    STUDY = "distribution"
-    """Result of :func:`error_distribution`; rows are targets."""
+class _Solves:
+    """One robot and solver over a sequence of targets: per target the tool point the solver reached, its
+    error [m], solve time [s] and the solver's own success; the fields both studies share."""
 
     robot: str
     solver: str
-    grid: int
-    targets: NDArray[np.float64]
     reached: NDArray[np.float64]
     error: NDArray[np.float64]
     time_s: NDArray[np.float64]
     success: NDArray[np.bool_]
+
+    def to_wire(self) -> dict[str, Any]:
+        return _result_to_wire(self)
+
+
+class _Record:
+    """The :class:`_Solves` arrays of n targets, filled one solve at a time."""
+
+    def __init__(self, n: int) -> None:
+        self.reached, self.error, self.time_s = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
+        self.success = np.zeros(n, dtype=bool)
+
+    def add(self, i: int, res) -> None:
+        """Target i's :class:`~app.ik.base.IKResult`."""
+        self.reached[i], self.error[i], self.time_s[i], self.success[i] = (
+            res.position,
+            res.error,
+            res.time_s,
+            res.success,
+        )
+
+    def first(self, done: int) -> dict[str, NDArray]:
+        """The arrays of the first ``done`` targets, by field name."""
+        return {k: v[:done] for k, v in vars(self).items()}
+
+
+# ----------------------------------------------------------------------------- error distribution
+@dataclass
+class ErrorDistribution(_Solves):
+    STUDY = "distribution"
+    """Result of :func:`error_distribution`; rows are targets."""
+
+    grid: int
+    targets: NDArray[np.float64]
     reachable: NDArray[np.bool_]
     box_lower: NDArray[np.float64]
     box_upper: NDArray[np.float64]
     complete: bool = True
-
-    def to_wire(self) -> dict[str, Any]:
-        return _result_to_wire(self)
 
     def summary(self) -> dict[str, Any]:
         n = len(self.error)
@@ -165,31 +194,26 @@ def error_distribution(
     solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
     reference = ReachabilityReference(robot, seed=seed)
     n = len(targets)
-    reached = np.zeros((n, 3))
-    error, t = np.zeros(n), np.zeros(n)
-    success, reachable = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    record, reachable = _Record(n), np.zeros(n, dtype=bool)
     done = 0
     try:
         for i, x in enumerate(targets):
             res = solver.solve_position(x)
-            reached[i], error[i], t[i], success[i] = res.position, res.error, res.time_s, res.success
+            record.add(i, res)
             reachable[i] = res.error <= reference.tol or reference(x)
             done = i + 1
             _tick(progress, cancelled, done, n)
     except _CancelledError:
         pass
     return ErrorDistribution(
-        robot.name,
-        solver_name,
-        grid,
-        targets[:done],
-        reached[:done],
-        error[:done],
-        t[:done],
-        success[:done],
-        reachable[:done],
-        box.lower,
-        box.upper,
+        robot=robot.name,
+        solver=solver_name,
+        **record.first(done),
+        grid=grid,
+        targets=targets[:done],
+        reachable=reachable[:done],
+        box_lower=box.lower,
+        box_upper=box.upper,
         complete=done == n,
     )
 
@@ -254,20 +278,11 @@ def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
 
 # ----------------------------------------------------------------------------- tracking
 @dataclass
-class Tracking:
+class Tracking(_Solves):
     STUDY = "tracking"
-    robot: str
-    solver: str
     t: NDArray[np.float64]
     target: NDArray[np.float64]
-    reached: NDArray[np.float64]
-    error: NDArray[np.float64]
-    time_s: NDArray[np.float64]
-    success: NDArray[np.bool_]
     q: NDArray[np.float64] = field(repr=False)
-
-    def to_wire(self) -> dict[str, Any]:
-        return _result_to_wire(self)
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -331,21 +346,21 @@ def track(
     t, path = tracking_path(robot, duration, dt)
     solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
     m = len(t)
-    reached, q_all = np.zeros((m, 3)), np.zeros((m, robot.n_joints))
-    err, st, ok = np.zeros(m), np.zeros(m), np.zeros(m, dtype=bool)
+    record, q_all = _Record(m), np.zeros((m, robot.n_joints))
     q = None
     done = 0
     try:
         for i, x in enumerate(path):
             res = solver.solve_position(x, q)
             q = res.q
-            reached[i], q_all[i], err[i], st[i], ok[i] = res.position, res.q, res.error, res.time_s, res.success
+            record.add(i, res)
+            q_all[i] = res.q
             done = i + 1
             _tick(progress, cancelled, done, m)
     except _CancelledError:
         pass
     return Tracking(
-        robot.name, solver_name, t[:done], path[:done], reached[:done], err[:done], st[:done], ok[:done], q_all[:done]
+        robot=robot.name, solver=solver_name, **record.first(done), t=t[:done], target=path[:done], q=q_all[:done]
     )
 
 
