@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import NDArray
@@ -89,25 +89,53 @@ class _Solves:
         return _result_to_wire(self)
 
 
-class _Record:
-    """The :class:`_Solves` arrays of n targets, filled one solve at a time."""
+class StudyRun(TypedDict, total=False):
+    """How a study runs, the keyword arguments every study takes: the solver's ``seed`` (default 0) and
+    ``solver_options``, and the ``progress(done, total)`` and ``cancelled()`` callbacks."""
 
-    def __init__(self, n: int) -> None:
+    seed: int
+    solver_options: dict[str, Any] | None
+    progress: Progress
+    cancelled: Cancelled
+
+
+class _Record:
+    """The :class:`_Solves` arrays of n targets and the joint values q (n, n_joints), one solve at a time."""
+
+    def __init__(self, n: int, n_joints: int) -> None:
         self.reached, self.error, self.time_s = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
         self.success = np.zeros(n, dtype=bool)
+        self.q = np.zeros((n, n_joints))
 
     def add(self, i: int, res) -> None:
         """Target i's :class:`~app.ik.base.IKResult`."""
-        self.reached[i], self.error[i], self.time_s[i], self.success[i] = (
-            res.position,
-            res.error,
-            res.time_s,
-            res.success,
-        )
+        self.reached[i], self.q[i], self.error[i] = res.position, res.q, res.error
+        self.time_s[i], self.success[i] = res.time_s, res.success
 
-    def first(self, done: int) -> dict[str, NDArray]:
-        """The arrays of the first ``done`` targets, by field name."""
-        return {k: v[:done] for k, v in vars(self).items()}
+    def solves(self, done: int) -> dict[str, NDArray]:
+        """The :class:`_Solves` arrays of the first ``done`` targets, by field name."""
+        return {name: getattr(self, name)[:done] for name in ("reached", "error", "time_s", "success")}
+
+
+def _solve_each(robot, solver_name: str, targets, run: StudyRun, warm: bool, then=None) -> tuple[_Record, int]:
+    """Solve ``targets`` in order with one solver instance (``warm``: each from the previous answer, as
+    teleoperation does), recording each solve and calling ``then(i, x, result)`` after it, then ``run``'s
+    progress and cancel callbacks.  Returns the record and how many targets were done (fewer if cancelled)."""
+    solver = make_solver(solver_name, robot, seed=run.get("seed", 0), **(run.get("solver_options") or {}))
+    record = _Record(len(targets), robot.n_joints)
+    q, done = None, 0
+    try:
+        for i, x in enumerate(targets):
+            res = solver.solve_position(x, q)
+            q = res.q if warm else None
+            record.add(i, res)
+            if then is not None:
+                then(i, x, res)
+            done = i + 1
+            _tick(run.get("progress"), run.get("cancelled"), done, len(targets))
+    except _CancelledError:
+        pass
+    return record, done
 
 
 # ----------------------------------------------------------------------------- error distribution
@@ -172,16 +200,7 @@ def _stats(x: NDArray[np.float64]) -> dict[str, float]:
     }
 
 
-def error_distribution(
-    robot,
-    solver_name: str,
-    grid: int = 8,
-    *,
-    seed: int = 0,
-    solver_options: dict[str, Any] | None = None,
-    progress: Progress = None,
-    cancelled: Cancelled = None,
-) -> ErrorDistribution:
+def error_distribution(robot, solver_name: str, grid: int = 8, **run: Unpack[StudyRun]) -> ErrorDistribution:
     """Solve the grid³ targets of the workspace box (paper Fig. 5: 8³ = 512).
 
     Targets are visited in grid order with one solver instance, as an operator sweeping
@@ -191,30 +210,23 @@ def error_distribution(
         raise ValueError(f"grid must be between 2 and 40, got {grid}")
     box = workspace_box(robot)
     targets = box.grid(grid)
-    solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
-    reference = ReachabilityReference(robot, seed=seed)
-    n = len(targets)
-    record, reachable = _Record(n), np.zeros(n, dtype=bool)
-    done = 0
-    try:
-        for i, x in enumerate(targets):
-            res = solver.solve_position(x)
-            record.add(i, res)
-            reachable[i] = res.error <= reference.tol or reference(x)
-            done = i + 1
-            _tick(progress, cancelled, done, n)
-    except _CancelledError:
-        pass
+    reference = ReachabilityReference(robot, seed=run.get("seed", 0))
+    reachable = np.zeros(len(targets), dtype=bool)
+
+    def check(i: int, x: NDArray[np.float64], res) -> None:
+        reachable[i] = res.error <= reference.tol or reference(x)
+
+    record, done = _solve_each(robot, solver_name, targets, run, False, check)
     return ErrorDistribution(
         robot=robot.name,
         solver=solver_name,
-        **record.first(done),
+        **record.solves(done),
         grid=grid,
         targets=targets[:done],
         reachable=reachable[:done],
         box_lower=box.lower,
         box_upper=box.upper,
-        complete=done == n,
+        complete=done == len(targets),
     )
 
 
@@ -331,36 +343,12 @@ def tracking_path(robot, duration: float, dt: float, amplitude: float = 0.25) ->
     return t, robot.position(q)
 
 
-def track(
-    robot,
-    solver_name: str,
-    *,
-    duration: float = 20.0,
-    dt: float = 0.1,
-    seed: int = 0,
-    solver_options: dict[str, Any] | None = None,
-    progress: Progress = None,
-    cancelled: Cancelled = None,
-) -> Tracking:
+def track(robot, solver_name: str, *, duration: float = 20.0, dt: float = 0.1, **run: Unpack[StudyRun]) -> Tracking:
     """Follow :func:`tracking_path` target by target, warm-starting from the previous answer."""
     t, path = tracking_path(robot, duration, dt)
-    solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
-    m = len(t)
-    record, q_all = _Record(m), np.zeros((m, robot.n_joints))
-    q = None
-    done = 0
-    try:
-        for i, x in enumerate(path):
-            res = solver.solve_position(x, q)
-            q = res.q
-            record.add(i, res)
-            q_all[i] = res.q
-            done = i + 1
-            _tick(progress, cancelled, done, m)
-    except _CancelledError:
-        pass
+    record, done = _solve_each(robot, solver_name, path, run, True)
     return Tracking(
-        robot=robot.name, solver=solver_name, **record.first(done), t=t[:done], target=path[:done], q=q_all[:done]
+        robot=robot.name, solver=solver_name, **record.solves(done), t=t[:done], target=path[:done], q=record.q[:done]
     )
 
 
