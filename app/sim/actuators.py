@@ -112,6 +112,11 @@ class LimitedAxes:
         self.tau = float(self.tau)
         self.use_kernels = sim_kernels.ENABLED
 
+    def rest_state(self, x: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """A state at rest at ``x``: (position clipped into the limits, zero speed, zero acceleration)."""
+        x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
+        return x, np.zeros_like(x), np.zeros_like(x)
+
 
 @dataclass(eq=False)
 class JointActuators(LimitedAxes):
@@ -145,10 +150,7 @@ class JointActuators(LimitedAxes):
         super().__post_init__()
         if not self.tau > 0:
             raise ValueError("tau must be positive")
-        q = 0.5 * (self.lower + self.upper) if q0 is None else np.asarray(q0, dtype=float)
-        self.q = np.clip(q, self.lower, self.upper)
-        self.qdot = np.zeros_like(self.q)
-        self.qddot = np.zeros_like(self.q)
+        self.q, self.qdot, self.qddot = self.rest_state(0.5 * (self.lower + self.upper) if q0 is None else q0)
         # the block's parameter record (lower, upper, speed, accel, τ): fixed, so made once, not every tick
         self.params = (self.lower, self.upper, self.speed, self.accel, self.tau)
 
@@ -170,6 +172,4 @@ class JointActuators(LimitedAxes):
         self.qdot = np.zeros_like(self.q)
 
     def reset(self, q: ArrayLike) -> None:
-        self.q = np.clip(np.asarray(q, dtype=float), self.lower, self.upper)
-        self.qdot = np.zeros_like(self.q)
-        self.qddot = np.zeros_like(self.q)
+        self.q, self.qdot, self.qddot = self.rest_state(q)

@@ -97,9 +97,7 @@ class MotionFilter(LimitedAxes):
         self.a = np.zeros_like(self.lower)
 
     def reset(self, x: ArrayLike) -> None:
-        self.x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
-        self.v = np.zeros_like(self.x)
-        self.a = np.zeros_like(self.x)
+        self.x, self.v, self.a = self.rest_state(x)
 
     def set_limits(self, lower: ArrayLike, upper: ArrayLike) -> None:
         """New position limits, written into the same (C-contiguous) arrays.
