@@ -24,6 +24,7 @@ from typing import Any, TypedDict, Unpack
 import numpy as np
 from numpy.typing import NDArray
 
+from app.analysis.figures import pyplot, save_figure
 from app.ik import make_solver
 from app.models.workspace import workspace_box
 
@@ -256,13 +257,14 @@ def study_from_wire(data: dict[str, Any]) -> ErrorDistribution | Tracking:
     return cls(**kw)
 
 
+def _headline(result: _Solves, text: str) -> str:
+    """A study figure's title: "robot – solver: text"."""
+    return f"{result.robot} – {result.solver}: {text}"
+
+
 def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
     """3D scatter of the targets coloured by error (paper Fig. 5), saved as PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig = plt.figure(figsize=(7.5, 6.0), dpi=110)
     ax = fig.add_subplot(projection="3d")
     err = np.maximum(result.error, 1e-9)
@@ -280,12 +282,9 @@ def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
     ax.set_zlabel("z [m]")
     s = result.summary()
     ax.set_title(
-        f"{result.robot} – {result.solver}: {s['targets']} targets, {s['success']} solved, {s['reachable']} reachable",
-        fontsize=10,
+        _headline(result, f"{s['targets']} targets, {s['success']} solved, {s['reachable']} reachable"), fontsize=10
     )
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    save_figure(plt, fig, path)
 
 
 # ----------------------------------------------------------------------------- tracking
@@ -354,11 +353,7 @@ def track(robot, solver_name: str, *, duration: float = 20.0, dt: float = 0.1, *
 
 def plot_tracking(result: Tracking, path: Path) -> None:
     """X, Y and Z of target and reached point against time (paper Fig. 4b), saved as PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=110, sharex=True)
     for k, label in enumerate("XYZ"):
         ax = axes[k]
@@ -372,13 +367,8 @@ def plot_tracking(result: Tracking, path: Path) -> None:
     axes[3].set_xlabel("time [s]")
     axes[3].grid(alpha=0.3)
     s = result.summary()
-    fig.suptitle(
-        f"{result.robot} – {result.solver}: rms error {s['rms_error_m']:.3g} m, max {s['max_error_m']:.3g} m",
-        fontsize=10,
-    )
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    fig.suptitle(_headline(result, f"rms error {s['rms_error_m']:.3g} m, max {s['max_error_m']:.3g} m"), fontsize=10)
+    save_figure(plt, fig, path)
 
 
 # ----------------------------------------------------------------------------- benchmark
