@@ -84,7 +84,7 @@ class SerialRobot(JointModel):
             for k, factor in joint.coupling:
                 M[joint.link, k] += factor
         # the chain's constants for compiled kernels, built once here; use_kernels=False: the NumPy reference.
-        # kernel_args, nine arrays, for the GA, crane-head and TAC kernels; kernel_record, the same numbers in
+        # kernel_args, nine arrays, for the crane-head and TAC kernels; kernel_record, the same numbers in
         # three arrays (dh (5, L), M (2, L, n), T (2, 4, 4)), the robot record of app/models/kernels.py, passed
         # whole as one argument (three arrays: numba's per-call type check of a tuple grows with its elements)
         self.kernel_args = tuple(
