@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "dh_transform",
+    "euler_to_matrix",
     "euler_zyx_to_matrix",
     "homogeneous",
     "invert_transform",
@@ -79,27 +80,40 @@ def unskew(S: ArrayLike) -> NDArray[np.float64]:
     return np.stack([S[..., 2, 1], S[..., 0, 2], S[..., 1, 0]], axis=-1)
 
 
-def euler_zyx_to_matrix(rpy: ArrayLike) -> NDArray[np.float64]:
-    """Rotation R_n_b from roll, pitch, yaw (φ, θ, ψ) in Fossen's zyx convention.
+def euler_to_matrix(angles: ArrayLike, order: str) -> NDArray[np.float64]:
+    """The product of the rotations about x by roll φ, about y by pitch θ and about z by yaw ψ, in ``order``.
 
-    R_b^n = Rz(ψ) Ry(θ) Rx(φ)  (Fossen 2011, eq. 2.18).  The TAC paper prints
-    eq. (37) as Rx(φ)Ry(θ)Rz(ψ); that is the transpose order and, for the
-    body-to-NED map it describes, a misprint: Fossen's book, which the paper
-    cites, has Rz Ry Rx.
+    ``order`` names the factors left to right: "zyx" is Rz(ψ) Ry(θ) Rx(φ), Fossen's
+    (:func:`euler_zyx_to_matrix`); "xyz" is Rx(φ) Ry(θ) Rz(ψ), the Motion-Lab's
+    (:func:`app.models.stewart.rotation_xyz`).
 
     Parameters
     ----------
-    rpy : array_like, shape (..., 3)
-        Roll φ, pitch θ, yaw ψ [rad].
+    angles : array_like, shape (..., 3)
+        Roll φ, pitch θ, yaw ψ [rad], in this order whatever the order of the product.
+    order : str
+        A permutation of "xyz".
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
     """
-    rpy = np.asarray(rpy, dtype=float)
-    if rpy.shape[-1] != 3:
-        raise ValueError(f"roll, pitch, yaw needs 3 values, got shape {rpy.shape}")
-    return rot_z(rpy[..., 2]) @ rot_y(rpy[..., 1]) @ rot_x(rpy[..., 0])
+    angles = np.asarray(angles, dtype=float)
+    if angles.shape[-1] != 3:
+        raise ValueError(f"roll, pitch, yaw needs 3 values, got shape {angles.shape}")
+    first, second, third = (_basic_rotation(angles[..., axis], axis) for axis in map("xyz".index, order))
+    return first @ second @ third
+
+
+def euler_zyx_to_matrix(rpy: ArrayLike) -> NDArray[np.float64]:
+    """Rotation R_n_b from roll, pitch, yaw (φ, θ, ψ) (..., 3) in Fossen's zyx convention; (..., 3, 3).
+
+    R_b^n = Rz(ψ) Ry(θ) Rx(φ)  (Fossen 2011, eq. 2.18).  The TAC paper prints
+    eq. (37) as Rx(φ)Ry(θ)Rz(ψ); that is the transpose order and, for the
+    body-to-NED map it describes, a misprint: Fossen's book, which the paper
+    cites, has Rz Ry Rx.
+    """
+    return euler_to_matrix(rpy, "zyx")
 
 
 def matrix_to_euler_zyx(R: ArrayLike) -> NDArray[np.float64]:

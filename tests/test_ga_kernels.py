@@ -121,7 +121,7 @@ def test_compiled_costs_equal_the_reference_on_random_chains(seed, n):
     costs = []
     for flag in (True, False):
         robot.use_kernels = flag
-        costs.append((ga.cost(pop, x), ga.velocity_cost(qdot, q_a, 0.01, x, u)))
+        costs.append((ga.cost(pop, x), ga.velocity_cost(qdot, ga.velocity_target(q_a, 0.01, x, u))))
     for a, b in zip(*costs, strict=True):
         # relative too: the FK paths agree to an ulp of the position, and a short chain's box is a few cm
         # (the normalised cost divides by it) while a penalised cost is 100 × that

@@ -102,7 +102,7 @@ def test_tool_point_on_a_moving_platform_against_finite_differences(lab, rng):
         def at(t, eta0=eta0, ed=ed, edd=edd, q0=q0, qd=qd, qdd=qdd):
             eta = eta0 + ed * t + 0.5 * edd * t * t
             q = q0 + qd * t + 0.5 * qdd * t * t
-            return tool_on_platform(lab.comau, T, eta, ed + edd * t, edd, q, qd + qdd * t, qdd)
+            return tool_on_platform(lab.comau, T, (eta, ed + edd * t, edd), (q, qd + qdd * t, qdd))
 
         p, v, a = at(0.0)
         h = 1e-4

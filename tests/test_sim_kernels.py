@@ -136,7 +136,7 @@ def test_comau_tool_point_equals_the_reference(lab, rng):
         eta, ed, edd = rng.uniform(-0.3, 0.3, 6), rng.normal(size=6) * 0.5, rng.normal(size=6)
         rates = lab_kernels.stewart_rates(eta, ed, edd)
         got = lab_kernels.tool_on_platform(cm, lab.layout.T_b1_r, (eta, ed, edd), rates, (q, qd, qdd))
-        for x, y in zip(got, tool_on_platform(c, lab.layout.T_b1_r, eta, ed, edd, q, qd, qdd), strict=True):
+        for x, y in zip(got, tool_on_platform(c, lab.layout.T_b1_r, (eta, ed, edd), (q, qd, qdd)), strict=True):
             close(x, y)
 
 

@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from app.analysis.figures import figure_saver, pyplot
 from app.analysis.ik_studies import write_json
-from app.analysis.tac_report import _plt, figure_saver
 from app.scenarios.vvmc import VvmcScenario
 
 
@@ -20,7 +20,7 @@ def save_antisway(sc: VvmcScenario, free: list[dict], study: dict, out: Path, wa
     """free_swing.png (the 4° swing with and without the law, estimate beside truth), vvmc_swing.png
     (the swing at Hs with VVMC, with and without anti-swing) and summary.json."""
     out.mkdir(parents=True, exist_ok=True)
-    plt = _plt()
+    plt = pyplot()
     paths: list[Path] = []
     save = figure_saver(
         plt, out, f"anti-swing: LQR (L = 3 m, c = 0.1, Ts = 5 ms, scheduled) + EKF; seed {sc.seed}", paths

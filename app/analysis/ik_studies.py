@@ -19,11 +19,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import NDArray
 
+from app.analysis.figures import pyplot, save_figure
 from app.ik import make_solver
 from app.models.workspace import workspace_box
 
@@ -72,27 +73,84 @@ class ReachabilityReference:
         return self.solver.solve_position(x).error <= self.tol
 
 
-# ----------------------------------------------------------------------------- error distribution
+# ----------------------------------------------------------------------------- results
 @dataclass
-class ErrorDistribution:
-    STUDY = "distribution"
-    """Result of :func:`error_distribution`; rows are targets."""
+class _Solves:
+    """One robot and solver over a sequence of targets: per target the tool point the solver reached, its
+    error [m], solve time [s] and the solver's own success; the fields both studies share."""
 
     robot: str
     solver: str
-    grid: int
-    targets: NDArray[np.float64]
     reached: NDArray[np.float64]
     error: NDArray[np.float64]
     time_s: NDArray[np.float64]
     success: NDArray[np.bool_]
+
+    def to_wire(self) -> dict[str, Any]:
+        return _result_to_wire(self)
+
+
+class StudyRun(TypedDict, total=False):
+    """How a study runs, the keyword arguments every study takes: the solver's ``seed`` (default 0) and
+    ``solver_options``, and the ``progress(done, total)`` and ``cancelled()`` callbacks."""
+
+    seed: int
+    solver_options: dict[str, Any] | None
+    progress: Progress
+    cancelled: Cancelled
+
+
+class _Record:
+    """The :class:`_Solves` arrays of n targets and the joint values q (n, n_joints), one solve at a time."""
+
+    def __init__(self, n: int, n_joints: int) -> None:
+        self.reached, self.error, self.time_s = np.zeros((n, 3)), np.zeros(n), np.zeros(n)
+        self.success = np.zeros(n, dtype=bool)
+        self.q = np.zeros((n, n_joints))
+
+    def add(self, i: int, res) -> None:
+        """Target i's :class:`~app.ik.base.IKResult`."""
+        self.reached[i], self.q[i], self.error[i] = res.position, res.q, res.error
+        self.time_s[i], self.success[i] = res.time_s, res.success
+
+    def solves(self, done: int) -> dict[str, NDArray]:
+        """The :class:`_Solves` arrays of the first ``done`` targets, by field name."""
+        return {name: getattr(self, name)[:done] for name in ("reached", "error", "time_s", "success")}
+
+
+def _solve_each(robot, solver_name: str, targets, run: StudyRun, warm: bool, then=None) -> tuple[_Record, int]:
+    """Solve ``targets`` in order with one solver instance (``warm``: each from the previous answer, as
+    teleoperation does), recording each solve and calling ``then(i, x, result)`` after it, then ``run``'s
+    progress and cancel callbacks.  Returns the record and how many targets were done (fewer if cancelled)."""
+    solver = make_solver(solver_name, robot, seed=run.get("seed", 0), **(run.get("solver_options") or {}))
+    record = _Record(len(targets), robot.n_joints)
+    q, done = None, 0
+    try:
+        for i, x in enumerate(targets):
+            res = solver.solve_position(x, q)
+            q = res.q if warm else None
+            record.add(i, res)
+            if then is not None:
+                then(i, x, res)
+            done = i + 1
+            _tick(run.get("progress"), run.get("cancelled"), done, len(targets))
+    except _CancelledError:
+        pass
+    return record, done
+
+
+# ----------------------------------------------------------------------------- error distribution
+@dataclass
+class ErrorDistribution(_Solves):
+    STUDY = "distribution"
+    """Result of :func:`error_distribution`; rows are targets."""
+
+    grid: int
+    targets: NDArray[np.float64]
     reachable: NDArray[np.bool_]
     box_lower: NDArray[np.float64]
     box_upper: NDArray[np.float64]
     complete: bool = True
-
-    def to_wire(self) -> dict[str, Any]:
-        return _result_to_wire(self)
 
     def summary(self) -> dict[str, Any]:
         n = len(self.error)
@@ -143,16 +201,7 @@ def _stats(x: NDArray[np.float64]) -> dict[str, float]:
     }
 
 
-def error_distribution(
-    robot,
-    solver_name: str,
-    grid: int = 8,
-    *,
-    seed: int = 0,
-    solver_options: dict[str, Any] | None = None,
-    progress: Progress = None,
-    cancelled: Cancelled = None,
-) -> ErrorDistribution:
+def error_distribution(robot, solver_name: str, grid: int = 8, **run: Unpack[StudyRun]) -> ErrorDistribution:
     """Solve the grid³ targets of the workspace box (paper Fig. 5: 8³ = 512).
 
     Targets are visited in grid order with one solver instance, as an operator sweeping
@@ -162,35 +211,23 @@ def error_distribution(
         raise ValueError(f"grid must be between 2 and 40, got {grid}")
     box = workspace_box(robot)
     targets = box.grid(grid)
-    solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
-    reference = ReachabilityReference(robot, seed=seed)
-    n = len(targets)
-    reached = np.zeros((n, 3))
-    error, t = np.zeros(n), np.zeros(n)
-    success, reachable = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
-    done = 0
-    try:
-        for i, x in enumerate(targets):
-            res = solver.solve_position(x)
-            reached[i], error[i], t[i], success[i] = res.position, res.error, res.time_s, res.success
-            reachable[i] = res.error <= reference.tol or reference(x)
-            done = i + 1
-            _tick(progress, cancelled, done, n)
-    except _CancelledError:
-        pass
+    reference = ReachabilityReference(robot, seed=run.get("seed", 0))
+    reachable = np.zeros(len(targets), dtype=bool)
+
+    def check(i: int, x: NDArray[np.float64], res) -> None:
+        reachable[i] = res.error <= reference.tol or reference(x)
+
+    record, done = _solve_each(robot, solver_name, targets, run, False, check)
     return ErrorDistribution(
-        robot.name,
-        solver_name,
-        grid,
-        targets[:done],
-        reached[:done],
-        error[:done],
-        t[:done],
-        success[:done],
-        reachable[:done],
-        box.lower,
-        box.upper,
-        complete=done == n,
+        robot=robot.name,
+        solver=solver_name,
+        **record.solves(done),
+        grid=grid,
+        targets=targets[:done],
+        reachable=reachable[:done],
+        box_lower=box.lower,
+        box_upper=box.upper,
+        complete=done == len(targets),
     )
 
 
@@ -220,13 +257,14 @@ def study_from_wire(data: dict[str, Any]) -> ErrorDistribution | Tracking:
     return cls(**kw)
 
 
+def _headline(result: _Solves, text: str) -> str:
+    """A study figure's title: "robot – solver: text"."""
+    return f"{result.robot} – {result.solver}: {text}"
+
+
 def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
     """3D scatter of the targets coloured by error (paper Fig. 5), saved as PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig = plt.figure(figsize=(7.5, 6.0), dpi=110)
     ax = fig.add_subplot(projection="3d")
     err = np.maximum(result.error, 1e-9)
@@ -244,30 +282,18 @@ def plot_error_distribution(result: ErrorDistribution, path: Path) -> None:
     ax.set_zlabel("z [m]")
     s = result.summary()
     ax.set_title(
-        f"{result.robot} – {result.solver}: {s['targets']} targets, {s['success']} solved, {s['reachable']} reachable",
-        fontsize=10,
+        _headline(result, f"{s['targets']} targets, {s['success']} solved, {s['reachable']} reachable"), fontsize=10
     )
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    save_figure(plt, fig, path)
 
 
 # ----------------------------------------------------------------------------- tracking
 @dataclass
-class Tracking:
+class Tracking(_Solves):
     STUDY = "tracking"
-    robot: str
-    solver: str
     t: NDArray[np.float64]
     target: NDArray[np.float64]
-    reached: NDArray[np.float64]
-    error: NDArray[np.float64]
-    time_s: NDArray[np.float64]
-    success: NDArray[np.bool_]
     q: NDArray[np.float64] = field(repr=False)
-
-    def to_wire(self) -> dict[str, Any]:
-        return _result_to_wire(self)
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -316,46 +342,18 @@ def tracking_path(robot, duration: float, dt: float, amplitude: float = 0.25) ->
     return t, robot.position(q)
 
 
-def track(
-    robot,
-    solver_name: str,
-    *,
-    duration: float = 20.0,
-    dt: float = 0.1,
-    seed: int = 0,
-    solver_options: dict[str, Any] | None = None,
-    progress: Progress = None,
-    cancelled: Cancelled = None,
-) -> Tracking:
+def track(robot, solver_name: str, *, duration: float = 20.0, dt: float = 0.1, **run: Unpack[StudyRun]) -> Tracking:
     """Follow :func:`tracking_path` target by target, warm-starting from the previous answer."""
     t, path = tracking_path(robot, duration, dt)
-    solver = make_solver(solver_name, robot, seed=seed, **(solver_options or {}))
-    m = len(t)
-    reached, q_all = np.zeros((m, 3)), np.zeros((m, robot.n_joints))
-    err, st, ok = np.zeros(m), np.zeros(m), np.zeros(m, dtype=bool)
-    q = None
-    done = 0
-    try:
-        for i, x in enumerate(path):
-            res = solver.solve_position(x, q)
-            q = res.q
-            reached[i], q_all[i], err[i], st[i], ok[i] = res.position, res.q, res.error, res.time_s, res.success
-            done = i + 1
-            _tick(progress, cancelled, done, m)
-    except _CancelledError:
-        pass
+    record, done = _solve_each(robot, solver_name, path, run, True)
     return Tracking(
-        robot.name, solver_name, t[:done], path[:done], reached[:done], err[:done], st[:done], ok[:done], q_all[:done]
+        robot=robot.name, solver=solver_name, **record.solves(done), t=t[:done], target=path[:done], q=record.q[:done]
     )
 
 
 def plot_tracking(result: Tracking, path: Path) -> None:
     """X, Y and Z of target and reached point against time (paper Fig. 4b), saved as PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=110, sharex=True)
     for k, label in enumerate("XYZ"):
         ax = axes[k]
@@ -369,13 +367,8 @@ def plot_tracking(result: Tracking, path: Path) -> None:
     axes[3].set_xlabel("time [s]")
     axes[3].grid(alpha=0.3)
     s = result.summary()
-    fig.suptitle(
-        f"{result.robot} – {result.solver}: rms error {s['rms_error_m']:.3g} m, max {s['max_error_m']:.3g} m",
-        fontsize=10,
-    )
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    fig.suptitle(_headline(result, f"rms error {s['rms_error_m']:.3g} m, max {s['max_error_m']:.3g} m"), fontsize=10)
+    save_figure(plt, fig, path)
 
 
 # ----------------------------------------------------------------------------- benchmark

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from app.analysis.figures import pyplot, save_figure
 from app.csvtext import cells, content_lines
 from app.errors import BosunError, one_line, shown
 
@@ -657,10 +658,7 @@ def aggregate(
 
 def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
     """table.csv, summary.json, operability_polar.png, heatmap.png (one panel a heading)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     from matplotlib.colors import TwoSlopeNorm
     from matplotlib.ticker import MaxNLocator
 
@@ -714,9 +712,7 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
         " (heading: 0 following, 180 head sea)",
         fontsize=9,
     )
-    fig.tight_layout()
-    fig.savefig(out / "operability_polar.png", dpi=110)
-    plt.close(fig)
+    save_figure(plt, fig, out / "operability_polar.png", dpi=110)
     # only the rows and columns that hold probability (a published diagram has empty margins)
     rows_used = np.flatnonzero(sc.prob.sum(axis=1) > 0)
     cols_used = np.flatnonzero(sc.prob.sum(axis=0) > 0)
@@ -767,7 +763,5 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
         above = [v for v in MaxNLocator(4).tick_values(crit, top) if crit * 1.5 < v <= top]
         cb.set_ticks([0.0, crit / 2, crit, *above])
     fig.suptitle(f"{st.mode}, {sc.source}, {st.spectrum}, rms(e_c) ≤ {st.criterion:g} m", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out / "heatmap.png", dpi=110)
-    plt.close(fig)
+    save_figure(plt, fig, out / "heatmap.png", dpi=110)
     return doc

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from app.analysis.figures import figure_saver, pyplot, save_figure
 from app.analysis.ik_studies import write_json
 from app.scenarios.tac import MODES, TacResult, TacScenario, simulate
 
@@ -27,32 +28,9 @@ def write_timeseries(result: TacResult, path: Path, every: int = 1) -> None:
             w.writerow([f"{v:.6g}" for v in row])
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def figure_saver(plt, out: Path, title: str, paths: list[Path]):
-    """``save(fig, name)``: title, tight layout, PNG at 110 dpi in ``out``, closed, path recorded."""
-
-    def save(fig, name: str) -> None:
-        fig.suptitle(title, fontsize=10)
-        fig.tight_layout()
-        p = out / name
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
-
-    return save
-
-
 def plot_run(result: TacResult, out: Path) -> list[Path]:
     """Figures 8–12 of the TAC paper for one run; returns the files written."""
-    plt = _plt()
+    plt = pyplot()
     d, sc = result.data, result.scenario
     t = d.t
     title = f"Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, mode {sc.mode}"
@@ -202,7 +180,7 @@ def save_sweep(rows: list[dict[str, Any]], base: TacScenario, out: Path) -> dict
         for r in rows:
             w.writerow([r[c] if isinstance(r[c], str) else f"{r[c]:.6g}" for c in cols])
     modes = sorted({r["mode"] for r in rows}, key=MODES.index)
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     for m in modes:
         rs = sorted((r for r in rows if r["mode"] == m), key=lambda r: r["hs"])
@@ -213,9 +191,7 @@ def save_sweep(rows: list[dict[str, Any]], base: TacScenario, out: Path) -> dict
     ax.set_title(f"Tp {base.tp:g} s, heading {base.heading:g}°, {base.duration:g} s, seed {base.seed}", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend()
-    fig.tight_layout()
-    fig.savefig(out / "sweep.png", dpi=110)
-    plt.close(fig)
+    save_figure(plt, fig, out / "sweep.png", dpi=110)
     doc = {
         "scenario": base.to_dict(),
         "rows": rows,

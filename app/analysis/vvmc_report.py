@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from app.analysis.figures import figure_saver, pyplot
 from app.analysis.ik_studies import write_json
-from app.analysis.tac_report import _plt, figure_saver
 from app.scenarios.vvmc import VvmcRun, VvmcScenario, summarize
 
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
@@ -35,7 +35,7 @@ def write_timeseries(on: VvmcRun, off: VvmcRun, path: Path, every: int = 1) -> N
 
 
 def plot_runs(sc: VvmcScenario, on: VvmcRun, off: VvmcRun, out: Path) -> list[Path]:
-    plt = _plt()
+    plt = pyplot()
     title = f"VVMC: Hs {sc.hs:g} m, Tp {sc.tp:g} s, headings {sc.heading1:g}°/{sc.heading2:g}°, seed {sc.seed}"
     paths: list[Path] = []
     save = figure_saver(plt, out, title, paths)

@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Unpack
 
 import numpy as np
 from numpy.typing import NDArray
 
-from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver
+from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver, SolverOptions
 from app.ik.jacobian import JacobianSolver
 from app.models import kernels
 from app.models.closed_form import find_family
@@ -42,18 +43,16 @@ class AnalyticSolver(Solver):
     """
 
     name = "analytic"
-    default_time_budget = 0.1
 
     def __init__(
         self,
         robot,
         *,
-        time_budget: float | object | None = DEFAULT,
-        rng: np.random.Generator | None = None,
         elbow: str = "auto",
         tolerance: float = 1e-6,
+        **common: Unpack[SolverOptions],
     ) -> None:
-        super().__init__(robot, time_budget=time_budget, rng=rng)
+        super().__init__(robot, **common)
         self.arm = find_family(robot)
         if self.arm is None:
             raise IKError(

@@ -17,7 +17,7 @@ import math
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -93,6 +93,13 @@ class SearchOutcome:
     reason: str
     cost: float = math.nan
     extra: dict[str, Any] = field(default_factory=dict)
+
+
+class SolverOptions(TypedDict, total=False):
+    """The keyword arguments of :class:`Solver` itself, which every method takes beside its own and passes on."""
+
+    time_budget: float | object | None
+    rng: np.random.Generator | None
 
 
 class Solver(ABC):

@@ -16,9 +16,10 @@ No kernel takes more than 8 arguments (issue 29): the constants and the per-call
 records, tuples that numba takes as one argument, each built where its values stop changing (every
 array C-contiguous float64, one numba specialisation):
 
-* ``chain`` (the robot; ``SerialRobot.kernel_args``, built once per robot): θ₀ [rad], d₀ [m], a [m],
-  cos α, sin α (L,) of the DH links A = Rz(θ) Tz(d) Tx(a) Rx(α) (TAC paper eq. 39), the joint maps
-  M_θ, M_d (L, n) (θ = θ₀ + M_θ q, d = d₀ + M_d q), T_world_base, T_flange_tool (4, 4) [m];
+* ``chain`` (the robot; ``SerialRobot.kernel_record``, built once per robot, the record of
+  :mod:`app.models.kernels`): dh (5, L), the DH links' θ₀ [rad], d₀ [m], a [m], cos α, sin α
+  (A = Rz(θ) Tz(d) Tx(a) Rx(α), TAC paper eq. 39); M (2, L, n), the joint maps M_θ, M_d (θ = θ₀ + M_θ q,
+  d = d₀ + M_d q); T (2, 4, 4), T_world_base, T_flange_tool [m];
 * ``limits`` (the position cost's constants; built once per solver): lower, upper (n,), the joint
   limits [rad, m] a gene must keep to; box_lower, box_extent (3,) [m], the workspace box that
   normalises positions (step 2: x̂ = (x − box_lower) / box_extent); penalty, the factor (100) on the
@@ -48,7 +49,7 @@ import math
 
 import numpy as np
 
-from app.models.kernels import ENABLED, _jit
+from app.models.kernels import ENABLED, _chain, _jit
 
 __all__ = ["ENABLED", "evolve_position", "evolve_velocity", "position_costs", "velocity_costs"]
 
@@ -58,7 +59,7 @@ def _tool_points(chain, Q):
     """Tool points (m, 3) of configurations Q (m, n) of the ``chain``: :func:`app.models.kernels.position`
     row by row in one loop (θ = θ₀ + M_θ q, d = d₀ + M_d q), with cos θ, sin θ of a link that no joint
     turns (a prismatic joint's or a fixed link) computed once instead of once per row."""
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = chain
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = _chain(chain)
     L, n = M_theta.shape
     c0, s0, turns = np.empty(L), np.empty(L), np.zeros(L, dtype=np.bool_)
     for i in range(L):
@@ -222,8 +223,8 @@ def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) every kernel of this file with the argument types the
     GA passes (for :func:`app.warmup.warm_up`)."""
     L, n = 3, 3
-    z3, zLn, eye = np.zeros(L), np.zeros((L, n)), np.eye(4)
-    chain = (z3, z3, np.ones(L), np.ones(L), z3, np.eye(L, n), zLn, eye, eye)  # a serial chain's kernel_args
+    dh = np.stack([np.zeros(L), np.zeros(L), np.ones(L), np.ones(L), np.zeros(L)])
+    chain = (dh, np.stack([np.eye(L, n), np.zeros((L, n))]), np.stack([np.eye(4), np.eye(4)]))  # a robot record
     pop, cost, rng = np.zeros((4, n)), np.ones(4), np.random.default_rng(0)
     limits = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
     rules = (np.ones(n), 1, 0.5, 0.005, 0.05)  # mutation span, elite, operators

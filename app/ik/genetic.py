@@ -89,12 +89,13 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.ik import ga_kernels
-from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver
+from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver, SolverOptions
 
 POPULATION = 125
 ELITE_FRACTION = 0.10
@@ -216,20 +217,18 @@ class GeneticSolver(Solver):
     """
 
     name = "ga"
-    default_time_budget = 0.1
 
     def __init__(
         self,
         robot,
         *,
-        time_budget: float | object | None = DEFAULT,
-        rng: np.random.Generator | None = None,
         target_cost: float = TARGET_COST,
         population: int = POPULATION,
         max_generations: int | None = None,
         velocity_tolerance: float = VELOCITY_TOLERANCE,
+        **common: Unpack[SolverOptions],
     ) -> None:
-        super().__init__(robot, time_budget=time_budget, rng=rng)
+        super().__init__(robot, **common)
         if population < 4:
             raise ValueError("population must be at least 4")
         self.target_cost = target_cost
@@ -242,7 +241,7 @@ class GeneticSolver(Solver):
         self._box_lower = np.array(self.box.lower, dtype=float)
         self._box_extent = np.array(self.box.extent, dtype=float)
         # ... and the kernels' records (module docstring of ga_kernels), made once: the robot's limits and speeds
-        # are fixed once it is loaded (the chain record is the robot's own kernel_args)
+        # are fixed once it is loaded (the chain record is the robot's own kernel_record)
         self._limits = (self._lower, self._upper, self._box_lower, self._box_extent, PENALTY_FACTOR)
         operators = (self.n_elite, CROSSOVER_SINGLE_POINT_PROBABILITY, MUTATION_PROBABILITY, MUTATION_AMPLITUDE)
         self._position_rules = (self.span, *operators)
@@ -270,7 +269,7 @@ class GeneticSolver(Solver):
         """Normalised distance |x̂_t − x̂_a| (eq. 5 on normalised positions), penalised outside limits."""
         if self.compiled and np.ndim(genes) == 2:
             return ga_kernels.position_costs(
-                self.robot.kernel_args, np.ascontiguousarray(genes, dtype=float),
+                self.robot.kernel_record, np.ascontiguousarray(genes, dtype=float),
                 np.ascontiguousarray(x_t, dtype=float), self._limits,
             )  # fmt: skip
         reached = self.box.normalise(self.robot.position(genes))
@@ -331,7 +330,7 @@ class GeneticSolver(Solver):
         if self.compiled:
             pop, cost = np.ascontiguousarray(pop, dtype=float), np.ascontiguousarray(cost, dtype=float)
             return ga_kernels.evolve_position(
-                self.robot.kernel_args, pop, cost, np.ascontiguousarray(x_t, dtype=float), self._limits,
+                self.robot.kernel_record, pop, cost, np.ascontiguousarray(x_t, dtype=float), self._limits,
                 self._position_rules, (float(self.target_cost), generations), self.rng,
             )  # fmt: skip
         ran = 0
@@ -414,47 +413,39 @@ class GeneticSolver(Solver):
         along = e[..., 0] * u[0] + e[..., 1] * u[1] + e[..., 2] * u[2]  # e·u, summed in the compiled path's order
         return np.abs(along) + CROSS_TRACK_WEIGHT * np.linalg.norm(e - along[..., None] * u, axis=-1)
 
-    def velocity_cost(
-        self,
-        qdot: NDArray[np.float64],
-        q_a: NDArray[np.float64],
-        dt: float,
-        x_t: NDArray[np.float64],
-        u: NDArray[np.float64],
-    ) -> NDArray[np.float64]:
-        """Cost of joint velocities: the distance from x(θ_a + θ̇Δt) to the local target x_t (eqs. 5, 7) [m]."""
+    @staticmethod
+    def velocity_target(q_a: NDArray[np.float64], dt: float, x_t: NDArray[np.float64], u: NDArray[np.float64]) -> tuple:
+        """A velocity solve's local target as the record of :mod:`app.ik.ga_kernels` (θ_a, Δt, x_t, u, w):
+        the tick's start θ_a, the tick Δt, the local target x_t (eq. 7), the unit command u and the
+        cross-track weight w of :meth:`command_distance`; made once per solve."""
+        q_a, x_t, u = (np.ascontiguousarray(v, dtype=float) for v in (q_a, x_t, u))
+        return (q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT)
+
+    def velocity_cost(self, qdot: NDArray[np.float64], target: tuple) -> NDArray[np.float64]:
+        """Cost of joint velocities: the distance from x(θ_a + θ̇Δt) to the local target x_t (eqs. 5, 7) [m];
+        ``target`` from :meth:`velocity_target`."""
         if self.compiled and np.ndim(qdot) == 2:
-            qdot, q_a, x_t, u = (np.ascontiguousarray(v, dtype=float) for v in (qdot, q_a, x_t, u))
-            return ga_kernels.velocity_costs(self.robot.kernel_args, qdot, (q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT))
+            return ga_kernels.velocity_costs(self.robot.kernel_record, np.ascontiguousarray(qdot, dtype=float), target)
+        q_a, dt, x_t, u, _ = target
         return self.command_distance(self.robot.position(q_a + qdot * dt) - x_t, u)
 
     def _evolve_velocity(
-        self,
-        pop: NDArray[np.float64],
-        cost: NDArray[np.float64],
-        q_a: NDArray[np.float64],
-        dt: float,
-        x_t: NDArray[np.float64],
-        u: NDArray[np.float64],
-        lo: NDArray[np.float64],
-        hi: NDArray[np.float64],
-        tolerance: float,
-        generations: int,
+        self, pop: NDArray[np.float64], cost: NDArray[np.float64], target: tuple, window: tuple, stop: tuple
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
-        """Up to ``generations`` generations on joint velocities inside the window [lo, hi], mutation
-        amplitude on the one-tick speed window 2 × speed, stopping below ``tolerance``:
-        (population, cost, generations run); compiled unless ``robot.use_kernels`` is False."""
-        mutation_span = 2.0 * self.robot.speed  # the one-tick speed window, in θ̇ units
+        """Up to ``generations`` generations on joint velocities inside the ``window`` (lo, hi), mutation
+        amplitude on the one-tick speed window 2 × speed, stopping below ``tolerance`` (``stop`` = (tolerance,
+        generations)): (population, cost, generations run); compiled unless ``robot.use_kernels`` is False."""
         if self.compiled:
             pop, cost = np.ascontiguousarray(pop, dtype=float), np.ascontiguousarray(cost, dtype=float)
             return ga_kernels.evolve_velocity(
-                self.robot.kernel_args, pop, cost, (q_a, float(dt), x_t, u, CROSS_TRACK_WEIGHT), (lo, hi),
-                self._velocity_rules, (float(tolerance), generations), self.rng,
-            )  # fmt: skip
+                self.robot.kernel_record, pop, cost, target, window, self._velocity_rules, stop, self.rng
+            )
+        (lo, hi), (tolerance, generations) = window, stop
+        mutation_span = 2.0 * self.robot.speed  # the one-tick speed window, in θ̇ units
         ran = 0
         while ran < generations and cost.min() >= tolerance:
             pop = np.clip(self.evolve(pop, cost, mutation_span), lo, hi)
-            cost = self.velocity_cost(pop, q_a, dt, x_t, u)
+            cost = self.velocity_cost(pop, target)
             ran += 1
         return pop, cost, ran
 
@@ -483,7 +474,8 @@ class GeneticSolver(Solver):
         pop = self.velocity_population(lo, hi)
         x_a = self.robot.position(q_a)
         x_t = x_a + step_vec  # Sanfilippo et al. eq. (7): the local target of this tick
-        cost = self.velocity_cost(pop, q_a, dt, x_t, u)  # eq. (5) about x_t, metres
+        target = self.velocity_target(q_a, dt, x_t, u)
+        cost = self.velocity_cost(pop, target)  # eq. (5) about x_t, metres
         cap = self.max_generations
         if cap is None and math.isinf(deadline):
             cap = VELOCITY_GENERATION_CAP
@@ -500,7 +492,7 @@ class GeneticSolver(Solver):
                 reason = "generation limit"
                 break
             k = self._batch(now, deadline, per_generation, None if cap is None else cap - generations)
-            pop, cost, ran = self._evolve_velocity(pop, cost, q_a, dt, x_t, u, lo, hi, tol, k)
+            pop, cost, ran = self._evolve_velocity(pop, cost, target, (lo, hi), (float(tol), k))
             generations += ran
             per_generation = (time.perf_counter() - now) / ran
         order = np.argsort(cost, kind="stable")

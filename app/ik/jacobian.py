@@ -22,11 +22,12 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver
+from app.ik.base import DEFAULT, IKResult, SearchOutcome, Solver, SolverOptions
 from app.models import kernels
 
 SEEDS = 256  # restart table size: its tool positions cover the workspace to a few centimetres
@@ -52,20 +53,18 @@ class JacobianSolver(Solver):
     """
 
     name = "jacobian"
-    default_time_budget = 0.1
 
     def __init__(
         self,
         robot,
         *,
-        time_budget: float | object | None = DEFAULT,
-        rng: np.random.Generator | None = None,
         tolerance: float = 1e-4,
         max_iterations: int = 200,
         restarts: int = 20,
         limit_avoidance_gain: float = 0.05,
+        **common: Unpack[SolverOptions],
     ) -> None:
-        super().__init__(robot, time_budget=time_budget, rng=rng)
+        super().__init__(robot, **common)
         self.tolerance = tolerance
         self.max_iterations = max_iterations
         self.restarts = restarts

@@ -13,7 +13,7 @@ Motion-Lab (:mod:`app.scenes.lab`) use the families directly.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cached_property
 from typing import ClassVar
 
@@ -30,8 +30,34 @@ def _close(a: float, b: float, tol: float = 1e-9) -> bool:
     return abs(a - b) <= tol
 
 
+class _Family:
+    """What the closed-form families share: their compiled candidates.
+
+    A family is a frozen dataclass of its dimensions [m] followed by the frame its equations hold in
+    (4, 4); :attr:`kernel_record` is the same numbers in the kernel's types, the ``arm`` record of
+    its ``CANDIDATES`` kernel (:mod:`app.models.kernels`).
+    """
+
+    #: the compiled candidates (app/models/kernels.py): (record, p (3,), hint, signs (k,)) → (q (2k, 3), exact (2k,))
+    CANDIDATES: ClassVar
+
+    @cached_property
+    def kernel_record(self) -> tuple:
+        """The dimensions as floats, then the frame C-contiguous: built on first use, then kept."""
+        *dims, frame = (getattr(self, f.name) for f in fields(self))
+        return (*(float(v) for v in dims), np.ascontiguousarray(frame, dtype=float))
+
+    def kernel_candidates(self, p_world, hint: float, signs):
+        """:meth:`candidates` compiled: (q (k, 3), exact (k,)); ``hint`` the first joint's angle where the
+        point is on its axis, ``signs`` the elbow signs."""
+        return self.CANDIDATES(
+            self.kernel_record, np.ascontiguousarray(p_world, dtype=float), float(hint),
+            np.ascontiguousarray(signs, dtype=float),
+        )  # fmt: skip
+
+
 @dataclass(frozen=True)
-class ComauArm:
+class ComauArm(_Family):
     """Dimensions of a Comau-type 3-DOF arm (Motion-Lab Table 3), read from its DH table."""
 
     a1: float
@@ -42,22 +68,7 @@ class ComauArm:
     T_world_base: NDArray[np.float64]
     #: elbow branch → sign of the square root in eq. (13): + is elbow up (eq. 15)
     SIGNS: ClassVar[dict[str, tuple[float, ...]]] = {"auto": (1.0, -1.0), "up": (1.0,), "down": (-1.0,)}
-
-    @cached_property
-    def kernel_record(self) -> tuple:
-        """The arm's record for :func:`app.models.kernels.comau_candidates` (a1, d1, a2, a3, L,
-        T_world_base), in the kernel's types: built on first use, then kept."""
-        return (
-            float(self.a1), float(self.d1), float(self.a2), float(self.a3), float(self.L),
-            np.ascontiguousarray(self.T_world_base, dtype=float),
-        )  # fmt: skip
-
-    def kernel_candidates(self, p_world, q1_hint: float, signs):
-        """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
-        return kernels.comau_candidates(
-            self.kernel_record, np.ascontiguousarray(p_world, dtype=float), float(q1_hint),
-            np.ascontiguousarray(signs, dtype=float),
-        )  # fmt: skip
+    CANDIDATES = staticmethod(kernels.comau_candidates)
 
     @staticmethod
     def match(robot) -> ComauArm | None:
@@ -116,7 +127,7 @@ class ComauArm:
 
 
 @dataclass(frozen=True)
-class ElbowCrane:
+class ElbowCrane(_Family):
     """Elbow manipulator of TAC paper §7: β0 about the vertical, boom L1, jib L2, mast L0."""
 
     L0: float
@@ -125,13 +136,7 @@ class ElbowCrane:
     T_world_1: NDArray[np.float64]  # pose of the frame in which eqs. (43)–(44) hold
     #: elbow branch → sign of the root in eq. (43): the negative root is elbow up
     SIGNS: ClassVar[dict[str, tuple[float, ...]]] = {"auto": (-1.0, 1.0), "up": (-1.0,), "down": (1.0,)}
-
-    def kernel_candidates(self, p_world, beta0_hint: float, signs):
-        """:meth:`candidates` compiled: (q (k, 3), exact (k,))."""
-        return kernels.crane_candidates(
-            float(self.L0), float(self.L1), float(self.L2), np.ascontiguousarray(self.T_world_1, dtype=float),
-            np.ascontiguousarray(p_world, dtype=float), float(beta0_hint), np.ascontiguousarray(signs, dtype=float),
-        )  # fmt: skip
+    CANDIDATES = staticmethod(kernels.crane_candidates)
 
     @staticmethod
     def match(robot) -> ElbowCrane | None:

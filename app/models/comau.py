@@ -92,20 +92,20 @@ class ComauKinematics:
 def tool_on_platform(
     comau: ComauKinematics,
     T_b1_r: NDArray[np.float64],
-    eta: NDArray[np.float64],
-    eta_dot: NDArray[np.float64],
-    eta_ddot: NDArray[np.float64],
-    q: NDArray[np.float64],
-    qd: NDArray[np.float64],
-    qdd: NDArray[np.float64],
+    platform: tuple[NDArray, NDArray, NDArray],
+    joints: tuple[NDArray, NDArray, NDArray],
     rates: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Tool-point position, velocity, acceleration in the platform's neutral frame {n1}.
 
     Eqs. (54), (56), (57): p = p_b + R (p_r + R_r p_t^r), ṗ = ṗ_b + Ṙ(p_r + R_r p_t^r) + R R_r ṗ_t^r,
     p̈ = p̈_b + R̈(p_r + R_r p_t^r) + 2Ṙ R_r ṗ_t^r + R R_r p̈_t^r, with Ṙ, R̈ of eqs. (47), (51)
-    (``rates`` = (R, Ṙ, R̈) when the caller has them already).
+    (``rates`` = (R, Ṙ, R̈) when the caller has them already).  The records of the compiled
+    :func:`app.models.lab_kernels.tool_on_platform`: ``platform`` = (η, η̇, η̈) of the platform carrying the
+    robot, ``joints`` = (q, q̇, q̈) of the Comau.
     """
+    eta, eta_dot, eta_ddot = platform
+    q, qd, qdd = joints
     R, Rd, Rdd = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot) if rates is None else rates
     R_r, p_r = T_b1_r[:3, :3], T_b1_r[:3, 3]
     p_tr, v_tr, a_tr = comau.position(q), comau.velocity(q, qd), comau.acceleration(q, qd, qdd)

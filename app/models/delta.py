@@ -35,9 +35,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.errors import JointInputError
 from app.geometry import rot_x
 from app.models import crane_head_kernels as kern
+from app.models.model import JointModel
 from app.models.spec import RobotSpec
 
 if TYPE_CHECKING:  # scipy.spatial takes 0.45 s to import: only the workspace study needs it, not every engine
@@ -57,17 +57,14 @@ class DeltaIK:
         return bool(self.reachable.all() and self.within_limits.all())
 
 
-class DeltaHead:
+class DeltaHead(JointModel):
     """Kinematics of a Delta mechanism from a ``delta`` robot spec (any geometry)."""
 
     kind = "delta"
 
     def __init__(self, spec: RobotSpec) -> None:
-        if spec.delta is None:
-            raise TypeError(f"robot {spec.name} is of type {spec.type}, not delta")
+        super().__init__(spec)
         d = spec.delta
-        self.spec = spec
-        self.name = spec.name
         self.l_k, self.l_a, self.l_r, self.l_p = d.l_k, d.l_a, d.l_r, d.l_p
         self.a = d.l_p - d.l_k
         self.R = rot_x(d.arm_rotations)  # (3, 3, 3): R_{t_i}^t
@@ -87,18 +84,6 @@ class DeltaHead:
         self.use_kernels = kern.ENABLED
 
     # ------------------------------------------------------------------ geometry
-    def check_q(self, q: ArrayLike) -> NDArray[np.float64]:
-        arr = np.asarray(q, dtype=float).reshape(-1)
-        if arr.size != 3:
-            raise JointInputError(f"{self.name} has 3 arm angles (alpha1, alpha2, alpha3); got {arr.size} value(s)")
-        if not np.all(np.isfinite(arr)):
-            raise JointInputError(f"{self.name}: arm angles must be finite numbers")
-        return arr
-
-    def within_limits(self, alpha: ArrayLike, tol: float = 1e-12) -> NDArray[np.bool_]:
-        alpha = np.asarray(alpha, dtype=float)
-        return (alpha >= self.lower - tol) & (alpha <= self.upper + tol)
-
     def knees(self, alpha: ArrayLike) -> NDArray[np.float64]:
         """Indented knee points c_i^t, eq. (4); alpha shape (..., 3) → (..., 3, 3) (arm, xyz)."""
         alpha = np.asarray(alpha, dtype=float)

@@ -29,6 +29,8 @@ type check; a tuple is type-checked element by element, so records are kept to a
   (n,) float64, revolute (n,) bool).
 * ``arm``, a Comau-type arm's (``ComauArm.kernel_record``, built once per arm): (a1, d1, a2, a3, L
   float, T_world_base (4, 4) float64), Motion-Lab Table 3.
+* ``crane``, an elbow crane's (``ElbowCrane.kernel_record``, built once per crane): (L0, L1, L2 float,
+  T_world_1 (4, 4) float64), TAC paper Table 3 and eqs. (42)–(44).
 """
 
 from __future__ import annotations
@@ -334,8 +336,11 @@ def comau_candidates(arm, p, q1_hint, signs):
 
 
 @_jit
-def crane_candidates(L0, L1, L2, T_world_1, p, beta0_hint, signs):
-    """TAC paper eqs. (42)–(44) for both slew branches and every elbow sign: (q (k, 3), exact (k,))."""
+def crane_candidates(crane, p, beta0_hint, signs):
+    """TAC paper eqs. (42)–(44) for both slew branches and every elbow sign: (q (k, 3), exact (k,)).  ``crane``:
+    the crane's record; p (3,) the tool point in the world; beta0_hint: β0 where the point is on the slew
+    axis; signs (k,) float64: the elbow signs of eq. (43)."""
+    L0, L1, L2, T_world_1 = crane
     v = _inverse_apply(T_world_1, p[0], p[1], p[2])  # eq. (42)
     x, y, z = v[0], v[1], v[2]
     r = math.hypot(x, y)
@@ -405,6 +410,7 @@ def warm_up_steps() -> list:
     settings = (-np.ones(n), np.ones(n), np.ones(n), 0.1, 0.01, 0.1, 0.05, 1e-4, 2)  # a DLS solver's record
     limits = (-np.ones(n), np.ones(n), np.ones(n, dtype=np.bool_))  # the analytic solver's record
     arm = (0.1, 0.5, 1.0, 0.2, 1.0, eye)  # a Comau arm's record
+    crane = (0.5, 1.0, 1.0, eye)  # an elbow crane's record
     steps = [
         lambda: frames(robot, np.zeros(n)),
         lambda: jacobian_from_frames(frames(robot, np.zeros(n)), np.eye(L, n), zLn),
@@ -417,7 +423,7 @@ def warm_up_steps() -> list:
             robot,
             limits,
             comau_candidates(arm, np.ones(3), 0.0, np.ones(2))[0],
-            crane_candidates(0.5, 1.0, 1.0, eye, np.ones(3), 0.0, np.ones(2))[1],
+            crane_candidates(crane, np.ones(3), 0.0, np.ones(2))[1],
             np.zeros(n),
             np.ones(3),
         ),

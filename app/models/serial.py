@@ -22,13 +22,13 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.errors import JointInputError
 from app.geometry import dh_transform
 from app.models import kernels
+from app.models.model import JointModel
 from app.models.spec import RobotSpec
 
 
-class SerialRobot:
+class SerialRobot(JointModel):
     """Kinematic model of a serial manipulator.
 
     Parameters
@@ -51,11 +51,8 @@ class SerialRobot:
     kind = "serial"
 
     def __init__(self, spec: RobotSpec) -> None:
-        if spec.serial is None:
-            raise TypeError(f"robot {spec.name} is of type {spec.type}, not serial")
-        self.spec = spec
+        super().__init__(spec)
         s = spec.serial
-        self.name = spec.name
         self.links = s.links
         self.joints = s.joints
         self.n_links = len(s.links)
@@ -87,7 +84,7 @@ class SerialRobot:
             for k, factor in joint.coupling:
                 M[joint.link, k] += factor
         # the chain's constants for compiled kernels, built once here; use_kernels=False: the NumPy reference.
-        # kernel_args, nine arrays, for the GA, crane-head and TAC kernels; kernel_record, the same numbers in
+        # kernel_args, nine arrays, for the crane-head and TAC kernels; kernel_record, the same numbers in
         # three arrays (dh (5, L), M (2, L, n), T (2, 4, 4)), the robot record of app/models/kernels.py, passed
         # whole as one argument (three arrays: numba's per-call type check of a tuple grows with its elements)
         self.kernel_args = tuple(
@@ -101,35 +98,6 @@ class SerialRobot:
             np.stack(self.kernel_args[7:]),
         )
         self.use_kernels = kernels.ENABLED
-
-    # ------------------------------------------------------------------ input
-    def check_q(self, q: ArrayLike) -> NDArray[np.float64]:
-        """Validate one configuration: n finite numbers. Returns a float array.
-
-        Raises
-        ------
-        JointInputError
-            Wrong count or a value that is NaN or infinite.
-        """
-        arr = np.asarray(q, dtype=float).reshape(-1)
-        if arr.size != self.n_joints:
-            raise JointInputError(
-                f"{self.name} has {self.n_joints} joints ({', '.join(self.joint_names)}); got {arr.size} value(s)"
-            )
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            names = ", ".join(self.joint_names[i] for i in np.flatnonzero(bad))
-            raise JointInputError(f"{self.name}: joint value for {names} is not a finite number")
-        return arr
-
-    def within_limits(self, q: ArrayLike, tol: float = 1e-12) -> NDArray[np.bool_]:
-        """Per-joint flag: is q inside [lower, upper] (with a tolerance)? Shape of q."""
-        q = np.asarray(q, dtype=float)
-        return (q >= self.lower - tol) & (q <= self.upper + tol)
-
-    def clip(self, q: ArrayLike) -> NDArray[np.float64]:
-        """q clipped into the joint limits."""
-        return np.minimum(np.maximum(np.asarray(q, dtype=float), self.lower), self.upper)  # ufuncs: no np.clip overhead
 
     # ------------------------------------------------------------ kinematics
     def dh_variables(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -25,7 +25,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.errors import BosunError
-from app.geometry import rot_x, rot_y, rot_z, skew
+from app.geometry import euler_to_matrix, skew
+from app.models.model import Model
 from app.models.spec import RobotSpec
 
 __all__ = [
@@ -43,19 +44,9 @@ class StewartError(BosunError):
 
 
 def rotation_xyz(delta: ArrayLike) -> NDArray[np.float64]:
-    """R_b^n(δ) = R_x(φ) R_y(θ) R_z(ψ) (Motion-Lab eq. 33 with the order that eq. 44 implies).
-
-    Parameters
-    ----------
-    delta : array_like, shape (..., 3)
-        Roll φ, pitch θ, yaw ψ [rad].
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-    """
-    d = np.asarray(delta, dtype=float)
-    return rot_x(d[..., 0]) @ rot_y(d[..., 1]) @ rot_z(d[..., 2])
+    """R_b^n(δ) = R_x(φ) R_y(θ) R_z(ψ) (Motion-Lab eq. 33 with the order that eq. 44 implies) of roll, pitch,
+    yaw δ (..., 3) [rad]; shape (..., 3, 3)."""
+    return euler_to_matrix(delta, "xyz")
 
 
 def T_delta(delta: ArrayLike) -> NDArray[np.float64]:
@@ -110,7 +101,7 @@ class StewartFK:
     iterations: int
 
 
-class StewartPlatform:
+class StewartPlatform(Model):
     """Kinematic model of a six-leg Stewart platform read from a ``type="stewart"`` robot file.
 
     Attributes
@@ -122,13 +113,11 @@ class StewartPlatform:
     """
 
     kind = "stewart"
+    wrong_type = StewartError
 
     def __init__(self, spec: RobotSpec) -> None:
-        if spec.stewart is None:
-            raise StewartError(f"robot '{spec.name}' is not a Stewart platform")
+        super().__init__(spec)
         s = spec.stewart
-        self.spec = spec
-        self.name = spec.name
         # C-contiguous float64: the compiled leg kernels have one signature
         self.a_n = np.ascontiguousarray(s.base_joints_n, dtype=float)
         self.b_b = np.ascontiguousarray(s.platform_joints_b, dtype=float)

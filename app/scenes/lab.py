@@ -400,7 +400,7 @@ class MotionLab:
         p1 = self.platforms[0]
         f = self.joints
         p, v, a = tool_on_platform(
-            self.comau, self.layout.T_b1_r, p1.eta, p1.eta_dot, p1.eta_ddot, f.x, f.v, f.a, self._rates[0]
+            self.comau, self.layout.T_b1_r, (p1.eta, p1.eta_dot, p1.eta_ddot), (f.x, f.v, f.a), self._rates[0]
         )
         T = self.layout.T_world_n1
         self.p_t_n1 = p

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import InitVar, dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -88,7 +90,36 @@ JOINT_ACTUATORS = Block(
 )
 
 
-class JointActuators:
+@dataclass(eq=False)
+class LimitedAxes:
+    """Axes within per-axis limits, as the plants' servos and filters hold them: position limits ``lower``,
+    ``upper`` [rad or m] (the object's own copies: a filter may narrow them in place), speed and
+    acceleration limits ``speed``, ``accel`` (``inf``: none) and the time constant ``tau`` [s] of the loop
+    that tracks a reference; every array C-contiguous float64 (a compiled step has one signature and
+    never compiles in a control tick).  ``use_kernels``: step compiled (default when numba is there)."""
+
+    lower: ArrayLike
+    upper: ArrayLike
+    speed: ArrayLike
+    accel: ArrayLike
+    tau: float
+
+    def __post_init__(self) -> None:
+        self.lower = np.array(self.lower, dtype=float, order="C")
+        self.upper = np.array(self.upper, dtype=float, order="C")
+        self.speed = np.ascontiguousarray(self.speed, dtype=float)
+        self.accel = np.ascontiguousarray(self.accel, dtype=float)
+        self.tau = float(self.tau)
+        self.use_kernels = sim_kernels.ENABLED
+
+    def rest_state(self, x: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """A state at rest at ``x``: (position clipped into the limits, zero speed, zero acceleration)."""
+        x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
+        return x, np.zeros_like(x), np.zeros_like(x)
+
+
+@dataclass(eq=False)
+class JointActuators(LimitedAxes):
     """Per-joint servo: q̇_des = (q_ref − q)/τ, bounded by the braking speed towards q_ref
     (:func:`approach_speed`), then limited.
 
@@ -112,30 +143,16 @@ class JointActuators:
         Initial position (default mid-range); clipped into the limits.
     """
 
-    def __init__(
-        self,
-        lower: ArrayLike,
-        upper: ArrayLike,
-        speed: ArrayLike,
-        accel: ArrayLike,
-        tau: float = 0.05,
-        q0: ArrayLike | None = None,
-    ) -> None:
-        # C-contiguous float64: the compiled step has one signature and never compiles in a control tick
-        self.lower = np.ascontiguousarray(lower, dtype=float)
-        self.upper = np.ascontiguousarray(upper, dtype=float)
-        self.speed = np.ascontiguousarray(speed, dtype=float)
-        self.accel = np.ascontiguousarray(accel, dtype=float)
-        if not tau > 0:
+    tau: float = 0.05
+    q0: InitVar[ArrayLike | None] = None
+
+    def __post_init__(self, q0: ArrayLike | None) -> None:
+        super().__post_init__()
+        if not self.tau > 0:
             raise ValueError("tau must be positive")
-        self.tau = tau
-        q = 0.5 * (self.lower + self.upper) if q0 is None else np.asarray(q0, dtype=float)
-        self.q = np.clip(q, self.lower, self.upper)
-        self.qdot = np.zeros_like(self.q)
-        self.qddot = np.zeros_like(self.q)
-        self.use_kernels = sim_kernels.ENABLED
+        self.q, self.qdot, self.qddot = self.rest_state(0.5 * (self.lower + self.upper) if q0 is None else q0)
         # the block's parameter record (lower, upper, speed, accel, τ): fixed, so made once, not every tick
-        self.params = (self.lower, self.upper, self.speed, self.accel, float(self.tau))
+        self.params = (self.lower, self.upper, self.speed, self.accel, self.tau)
 
     def step(self, q_ref: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Advance by dt toward q_ref (one step of :data:`JOINT_ACTUATORS`, compiled unless ``use_kernels`` is
@@ -155,6 +172,4 @@ class JointActuators:
         self.qdot = np.zeros_like(self.q)
 
     def reset(self, q: ArrayLike) -> None:
-        self.q = np.clip(np.asarray(q, dtype=float), self.lower, self.upper)
-        self.qdot = np.zeros_like(self.q)
-        self.qddot = np.zeros_like(self.q)
+        self.q, self.qdot, self.qddot = self.rest_state(q)

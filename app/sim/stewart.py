@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import io
 import math
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,7 +43,7 @@ from app.marine.waves import spectrum as sea_spectrum
 from app.marine.waves import wave_components
 from app.models.stewart import StewartPlatform
 from app.sim import kernels as sim_kernels
-from app.sim.actuators import approach_speed, braking_speed
+from app.sim.actuators import LimitedAxes, approach_speed, braking_speed
 
 MODES = ("settled", "neutral", "engaged")
 SOURCES = ("simulation", "generator", "remote", "timeseries")
@@ -58,7 +58,8 @@ class PlatformError(BosunError):
 
 
 # ----------------------------------------------------------------------------- filter
-class MotionFilter:
+@dataclass(eq=False)
+class MotionFilter(LimitedAxes):
     """Per-DOF limiter: position, velocity and acceleration never pass their limits.
 
     Each step the new velocity v⁺ is the desired one (feed-forward v_ref + (x_ref − x)/τ, the
@@ -84,31 +85,19 @@ class MotionFilter:
         (default ``accel``; larger values are taken as ``accel``)
     """
 
-    def __init__(
-        self,
-        lower: ArrayLike,
-        upper: ArrayLike,
-        speed: ArrayLike,
-        accel: ArrayLike,
-        tau: float = 0.1,
-        brake: ArrayLike | None = None,
-    ) -> None:
-        # C-contiguous float64: the compiled step has one signature and never compiles in a control tick;
-        # the position limits are the filter's own copies (set_limits writes into them)
-        self.lower, self.upper = np.array(lower, dtype=float, order="C"), np.array(upper, dtype=float, order="C")
-        self.speed, self.accel = np.ascontiguousarray(speed, dtype=float), np.ascontiguousarray(accel, dtype=float)
+    tau: float = 0.1
+    brake: InitVar[ArrayLike | None] = None
+
+    def __post_init__(self, brake: ArrayLike | None) -> None:
+        super().__post_init__()
         b = self.accel if brake is None else np.minimum(np.asarray(brake, dtype=float), self.accel)
         self.brake = np.array(np.broadcast_to(b, self.accel.shape), dtype=float, order="C")
-        self.tau = float(tau)
         self.x = np.zeros_like(self.lower)
         self.v = np.zeros_like(self.lower)
         self.a = np.zeros_like(self.lower)
-        self.use_kernels = sim_kernels.ENABLED
 
     def reset(self, x: ArrayLike) -> None:
-        self.x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
-        self.v = np.zeros_like(self.x)
-        self.a = np.zeros_like(self.x)
+        self.x, self.v, self.a = self.rest_state(x)
 
     def set_limits(self, lower: ArrayLike, upper: ArrayLike) -> None:
         """New position limits, written into the same (C-contiguous) arrays.

@@ -31,6 +31,18 @@ from app.models.drawing.mesh import (
     sphere,
 )
 
+__all__ = [
+    "delta_meshes",
+    "link_radius",
+    "load_mesh",
+    "pedestal",
+    "serial_links",
+    "serial_reach",
+    "serial_robot_meshes",
+    "stewart_meshes",
+    "wire",
+]
+
 
 # ---------------------------------------------------------------------------------------------- serial chains
 def serial_reach(links) -> float:

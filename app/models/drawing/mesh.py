@@ -8,6 +8,38 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+__all__ = [
+    "DECK_COLOR",
+    "HEAD_COLOR",
+    "HULL_COLOR",
+    "JOINT_COLOR",
+    "LEG_COLOR",
+    "LINK_COLOR",
+    "LINK_RADIUS_SHARE",
+    "LOAD_COLOR",
+    "MOUNT_COLOR",
+    "RGBA",
+    "ROD_COLOR",
+    "SEA_COLOR",
+    "SHIP_DECK_COLOR",
+    "Mesh",
+    "box",
+    "convex_hull_2d",
+    "cylinder",
+    "dedupe",
+    "disc",
+    "extrusion",
+    "homogeneous_rotation",
+    "is_closed",
+    "merge",
+    "outline",
+    "plate",
+    "signed_volume",
+    "sphere",
+    "support_polygon",
+    "up_rotation",
+]
+
 RGBA = tuple[float, float, float, float]
 
 LINK_COLOR: RGBA = (0.90, 0.55, 0.15, 1.0)  # orange: the links of a serial arm or crane

@@ -18,6 +18,11 @@ from app.models.drawing.machines import (
 from app.models.drawing.mesh import Mesh, dedupe, homogeneous_rotation, up_rotation
 from app.models.drawing.sea import hull_mesh
 
+__all__ = [
+    "lab_meshes",
+    "tac_meshes",
+]
+
 
 # ---------------------------------------------------------------------------------------------- scenes
 def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=None) -> list[Mesh]:

@@ -7,6 +7,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.models.drawing.mesh import HULL_COLOR, RGBA, SEA_COLOR, SHIP_DECK_COLOR, Mesh, extrusion, signed_volume
 
+__all__ = [
+    "WAVE_FIELDS",
+    "grid_surface",
+    "hull_mesh",
+    "sea_profile",
+    "sea_surface",
+    "strongest_components",
+    "wave_elevation",
+]
+
 
 # ---------------------------------------------------------------------------------------------- vessel and sea
 def hull_mesh(length: float, beam: float, deck_z: float, keel_z: float, n: int = 12) -> Mesh:
