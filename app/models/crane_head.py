@@ -171,7 +171,7 @@ class CraneHead:
                 kern.c_array(x) for x in (eta, nu, beta, beta_dot, p_d_n, p_d_n_dot, hold)
             )
             out = kern.head_reference(
-                (self.crane.kernel_args, self.head.kernel_args, self.kernel_hull),
+                (self.crane.kernel_record, self.head.kernel_args, self.kernel_hull),
                 (eta, nu),
                 (beta, beta_dot),
                 (p_d_n, p_d_n_dot),

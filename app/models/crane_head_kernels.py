@@ -10,8 +10,9 @@ head's motors :mod:`app.sim.head_kernels`, the whole simulation step :mod:`app.s
 Every array argument is C-contiguous float64 (another layout would make numba compile a second
 specialisation in an engine tick); the constants come in tuples built once by the models:
 
-* ``chain``: the crane's ``SerialRobot.kernel_args`` (θ₀, d₀, a, cos α, sin α, M_θ, M_d, T_world_base,
-  T_flange_tool; eq. 39);
+* ``chain``: the crane's ``SerialRobot.kernel_record``, the robot record of :mod:`app.models.kernels`
+  (dh (5, L): θ₀, d₀, a, cos α, sin α; M (2, L, n): M_θ, M_d; T (2, 4, 4): T_world_base, T_flange_tool;
+  eq. 39);
 * ``head``: ``DeltaHead.kernel_args`` (l_a, a = l_p − l_k, l_r, R_{t_i}^t (3, 3, 3), α_min, α_max);
 * ``hull``: the workspace's facet equations (m, 4) (n·p + b ≤ 0 inside, |n| = 1), centre p_d^t and the
   radius of the largest ball about it inside the hull (its depth, §6);
@@ -24,7 +25,7 @@ import math
 
 import numpy as np
 
-from app.models.kernels import ENABLED, _jit, matmul_into
+from app.models.kernels import ENABLED, _chain, _jit, matmul_into
 
 __all__ = [
     "ENABLED",
@@ -72,7 +73,7 @@ def _to_n(R, eta, o, M, p, out):
 @_jit
 def _crane_pose(chain, beta, beta_dot, o, R, v, w):
     """o_t^b, R_t^b of the jib tip (eqs. 39–41) and its twist v_t^b, ω_t^b = J(β) β̇ (eqs. 45–48), in place."""
-    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = chain
+    theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = _chain(chain)
     L, n = M_theta.shape
     T, C = T_base.copy(), np.empty((4, 4))
     A = np.zeros((4, 4))
@@ -400,7 +401,7 @@ def warm_up_steps() -> list:
     from app.geometry import rot_x
 
     z3, o3, eye = np.zeros(3), np.ones(3), np.eye(4)
-    chain = (z3, z3, o3, o3, z3, np.eye(3), np.zeros((3, 3)), eye, eye)
+    chain = (np.stack([z3, z3, o3, o3, z3]), np.stack([np.eye(3), np.zeros((3, 3))]), np.stack([eye, eye]))
     head = (3.25, -0.75, 7.0, rot_x(np.radians([150.0, 270.0, 30.0])), -o3, o3)  # TAC paper Table 4
     hull = (np.array([[1.0, 0.0, 0.0, -1.0]]), z3, 1.0)
     elbow = (3.0, 19.2, 16.0, eye)

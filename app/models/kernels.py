@@ -15,7 +15,7 @@ type check; a tuple is type-checked element by element, so records are kept to a
 * ``robot``, the chain (``SerialRobot.kernel_record``, built once per robot): (dh, M, T), float64,
   C-contiguous: dh (5, L) the links' constant DH values θ₀, d₀, a and the cosine and sine of their
   twists α, one row each; M (2, L, n) the joint map M_θ, M_d (θ = θ₀ + M_θ q, d = d₀ + M_d q);
-  T (2, 4, 4) T_world_base, T_flange_tool.  Three arrays, not the nine of ``SerialRobot.kernel_args``:
+  T (2, 4, 4) T_world_base, T_flange_tool.  Three arrays, not nine:
   a record of nine arrays cost about 0.2 µs a call more than nine separate arguments (its type
   fingerprint outgrows numba's 40-byte buffer), three cost less.  :func:`_chain` gives the nine
   arrays (views).  The DH link is A = Rz(θ) Tz(d) Tx(a) Rx(α) (standard DH, TAC paper eq. 39).

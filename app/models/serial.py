@@ -83,20 +83,15 @@ class SerialRobot(JointModel):
             offset[joint.link] += joint.offset
             for k, factor in joint.coupling:
                 M[joint.link, k] += factor
-        # the chain's constants for compiled kernels, built once here; use_kernels=False: the NumPy reference.
-        # kernel_args, nine arrays, for the crane-head and TAC kernels; kernel_record, the same numbers in
-        # three arrays (dh (5, L), M (2, L, n), T (2, 4, 4)), the robot record of app/models/kernels.py, passed
-        # whole as one argument (three arrays: numba's per-call type check of a tuple grows with its elements)
-        self.kernel_args = tuple(
-            np.ascontiguousarray(x, dtype=float)
-            for x in (self._theta0, self._d0, self._a, self._cos_alpha, self._sin_alpha, self._M_theta, self._M_d,
-                      self.T_world_base, self.T_flange_tool)
+        # the chain's constants for compiled kernels, built once here (use_kernels=False: the NumPy reference):
+        # the robot record of app/models/kernels.py, passed whole as one argument, dh (5, L) θ₀, d₀, a, cos α,
+        # sin α; M (2, L, n) M_θ, M_d; T (2, 4, 4) T_world_base, T_flange_tool (three arrays, not nine: numba's
+        # per-call type check of a tuple grows with its elements)
+        self.kernel_record = tuple(
+            np.ascontiguousarray(np.stack(x), dtype=float)
+            for x in ((self._theta0, self._d0, self._a, self._cos_alpha, self._sin_alpha), (self._M_theta, self._M_d),
+                      (self.T_world_base, self.T_flange_tool))
         )  # fmt: skip
-        self.kernel_record = (
-            np.stack(self.kernel_args[:5]),
-            np.stack(self.kernel_args[5:7]),
-            np.stack(self.kernel_args[7:]),
-        )
         self.use_kernels = kernels.ENABLED
 
     # ------------------------------------------------------------ kinematics

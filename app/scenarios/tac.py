@@ -443,7 +443,7 @@ class TacSimulator:
         x = ((beta, beta_dot, beta_c_prev, self._beta0_hint, has_prev), (alpha, integral, u))
         inputs = (f(true.eta), f(meas.eta), f(meas.nu), meas is not true)
         setpoints = (f(beta_hold), f(alpha_lock), self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t)
-        kinematics = (sys_.crane.kernel_args, sys_.head.kernel_args, sys_.kernel_hull, sys_.kernel_elbow)
+        kinematics = (sys_.crane.kernel_record, sys_.head.kernel_args, sys_.kernel_hull, sys_.kernel_elbow)
         p = ((crane_mode, head_mode, *setpoints), *kinematics, self._crane_args, *self._servo_args)
         out = tk.tac_chunk(x, inputs, p, float(sc.dt))
         n = t.size

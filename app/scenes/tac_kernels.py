@@ -224,7 +224,7 @@ def warm_up_steps() -> list:
     from app.geometry import rot_x
 
     z3, o3, eye = np.zeros(3), np.ones(3), np.eye(4)
-    chain = (z3, z3, o3, o3, z3, np.eye(3), np.zeros((3, 3)), eye, eye)
+    chain = (np.stack([z3, z3, o3, o3, z3]), np.stack([np.eye(3), np.zeros((3, 3))]), np.stack([eye, eye]))
     head = (3.25, -0.75, 7.0, rot_x(np.radians([150.0, 270.0, 30.0])), -o3, o3)  # TAC paper Table 4
     hull = (np.array([[1.0, 0.0, 0.0, -1.0]]), z3, 1.0)
     elbow = (3.0, 19.2, 16.0, eye)
