@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from collections.abc import Callable
 
 LINES_BLOCK = 1 << 16  # characters split into lines at a time (a 4 MB text in one call held the lock 20-30 ms)
@@ -45,3 +46,15 @@ def content_lines(text: str, pace: Callable[[], None] | None = None) -> tuple[li
 def cells(line: str) -> list[str]:
     """The fields of one CSV line (quoted fields as CSV has them)."""
     return next(csv.reader(io.StringIO(line)), [])
+
+
+def finite_number(text: str) -> float:
+    """The finite number in one cell; ValueError ``not a number`` or ``not a finite number`` (the format puts
+    its line, field and the cell's text before it)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError("not a number") from None
+    if not math.isfinite(value):
+        raise ValueError("not a finite number")
+    return value

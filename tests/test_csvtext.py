@@ -28,3 +28,15 @@ def test_every_format_reports_the_files_own_line_numbers():
         parse_timeseries_csv(text, "m.csv")
     ts = parse_timeseries_csv(text.replace("abc", "0"), "m.csv")  # the empty spreadsheet row is not a sample
     assert list(ts.t) == [0.0, 1.0]
+
+
+@pytest.mark.parametrize(
+    ("text", "error"),
+    [("abc", "not a number"), ("nan", "not a finite number"), ("-inf", "not a finite number"), ("", "not a number")],
+)
+def test_a_cell_that_is_no_finite_number_says_which(text, error):
+    from app.csvtext import finite_number
+
+    with pytest.raises(ValueError, match=f"^{error}$"):
+        finite_number(text)
+    assert finite_number(" 2.5e3 ") == 2500.0

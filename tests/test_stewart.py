@@ -304,7 +304,7 @@ def test_timeseries_round_trip_and_playback():
     ("text", "message"),
     [
         ("t,x,y,z,phi,theta\n0,0,0,0,0,0\n", r"data.csv:1: missing column psi"),
-        ("t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,nan,0,0,0,0\n", r"data.csv:3: column y is nan"),
+        ("t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,nan,0,0,0,0\n", r"data.csv:3: column y: 'nan' is not a finite"),
         (
             "t,x,y,z,phi,theta,psi\n0,0,0,0,0,0,0\n1,0,0,0,0,0,0\n1,0,0,0,0,0,0\n",
             r"data.csv:4: time 1 s does not increase",

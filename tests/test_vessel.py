@@ -151,7 +151,7 @@ GOOD = "0.5,0," + ",".join(["0.1,0"] * 6)
             r"<t>:3: field surge_amp: 'abc' is not a number",
         ),
         (_csv([GOOD, "0.6,0," + ",".join(["-1,0"] + ["0.1,0"] * 5)]), r"<t>:3: field surge_amp: amplitude must not"),
-        (_csv([GOOD, "0.6,0," + ",".join(["nan,0"] + ["0.1,0"] * 5)]), r"<t>:3: field surge_amp: value is not finite"),
+        (_csv([GOOD, "0.6,0," + ",".join(["nan,0"] + ["0.1,0"] * 5)]), r"<t>:3: field surge_amp: 'nan' is not a fin"),
         (_csv([GOOD, "0.6,0,1"]), r"<t>:3: expected 14 fields, got 3"),
         (_csv([GOOD, "0.6,0," + ",".join(["0.1,0"] * 6), "0.6,90," + ",".join(["0.1,0"] * 6)]), "full grid"),
         (_csv([GOOD, GOOD]), "full grid|duplicate"),

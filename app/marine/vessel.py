@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.csvtext import cells, content_lines
+from app.csvtext import cells, content_lines, finite_number
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.marine import kernels
@@ -429,11 +429,9 @@ def load_rao_csv(text: str, where: str = "<csv>", pace: Callable[[], None] | Non
         vals = []
         for c, i, (lo, hi, unit) in zip(CSV_COLUMNS, idx, bounds, strict=True):
             try:
-                v = float(row[i])
-            except ValueError:
-                raise VesselError(f"{where}:{n}: field {c}: '{row[i].strip()}' is not a number") from None
-            if not math.isfinite(v):
-                raise VesselError(f"{where}:{n}: field {c}: value is not finite")
+                v = finite_number(row[i])
+            except ValueError as err:
+                raise VesselError(f"{where}:{n}: field {c}: '{row[i].strip()}' is {err}") from None
             if c.endswith("_amp") and v < 0:
                 raise VesselError(f"{where}:{n}: field {c}: amplitude must not be negative")
             if not lo <= v <= hi:

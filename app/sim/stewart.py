@@ -36,7 +36,7 @@ from dataclasses import InitVar, dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from app.csvtext import cells, content_lines
+from app.csvtext import cells, content_lines, finite_number
 from app.errors import BosunError
 from app.marine.vessel import VesselMotion, significant_response
 from app.marine.waves import spectrum as sea_spectrum
@@ -262,11 +262,9 @@ def parse_timeseries_csv(text: str, where: str = "<csv>") -> TimeSeries:
             if k >= len(r) or not r[k].strip():
                 raise PlatformError(f"{where}:{line}: column {col} is empty")
             try:
-                v = float(r[k])
-            except ValueError:
-                raise PlatformError(f"{where}:{line}: column {col}: {r[k].strip()!r} is not a number") from None
-            if not math.isfinite(v):
-                raise PlatformError(f"{where}:{line}: column {col} is {r[k].strip()} (must be a finite number)")
+                v = finite_number(r[k])
+            except ValueError as err:
+                raise PlatformError(f"{where}:{line}: column {col}: {r[k].strip()!r} is {err}") from None
             vals.append(v)
         if data and vals[0] <= data[-1][0]:
             raise PlatformError(
