@@ -41,12 +41,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
     engine_label = "Motion-Lab"
 
     def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
-        super().__init__()
-        self.link_factory = link_factory
-        self.link = None
-        self.use_gl = use_gl
-        self.state = None  # the newest LabSnapshot
-        self.desc = None  # the engine's LabDescription
+        super().__init__(link_factory, use_gl)  # state: the newest LabSnapshot, desc: the LabDescription
         self._t_last = -math.inf
         self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), LAB_COLUMNS)
         self.swing_ring = Ring(int(HISTORY_S * SAMPLE_HZ), SWING_COLUMNS)
