@@ -18,7 +18,6 @@ from PyQt5.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QProgressBar,
-    QPushButton,
     QSpinBox,
     QVBoxLayout,
     QWidget,
@@ -26,6 +25,7 @@ from PyQt5.QtWidgets import (
 
 from app.analysis.ik_studies import study_from_wire
 from ui.glprobe import gl_available
+from ui.widgets.buttons import button
 from ui.widgets.files import choose_file
 from ui.widgets.plots import LEGEND_TEXT, axis_label, legend
 
@@ -61,28 +61,30 @@ class AnalysisTab(QWidget):
         self.grid.setToolTip("targets per axis of the workspace box (8 → 512 targets, as in the paper)")
         row.addWidget(QLabel("grid"))
         row.addWidget(self.grid)
-        self.run_dist = QPushButton("Error distribution")
-        self.run_dist.setToolTip("solve the grid³ equally spaced targets of the workspace box (paper Fig. 5)")
-        self.run_dist.clicked.connect(lambda: self.start("distribution"))
-        self.run_track = QPushButton("Trajectory tracking")
-        self.run_track.setToolTip("follow a 20 s path through the workspace, X/Y/Z target vs reached (Fig. 4)")
-        self.run_track.clicked.connect(lambda: self.start("tracking"))
-        self.cancel = QPushButton("Cancel")
+        self.run_dist = button(
+            "Error distribution",
+            "solve the grid³ equally spaced targets of the workspace box (paper Fig. 5)",
+            lambda: self.start("distribution"),
+        )
+        self.run_track = button(
+            "Trajectory tracking",
+            "follow a 20 s path through the workspace, X/Y/Z target vs reached (Fig. 4)",
+            lambda: self.start("tracking"),
+        )
+        self.cancel = button(
+            "Cancel",
+            "stop the running study (the targets done so far are kept)",
+            lambda: self.link is not None and self.link.send("study_cancel"),
+        )
         self.cancel.setEnabled(False)
-        self.cancel.setToolTip("stop the running study (the targets done so far are kept)")
-        self.cancel.clicked.connect(lambda: self.link is not None and self.link.send("study_cancel"))
         for b in (self.run_dist, self.run_track, self.cancel):
             row.addWidget(b)
         self.progress = QProgressBar()
         self.progress.setToolTip("targets solved")
         self.progress.setFormat("%v / %m targets")
         row.addWidget(self.progress, 1)
-        self.export_csv = QPushButton("Export CSV")
-        self.export_csv.setToolTip("write the study's rows to a CSV file")
-        self.export_csv.clicked.connect(self.save_csv)
-        self.export_png = QPushButton("Export PNG")
-        self.export_png.setToolTip("save the plots as a PNG picture")
-        self.export_png.clicked.connect(self.save_png)
+        self.export_csv = button("Export CSV", "write the study's rows to a CSV file", self.save_csv)
+        self.export_png = button("Export PNG", "save the plots as a PNG picture", self.save_png)
         for b in (self.export_csv, self.export_png):
             b.setEnabled(False)
             row.addWidget(b)

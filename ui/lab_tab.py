@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtWidgets import QHBoxLayout, QPushButton, QSizePolicy, QTabWidget, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QHBoxLayout, QSizePolicy, QTabWidget, QVBoxLayout, QWidget
 
 from ui.lab.comau import ComauWinchPage
 from ui.lab.common import HISTORY_S, LAB_COLUMNS, LAB_LIGHTS, SAMPLE_HZ, SWING_COLUMNS
@@ -23,6 +23,7 @@ from ui.lab.scene import ScenePage
 from ui.lab.status import StatusStrip
 from ui.lab.swing import SwingPage
 from ui.scene_tab import SceneEngineMixin
+from ui.widgets.buttons import button
 from ui.widgets.labels import ElidedLabel
 from ui.widgets.plots import Ring
 from ui.widgets.status import SceneLights, lab_plc_light
@@ -41,12 +42,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
     engine_label = "Motion-Lab"
 
     def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
-        super().__init__()
-        self.link_factory = link_factory
-        self.link = None
-        self.use_gl = use_gl
-        self.state = None  # the newest LabSnapshot
-        self.desc = None  # the engine's LabDescription
+        super().__init__(link_factory, use_gl)  # state: the newest LabSnapshot, desc: the LabDescription
         self._t_last = -math.inf
         self.ring = Ring(int(HISTORY_S * SAMPLE_HZ), LAB_COLUMNS)
         self.swing_ring = Ring(int(HISTORY_S * SAMPLE_HZ), SWING_COLUMNS)
@@ -97,10 +93,12 @@ class MotionLabTab(SceneEngineMixin, QWidget):
         row.setContentsMargins(6, 0, 2, 0)
         self.plc_text = ElidedLabel("")  # one line in the row's kept room ("…" and the whole in the tool tip)
         row.addWidget(self.plc_text, 1)
-        self.plc_ack = QPushButton("Acknowledge")
-        self.plc_ack.setFocusPolicy(Qt.NoFocus)  # Space stays STOP
-        self.plc_ack.setToolTip("writes MAIN.bReset; a platform in WARNING/ERROR: its bReset, then SETTLED")
-        self.plc_ack.clicked.connect(lambda: self._send("lab_plc_ack"))
+        self.plc_ack = button(
+            "Acknowledge",
+            "writes MAIN.bReset; a platform in WARNING/ERROR: its bReset, then SETTLED",
+            lambda: self._send("lab_plc_ack"),
+            keyboard=False,
+        )
         row.addWidget(self.plc_ack)
         bar.hide()
         return bar

@@ -10,7 +10,7 @@ from typing import Any
 
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
-from app.net.link import EngineConnection
+from app.net.link import connect
 from app.net.snapshots import Description, Snapshot
 from app.net.transport import Client, TransportError
 
@@ -40,30 +40,20 @@ class EngineLink(QObject):
     reply = pyqtSignal(str, bool, str)
     connection = pyqtSignal(bool, str)
 
-    def __init__(
-        self,
-        url: str,
-        role: str = "operator",
-        name: str = "bosun-gui",
-        token: str | None = None,
-        lost_after: float = 1.0,
-        parent: QObject | None = None,
-        secret: str | None = None,
-        curve=None,
-    ) -> None:
+    def __init__(self, url: str, *, name: str = "bosun-gui", parent: QObject | None = None, **options: Any) -> None:
+        """``options`` are :func:`app.net.link.connect`'s: ``role`` (operator unless given), ``token``,
+        ``lost_after``, ``secret``, ``curve``."""
         super().__init__(parent)
-        # raises TransportError: no engine
-        self.client = Client(url, role=role, name=name, token=token, secret=secret, curve=curve)
+        self._worker = connect(url, name=name, **options)  # raises TransportError: no engine
+        self.client: Client = self._worker.client
         self.url = url
         self.role = self.client.role
         self.note = self.client.note
-        self.lost_after = lost_after
+        self.lost_after = self._worker.lost_after
         self.latest: Snapshot | None = None
         self.description: Description | None = self.client.description
         self._seen_seq = 0
         self._dead_reported = False
-        self._worker = EngineConnection(self.client, role, name, token, lost_after)
-        self._worker.start()
         self._timer = QTimer(self)
         self._timer.setInterval(10)
         self._timer.timeout.connect(self.poll)

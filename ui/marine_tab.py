@@ -193,13 +193,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
     engine_label = "crane head"
 
     def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
-        super().__init__()
-        self.link_factory = link_factory
-        self.link = None
-        self.use_gl = use_gl
+        super().__init__(link_factory, use_gl)  # state: the newest TacSnapshot, desc: the TacDescription
         self.hull = None
-        self.desc = None  # the engine's TacDescription
-        self.state = None  # the newest TacSnapshot
         self._sea_seq = -1
         self._t_last = -math.inf
         self._controls = False  # the operator's controls are on (a linked operator; a viewer never)

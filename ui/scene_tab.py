@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 
 from PyQt5.QtCore import QObject, pyqtSignal
 
@@ -43,6 +44,16 @@ class SceneEngineMixin:
     _starting = None
     shown = True  # the tab is on screen (set by the main window); hidden, its engine is paused
     _pause_sent = -1e9
+
+    def __init__(self, link_factory: Callable[[], object] | None = None, use_gl: bool | None = None) -> None:
+        """Before the first view: no link (``link_factory`` makes it), nothing from the engine yet;
+        ``use_gl`` chooses the tab's scene view (None: OpenGL where it works)."""
+        super().__init__()  # the tab's widget class, next in its bases
+        self.link_factory = link_factory
+        self.link = None
+        self.use_gl = use_gl
+        self.state = None  # the engine's newest snapshot
+        self.desc = None  # the engine's description
 
     def connect_engine(self) -> bool:
         """Link the tab to its engine; False while it is starting in the background or when it failed."""

@@ -347,14 +347,12 @@ class LabSession(Scene):
         )
 
     def estop(self, source: str = "operator") -> None:
-        if not self.estop_latched:
-            self.note("error", f"E-STOP from {source}: platforms, robot and winch braking to rest")
+        if self._latch(f"E-STOP from {source}: platforms, robot and winch braking to rest"):
             why = self.plant.stop_path()
             if why and self.plant.ready():
                 self.note("error", f"E-STOP latched here, not yet on the plant ({why}): written as soon as it is back")
             elif why:  # the link is up, but STOP cannot reach the PLC (issue 27, item 1)
                 self.note("error", f"E-STOP latched here only: {why}; use the lab's hardware emergency stop")
-        self.estop_latched = True
         self.vvmc = False
         self.plant.estop()
         self._jog = None  # the plant dropped it with the stop
@@ -366,10 +364,8 @@ class LabSession(Scene):
             if why:
                 raise CommandError(f"reset refused: {why}; the E-STOP stays latched")
             self._plant(self.plant.reset)
-            self.estop_latched = False
-            self.input.disarm("E-STOP reset")
             held = ", ".join(f"{n} {p.status.upper()}" for n, p in zip(self.names, self.lab.platforms, strict=True))
-            self.note("info", f"E-STOP reset: every machine holds where it stands ({held}, Comau HOLD, winch LOCAL)")
+            self._unlatch(f"every machine holds where it stands ({held}, Comau HOLD, winch LOCAL)")
 
     # ------------------------------------------------------------------ loop
     def _apply_input(self, now: float) -> None:

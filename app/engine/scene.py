@@ -87,6 +87,21 @@ class Scene(abc.ABC):
         self.log_seq += 1
         self.log.append(LogEntry(self.log_seq, time.time(), level, text))
 
+    def _latch(self, text: str) -> bool:
+        """Latch the E-STOP; the first STOP of a latch says ``text`` in the log.  True for that first one."""
+        first = not self.estop_latched
+        if first:
+            self.note("error", text)
+        self.estop_latched = True
+        return first
+
+    def _unlatch(self, text: str) -> None:
+        """Clear the E-STOP latch once the scene holds its machines: the input is disarmed, so nothing moves
+        until the operator commands anew; ``text`` says how the scene holds."""
+        self.estop_latched = False
+        self.input.disarm("E-STOP reset")
+        self.note("info", f"E-STOP reset: {text}")
+
     def changed(self) -> None:
         """The description changed: clients are told by ``describe_seq`` and ask for it again."""
         self.describe_seq += 1

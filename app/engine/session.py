@@ -265,20 +265,16 @@ class Session(Scene):
         """Stop all motion in this tick and latch."""
         self.actuators.stop()
         self.q_ref = self.actuators.q.copy()
-        if not self.estop_latched:
-            self.note("error", f"E-STOP from {source}")
-        self.estop_latched = True
+        self._latch(f"E-STOP from {source}")
 
     def reset(self) -> None:
         """Clear a latched E-STOP; the arm holds where it stands until the operator commands anew."""
         if self.estop_latched:
-            self.estop_latched = False
             self.q_ref = self.actuators.q.copy()
             self.command_point = None
             if self.mode == "position":
                 self.scaling = self.scaling.with_origin(self.robot.position(self.actuators.q))
-            self.input.disarm("E-STOP reset")
-            self.note("info", "E-STOP reset: holding; centre the stick and press enable to drive")
+            self._unlatch("holding; centre the stick and press enable to drive")
 
     # ------------------------------------------------------------------ input
     def feed(self, sample: InputSample | None, now: float, released: bool = False) -> None:

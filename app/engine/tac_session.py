@@ -167,17 +167,13 @@ class TacSession(Scene):
         self.note("info", f"compensation mode: {mode}")
 
     def estop(self, source: str = "operator") -> None:
-        if not self.estop_latched:
-            self.note("error", f"E-STOP from {source}: head and crane stopped")
-        self.estop_latched = True
+        self._latch(f"E-STOP from {source}: head and crane stopped")
 
     def reset(self) -> None:
         """Clear a latched E-STOP; head and crane stay frozen until the operator selects a mode."""
         if self.estop_latched:
-            self.estop_latched = False
             self.holding = True
-            self.input.disarm("E-STOP reset")
-            self.note("info", "E-STOP reset: head and crane hold; select a compensation mode to resume")
+            self._unlatch("head and crane hold; select a compensation mode to resume")
 
     # ------------------------------------------------------------------ loop
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:

@@ -21,6 +21,7 @@ import collections
 import contextlib
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import zmq
@@ -162,6 +163,15 @@ class EngineConnection(threading.Thread):
             self._last_ping = now
             self._send("ping")
 
+    def _typed(self, from_wire: Callable[[Any], Any], data: Any, what: str) -> Any:
+        """``data`` as its typed class by ``from_wire``, or None (said in the log) when it does not fit the
+        protocol: one bad message is skipped, the link goes on."""
+        try:
+            return from_wire(data)
+        except SnapshotError as err:
+            self.events.append(("log", "error", f"engine {what} not understood: {err}"[:300]))
+            return None
+
     def _receive(self, now: float) -> None:
         for sock in (self.client.sub, self.client.dealer):
             for _ in range(500):
@@ -176,10 +186,8 @@ class EngineConnection(threading.Thread):
                 except ProtocolError:
                     continue
                 if isinstance(msg, State):
-                    try:
-                        snap = snapshot_from_wire(msg.state)
-                    except SnapshotError as err:
-                        self.events.append(("log", "error", f"engine state not understood: {err}"[:300]))
+                    snap = self._typed(snapshot_from_wire, msg.state, "state")
+                    if snap is None:
                         continue
                     with self.lock:
                         self.latest = snap
@@ -191,10 +199,8 @@ class EngineConnection(threading.Thread):
                         self._last_describe = now
                         self._send("describe")
                 elif isinstance(msg, DescriptionMessage):
-                    try:
-                        desc = description_from_wire(msg.description)
-                    except SnapshotError as err:
-                        self.events.append(("log", "error", f"engine description not understood: {err}"[:300]))
+                    desc = self._typed(description_from_wire, msg.description, "description")
+                    if desc is None:
                         continue
                     if (
                         self.description is None

@@ -23,6 +23,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Self
 
 import zmq
 import zmq.auth
@@ -78,46 +79,60 @@ def _load(path: str | os.PathLike[str]) -> tuple[bytes, bytes | None]:
 
 
 @dataclass(frozen=True)
-class ClientCurve:
-    """A client's CURVE keys: its own pair and the engine's public key."""
+class _OwnPair:
+    """The CURVE pair a socket speaks with (a client's or the engine's) and what it knows of its peers."""
 
     public: bytes
     secret: bytes
-    server_public: bytes
 
     @classmethod
-    def from_files(cls, secret_file: str, server_key_file: str) -> ClientCurve:
+    def from_files(cls, secret_file: str, peers: str) -> Self:
+        """The pair of the secret certificate ``secret_file``; the peers' keys from ``peers`` (read by
+        :meth:`_peers`)."""
         public, secret = load_pair(secret_file)
-        return cls(public, secret, load_public(server_key_file))
+        return cls(public, secret, cls._peers(peers))
 
-    def apply(self, sock: zmq.Socket) -> None:
+    @staticmethod
+    def _peers(peers: str) -> Any:
+        raise NotImplementedError  # each kind of pair reads its peers' keys its own way
+
+    def _apply_pair(self, sock: zmq.Socket) -> None:
         sock.curve_publickey = self.public
         sock.curve_secretkey = self.secret
+
+
+@dataclass(frozen=True)
+class ClientCurve(_OwnPair):
+    """A client's CURVE keys: its own pair and the engine's public key (``from_files``: the engine's
+    public key file)."""
+
+    server_public: bytes
+
+    _peers = staticmethod(load_public)
+
+    def apply(self, sock: zmq.Socket) -> None:
+        self._apply_pair(sock)
         sock.curve_serverkey = self.server_public
 
 
 @dataclass(frozen=True)
-class ServerCurve:
-    """The engine's CURVE pair and the folder of allowed client public keys."""
+class ServerCurve(_OwnPair):
+    """The engine's CURVE pair and the folder of allowed client public keys (``from_files``: that folder)."""
 
-    public: bytes
-    secret: bytes
     clients_dir: Path
 
-    @classmethod
-    def from_files(cls, secret_file: str, clients_dir: str) -> ServerCurve:
-        public, secret = load_pair(secret_file)
+    @staticmethod
+    def _peers(clients_dir: str) -> Path:
         folder = Path(clients_dir)
         if not folder.is_dir():
             raise KeyFileError(f"{clients_dir}: not a folder of client public keys")
         if not list(folder.glob("*.key")):
             raise KeyFileError(f"{clients_dir}: no client public keys (*.key) in it")
-        return cls(public, secret, folder)
+        return folder
 
     def apply(self, sock: zmq.Socket) -> None:
         sock.curve_server = True
-        sock.curve_publickey = self.public
-        sock.curve_secretkey = self.secret
+        self._apply_pair(sock)
 
 
 class AuthThrottle:

@@ -83,16 +83,11 @@ class EngineInfo:
 
 
 @dataclass(kw_only=True, slots=True)
-class Snapshot:
-    """What every scene's state has, in the same place."""
+class _Kinded:
+    """The head of every snapshot and description: ``kind`` names the scene, and a scene's class fills it
+    with its ``KIND`` when it is not given."""
 
     kind: str = ""
-    t: float = 0.0  # engine (simulated) time [s]
-    estop: bool = False  # the scene's E-STOP latch
-    describe_seq: int = 0  # the description this state belongs to; a client holding an older one asks again
-    flags: InputFlags = field(default_factory=InputFlags)
-    alarms: list[Alarm] = field(default_factory=list)
-    engine: EngineInfo = field(default_factory=EngineInfo)
 
     KIND: ClassVar[str] = ""
 
@@ -102,19 +97,24 @@ class Snapshot:
 
 
 @dataclass(kw_only=True, slots=True)
-class Description:
+class Snapshot(_Kinded):
+    """What every scene's state has, in the same place."""
+
+    t: float = 0.0  # engine (simulated) time [s]
+    estop: bool = False  # the scene's E-STOP latch
+    describe_seq: int = 0  # the description this state belongs to; a client holding an older one asks again
+    flags: InputFlags = field(default_factory=InputFlags)
+    alarms: list[Alarm] = field(default_factory=list)
+    engine: EngineInfo = field(default_factory=EngineInfo)
+
+
+@dataclass(kw_only=True, slots=True)
+class Description(_Kinded):
     """What every scene's static description has."""
 
-    kind: str = ""
     seq: int = 0  # increments whenever the description changes
     title: str = ""  # the scene as shown to a person
     commands: list[str] = field(default_factory=list)  # the scene's command table (protocol message types)
-
-    KIND: ClassVar[str] = ""
-
-    def __post_init__(self) -> None:
-        if not self.kind:
-            self.kind = self.KIND
 
 
 # ---------------------------------------------------------------------------------------------- teleop

@@ -13,6 +13,7 @@ import contextlib
 import ipaddress
 import time
 import uuid
+from collections.abc import Iterator
 from typing import Any
 from urllib.parse import urlsplit
 
@@ -95,6 +96,20 @@ def _auth_refusal(monitor: zmq.Socket | None) -> int:
         elif event["event"] == zmq.EVENT_HANDSHAKE_SUCCEEDED:
             status = 0
     return status
+
+
+def _engine_messages(sock: zmq.Socket, timeout: float) -> Iterator[Any]:
+    """The engine's messages as they arrive on ``sock`` until ``timeout`` seconds have passed (the caller
+    stops early by leaving the loop); what does not decode is skipped."""
+    deadline = time.monotonic() + timeout
+    while (left := deadline - time.monotonic()) > 0:
+        if not sock.poll(int(left * 1000) + 1):
+            continue
+        try:
+            msg = decode_engine(sock.recv())
+        except ProtocolError:
+            continue
+        yield msg
 
 
 class Client:
@@ -235,14 +250,7 @@ class Client:
 
     # ------------------------------------------------------------------ receiving
     def _wait_for(self, types: tuple[str, ...], re: str | None = None) -> Any:
-        deadline = time.monotonic() + self.timeout
-        while (left := deadline - time.monotonic()) > 0:
-            if not self.dealer.poll(int(left * 1000) + 1):
-                continue
-            try:
-                msg = decode_engine(self.dealer.recv())
-            except ProtocolError:
-                continue
+        for msg in _engine_messages(self.dealer, self.timeout):
             if isinstance(msg, DescriptionMessage):  # sent after welcome and on request: keep the newest
                 with contextlib.suppress(SnapshotError):
                     self.description = description_from_wire(msg.description)
@@ -252,14 +260,7 @@ class Client:
 
     def recv_state(self, timeout: float = 1.0) -> Snapshot | None:
         """The next state message's typed snapshot (None on timeout); other messages are skipped."""
-        deadline = time.monotonic() + timeout
-        while (left := deadline - time.monotonic()) > 0:
-            if not self.sub.poll(int(left * 1000) + 1):
-                continue
-            try:
-                msg = decode_engine(self.sub.recv())
-            except ProtocolError:
-                continue
+        for msg in _engine_messages(self.sub, timeout):
             if isinstance(msg, State):
                 try:
                     return snapshot_from_wire(msg.state)

@@ -29,6 +29,7 @@ from app.errors import BosunError
 from app.net.snapshots import MachineLight, MotionStatus, PlantLink
 from app.plc.symbols import GENERATOR_AMPLITUDE, GENERATOR_OMEGA, GENERATOR_PHASE
 from app.scenes.lab import MotionLab
+from app.sim.stewart import Generator, Platform
 
 
 class BackendError(BosunError):
@@ -46,6 +47,23 @@ GENERATOR_DEFAULT = (
     [w / (2 * math.pi) for w in GENERATOR_OMEGA],
     list(GENERATOR_PHASE),
 )
+
+
+def lab_generator(plat: Platform, fields: dict[str, Any] | None = None) -> Generator:
+    """The checked sine generator a ``lab_source`` command's ``fields`` ask of platform ``plat`` (in its
+    command box); a field it lacks takes the lab PLC's default (:data:`GENERATOR_DEFAULT`).
+    :class:`BackendError` when the generator is refused."""
+    p = fields or {}
+    try:
+        return Generator.make(
+            p.get("amplitude", GENERATOR_DEFAULT[0]),
+            p.get("frequency", GENERATOR_DEFAULT[1]),
+            p.get("phase", GENERATOR_DEFAULT[2]),
+            plat.model,
+            plat.command_box,
+        )
+    except BosunError as err:
+        raise BackendError(str(err)) from None
 
 
 class LabBackend(abc.ABC):

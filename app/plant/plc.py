@@ -43,7 +43,7 @@ from app.errors import BosunError, one_line
 from app.marine.waves import check_sea
 from app.marine.waves import spectrum as sea_spectrum
 from app.net.snapshots import MachineLight, MotionStatus, PlantLink
-from app.plant.base import GENERATOR_DEFAULT, BackendError, LabBackend
+from app.plant.base import BackendError, LabBackend, lab_generator
 from app.plc.bridge import (
     STOP,
     AdsBridge,
@@ -74,7 +74,6 @@ from app.plc.symbols import (
     wave_inputs,
 )
 from app.scenes.lab import MotionLab
-from app.sim.stewart import Generator
 
 DATA_STALE = 1.0  # s without a value from a connected PLC: the link is shown stale
 MAX_UPDATES_PER_TICK = 5000
@@ -271,16 +270,7 @@ class PlcLab(LabBackend):
             raise BackendError(f"{name} is ENGAGED; disengage before changing the motion source")
         plat = self.lab.platforms[k]
         if source == "generator":
-            try:
-                g = Generator.make(  # absent fields: the lab PLC's defaults
-                    p.get("amplitude", GENERATOR_DEFAULT[0]),
-                    p.get("frequency", GENERATOR_DEFAULT[1]),
-                    p.get("phase", GENERATOR_DEFAULT[2]),
-                    plat.model,
-                    plat.command_box,
-                )
-            except BosunError as err:
-                raise BackendError(str(err)) from None
+            g = lab_generator(plat, p)
             omega = (2.0 * math.pi * g.frequency).tolist()
             self._send(
                 (f"{m}.sineAmplitude", g.amplitude.tolist()),

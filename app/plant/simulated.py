@@ -34,10 +34,10 @@ from numpy.typing import NDArray
 from app.errors import BosunError
 from app.marine.vessels import vessel_rao
 from app.net.snapshots import MachineLight, MotionStatus, PlantLink
-from app.plant.base import GENERATOR_DEFAULT, REMOTE_TIMEOUT, BackendError, LabBackend
+from app.plant.base import REMOTE_TIMEOUT, BackendError, LabBackend, lab_generator
 from app.plc.symbols import decode_status, encode_status
 from app.scenes.lab import MotionLab
-from app.sim.stewart import Generator, Platform, WaveSimulation, parse_timeseries_csv
+from app.sim.stewart import Platform, WaveSimulation, parse_timeseries_csv
 
 
 def motion_status(p: Platform) -> MotionStatus:
@@ -81,7 +81,7 @@ class SimulatedLab(LabBackend):
         self._remote_t = -np.inf  # monotonic time of the last remote pose (the "remote" light)
         for plat in lab.platforms:  # the lab PLC's generator defaults (FB_StewartInterface.FB_init)
             if plat.source_name == "generator":
-                plat.set_source("generator", Generator.make(*GENERATOR_DEFAULT, plat.model, plat.command_box))
+                plat.set_source("generator", lab_generator(plat))
 
     # ------------------------------------------------------------------ commands
     def platform(self, k: int, action: str) -> None:
@@ -93,13 +93,7 @@ class SimulatedLab(LabBackend):
             if plat.mode == "engaged":
                 raise BackendError(f"{self.names[k]} is ENGAGED; disengage before changing the motion source")
             if source == "generator":
-                obj = Generator.make(  # absent fields: the lab PLC's defaults
-                    p.get("amplitude", GENERATOR_DEFAULT[0]),
-                    p.get("frequency", GENERATOR_DEFAULT[1]),
-                    p.get("phase", GENERATOR_DEFAULT[2]),
-                    plat.model,
-                    plat.command_box,
-                )
+                obj = lab_generator(plat, p)
                 info: dict[str, Any] = {"amplitude": obj.amplitude.tolist(), "frequency": obj.frequency.tolist()}
             elif source == "simulation":
                 if self._rao is None:

@@ -9,6 +9,7 @@ import pyqtgraph as pg
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QGridLayout, QHBoxLayout, QLabel, QPushButton, QSizePolicy, QVBoxLayout, QWidget
 
+from ui.widgets.buttons import button
 from ui.widgets.plots import axis_label, legend, refit, refit_on_show
 
 
@@ -27,11 +28,9 @@ class SwingPage(QWidget):
             ("deactivate", "the law off: its offset returns to zero along the law (the tool back on the work point)"),
             ("reset", "the estimator back to 'no swing' with its initial covariance (law off, tool back)"),
         ):
-            b = QPushButton(action.capitalize())
-            b.setFocusPolicy(Qt.NoFocus)  # Space stays STOP
-            b.setToolTip(tip)
-            b.setMinimumHeight(30)
+            b = button(action.capitalize(), tip, keyboard=False)
             b.clicked.connect(lambda _=False, a=action: send("lab_antisway", action=a))
+            b.setMinimumHeight(30)
             self.swing_buttons[action] = b
             row.addWidget(b)
         self.swing_label = QLabel("–")

@@ -17,7 +17,6 @@ from PyQt5.QtWidgets import (
     QAbstractItemView,
     QHBoxLayout,
     QHeaderView,
-    QPushButton,
     QSizePolicy,
     QTableWidget,
     QTableWidgetItem,
@@ -26,6 +25,7 @@ from PyQt5.QtWidgets import (
 )
 
 from app.engine.alarm_catalog import SHELVE_DEFAULT_S, definition
+from ui.widgets.buttons import button
 from ui.widgets.labels import ElidedLabel
 
 COLUMNS = ("", "time (UTC)", "priority", "source", "alarm", "state")
@@ -47,19 +47,17 @@ class AlarmPanel(QWidget):
         self.title = ElidedLabel("Alarms: none")  # "…" and the whole text in its tool tip when narrow
         self.title.setStyleSheet("font-weight: bold;")
         head.addWidget(self.title, 1)
-        self.ack_one = QPushButton("Acknowledge")
-        self.ack_one.setToolTip("acknowledge the selected alarm")
-        self.ack_one.clicked.connect(self._ack_selected)
-        self.ack_all = QPushButton("Acknowledge all")
-        self.ack_all.clicked.connect(self._ack_everything)
-        self.shelve_one = QPushButton(f"Shelve {SHELVE_DEFAULT_S / 60:g} min")
-        self.shelve_one.setToolTip(
+        # the list stands beside every tab: its buttons never take the keyboard (Space is STOP)
+        self.ack_one = button("Acknowledge", "acknowledge the selected alarm", self._ack_selected, keyboard=False)
+        self.ack_all = button("Acknowledge all", clicked=self._ack_everything, keyboard=False)
+        self.shelve_one = button(
+            f"Shelve {SHELVE_DEFAULT_S / 60:g} min",
             "shelve the selected alarm: it stays tracked but quiet, and returns by itself when the time is up "
-            "(critical and trip alarms cannot be shelved); again on a shelved alarm: unshelve it"
+            "(critical and trip alarms cannot be shelved); again on a shelved alarm: unshelve it",
+            self._shelve_selected,
+            keyboard=False,
         )
-        self.shelve_one.clicked.connect(self._shelve_selected)
         for b in (self.ack_one, self.ack_all, self.shelve_one):
-            b.setFocusPolicy(Qt.NoFocus)  # Space is STOP; a focused button would swallow it
             head.addWidget(b)
         lay.addLayout(head)
         self.table = QTableWidget(0, len(COLUMNS))

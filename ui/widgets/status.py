@@ -19,13 +19,13 @@ from PyQt5.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QPlainTextEdit,
-    QPushButton,
     QSplitter,
     QVBoxLayout,
     QWidget,
 )
 
 from ui.widgets.alarms import AlarmPanel
+from ui.widgets.buttons import button
 from ui.widgets.labels import ElidedLabel
 
 LIGHT = {"ok": "#3c9d3c", "warn": "#e0a020", "error": "#d9534f", "off": "#666666", "unknown": "#8a8aa0"}
@@ -341,8 +341,14 @@ class StatusPanel(QWidget):
         left.addWidget(split, 1)
         lay.addLayout(left, 1)
         right = QVBoxLayout()
-        self.stop = QPushButton("STOP")
-        self.stop.setFocusPolicy(Qt.NoFocus)  # never takes the keyboard: Space stays STOP everywhere
+        # the column's buttons never take the keyboard: Space stays STOP everywhere
+        self.stop = button(
+            "STOP",
+            "E-STOP: stops every machine within one engine tick and latches (Space from any tab or dialog, except "
+            "in a text field that has the keyboard, where Space types; Ctrl+Space everywhere; the joystick's stop "
+            "button)",
+            keyboard=False,
+        )
         self.stop.setMinimumSize(150, 80)
         f = QFont()
         f.setPointSize(22)
@@ -352,24 +358,19 @@ class StatusPanel(QWidget):
             "QPushButton { background: #c9302c; color: white; border-radius: 8px; }"
             "QPushButton:pressed { background: #8b1e1b; }"
         )
-        self.stop.setToolTip(
-            "E-STOP: stops every machine within one engine tick and latches (Space from any tab or dialog, except "
-            "in a text field that has the keyboard, where Space types; Ctrl+Space everywhere; the joystick's stop "
-            "button)"
-        )
         self.stop.pressed.connect(self.stop_clicked)  # on press: a press that slides off still stops
         right.addWidget(self.stop)
         self.latched = QLabel("")
         self.latched.setStyleSheet("color: #d9534f; font-weight: bold;")
         right.addWidget(self.latched)
-        self.reset = QPushButton("Reset E-STOP")
-        self.reset.setFocusPolicy(Qt.NoFocus)
-        self.reset.setToolTip(
+        self.reset = button(
+            "Reset E-STOP",
             "clear a latched E-STOP (operator only); every machine keeps holding until you command it anew: "
-            "centre the stick and press enable, or choose a mode"
+            "centre the stick and press enable, or choose a mode",
+            self.reset_clicked,
+            keyboard=False,
         )
         self.reset.setEnabled(False)
-        self.reset.clicked.connect(self.reset_clicked)
         right.addWidget(self.reset)
         self.role = QLabel("role: –")
         self.role.setWordWrap(True)
@@ -379,13 +380,13 @@ class StatusPanel(QWidget):
         self.role.setAlignment(Qt.AlignLeft | Qt.AlignTop)
         self.role.setToolTip("who holds the operator role of each engine; viewers see everything and may STOP")
         right.addWidget(self.role)
-        self.role_button = QPushButton("Release operator role")
-        self.role_button.setFocusPolicy(Qt.NoFocus)
-        self.role_button.setToolTip(
+        self.role_button = button(
+            "Release operator role",
             "release: the engines hold and another console may take over; take: become the operator where the "
-            "role is free (you start disarmed)"
+            "role is free (you start disarmed)",
+            self.role_clicked,
+            keyboard=False,
         )
-        self.role_button.clicked.connect(self.role_clicked)
         right.addWidget(self.role_button)
         right.addStretch(1)
         lay.addLayout(right)
