@@ -95,6 +95,9 @@ class ViewerWindow(QMainWindow):
             self.content.setParent(None)
         self.content = self._make(desc)
         self.body.addWidget(self.content, 1)
+        # a child added to a window already on screen stays hidden until shown (Qt): seen as an empty viewer
+        # when the description came after the window was shown, in a test process that had shown other windows
+        self.content.show()
 
     def _make(self, desc) -> QWidget:
         if desc.kind == "teleop":
