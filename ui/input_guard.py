@@ -18,6 +18,7 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+from PyQt5 import sip
 from PyQt5.QtCore import QEvent, QObject, Qt, QTimer
 from PyQt5.QtWidgets import (
     QAbstractScrollArea,
@@ -112,7 +113,10 @@ class WheelGuard(QObject):
     def install(self, app: QApplication | None = None) -> None:
         app = app or QApplication.instance()
         for w in app.allWidgets():
-            self._no_wheel_focus(w)
+            # a widget of a window closed before may be gone by now (seen in CI: a QSpinBox deleted while
+            # a second window was built in the same process)
+            if not sip.isdeleted(w):
+                self._no_wheel_focus(w)
         app.installEventFilter(self)
 
     def remove(self, app: QApplication | None = None) -> None:
