@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from app.models.kernels import _jit
-from app.sim.kernels import _pendulum_derivative, pendulum_step
+from app.models.pendulum_kernels import _pendulum_derivative, pendulum_step
 
 __all__ = ["ekf_block"]
 
