@@ -5,8 +5,8 @@ in the diagram's order: the platforms' body rates (eqs. 33, 47, 51) as true and 
 (the sensor), the Comau's law (:func:`app.control.lab_kernels.comau_law`) and drives
 (:func:`app.sim.kernels.drives_block`), the tool point (eqs. 54–57), the winch's law
 (:func:`app.control.lab_kernels.winch_law`) and drum (:func:`app.sim.kernels.drum_block`), the load
-(:func:`app.sim.kernels.pendulum_step`) and the sample.  The reference is the same diagram run block by block
-in NumPy (``MotionLab(use_kernels=False)``), tested equal in ``tests/test_sim_kernels.py``.
+(:func:`app.models.pendulum_kernels.pendulum_step`) and the sample.  The reference is the same diagram run block
+by block in NumPy (``MotionLab(use_kernels=False)``), tested equal in ``tests/test_sim_kernels.py``.
 
 Records (every array C-contiguous float64, bool for ``at_limit``; updated in place where marked):
 
