@@ -421,3 +421,61 @@ def test_warm_up_and_the_cli_clear_stale_caches_first(monkeypatch):
     assert calls == ["cleared"] or not kernels.ENABLED
     assert cli.main(["robots"]) == 0
     assert calls[-1] == "cleared"
+
+
+INTERRUPT_WHILE_LOADING = r"""
+import signal, sys
+from numba.core import codegen
+
+when = sys.argv[1]  # "compile": the first time LLVM asks the object cache; "load": when it hands over cached code
+fired = []
+ask = codegen.CPUCodeLibrary._object_getbuffer_hook.__func__
+
+
+def ctrl_c_inside_the_callback(cls, ll_module):
+    lib = getattr(ll_module, "_CPUCodeLibrary__library", None)
+    cached = lib is not None and getattr(lib, "_compiled_object", None)
+    if not fired and (when == "compile" or cached):
+        fired.append(1)
+        signal.raise_signal(signal.SIGINT)  # Ctrl-C while LLVM is inside numba's ctypes callback
+    return ask(cls, ll_module)
+
+
+codegen.CPUCodeLibrary._object_getbuffer_hook = classmethod(ctrl_c_inside_the_callback)
+import numba
+from app.models import kernels  # registers the deferral
+
+
+@numba.njit(cache=True)
+def f(x):
+    return 2.0 * x + 1.0
+
+
+try:
+    f(1.0)
+    print("not interrupted", fired, flush=True)
+except KeyboardInterrupt:
+    print("interrupted after", f.signatures, flush=True)
+print("then", f(2.0), flush=True)
+"""
+
+
+@pytest.mark.parametrize("when", ["compile", "load"])
+def test_ctrl_c_while_numba_compiles_or_loads_a_kernel_arrives_after_it(tmp_path, when):
+    """A KeyboardInterrupt inside numba's ctypes callback was dropped: LLVM went on without the cached machine
+    code and the process died with SIGSEGV (``sim tac`` interrupted at its start, CI 2026-11-28 and -29), or the
+    interrupt was lost and the command finished.  The signal now waits for the compiler lock's release."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "interrupt_while_loading.py"
+    script.write_text(INTERRUPT_WHILE_LOADING, encoding="utf-8")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    if when == "load":  # a first run writes the cache (it is interrupted too: "compile" covers it)
+        subprocess.run([sys.executable, str(script), "none"], env=env, capture_output=True, timeout=300, check=True)
+    out = subprocess.run(
+        [sys.executable, "-X", "faulthandler", str(script), when], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
+    assert "Exception ignored" not in out.stderr, out.stderr[-2000:]
+    assert out.stdout.splitlines() == ["interrupted after [(float64,)]", "then 5.0"], out.stdout
