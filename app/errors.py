@@ -2,10 +2,54 @@
 
 from __future__ import annotations
 
+from typing import Any
 
-def raise_interrupt(*_: object) -> None:
-    """A SIGTERM handler: the signal ends the program as Ctrl-C does (one line, status 130, a study's
-    partial output removed).  Set by the entry point (app/launch.py) and by :func:`app.cli.main`."""
+#: Python functions that machine code calls back, (module file, function): numba's runtime unpickling of the objects
+#: a kernel boxes (``numba_unpickle`` in numba's _helperlib.c calls it on every call that returns an array) and
+#: llvmlite's object-cache callbacks (ctypes).  An exception raised inside one is not passed on: the caller goes on
+#: with a NULL object and the process dies with SIGSEGV (numba issue #2324, "interrupting … sometimes gives a
+#: segmentation fault"; here: ``sim tac`` interrupted while the Delta head's workspace was computed).
+CALLBACKS = frozenset(
+    {
+        ("serialize.py", "_numba_unpickle"),
+        ("executionengine.py", "_raw_object_cache_notify"),
+        ("executionengine.py", "_raw_object_cache_getbuffer"),
+    }
+)
+
+
+def inside_a_callback(frame: Any) -> bool:
+    """True when ``frame`` or a caller of it is one of :data:`CALLBACKS`."""
+    while frame is not None:
+        code = frame.f_code
+        if (code.co_filename.rsplit("/", 1)[-1], code.co_name) in CALLBACKS:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _again_later(signum: int, delay: float = 0.01) -> None:
+    """The signal ``signum`` pending again in ``delay`` seconds, from a helper thread: re-raised at once (by
+    ``signal.raise_signal`` or ``_thread.interrupt_main``) its handler ran again right away, still inside the
+    callback, until the recursion limit."""
+    import _thread
+    import threading
+
+    timer = threading.Timer(delay, _thread.interrupt_main, args=(signum,))
+    timer.daemon = True  # never keeps the process alive
+    timer.start()
+
+
+def raise_interrupt(signum: int | None = None, frame: Any = None) -> None:
+    """The SIGINT and SIGTERM handler of the ``bosun`` command: the signal ends the program as Ctrl-C does (one
+    line, status 130, a study's partial output removed).  Set by the entry point (app/launch.py) and by
+    :func:`app.cli.main`.
+
+    A signal that lands inside a callback from machine code (:data:`CALLBACKS`) is raised again instead, so
+    the KeyboardInterrupt comes once the compiled code has returned to Python (safety H92)."""
+    if signum is not None and inside_a_callback(frame):
+        _again_later(signum)
+        return
     raise KeyboardInterrupt
 
 

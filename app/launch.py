@@ -43,6 +43,7 @@ def main() -> int:
         from app.errors import raise_interrupt
 
         signal.signal(signal.SIGTERM, raise_interrupt)
+        signal.signal(signal.SIGINT, raise_interrupt)  # Python's own raises inside numba's callbacks too (H92)
         code = _import_cli()()
     except KeyboardInterrupt:
         print("bosun: interrupted", file=sys.stderr)

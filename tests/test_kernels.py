@@ -479,3 +479,54 @@ def test_ctrl_c_while_numba_compiles_or_loads_a_kernel_arrives_after_it(tmp_path
     assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
     assert "Exception ignored" not in out.stderr, out.stderr[-2000:]
     assert out.stdout.splitlines() == ["interrupted after [(float64,)]", "then 5.0"], out.stdout
+
+
+SIGNAL_DURING_A_KERNEL = r"""
+import os, signal, sys, threading, time
+import numba
+import numpy as np
+from app.errors import raise_interrupt
+
+sig = getattr(signal, sys.argv[1])
+signal.signal(sig, raise_interrupt)  # what app/launch.py sets for both
+
+
+@numba.njit(nogil=True)
+def slow(n):
+    out, ok = np.zeros(3), np.zeros(3, dtype=np.bool_)
+    for i in range(n):
+        out[i % 3] += 1e-9 * i
+    return out, ok  # boxing the arrays calls numba's _numba_unpickle: the first Python code after the signal
+
+
+slow(10)
+t0 = time.perf_counter()
+slow(20_000_000)
+n = max(1, int(20_000_000 * 0.6 / (time.perf_counter() - t0)))  # about 0.6 s
+threading.Timer(0.2, os.kill, args=(os.getpid(), sig)).start()
+try:
+    slow(n)
+    time.sleep(2.0)  # the program goes on: the interrupt arrives here
+    print("not interrupted", flush=True)
+except KeyboardInterrupt:
+    print("interrupted after the kernel", flush=True)
+"""
+
+
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_a_signal_during_a_kernel_that_returns_an_array_interrupts_after_it(tmp_path, name):
+    """Safety H92: a signal that arrives while a kernel runs is handled by the first Python code after it, which
+    is numba's ``_numba_unpickle`` as the kernel boxes its array; a KeyboardInterrupt raised there reached the
+    machine code as a NULL object and the process died with SIGSEGV (``sim tac`` stopped while the Delta head's
+    workspace was computed) or, here, a ``SystemError`` "returned a result with an exception set".  Bosun's handler
+    puts the signal off until the kernel has returned."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "signal_during_a_kernel.py"
+    script.write_text(SIGNAL_DURING_A_KERNEL, encoding="utf-8")
+    out = subprocess.run(
+        [sys.executable, "-X", "faulthandler", str(script), name], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
+    assert out.stdout.strip() == "interrupted after the kernel", out.stdout
