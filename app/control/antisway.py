@@ -33,10 +33,15 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
+from app.control import antisway_kernels
 from app.errors import BosunError
+from app.models.block import Block
 from app.models.pendulum import G, swing_derivative, swing_direction, swing_rk4
 
-__all__ = ["AntiSwing", "AntiSwingDesign", "AntiSwingError", "GainSchedule", "SwingEkf", "axis_model", "lqr_gain"]
+__all__ = [
+    "ANTISWAY_LAW", "SWING_CONTROL", "SWING_EKF", "AntiSwing", "AntiSwingDesign", "AntiSwingError", "GainSchedule",
+    "SwingEkf", "axis_model", "lqr_gain",
+]  # fmt: skip
 
 
 class AntiSwingError(BosunError):
@@ -144,31 +149,67 @@ class AntiSwing:
         self.p[:], self.v[:], self.a[:] = 0.0, 0.0, 0.0
         self.saturated = False
 
+    def record(self) -> tuple:
+        """The law's parameter record for :data:`ANTISWAY_LAW`: (grid, K_α, K_β, a_max, offset_max); the fixed
+        design is a grid of one length (np.interp then gives its gains exactly)."""
+        if self.schedule:
+            sch = self._schedule
+            grid, Ka, Kb = sch.L, sch.K_alpha, sch.K_beta
+        else:
+            grid, Ka, Kb = np.array([self.design.L]), self._fixed[0][None, :], self._fixed[1][None, :]
+        return (grid, np.ascontiguousarray(Ka), np.ascontiguousarray(Kb), self.design.a_max, self.design.offset_max)
+
     def step(self, x_hat: ArrayLike, L: float, dt: float) -> tuple[NDArray, NDArray, NDArray]:
-        """Advance the offset by dt with the command u = −K s of each plane; returns (p, ṗ, p̈) in {d} (3,)."""
+        """Advance the offset by dt with the command u = −K s of each plane; returns (p, ṗ, p̈) in {d} (3,)
+        (one step of the NumPy reference of :data:`ANTISWAY_LAW`)."""
         x = np.asarray(x_hat, dtype=float)
-        if self.active and np.all(np.isfinite(x)):
-            ka, kb = self.gains(L)
-            u = np.array(
-                [-ka @ np.array([x[0], x[2], self.p[0], self.v[0]]), -kb @ np.array([x[1], x[3], self.p[1], self.v[1]])]
-            )
-        else:  # inactive (or no estimate): bring an offset that is left back to zero along the same law
-            ka, kb = self.gains(L)
-            u = np.array([-ka[2:] @ np.array([self.p[0], self.v[0]]), -kb[2:] @ np.array([self.p[1], self.v[1]])])
-        a_max, p_max = self.design.a_max, self.design.offset_max
-        self.saturated = bool(np.any(np.abs(u) > a_max))
-        u = np.clip(u, -a_max, a_max)
-        self.v = self.v + u * dt
-        self.p = self.p + self.v * dt
-        for k in range(2):  # at the offset limit: stop there (no speed further out)
-            if abs(self.p[k]) > p_max:
-                self.p[k] = math.copysign(p_max, self.p[k])
-                if self.v[k] * self.p[k] > 0:
-                    self.v[k] = 0.0
-                self.saturated = True
-        self.a = u
+        (self.p, self.v, self.a), (self.saturated,) = _law_reference(
+            (self.p, self.v, self.a), (x, float(L), self.active), self.record(), dt
+        )
         z = np.zeros(1)
         return np.concatenate([self.p, z]), np.concatenate([self.v, z]), np.concatenate([self.a, z])
+
+
+def _interp_gains(L: float, grid: NDArray, K: NDArray) -> NDArray[np.float64]:
+    Lc = float(np.clip(L, grid[0], grid[-1]))
+    return np.array([np.interp(Lc, grid, K[:, j]) for j in range(4)])
+
+
+def _law_reference(x, u, p, dt):
+    """The NumPy reference of :data:`ANTISWAY_LAW` (see :class:`AntiSwing`)."""
+    pos, vel, _ = x
+    x_hat, L, active = u
+    grid, K_alpha, K_beta, a_max, p_max = p
+    ka, kb = _interp_gains(L, grid, K_alpha), _interp_gains(L, grid, K_beta)
+    if active and np.all(np.isfinite(x_hat)):
+        u_cmd = np.array(
+            [-ka @ np.array([x_hat[0], x_hat[2], pos[0], vel[0]]), -kb @ np.array([x_hat[1], x_hat[3], pos[1], vel[1]])]
+        )
+    else:  # inactive (or no estimate): bring an offset that is left back to zero along the same law
+        u_cmd = np.array([-ka[2:] @ np.array([pos[0], vel[0]]), -kb[2:] @ np.array([pos[1], vel[1]])])
+    saturated = bool(np.any(np.abs(u_cmd) > a_max))
+    u_cmd = np.clip(u_cmd, -a_max, a_max)
+    vel = vel + u_cmd * dt
+    pos = pos + vel * dt
+    for k in range(2):  # at the offset limit: stop there (no speed further out)
+        if abs(pos[k]) > p_max:
+            pos[k] = math.copysign(p_max, pos[k])
+            if vel[k] * pos[k] > 0:
+                vel[k] = 0.0
+            saturated = True
+    return (pos, vel, u_cmd), (saturated,)
+
+
+#: the anti-swing law as a block: the swing estimate in, the tool's offset from its target out (in {d})
+ANTISWAY_LAW = Block(
+    "anti-swing law (LQR, gain schedule)",
+    state=("p", "v", "a"),
+    inputs=("x_hat", "L", "active"),
+    outputs=("saturated",),
+    params=("grid", "K_alpha", "K_beta", "a_max", "offset_max"),
+    reference=_law_reference,
+    kernel=antisway_kernels.law_block,
+)
 
 
 # ----------------------------------------------------------------------------- the estimator
@@ -272,6 +313,13 @@ class SwingEkf:
         self.innovation = y
         self.nis = float(y @ np.linalg.solve(S, y))
 
+    def record(self) -> tuple:
+        """The estimator's parameter record for :data:`SWING_EKF`."""
+        return (
+            self.c, self.g, self.sigma_accel, self.sigma_model, self.measurement == "payload",
+            self.sigma_angle, self.sigma_pos,
+        )  # fmt: skip
+
     def nees(self, x_true: ArrayLike) -> float:
         """Normalised estimation error squared eᵀP⁻¹e of the estimate against the true state."""
         e = np.asarray(x_true, dtype=float) - self.x
@@ -280,3 +328,58 @@ class SwingEkf:
     def sigma(self) -> NDArray[np.float64]:
         """Standard deviations of the state estimate (4,)."""
         return np.sqrt(np.clip(np.diag(self.P), 0.0, None))
+
+
+def _ekf_reference(x, u, p, dt):
+    """The NumPy reference of :data:`SWING_EKF`: :meth:`SwingEkf.predict` then :meth:`SwingEkf.update`."""
+    c, g, sigma_accel, sigma_model, payload, sigma_angle, sigma_pos = p
+    a_t_d, L_prev, L_dot, z, L = u
+    f = SwingEkf(
+        c=c, g=g, sigma_accel=sigma_accel, sigma_model=sigma_model, measurement=MEASUREMENTS[int(payload)],
+        sigma_angle=sigma_angle, sigma_pos=sigma_pos, x=np.array(x[0], dtype=float), P=np.array(x[1], dtype=float),
+    )  # fmt: skip
+    f.predict(dt, a_t_d, L_prev, L_dot)
+    f.update(z, L)
+    return (f.x, f.P), (f.innovation, f.nis)
+
+
+#: the swing estimator as a block: the measured tool acceleration and a wire measurement in, the swing out
+SWING_EKF = Block(
+    "swing estimator (EKF)",
+    state=("x_hat", "P"),
+    inputs=("a_t_d", "L_prev", "L_dot", "z", "L"),
+    outputs=("innovation", "nis"),
+    params=("c", "g", "sigma_accel", "sigma_model", "payload", "sigma_angle", "sigma_pos"),
+    reference=_ekf_reference,
+    kernel=antisway_kernels.ekf_block,
+)
+
+
+def _swing_control_reference(x, u, p, dt):
+    """The NumPy reference of :data:`SWING_CONTROL`: :data:`SWING_EKF`, the tilt, :data:`ANTISWAY_LAW`."""
+    x_hat, P, tilt, _, lp, lv, la, L_prev = x
+    a_d, z, L, L_dot, active = u
+    ekf_p, law_p, g, tau = p
+    (x_hat, P), (y, nis) = _ekf_reference((x_hat, P), (a_d, L_prev, L_dot, z, L), ekf_p, dt)
+    # the quasi-static tilt of the compensation's own tool acceleration (without the law's), low-passed
+    a_comp = a_d[:2] - la
+    k = 1.0 - math.exp(-dt / tau)
+    new_tilt = tilt + k * (np.array([a_comp[0], -a_comp[1]]) / g - tilt)
+    tilt_rate, tilt = (new_tilt - tilt) / dt, new_tilt
+    x_swing = x_hat - np.concatenate([tilt, tilt_rate])
+    (lp, lv, la), (saturated,) = _law_reference((lp, lv, la), (x_swing, L, active), law_p, dt)
+    zero = np.zeros(1)
+    out = (np.concatenate([lp, zero]), np.concatenate([lv, zero]), saturated, y, nis)
+    return (x_hat, P, tilt, tilt_rate, lp, lv, la, L), out
+
+
+#: the estimator, the quasi-static tilt (app.scenarios.swing) and the law composed: the lab's anti-swing
+SWING_CONTROL = Block(
+    "swing control (EKF, tilt, LQR)",
+    state=("x_hat", "P", "tilt", "tilt_rate", "p", "v", "a", "L_prev"),
+    inputs=("a_t_d", "z", "L", "L_dot", "active"),
+    outputs=("p_d", "v_d", "saturated", "innovation", "nis"),
+    params=("ekf", "law", "g", "tilt_tau"),
+    reference=_swing_control_reference,
+    kernel=antisway_kernels.swing_control_block,
+)

@@ -1,4 +1,4 @@
-"""Compiled swing estimator (issue 30, item 1 — work in progress): the EKF of :class:`app.control.antisway.SwingEkf`
+"""Compiled swing estimator and anti-swing law (issue 30): the EKF of :class:`app.control.antisway.SwingEkf`
 as one step on records, to give the NumPy reference's numbers bit for bit.
 
 Records (every array C-contiguous float64):
@@ -103,3 +103,79 @@ def ekf_block(x, u, p, dt):
     _predict(xh, P, a, L_prev, Ld, p, dt)
     y, nis = _update(xh, P, z, L, p)
     return x, (y, nis)
+
+
+@_jit
+def _interp_gains(L, grid, K):
+    """GainSchedule.gains for one plane: each of the 4 gains interpolated at L clipped to the grid."""
+    Lc = min(max(L, grid[0]), grid[-1])
+    k = np.empty(4)
+    for j in range(4):
+        k[j] = np.interp(Lc, grid, K[:, j])
+    return k
+
+
+@_jit
+def _dot4(k, s0, s1, s2, s3):
+    s = np.array([s0, s1, s2, s3])
+    return -k @ s
+
+
+@_jit
+def law_block(x, u, p, dt):
+    """AntiSwing.step (gain schedule on): x = (p, v, a) (2,) each, in place; u = (x̂ (4,), L, active);
+    p = (grid (n,), K_α (n, 4), K_β (n, 4), a_max, offset_max).  Returns (x, (saturated,))."""
+    pos, vel, acc = x
+    xh, L, active = u
+    grid, K_alpha, K_beta, a_max, p_max = p
+    ka = _interp_gains(L, grid, K_alpha)
+    kb = _interp_gains(L, grid, K_beta)
+    finite = True
+    for i in range(4):
+        if not math.isfinite(xh[i]):
+            finite = False
+    cmd = np.empty(2)
+    if active and finite:
+        cmd[0] = _dot4(ka, xh[0], xh[2], pos[0], vel[0])
+        cmd[1] = _dot4(kb, xh[1], xh[3], pos[1], vel[1])
+    else:
+        cmd[0] = -ka[2:] @ np.array([pos[0], vel[0]])
+        cmd[1] = -kb[2:] @ np.array([pos[1], vel[1]])
+    saturated = abs(cmd[0]) > a_max or abs(cmd[1]) > a_max
+    for i in range(2):
+        cmd[i] = min(max(cmd[i], -a_max), a_max)
+        vel[i] = vel[i] + cmd[i] * dt
+    for i in range(2):
+        pos[i] = pos[i] + vel[i] * dt
+    for i in range(2):
+        if abs(pos[i]) > p_max:
+            pos[i] = math.copysign(p_max, pos[i])
+            if vel[i] * pos[i] > 0:
+                vel[i] = 0.0
+            saturated = True
+        acc[i] = cmd[i]
+    return x, (saturated,)
+
+
+@_jit
+def swing_control_block(x, u, p, dt):
+    """The estimator, the quasi-static tilt and the law in one step (see :data:`app.control.antisway.SWING_CONTROL`):
+    x = (x̂, P, tilt, tilt_rate, p, v, a, L_prev), u = (a_t^d, z, L, L̇, active), p = (EKF record, law record,
+    g, τ_tilt).  Returns (x', (p_d (3,), v_d (3,), saturated, innovation, NIS)) with p_d, v_d in {d}."""
+    xh, P, tilt, tilt_rate, lp, lv, la, L_prev = x
+    a_d, z, L, Ld, active = u
+    ekf_p, law_p, g, tau = p
+    _predict(xh, P, a_d, L_prev, Ld, ekf_p, dt)
+    y, nis = _update(xh, P, z, L, ekf_p)
+    k = 1.0 - math.exp(-dt / tau)
+    q0 = (a_d[0] - la[0]) / g
+    q1 = (-(a_d[1] - la[1])) / g
+    t0 = tilt[0] + k * (q0 - tilt[0])
+    t1 = tilt[1] + k * (q1 - tilt[1])
+    tilt_rate[0], tilt_rate[1] = (t0 - tilt[0]) / dt, (t1 - tilt[1]) / dt
+    tilt[0], tilt[1] = t0, t1
+    xs = np.array([xh[0] - t0, xh[1] - t1, xh[2] - tilt_rate[0], xh[3] - tilt_rate[1]])
+    _, (saturated,) = law_block((lp, lv, la), (xs, L, active), law_p, dt)
+    p_d = np.array([lp[0], lp[1], 0.0])
+    v_d = np.array([lv[0], lv[1], 0.0])
+    return (xh, P, tilt, tilt_rate, lp, lv, la, L), (p_d, v_d, saturated, y, nis)

@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from app.control.antisway import AntiSwing, AntiSwingDesign, SwingEkf
+from app.control.antisway import SWING_CONTROL, AntiSwing, AntiSwingDesign, SwingEkf
+from app.models.kernels import ENABLED
 from app.scenes.lab import MotionLab
 from app.sim.motionlab import R_G_D
 
@@ -47,6 +48,7 @@ class SwingControl:
     sigma_pos: float = 0.005  # m: the load's position from the tracker (assumed)
     tilt_tau: float = 0.2  # s: low-pass of the quasi-static tilt (assumed; well below the wave periods)
     active: bool = True
+    use_kernels: bool = field(default=ENABLED, repr=False)
     ekf: SwingEkf = field(init=False)
     law: AntiSwing = field(init=False)
 
@@ -61,6 +63,7 @@ class SwingControl:
         self._L_prev = self.lab.winch.length
         self.tilt = np.zeros(2)  # the quasi-static tilt (α, β) of the compensation's tool motion
         self.tilt_rate = np.zeros(2)
+        self._record = (self.ekf.record(), self.law.record(), float(pd.g), float(self.tilt_tau))
 
     def reset(self) -> None:
         """Estimator back to "no swing", the law's offset to zero (call at rest)."""
@@ -75,23 +78,21 @@ class SwingControl:
         return np.array([pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot])
 
     def step(self, dt: float) -> None:
-        """Estimate with what the step just taken showed; set the offset for the next step."""
+        """Estimate with what the step just taken showed; set the offset for the next step (one step of
+        :data:`~app.control.antisway.SWING_CONTROL`, compiled unless ``use_kernels`` is False)."""
         lab, pd = self.lab, self.lab.pendulum
         L, Ld = lab.winch.length, lab.winch.speed
         a_d = R_G_D.T @ lab.a_t_g + self.rng.normal(0.0, self.sigma_accel, 3)
-        self.ekf.predict(dt, a_d, self._L_prev, Ld)
         if self.measurement == "angles":
             z = np.array([pd.alpha, pd.beta]) + self.rng.normal(0.0, self.sigma_angle, 2)
         else:
             z = L * pd.direction() + self.rng.normal(0.0, self.sigma_pos, 3)
-        self.ekf.update(z, L)
-        self._L_prev = L
-        # the quasi-static tilt of the compensation's own tool acceleration (without the law's)
-        a_comp = a_d[:2] - self.law.a
-        k = 1.0 - math.exp(-dt / self.tilt_tau)
-        tilt = self.tilt + k * (np.array([a_comp[0], -a_comp[1]]) / pd.g - self.tilt)
-        self.tilt_rate, self.tilt = (tilt - self.tilt) / dt, tilt
-        self.law.active = self.active
-        x = self.ekf.x - np.concatenate([self.tilt, self.tilt_rate])
-        p_d, v_d, _ = self.law.step(x, L, dt)
+        ekf, law = self.ekf, self.law
+        law.active = self.active
+        x = (ekf.x, ekf.P, self.tilt, self.tilt_rate, law.p, law.v, law.a, self._L_prev)
+        x, (p_d, v_d, law.saturated, ekf.innovation, nis) = SWING_CONTROL.step(
+            x, (a_d, z, float(L), float(Ld), bool(self.active)), self._record, dt, self.use_kernels
+        )
+        ekf.x, ekf.P, self.tilt, self.tilt_rate, law.p, law.v, law.a, self._L_prev = x
+        ekf.nis = float(nis)
         lab.set_tool_offset(self.R_n1_d @ p_d, self.R_n1_d @ v_d)

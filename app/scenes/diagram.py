@@ -20,6 +20,7 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass, field
 
+from app.control.antisway import SWING_CONTROL
 from app.control.lab import COMAU_LAW, WINCH_LAW
 from app.control.tac import CRANE_LAW, HEAD_PID
 from app.errors import BosunError
@@ -237,12 +238,18 @@ LAB_DIAGRAM = Diagram(
     runs="app.scenes.lab.MotionLab.step: the platforms, then app.scenes.lab_kernels.lab_step (one compiled call), "
     "or each block's NumPy reference",
     nodes=(
-        part("operator", "operator", "app.engine.lab_session", "-> comau_mode, v_cmd, winch_mode, winch_speed", "HMI"),
+        part(
+            "operator",
+            "operator",
+            "app.engine.lab_session",
+            "-> comau_mode, v_cmd, winch_mode, winch_speed, antisway",
+            "HMI",
+        ),
         part("waves", "plant", "app.sim.stewart", "-> eta8000, eta1500", "vessel motion / generator"),
         part("em8000", "plant", "app.sim.stewart", "source -> eta", "EM8000 platform"),
         part("em1500", "plant", "app.sim.stewart", "source -> eta", "EM1500 platform"),
         part("sensors", "sensor", "app.marine.sensors", "eta1, eta2 -> view, view2", "MRU / tracker or true"),
-        part("antisway", "controller", "app.control.antisway", "swing -> offset", "EKF + LQR anti-swing"),
+        Node("antisway", "controller", "app.control.antisway", SWING_CONTROL, note="EKF + LQR anti-swing"),
         Node("comau_law", "controller", "app.control.lab", COMAU_LAW, note="REMOTE / MOTION_COMP"),
         Node("drives", "plant", "app.sim.motionlab", COMAU_DRIVES, note="Comau joint drives"),
         part("tool", "sensor", "app.models.comau", "q, eta1 -> tool, a_t_d", "tool point, eqs. 54-57"),
@@ -257,11 +264,15 @@ LAB_DIAGRAM = Diagram(
             "waves.eta1500 -> em1500.source",
             "em8000.eta -> sensors.eta1",
             "em1500.eta -> sensors.eta2",
-            "load.alpha,beta -> antisway.swing",
+            "tool.a_t_d -> antisway.a_t_d",
+            "load.alpha,beta -> antisway.z",
+            "drum.L_w -> antisway.L",
+            "drum.L_w_dot -> antisway.L_dot",
+            "operator.antisway -> antisway.active",
             "operator.comau_mode -> comau_law.mode",
             "drives.q -> comau_law.q",
             "operator.v_cmd -> comau_law.v_cmd",
-            "antisway.offset -> comau_law.offset",
+            "antisway.p_d,v_d -> comau_law.offset",
             "sensors.view -> comau_law.view",
             "comau_law.brake -> drives.brake",
             "comau_law.q_ref -> drives.q_ref",
