@@ -179,3 +179,17 @@ def swing_control_block(x, u, p, dt):
     p_d = np.array([lp[0], lp[1], 0.0])
     v_d = np.array([lv[0], lv[1], 0.0])
     return (xh, P, tilt, tilt_rate, lp, lv, la, L), (p_d, v_d, saturated, y, nis)
+
+
+def warm_up_steps() -> list:
+    """Zero-argument calls that compile (or load) the kernels as :class:`app.scenarios.swing.SwingControl` and the
+    blocks call them (for :func:`app.warmup.warm_up`)."""
+    z2, z3, z4, eye4 = np.zeros(2), np.zeros(3), np.zeros(4), np.eye(4)
+    ekf_p = (0.1, 9.81, 0.05, 1e-3, False, 0.01, 0.005)
+    law_p = (np.ones(2), np.zeros((2, 4)), np.zeros((2, 4)), 2.0, 0.3)
+    x = (z4.copy(), eye4.copy(), z2.copy(), z2.copy(), z2.copy(), z2.copy(), z2.copy(), 3.0)
+    return [
+        lambda: ekf_block((z4.copy(), eye4.copy()), (z3, 3.0, 0.0, z2, 3.0), ekf_p, 0.005),
+        lambda: law_block((z2.copy(), z2.copy(), z2.copy()), (z4, 3.0, False), law_p, 0.005),
+        lambda: swing_control_block(x, (z3, z2, 3.0, 0.0, False), (ekf_p, law_p, 9.81, 0.2), 0.005),
+    ]

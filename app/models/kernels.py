@@ -66,6 +66,8 @@ KERNEL_FILES = (
     "control/tac_kernels.py",
     "sim/head_kernels.py",
     "scenes/tac_kernels.py",
+    "models/pendulum_kernels.py",
+    "control/antisway_kernels.py",
 )
 
 
