@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 #: Python functions that machine code calls back, (module file, function): numba's runtime unpickling of the objects
@@ -51,6 +52,19 @@ def raise_interrupt(signum: int | None = None, frame: Any = None) -> None:
         _again_later(signum)
         return
     raise KeyboardInterrupt
+
+
+def keep_dropped_interrupts(unraisable: Any) -> None:
+    """``sys.unraisablehook`` of the ``bosun`` command: a KeyboardInterrupt that Python had to drop (raised in a
+    weakref callback, a ``__del__`` or a ctypes callback, where an exception cannot be passed on) is made pending
+    again 10 ms later, so Ctrl-C is never lost (safety H93: a SIGINT that landed in matplotlib's weakref
+    callback printed "Exception ignored" and the study ran to its end); anything else goes to Python's hook."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        import signal
+
+        _again_later(int(signal.SIGINT))
+        return
+    sys.__unraisablehook__(unraisable)
 
 
 def one_line(text: str, limit: int) -> str:

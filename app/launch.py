@@ -40,8 +40,9 @@ def main() -> int:
             faulthandler.register(signal.SIGUSR1, all_threads=True)
         # SIGTERM is Ctrl-C from the first moment: one line and status 130 also while the CLI still loads (it
         # ended the process silently with -15 before app.cli set its own handler; issue 27, item 10)
-        from app.errors import raise_interrupt
+        from app.errors import keep_dropped_interrupts, raise_interrupt
 
+        sys.unraisablehook = keep_dropped_interrupts  # H93
         signal.signal(signal.SIGTERM, raise_interrupt)
         signal.signal(signal.SIGINT, raise_interrupt)  # Python's own raises inside numba's callbacks too (H92)
         code = _import_cli()()

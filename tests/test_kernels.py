@@ -530,3 +530,45 @@ def test_a_signal_during_a_kernel_that_returns_an_array_interrupts_after_it(tmp_
     )
     assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
     assert out.stdout.strip() == "interrupted after the kernel", out.stdout
+
+
+DROPPED_INTERRUPT = r"""
+import os, signal, sys, time, weakref
+from app.errors import keep_dropped_interrupts, raise_interrupt
+
+if sys.argv[1] == "hook":
+    sys.unraisablehook = keep_dropped_interrupts  # as app/launch.py sets it
+signal.signal(signal.SIGINT, raise_interrupt)
+
+
+class Thing:
+    pass
+
+
+thing = Thing()
+ref = weakref.ref(thing, lambda _: os.kill(os.getpid(), signal.SIGINT))  # Ctrl-C inside a weakref callback
+try:
+    del thing  # the callback runs; Python drops the KeyboardInterrupt raised in it
+    time.sleep(2.0)
+    print("not interrupted", flush=True)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+"""
+
+
+def test_an_interrupt_python_drops_is_raised_again(tmp_path):
+    """Safety H93: a KeyboardInterrupt raised where Python cannot pass it on (a weakref callback: matplotlib's,
+    in a ``sim tac`` run) was printed as "Exception ignored" and lost, and the command ran on.  The command's
+    unraisable hook makes it pending again; without the hook, the same script is not interrupted."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "dropped_interrupt.py"
+    script.write_text(DROPPED_INTERRUPT, encoding="utf-8")
+    runs = {
+        how: subprocess.run([sys.executable, str(script), how], capture_output=True, text=True, timeout=120)
+        for how in ("hook", "python")
+    }
+    assert runs["hook"].stdout.strip() == "interrupted", runs["hook"]
+    assert "Exception ignored" not in runs["hook"].stderr, runs["hook"].stderr
+    assert runs["python"].stdout.strip() == "not interrupted", runs["python"]  # the hazard, as Python has it
