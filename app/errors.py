@@ -29,6 +29,69 @@ def inside_a_callback(frame: Any) -> bool:
     return False
 
 
+class InterruptsDeferred:
+    """SIGINT and SIGTERM held off on the main thread for a while, and raised again when it ends (re-entrant: the
+    outermost :meth:`exit` raises them).  Used where an interrupt would leave something half done that cannot be
+    undone (numba's compiler lock, safety H91; matplotlib's renderer, H94).  Another thread's use is a no-op
+    (Python runs signal handlers on the main thread only)."""
+
+    SIGNALS = ("SIGINT", "SIGTERM")
+
+    def __init__(self) -> None:
+        self._depth = 0
+        self._saved: dict[int, Any] = {}
+        self._noted: list[int] = []
+
+    def _note(self, signum: int, _frame: Any) -> None:
+        if signum not in self._noted:
+            self._noted.append(signum)
+
+    @staticmethod
+    def _main() -> bool:
+        import threading
+
+        return threading.current_thread() is threading.main_thread()
+
+    def enter(self) -> None:
+        import signal
+
+        if not self._main():
+            return
+        self._depth += 1
+        if self._depth == 1:
+            for name in self.SIGNALS:
+                num = getattr(signal, name, None)
+                previous = signal.getsignal(num) if num is not None else None
+                if previous is not None:  # None: a handler set outside Python, left as it is
+                    self._saved[num] = previous
+                    signal.signal(num, self._note)
+
+    def exit(self) -> None:
+        import signal
+
+        if not self._main() or self._depth == 0:
+            return
+        self._depth -= 1
+        if self._depth == 0:
+            saved, self._saved = self._saved, {}
+            for num, handler in saved.items():
+                signal.signal(num, handler)
+            noted, self._noted = self._noted, []
+            for num in noted:
+                signal.raise_signal(num)  # its own handler runs now, at a safe point
+
+    def __enter__(self) -> InterruptsDeferred:
+        self.enter()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.exit()
+
+
+#: the process's one deferral (nested uses share its depth)
+DEFERRED = InterruptsDeferred()
+
+
 def _again_later(signum: int, delay: float = 0.01) -> None:
     """The signal ``signum`` pending again in ``delay`` seconds, from a helper thread: re-raised at once (by
     ``signal.raise_signal`` or ``_thread.interrupt_main``) its handler ran again right away, still inside the

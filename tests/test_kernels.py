@@ -572,3 +572,52 @@ def test_an_interrupt_python_drops_is_raised_again(tmp_path):
     assert runs["hook"].stdout.strip() == "interrupted", runs["hook"]
     assert "Exception ignored" not in runs["hook"].stderr, runs["hook"].stderr
     assert runs["python"].stdout.strip() == "not interrupted", runs["python"]  # the hazard, as Python has it
+
+
+SIGNAL_DURING_A_FIGURE = r"""
+import os, signal, sys
+from pathlib import Path
+from app.errors import raise_interrupt
+from app.analysis.figures import pyplot, save_figure
+
+signal.signal(signal.SIGINT, raise_interrupt)
+plt = pyplot()
+from matplotlib.backends.backend_agg import RendererAgg
+
+draw = RendererAgg.draw_path
+fired = []
+
+
+def ctrl_c_while_drawing(self, *args, **kwargs):
+    if not fired:
+        fired.append(1)
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while Agg draws (its renderer calls Python back)
+    return draw(self, *args, **kwargs)
+
+
+RendererAgg.draw_path = ctrl_c_while_drawing
+fig, ax = plt.subplots()
+ax.plot([0, 1, 2], [0, 1, 0])
+path = Path(sys.argv[1])
+try:
+    save_figure(plt, fig, path)
+    print("not interrupted", flush=True)
+except KeyboardInterrupt:
+    print("interrupted", "written" if path.is_file() and path.stat().st_size > 0 else "not written", flush=True)
+"""
+
+
+def test_ctrl_c_while_a_figure_is_drawn_comes_after_it_is_written(tmp_path):
+    """Safety H94: a SIGINT while Agg drew a figure (``sim tac`` writing its figures) came out of matplotlib's
+    renderer as "ValueError: Invalid bounding box", a traceback (1 of 200 timed tries).  The interrupt now waits
+    until the figure is written, then ends the command as Ctrl-C does."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "signal_during_a_figure.py"
+    script.write_text(SIGNAL_DURING_A_FIGURE, encoding="utf-8")
+    out = subprocess.run(
+        [sys.executable, str(script), str(tmp_path / "f.png")], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "interrupted written", out.stdout

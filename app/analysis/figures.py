@@ -18,10 +18,17 @@ def pyplot():
 
 
 def save_figure(plt, fig, path: Path, dpi: float | None = None) -> None:
-    """Lay ``fig`` out, write it as PNG at ``path`` (``dpi`` None: matplotlib's default) and close it."""
-    fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    """Lay ``fig`` out, write it as PNG at ``path`` (``dpi`` None: matplotlib's default) and close it.
+
+    Ctrl-C and SIGTERM wait until the figure is written (safety H94): Agg's renderer calls Python back, and a
+    KeyboardInterrupt raised there came out as "ValueError: Invalid bounding box", a traceback instead of
+    "interrupted"."""
+    from app.errors import DEFERRED
+
+    with DEFERRED:
+        fig.tight_layout()
+        fig.savefig(path, dpi=dpi)
+        plt.close(fig)
 
 
 def figure_saver(plt, out: Path, title: str, paths: list[Path]):

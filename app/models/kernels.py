@@ -112,77 +112,31 @@ def _jit(fn):
     return numba.njit(cache=True, nogil=True)(fn) if ENABLED else fn
 
 
-class _InterruptsAfterCompiling:
-    """Ctrl-C and SIGTERM wait while numba compiles or loads a kernel, and arrive when it is done.
+def _defer_interrupts_while_compiling() -> None:
+    """Ctrl-C and SIGTERM wait while numba compiles or loads a kernel, and arrive when it is done (safety H91).
 
-    Numba loads a cached kernel under its compiler lock: LLVM asks a Python callback (ctypes) for the
-    machine code.  A KeyboardInterrupt raised inside that callback is printed as "Exception ignored"
-    and dropped, and LLVM goes on without the code: the process died with SIGSEGV (CI on 2026-11-28
-    and 2026-11-29, ``sim tac`` interrupted at its start; reproduced about once in 180 tries), or the
-    interrupt was lost and the run finished with status 0.  Listening to numba's documented event
-    ``numba:compiler_lock``, the main thread's SIGINT and SIGTERM handlers are swapped for one that notes
-    the signal on the outermost acquisition, and put back on the release, where each noted signal is
-    raised again (its own handler then runs at a safe point).  A compile on another thread is left
-    alone (Python runs signal handlers on the main thread only)."""
-
-    SIGNALS = ("SIGINT", "SIGTERM")
-
-    def __init__(self) -> None:
-        import signal
-        import threading
-
-        self._signal, self._threading = signal, threading
-        self._depth = 0
-        self._saved: dict = {}
-        self._noted: list[int] = []
-
-    def _note(self, signum, _frame) -> None:
-        if signum not in self._noted:
-            self._noted.append(signum)
-
-    def on_start(self) -> None:
-        if self._threading.current_thread() is not self._threading.main_thread():
-            return
-        self._depth += 1
-        if self._depth == 1:
-            for name in self.SIGNALS:
-                num = getattr(self._signal, name, None)
-                previous = self._signal.getsignal(num) if num is not None else None
-                if previous is not None:  # None: a handler set outside Python, left as it is
-                    self._saved[num] = previous
-                    self._signal.signal(num, self._note)
-
-    def on_end(self) -> None:
-        if self._threading.current_thread() is not self._threading.main_thread() or self._depth == 0:
-            return
-        self._depth -= 1
-        if self._depth == 0:
-            saved, self._saved = self._saved, {}
-            for num, handler in saved.items():
-                self._signal.signal(num, handler)
-            noted, self._noted = self._noted, []
-            for num in noted:
-                self._signal.raise_signal(num)
-
-
-def _defer_interrupts_while_compiling() -> _InterruptsAfterCompiling:
-    """Register :class:`_InterruptsAfterCompiling` with numba's event API (once, at import)."""
+    Numba loads a cached kernel under its compiler lock: LLVM asks a Python callback (ctypes) for the machine
+    code.  A KeyboardInterrupt raised inside that callback is printed as "Exception ignored" and dropped, and
+    LLVM goes on without the code: the process died with SIGSEGV (CI on 2026-11-28 and 2026-11-29, ``sim tac``
+    interrupted at its start; reproduced about once in 180 tries), or the interrupt was lost and the run finished
+    with status 0.  Numba's documented event ``numba:compiler_lock`` holds the signals off
+    (:data:`app.errors.DEFERRED`) from the lock's outermost acquisition to its release."""
     from numba.core import event
 
-    deferral = _InterruptsAfterCompiling()
+    from app.errors import DEFERRED
 
     class Listener(event.Listener):
         def on_start(self, _event) -> None:
-            deferral.on_start()
+            DEFERRED.enter()
 
         def on_end(self, _event) -> None:
-            deferral.on_end()
+            DEFERRED.exit()
 
     event.register("numba:compiler_lock", Listener())
-    return deferral
 
 
-INTERRUPTS = _defer_interrupts_while_compiling() if ENABLED else None
+if ENABLED:
+    _defer_interrupts_while_compiling()
 
 
 @_jit
