@@ -122,7 +122,7 @@ def test_the_lab_controllers_and_plants_are_blocks_whose_kernels_equal_their_ref
         mode = (SETTLED, REMOTE, MOTION_COMP, BRAKE)[k % 4]
         q = np.ascontiguousarray(lab.q_work + rng.normal(0.0, 0.05, 3))
         view = _lab_view(rng, lab)
-        offset = (rng.normal(0.0, 0.02, 3), rng.normal(0.0, 0.02, 3))
+        offset = tuple(rng.normal(0.0, 0.02, 3) for _ in range(4))  # anti-swing (p, ṗ), the operator's shift (d, ḋ)
         u = COMAU_LAW.record("inputs", mode=mode, q=q, v_cmd=rng.normal(0.0, 0.1, 3), offset=offset, view=view)
         _, y_k = COMAU_LAW.step((), u, law_p, 0.005, use_kernels=True)
         _, y_r = COMAU_LAW.step((), u, law_p, 0.005, use_kernels=False)

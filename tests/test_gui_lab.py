@@ -80,6 +80,7 @@ def test_lab_tab_runs_platforms_through_the_engine(qtbot, window):
     tab.comau.vvmc.click()
     qtbot.waitUntil(lambda: tab.state.vvmc and tab.state.comau.mode == "motion_comp", timeout=GUI_WAIT)
     assert tab.comau.comau_mode.currentText() == "MOTION_COMP" and tab.comau.winch_mode.currentText() == "MOTION_COMP"
+    assert tab.comau.drive_box.title().startswith("VVMC drive (work point on EM1500")  # issue 30, item 4
     # the robot first travels to the work point (EM8000 is still SETTLED, 0.9 m low), then holds it
     qtbot.waitUntil(lambda: np.linalg.norm(tab.state.tool_error_b2) < 0.01, timeout=GUI_WAIT)
     # STOP: everything brakes to rest and commands are refused until reset

@@ -43,11 +43,12 @@ def _comau_reference(x, u, p, dt):
         return x, (False, q + rate * dt, rate, True, 1.0)
     assert mode == MOTION_COMP
     eta1, eta_dot1, R1, Rd1, eta2, eta_dot2, R2, Rd2 = view
-    off_p, off_v = offset
-    # the work point fixed in {b2}, in {n1} (eq. 39 through {g}), plus the offset
+    off_p, off_v, d, dd = offset
+    # the work point fixed in {b2} and shifted there by the operator, in {n1} (eq. 39 through {g}), plus the offset
     R12 = T_n1_n2[:3, :3]
-    p_n1 = T_n1_n2[:3, 3] + R12 @ (eta2[:3] + R2 @ w_b2) + off_p
-    v_n1 = R12 @ (eta_dot2[:3] + Rd2 @ w_b2) + off_v
+    w = w_b2 + d
+    p_n1 = T_n1_n2[:3, 3] + R12 @ (eta2[:3] + R2 @ w) + off_p
+    v_n1 = R12 @ (eta_dot2[:3] + Rd2 @ w + R2 @ dd) + off_v
     # eqs. (54), (56) inverted for the tool point in {r}
     R_r, p_r = T_b1_r[:3, :3], T_b1_r[:3, 3]
     p_tr = R_r.T @ (R1.T @ (p_n1 - eta1[:3]) - p_r)
@@ -85,8 +86,11 @@ def _winch_reference(x, u, p, dt):
         sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
         p_p_g = p_t_g + np.diag([1.0, -1.0, -1.0]) @ (float(wl[0]) * np.array([-sa, ca * sb, ca * cb]))
         target, has_target = R2.T @ (p_p_g - o2), True
+    s = float(np.clip(speed_cmd, -w_speed[0], w_speed[0]))  # paying out lowers the load relative to the deck
+    target = target.copy()
+    target[2] = target[2] + s * dt  # along {b2}'s z, which points down (the platforms' frames)
     target_g = R2 @ target + o2
-    v_target_g = T_g_n2[:3, :3] @ (eta_dot2[:3] + Rd2 @ target)
+    v_target_g = T_g_n2[:3, :3] @ (eta_dot2[:3] + Rd2 @ target) + s * R2[:, 2]
     # heights along gravity: the load hangs L_w below the tool (small swing)
     return (target, has_target), (np.array([p_t_g[2] - target_g[2]]), np.array([v_t_g[2] - v_target_g[2]]))
 

@@ -26,8 +26,9 @@ def comau_law(x, u, p, dt):
 
     Inputs (mode, q, v_cmd, offset, view): ``mode`` SETTLED (to the park configuration at a quarter speed),
     REMOTE (q̇ = J⁺ v_cmd, eq. 21, v_cmd the tool velocity in {r}), MOTION_COMP (the work point fixed in {b2},
-    plus ``offset`` = (position, velocity) in {n1}, through eqs. 54–56 inverted, IK of eqs. 7–20, feed-forward
-    q̇ = J⁺ ṗ_t^r of eq. 21) or BRAKE; ``q`` the joints.  Parameters (cm, T_base, signs, T_n1_n2, T_b1_r,
+    shifted by the operator's d (its rate ḋ) in {b2}, plus the anti-swing offset, through eqs. 54–56 inverted, IK
+    of eqs. 7–20, feed-forward q̇ = J⁺ ṗ_t^r of eq. 21; ``offset`` = (p, ṗ in {n1}, d, ḋ in {b2})) or BRAKE;
+    ``q`` the joints.  Parameters (cm, T_base, signs, T_n1_n2, T_b1_r,
     w_b2, park_q, lower, upper): the arm (a1, d1, a2, a3, L), its base, the IK's elbow branches, {n2} in
     {n1}, {r} in {b1}, the work point in {b2}, the park joints and the joint limits in force.
 
@@ -47,12 +48,14 @@ def comau_law(x, u, p, dt):
         return x, (off, q + rate * dt, rate, on, 1.0)
     # MOTION_COMP: inverse kinematic control with feed-forward of both platforms, as the controller sees them
     cx1, cv1, cR1, cRd1, cx2, cv2, cR2, cRd2 = view
-    off_p, off_v = offset
-    # the work point fixed in {b2} (plus the offset), in {n1} (eq. 39 through {g})
-    w = mv(cR2, w_b2[0], w_b2[1], w_b2[2])
-    Rdw = mv(cRd2, w_b2[0], w_b2[1], w_b2[2])
+    off_p, off_v, d, dd = offset
+    # the work point fixed in {b2} and shifted there by the operator (plus the offset), in {n1} (eq. 39 via {g})
+    w0, w1, w2 = w_b2[0] + d[0], w_b2[1] + d[1], w_b2[2] + d[2]
+    w = mv(cR2, w0, w1, w2)
+    Rdw = mv(cRd2, w0, w1, w2)
+    Rdd = mv(cR2, dd[0], dd[1], dd[2])
     pw = mv(T_n1_n2, cx2[0] + w[0], cx2[1] + w[1], cx2[2] + w[2])
-    vw = mv(T_n1_n2, cv2[0] + Rdw[0], cv2[1] + Rdw[1], cv2[2] + Rdw[2])
+    vw = mv(T_n1_n2, cv2[0] + Rdw[0] + Rdd[0], cv2[1] + Rdw[1] + Rdd[1], cv2[2] + Rdw[2] + Rdd[2])
     for i in range(3):
         pw[i] = T_n1_n2[i, 3] + pw[i] + off_p[i]
         vw[i] = vw[i] + off_v[i]
@@ -81,7 +84,8 @@ def winch_law(x, u, p, dt):
     State (target, has_target): the load's height target, a point fixed in {b2} (captured where the load is
     when tracking starts), in place.  Inputs (track, speed_cmd, L_w, swing, tool, view2): ``track`` keeps the
     load's height relative to EM1500 at the target (heights along gravity, the load L_w below the tool: small
-    swing), else the speed command [m/s]; L_w (1,) the wire; swing (α, β); tool (p_t^g, ṗ_t^g) (eqs. 55–56);
+    swing), the speed command [m/s] lowering the target along {b2}'s z, down (winch REMOTE under VVMC), else
+    the speed command pays out; L_w (1,) the wire; swing (α, β); tool (p_t^g, ṗ_t^g) (eqs. 55–56);
     view2 (H^g_b2, Ṙ2, η̇2) of EM1500 as the controller sees it (eq. 39).  Parameters (T_g_n2, speed (1,)).
     y = (L_ref, L̇_ref), (1,) each: the drum's reference."""
     target, has_target = x
@@ -102,9 +106,13 @@ def winch_law(x, u, p, dt):
             for i in range(3):
                 target[i] = t[i]
             has_target = True
+        s = min(max(speed_cmd, -w_speed[0]), w_speed[0])  # paying out lowers the load relative to the deck:
+        target[2] = target[2] + s * dt  # along {b2}'s z, which points down (the platforms' frames)
         tg = mv(cH2, target[0], target[1], target[2])
         Rdt = mv(cRd2, target[0], target[1], target[2])
         vtg = mv(T_g_n2, cv2[0] + Rdt[0], cv2[1] + Rdt[1], cv2[2] + Rdt[2])
+        for i in range(3):
+            vtg[i] = vtg[i] + s * cH2[i, 2]
         ref[0] = p_t_g[2] - (tg[2] + cH2[2, 3])
         ref_v[0] = v_t_g[2] - vtg[2]
     else:
@@ -123,6 +131,6 @@ def warm_up_steps() -> list:
     law_p = (cm, eye4, np.array([1.0, -1.0]), eye4, eye4, o3, z3, -o3, o3)
     winch_u = (np.bool_(True), 0.0, np.ones(1), (0.0, 0.0), (z3, z3), (eye4, eye3, z6))
     return [
-        lambda: comau_law((), (MOTION_COMP, z3, z3, (z3, z3), view), law_p, 0.01),
+        lambda: comau_law((), (MOTION_COMP, z3, z3, (z3, z3, z3, z3), view), law_p, 0.01),
         lambda: winch_law((np.zeros(3), np.bool_(False)), winch_u, (eye4, np.ones(1)), 0.01),
     ]

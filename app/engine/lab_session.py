@@ -393,7 +393,8 @@ class LabSession(Scene):
         al.at(now)
         al.set("estop", self.estop_latched, text="E-STOP latched: reset to continue")
         fl = self.input.flags()
-        remote = lab.comau_mode == "remote" or lab.winch.mode == "remote"
+        # the stick drives in REMOTE and, under VVMC, the work point and the load relative to EM1500 (issue 30)
+        remote = lab.comau_mode in ("remote", "motion_comp") or lab.winch.mode in ("remote", "motion_comp")
         al.set("device_lost", remote and self.input.lost, text="Input device lost: Comau and winch hold")
         stale = remote and fl["device"] and fl["stale_input"] and self.input.stale_while_driving
         al.set("stale_input", stale, text="Input stale: Comau and winch hold")
@@ -414,6 +415,9 @@ class LabSession(Scene):
                 lab.platforms[k].leg_clamped,
                 text=f"{name}: target beyond an actuator stroke, scaled back (leg limit)",
             )
+        pushed = bool(np.any(np.asarray(lab.tool_velocity_cmd) != 0.0))
+        limited = lab.comau_mode == "motion_comp" and pushed and bool(getattr(lab, "work_shift_limited", False))
+        al.set("work_point_limit", limited, text="Work point at the Comau's reach: it stops there")
         al.set("payload_below_deck", self._payload_below_deck(), text="Load below the EM1500 deck")
         amp = self._swing_amplitude()
         al.set("load_swing", value=math.degrees(amp), text=f"Load swinging {math.degrees(amp):.1f}° from the vertical")

@@ -118,8 +118,9 @@ class LabBackend(abc.ABC):
 
     @abc.abstractmethod
     def drive(self, tool_velocity_r: NDArray[np.float64], winch_speed: float) -> None:
-        """The operator's stick, every tick: Comau tool velocity in its base frame [m/s] (REMOTE) and the
-        winch speed [m/s] (REMOTE); zeros when the input may not move anything."""
+        """The operator's stick, every tick: Comau tool velocity in its base frame [m/s] (REMOTE), or the work
+        point's in EM1500's frame (MOTION_COMP: REMOTE under VVMC), and the winch speed [m/s] (REMOTE; under
+        VVMC it lowers the load relative to EM1500); zeros when the input may not move anything."""
 
     @abc.abstractmethod
     def estop(self) -> None:

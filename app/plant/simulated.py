@@ -164,9 +164,9 @@ class SimulatedLab(LabBackend):
 
     def drive(self, tool_velocity_r: NDArray[np.float64], winch_speed: float) -> None:
         lab = self.lab
-        if lab.comau_mode == "remote":
+        if lab.comau_mode in ("remote", "motion_comp"):  # under VVMC: the work point's velocity in {b2}
             lab.tool_velocity_cmd = tool_velocity_r  # replaced in each step while a joint is jogged
-        if lab.winch.mode == "remote":
+        if lab.winch.mode in ("remote", "motion_comp"):  # under VVMC: lowers the load relative to EM1500
             lab.winch.speed_command = float(winch_speed)
 
     def estop(self) -> None:

@@ -35,6 +35,14 @@ __all__ = ["COMAU_MODES", "REMOTE_TOOL_SPEED", "WINCH_MODES", "LabError", "LabSa
 
 COMAU_MODES = ("settled", "remote", "motion_comp", "hold")  # hold: after an E-STOP reset, until commanded
 WINCH_MODES = ("local", "remote", "motion_comp")
+#: how far the operator may shift the work point from its place on EM1500 in MOTION_COMP, per axis [m]; within
+#: it, the shifted point must stay in the Comau's reach with both platforms at neutral and WORK_REACH_MARGIN
+#: around it (the sea moves the platforms): assumed values, checked in tests/test_lab_remote_vvmc.py
+WORK_SHIFT_MAX = np.array([1.0, 1.0, 1.0])
+WORK_REACH_MARGIN = 0.15
+#: the operator's deck frame in EM1500's body frame {b2} (z down, as the platforms' frames): x along {b2}'s x,
+#: z up, so the stick's z raises the work point as it raises the tool in REMOTE (where {r} has z up)
+R_B2_DECK = np.diag([1.0, -1.0, -1.0])
 REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
 
 
@@ -118,7 +126,10 @@ class MotionLab:
             raise LabError(f"{layout.path}: the Comau's park configuration is outside its '{prof.name}' joint limits")
         self.joints.reset(layout.park_q)
         self.comau_mode = "remote"
-        self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]
+        self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]; MOTION_COMP: the work point's in {b2}
+        # the operator's shift of the work point in {b2} under VVMC (issue 30, item 4) and its rate
+        self.work_shift, self.work_shift_rate = np.zeros(3), np.zeros(3)
+        self.work_shift_limited = False  # the last shift was stopped by WORK_SHIFT_MAX or the Comau's reach
         self.winch = Winch(layout.winch)
         self.pendulum = Pendulum(damping=layout.payload_damping)
         self.T_n1_g = np.linalg.inv(layout.T_world_n1)
@@ -192,12 +203,12 @@ class MotionLab:
         else:
             p2 = self.platforms[1]
             eta, eta_dot, eta_ddot, (R, Rd, Rdd) = p2.eta, p2.eta_dot, p2.eta_ddot, self._rates[1]
-        w = self.layout.work_point_b2
+        w, wd = self.layout.work_point_b2 + self.work_shift, self.work_shift_rate
         T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
         R12 = T_n1_n2[:3, :3]
         p = T_n1_n2[:3, 3] + R12 @ (eta[:3] + R @ w)
-        v = R12 @ (eta_dot[:3] + Rd @ w)
-        a = R12 @ (eta_ddot[:3] + Rdd @ w)
+        v = R12 @ (eta_dot[:3] + Rd @ w + R @ wd)
+        a = R12 @ (eta_ddot[:3] + Rdd @ w + 2.0 * Rd @ wd)
         return p, v, a
 
     def to_robot_base(self, p_n1, v_n1, seen: bool = False) -> tuple[NDArray, NDArray]:
@@ -240,6 +251,9 @@ class MotionLab:
             raise LabError(f"Comau mode must be one of {', '.join(COMAU_MODES)}, got {mode!r}")
         self.comau_mode = mode
         self.tool_velocity_cmd = np.zeros(3)
+        if mode == "motion_comp":  # VVMC starts on the work point itself (no shift left from before)
+            self.work_shift, self.work_shift_rate = np.zeros(3), np.zeros(3)
+            self.work_shift_limited = False
 
     def set_winch_mode(self, mode: str) -> None:
         if mode not in WINCH_MODES:
@@ -310,8 +324,42 @@ class MotionLab:
         for p in self.platforms:
             p.step(dt)
         self._measure()
+        self._shift_work_point(dt)
         self.last = self._step_compiled(dt) if self._use_kernels else self._step_reference(dt)
         return self.last
+
+    def _shift_work_point(self, dt: float) -> None:
+        """REMOTE under VVMC (issue 30, item 4): in MOTION_COMP the operator's velocity (``tool_velocity_cmd``,
+        read in EM1500's frame {b2}) moves the work point there, within :data:`WORK_SHIFT_MAX`; the law holds the
+        tool on the moved point relative to EM1500 (its feed-forward has the shift's rate).  Stopped, braked or
+        in any other mode the shift holds."""
+        rate = np.zeros(3)
+        if self.comau_mode == "motion_comp" and not self.frozen:
+            rate = R_B2_DECK @ np.asarray(self.tool_velocity_cmd, dtype=float)
+        shift = self.work_shift
+        if np.any(rate != 0.0) and dt > 0:
+            want = self.work_shift + rate * dt
+            shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
+            self.work_shift_limited = bool(np.any(shift != want))
+            if not self._reachable(shift):  # the last reachable point holds
+                shift, self.work_shift_limited = self.work_shift, True
+        self.work_shift_rate = (shift - self.work_shift) / dt if dt > 0 else np.zeros(3)
+        self.work_shift = shift
+
+    def _reachable(self, shift: NDArray[np.float64]) -> bool:
+        """The work point shifted by ``shift`` (in {b2}), and WORK_REACH_MARGIN around it along each axis, in
+        the Comau's reach with both platforms at neutral (the analytic IK within the joint limits in force)."""
+        T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
+        R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
+        w = self.layout.work_point_b2 + shift
+        for k in range(7):
+            d = np.zeros(3)
+            if k:
+                d[(k - 1) // 2] = WORK_REACH_MARGIN if k % 2 else -WORK_REACH_MARGIN
+            p_n1 = T_n1_n2[:3, :3] @ (w + d) + T_n1_n2[:3, 3]
+            if self._ik(R_r.T @ (p_n1 - p_r), self.q_work) is None:
+                return False
+        return True
 
     def refresh(self) -> LabSample:
         """Recompute the derived state (rotation rates, tool point, the sample) from the machines' states
@@ -341,7 +389,8 @@ class MotionLab:
         seen = (False, *true) if self.measured is None else (True, *self.measured[0], *self.measured[1])
         v_cmd = np.ascontiguousarray(self.tool_velocity_cmd, dtype=float)
         x = ((f.x, f.v, f.a), (wf.x, wf.v, wf.a), (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot), (target, has))
-        u = (true, seen, (mode, v_cmd, self.tool_offset, track, float(w.speed_command)))
+        offset = (*self.tool_offset, self.work_shift, self.work_shift_rate)
+        u = (true, seen, (mode, v_cmd, offset, track, float(w.speed_command)))
         wire = (wf.lower, wf.upper, wf.speed, wf.accel, float(wf.tau))
         p = (self._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)))
         y = (self._rates_buf, self.p_t_n1, self.p_t_g, self.v_t_g, self.a_t_g, self.at_limit, *self._out)
@@ -377,7 +426,8 @@ class MotionLab:
         g = self._geometry
         # the Comau: its law, then its drives
         v_cmd = np.asarray(self.tool_velocity_cmd, dtype=float)
-        u = (mode, f.x, v_cmd, self.tool_offset, (e1, ed1, R1, Rd1, e2, ed2, R2, Rd2))
+        offset = (*self.tool_offset, self.work_shift, self.work_shift_rate)
+        u = (mode, f.x, v_cmd, offset, (e1, ed1, R1, Rd1, e2, ed2, R2, Rd2))
         law_p = (*g[:3], *g[5:9], f.lower, f.upper)
         _, command = COMAU_LAW.step((), u, law_p, dt, use_kernels=False)
         (f.x, f.v, f.a, _), _ = COMAU_DRIVES.step((f.x, f.v, f.a, self.at_limit), command, f.limits(), dt, False)
@@ -418,13 +468,14 @@ class MotionLab:
 
     def _sample(self) -> LabSample:
         R2, o2 = self._b2_to_g()
-        e_b2 = R2.T @ (self.p_t_g - o2) - self.layout.work_point_b2
+        w = self.layout.work_point_b2 + self.work_shift  # where the operator has the work point on EM1500
+        e_b2 = R2.T @ (self.p_t_g - o2) - w
         if self.payload_target_b2 is not None:
             target_g = R2 @ self.payload_target_b2 + o2
             h_err = float(self.p_p_g()[2] - target_g[2])
         else:
             h_err = 0.0
-        p_w_g = R2 @ self.layout.work_point_b2 + o2
+        p_w_g = R2 @ w + o2
         return LabSample(
             t=self.t,
             eta1=self.platforms[0].eta,

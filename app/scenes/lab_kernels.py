@@ -14,7 +14,8 @@ Records (every array C-contiguous float64, bool for ``at_limit``; updated in pla
   target (the load's height target in {b2} (3,) in place, whether it is set);
 * ``u`` = (true, seen, command): true (η1, η̇1, η̈1, η2, η̇2, η̈2) of EM8000 and EM1500; seen (measured, η1, η̇1,
   η̈1, η2, η̇2, η̈2) as the sensors report them, used by the controllers when ``measured``; command (Comau mode
-  of :mod:`app.control.lab_kernels`, tool velocity in {r}, offset (p, v) in {n1}, winch tracks, winch speed);
+  of :mod:`app.control.lab_kernels`, tool velocity in {r}, offset (p, ṗ in {n1}, the operator's shift d, ḋ of the
+  work point in {b2}), winch tracks, winch speed);
 * ``p`` = (geometry, joints, wire, load): geometry (cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r, w_b2,
   park_q, a_n1, b_b1, a_n2, b_b2); the drives' (lower, upper, speed, accel, brake, τ); the drum's (lower,
   upper, speed, accel, τ); the load's (c, g);
@@ -94,9 +95,11 @@ def lab_step(x, u, p, y, dt):
     p_p_g[1] = p_t_g[1] - L0 * (ca * sb)
     p_p_g[2] = p_t_g[2] - L0 * (ca * cb)
     e = mtv(H2, p_t_g[0] - H2[0, 3], p_t_g[1] - H2[1, 3], p_t_g[2] - H2[2, 3])
-    wg = mv(H2, w_b2[0], w_b2[1], w_b2[2])
+    d = offset[2]  # the operator's shift of the work point in {b2}
+    wd = np.array([w_b2[0] + d[0], w_b2[1] + d[1], w_b2[2] + d[2]])
+    wg = mv(H2, wd[0], wd[1], wd[2])
     for i in range(3):
-        e_b2[i] = e[i] - w_b2[i]
+        e_b2[i] = e[i] - wd[i]
         p_w_g[i] = wg[i] + H2[i, 3]
     h_err = 0.0
     if has_target:
@@ -122,7 +125,7 @@ def warm_up_steps() -> list:
     def step() -> None:
         x = ((vec(3), vec(3), vec(3)), (vec(1, 1.0), vec(1), vec(1)), (0.0, 0.0, 0.0, 0.0), (vec(3), False))
         seen = (True, z6, z6, z6, z6, z6, z6)
-        u = ((z6, z6, z6, z6, z6, z6), seen, (2, z3, (z3, z3), True, 0.0))
+        u = ((z6, z6, z6, z6, z6, z6), seen, (2, z3, (z3, z3, z3, z3), True, 0.0))
         geometry = (cm, eye, signs, eye, eye, eye, eye, o3, z3, a_n, b_b, a_n, b_b)
         joints = (vec(3, -3.0), vec(3, 3.0), o3, o3, o3, 0.05)
         wire = (vec(1, 0.3), vec(1, 2.5), vec(1, 0.5), vec(1, 1.5), 0.05)

@@ -31,6 +31,11 @@ from ui.widgets.status import MOVING
 from ui.widgets.stick import VirtualStick
 
 WINCH_MODES = ("local", "remote", "motion_comp")
+#: the stick's group title, by VVMC (issue 30, item 4: REMOTE under VVMC moves the work point on EM1500)
+DRIVE_TITLES = {
+    False: "REMOTE drive (Comau tool x, y, z; winch w)",
+    True: "VVMC drive (work point on EM1500 x, y, z; w lowers the load to the deck)",
+}
 
 
 class SpringSlider(QSlider):
@@ -120,12 +125,14 @@ class ComauWinchPage(QWidget):
         self.winch_slider_label.setWordWrap(True)  # a label as wide as the column cut its right side off
         wl.addRow(self.winch_slider_label)
         wl.addRow(self.winch_slider)
-        rbox = QGroupBox("REMOTE drive (Comau tool x, y, z; winch w)")
+        rbox = self.drive_box = QGroupBox(DRIVE_TITLES[False])
         rl = QVBoxLayout(rbox)
         self.stick = VirtualStick(aux_axis="w winch")
         self.stick.setToolTip(
-            "drives the Comau tool point (REMOTE, 0.25 m/s at full stick) and the winch (REMOTE, slider w); "
-            "hold Shift or the ENABLE button (deadman); a joystick works the same way"
+            "drives the Comau tool point (REMOTE, 0.25 m/s at full stick) and the winch (REMOTE, slider w); with VVMC "
+            "on it moves the work point on EM1500 (x, y along the deck, z up) while VVMC holds the tool on it, and w "
+            "lowers the load relative to the EM1500 deck; hold Shift or the ENABLE button (deadman); a joystick works "
+            "the same way"
         )
         rl.addWidget(self.stick)
         # not a toggle: a click asks the engine for the other state, and the button shows the engine's state
@@ -328,6 +335,8 @@ class ComauWinchPage(QWidget):
             widget.setEnabled(free)
         self.winch_slider.setEnabled(free and w.mode == "local")
         look = "VVMC ON" if state.vvmc else "VVMC OFF"
+        if self.drive_box.title() != DRIVE_TITLES[bool(state.vvmc)]:
+            self.drive_box.setTitle(DRIVE_TITLES[bool(state.vvmc)])
         if self.vvmc.text() != look:
             self.vvmc.setText(look)
             self.vvmc.setStyleSheet("QPushButton { background: #2f6f2f; color: white; }" if state.vvmc else "")
