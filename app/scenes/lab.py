@@ -329,21 +329,24 @@ class MotionLab:
         return self.last
 
     def _shift_work_point(self, dt: float) -> None:
-        """REMOTE under VVMC (issue 30, item 4): in MOTION_COMP the operator's velocity (``tool_velocity_cmd``,
-        read in EM1500's frame {b2}) moves the work point there, within :data:`WORK_SHIFT_MAX`; the law holds the
-        tool on the moved point relative to EM1500 (its feed-forward has the shift's rate).  Stopped, braked or
-        in any other mode the shift holds."""
-        rate = np.zeros(3)
-        if self.comau_mode == "motion_comp" and not self.frozen:
-            rate = R_B2_DECK @ np.asarray(self.tool_velocity_cmd, dtype=float)
+        """REMOTE under VVMC (issue 30, item 4): in MOTION_COMP the operator's velocity (``tool_velocity_cmd``, in
+        the deck frame: EM1500's {b2} turned by :data:`R_B2_DECK`, z up) moves the work point on EM1500, within
+        :data:`WORK_SHIFT_MAX` and the Comau's reach; the law holds the tool on the moved point relative to EM1500
+        (its feed-forward has the shift's rate).  Stopped, braked or in any other mode the shift holds."""
+        cmd = self.tool_velocity_cmd
+        if self.comau_mode != "motion_comp" or self.frozen or not (cmd[0] or cmd[1] or cmd[2]) or dt <= 0:
+            if self.work_shift_rate[0] or self.work_shift_rate[1] or self.work_shift_rate[2]:
+                self.work_shift_rate = np.zeros(3)  # the shift holds (the common case costs no array work)
+            return
+        rate = R_B2_DECK @ np.asarray(cmd, dtype=float)
         shift = self.work_shift
-        if np.any(rate != 0.0) and dt > 0:
+        if np.any(rate != 0.0):
             want = self.work_shift + rate * dt
             shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
             self.work_shift_limited = bool(np.any(shift != want))
             if not self._reachable(shift):  # the last reachable point holds
                 shift, self.work_shift_limited = self.work_shift, True
-        self.work_shift_rate = (shift - self.work_shift) / dt if dt > 0 else np.zeros(3)
+        self.work_shift_rate = (shift - self.work_shift) / dt
         self.work_shift = shift
 
     def _reachable(self, shift: NDArray[np.float64]) -> bool:
