@@ -87,6 +87,11 @@ def test_mode_and_solver_reach_the_engine(qtbot, window):
     solver.setCurrentText("ga")
     solver.activated.emit(solver.currentIndex())
     qtbot.waitUntil(lambda: window.teleop.state.solver == "ga", timeout=GUI_WAIT)
+    frame = window.teleop.frame  # issue 30, item 1: the frame selector shows the engine's frame
+    frame.setCurrentText("tool")
+    frame.activated.emit(frame.currentIndex())
+    qtbot.waitUntil(lambda: window.teleop.state.frame == "tool", timeout=GUI_WAIT)
+    assert frame.findText("target") < 0  # the teleop scene has no target deck: not offered
 
 
 def test_virtual_stick_moves_the_plotted_tool_point(qtbot, window):

@@ -111,13 +111,9 @@ def test_the_lab_engine_drives_the_work_point_under_vvmc_by_the_sticks_rules():
     """Through the engine's input pipeline: switching VVMC disarms; armed (centred, enable held), the stick's x
     moves the work point on EM1500 and its w lowers the load relative to the deck; the stick gone stale, both
     hold (the compensation goes on)."""
-    import sys
-
-    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-    from test_safety_engine import lab_sample, run_lab
-
     from app.engine.lab_session import LabSession
     from app.scenes.lab import REMOTE_TOOL_SPEED
+    from tests.test_safety_engine import lab_sample, run_lab
 
     ses = LabSession()
     ses.input.axes = 4

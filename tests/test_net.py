@@ -33,6 +33,7 @@ def test_round_trip_every_client_message():
         "set_robot": {"robot": "scara"},
         "set_solver": {"solver": "ga"},
         "set_mode": {"mode": "position"},
+        "set_frame": {"frame": "tool"},
         "set_scaling": {"k_p": [1.0, 1.0, 1.0], "x_w": [0.0, 1.0, 2.0], "k_v": [0.1, 0.1, 0.1]},
         "estop": {"reason": "test", "token": "t"},
         "ack_alarm": {"key": "estop"},

@@ -180,6 +180,15 @@ class TeleopTab(QWidget):
         self.mode_pos.clicked.connect(lambda: self.set_mode("position"))
         self.mode_vel.clicked.connect(lambda: self.set_mode("velocity"))
         f.addRow("mode", mode_row)
+        self.frame = QComboBox()
+        self.frame.addItems(["world", "base", "tool"])  # this scene has no target deck
+        self.frame.setToolTip(
+            "the frame the stick commands in (issue 30): world (earth-fixed, the papers' mapping), base (the robot's "
+            "base) or tool (the tool, as it turns); position and velocity modes and the scaling act in it; a "
+            "change disarms the stick (centre it and hold enable again)"
+        )
+        self.frame.activated.connect(lambda _i: self.link.send("set_frame", frame=self.frame.currentText()))
+        f.addRow("frame", self.frame)
         cl.addWidget(g)
 
         g = QGroupBox("Input")
@@ -369,7 +378,7 @@ class TeleopTab(QWidget):
         self.link.send("set_scaling", k_p=[k_p] * 3, k_v=[k_v] * 3, x_w=[s.value() for s in self.x_w])
 
     def on_reply(self, re: str, ok: bool, error: str) -> None:
-        if not ok and re in ("set_robot", "set_solver", "set_mode", "set_scaling", "invalid"):
+        if not ok and re in ("set_robot", "set_solver", "set_mode", "set_frame", "set_scaling", "invalid"):
             what = {"set_robot": "Robot not loaded", "set_solver": "Solver not changed"}.get(re, "Command refused")
             self.error.emit(what, error)
 
@@ -446,6 +455,9 @@ class TeleopTab(QWidget):
         button = self.mode_pos if state.mode == "position" else self.mode_vel
         if not button.isChecked():
             button.setChecked(True)
+        frame = getattr(state, "frame", "world")
+        if self.frame.currentText() != frame and not self.frame.view().isVisible():  # the engine's frame
+            self.frame.setCurrentText(frame)
         sc = state.scaling
         if sc is None:
             return

@@ -48,9 +48,11 @@ from app.net.snapshots import (
 from app.sim.actuators import JointActuators
 from app.teleop.devices import InputSample
 from app.teleop.mapping import (
+    FRAMES,
     MODES,
     Scaling,
     default_scaling,
+    in_frame,
     position_target,
     velocity_command,
 )
@@ -95,6 +97,7 @@ class Session(Scene):
     robot_name: str = DEFAULT_ROBOT
     solver_name: str = DEFAULT_SOLVER
     mode: str = "velocity"
+    frame: str = "world"  # the frame the stick commands in (issue 30, item 1): world, base or tool
     stale_timeout: float = 0.2
     actuator_tau: float = 0.05
     seed: int = 0
@@ -121,6 +124,7 @@ class Session(Scene):
         self.ticks = 0
         self.sim_time = 0.0
         self._armed_prev = False
+        self._frame_at_arming: np.ndarray | None = None  # position mode: the frame's rotation when armed
         self._load(self.robot_name, self.solver_name)
 
     # ------------------------------------------------------------------ commands
@@ -213,6 +217,31 @@ class Session(Scene):
             self.note("info", f"mode {mode}")
 
     @command
+    def set_frame(self, frame: str) -> None:
+        """The frame the stick commands in (issue 30, item 1): ``world`` (earth-fixed, the papers' mapping),
+        ``base`` (the robot's base) or ``tool`` (the tool, as it turns); this scene has no target deck.  Position
+        and velocity modes and the scaling act in that frame; a change disarms the input (safety H96)."""
+        if frame not in FRAMES:
+            raise CommandError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+        if frame == "target":
+            raise CommandError(
+                "frame target: the teleop scene has no target deck (the crane-head and Motion-Lab scenes have one)"
+            )
+        if frame != self.frame:
+            self.frame = frame
+            self.command_point = None
+            self.input.disarm("command frame changed")
+            self.note("info", f"command frame {frame}")
+
+    def _frame_rotation(self) -> np.ndarray | None:
+        """R_w^F of the operator's frame now (None: the world frame, the papers' mapping as it is)."""
+        if self.frame == "base":
+            return self.robot.T_world_base[:3, :3]
+        if self.frame == "tool":
+            return self.robot.fk(self.q_ref)[:3, :3]
+        return None
+
+    @command
     def set_scaling(self, k_p=None, x_w=None, k_v=None) -> None:
         new = Scaling(
             tuple(np.broadcast_to(np.asarray(k_p, dtype=float), 3)) if k_p is not None else self.scaling.k_p,
@@ -300,6 +329,7 @@ class Session(Scene):
         if inp.armed and not self._armed_prev and self.mode == "position":
             # position mode starts from where the tool is at every arming: arming at neutral never moves it
             self.scaling = self.scaling.with_origin(self.robot.position(self.q_ref))
+            self._frame_at_arming = self._frame_rotation()  # the frame held while armed (a tool frame turns)
         self._armed_prev = inp.armed
         self.stale, self.enabled = inp.stale, inp.enabled and not self.estop_latched
         self.signal = inp.raw_signal[:3].copy()
@@ -323,12 +353,17 @@ class Session(Scene):
         budget = DEFAULT if solve_budget is None else solve_budget
         xdot = None
         if self.mode == "position":
-            point = position_target(s, self.scaling.k_p, self.scaling.x_w)  # eq. (1)
+            if self.frame == "world":
+                point = position_target(s, self.scaling.k_p, self.scaling.x_w)  # eq. (1)
+            else:  # eq. (1) in the operator's frame, as it was at arming
+                point = self.scaling.x_w + in_frame(np.asarray(self.scaling.k_p) * s, self._frame_at_arming)
             res = self._solve_position(point, budget)
             self.command_point = point
             self.target = np.asarray(point, dtype=float)
         else:
-            xdot = velocity_command(s, self.scaling.k_v)  # eq. (2)
+            xdot = velocity_command(s, self.scaling.k_v)  # eq. (2), in the operator's frame
+            if self.frame != "world":
+                xdot = in_frame(xdot, self._frame_rotation())
             x_ref = self.robot.position(self.q_ref)
             if np.any(xdot != 0.0):
                 # the operator's command as a point: eq. (7) integrated from where the reference was
@@ -491,6 +526,7 @@ class Session(Scene):
             robot=self.robot_name,
             solver=self.solver_name,
             mode=self.mode,
+            frame=self.frame,
             q=q.tolist(),
             qdot=self.actuators.qdot.tolist(),
             q_ref=self.q_ref.tolist(),

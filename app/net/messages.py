@@ -41,6 +41,9 @@ MAX_ROBOT_TEXT = 60_000  # robot XML sent by a client in set_robot (larger files
 
 ROLES = ("operator", "viewer")
 MODES = ("position", "velocity")
+#: the frames the operator may command in (issue 30, item 1): the world (earth-fixed: the mapping of the papers),
+#: the robot's base, its tool, and a target (a moving deck: the EM1500, a second vessel; scenes that have one)
+FRAMES = ("world", "base", "tool", "target")
 
 
 # ------------------------------------------------------------------ the message classes
@@ -169,6 +172,14 @@ class SetMode(Message):
     """Choose the position or the velocity workspace."""
 
     mode: str = spec("enum", MODES)
+
+
+@scene_command("set_frame")
+class SetFrame(Message):
+    """Choose the frame the stick commands in (issue 30, item 1): world (earth-fixed), base, tool, or target (a
+    moving deck, in the scenes that have one).  A change disarms the input."""
+
+    frame: str = spec("enum", FRAMES)
 
 
 @scene_command("set_scaling")

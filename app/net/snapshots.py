@@ -146,6 +146,7 @@ class TeleopSnapshot(Snapshot):
     robot: str = ""
     solver: str = ""
     mode: str = "position"
+    frame: str = "world"  # the frame the stick commands in (issue 30, item 1)
     q: list[float] = field(default_factory=list)  # joint positions [rad | m]
     qdot: list[float] = field(default_factory=list)
     q_ref: list[float] = field(default_factory=list)

@@ -18,6 +18,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.net.messages import FRAMES  # noqa: F401  (the frames, as the wire names them)
+
 MODES = ("position", "velocity")
 
 
@@ -55,6 +57,13 @@ def position_target(s: ArrayLike, k_p: ArrayLike, x_w: ArrayLike) -> NDArray[np.
 def velocity_command(s: ArrayLike, k_v: ArrayLike) -> NDArray[np.float64]:
     """Eq. (2): ẋ_ds = k_v s [m/s]; k_v [m/s per unit deflection], scalar or per axis."""
     return np.asarray(k_v, dtype=float) * np.asarray(s, dtype=float)
+
+
+def in_frame(v: ArrayLike, R_world_frame: NDArray[np.float64] | None) -> NDArray[np.float64]:
+    """A command ``v`` given in the operator's frame, in the world: R_w^F v (None: the world frame itself, ``v``
+    as it is).  Eqs. (1) and (2) then hold in that frame: x_ds = x_w + R (k_p ⊙ s) and ẋ_ds = R (k_v ⊙ s)."""
+    v = np.asarray(v, dtype=float)
+    return v if R_world_frame is None else np.asarray(R_world_frame, dtype=float) @ v
 
 
 def velocity_target(x_a: ArrayLike, xdot_ds: ArrayLike, dt: float) -> NDArray[np.float64]:
