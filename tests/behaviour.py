@@ -3,7 +3,11 @@
 Every case runs at a fixed seed, in this process, and returns named arrays: the time series sampled at
 ``ROWS`` instants (the last one always among them) and every number of the summaries the commands print.
 ``tests/data/behaviour_baseline.npz`` holds them as recorded on 2026-11-28 (main at the commit that added
-this file); ``tests/test_behaviour_kept.py`` compares a fresh run with them to 1e-9 relative.
+this file); ``tests/test_behaviour_kept.py`` compares a fresh run with them to 1e-9 relative.  One change was
+meant since: on 2026-11-29 (issue 30, item 2) the crane-head engine's stick moves the TCP's target and a mode
+change disarms, so ``engine_tac`` was recorded again, with ``engine_tac_neutral`` (the same script, stick
+centred) beside it; that one gave the 2026-11-28 ``engine_tac`` record bit for bit in all 47 arrays but the
+armed and enabled flags after the mode change at 5.1 s (disarmed now, safety H97).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):
@@ -175,7 +179,10 @@ def _engine_teleop() -> dict[str, np.ndarray]:
     return _drive(s, script, dt=0.002, every=25)
 
 
-def _engine_tac() -> dict[str, np.ndarray]:
+def _engine_tac(stick: tuple = (0.5, 0.0, -0.3)) -> dict[str, np.ndarray]:
+    """The crane-head engine's scripted session.  Since issue 30 (item 2) the armed stick moves the TCP's target:
+    ``engine_tac`` was recorded again on 2026-11-29 with it; ``engine_tac_neutral`` is the same script with the
+    stick centred, which must give the 2026-11-28 record (the engine before the stick) bit for bit."""
     from app.engine.tac_session import TacSession
 
     s = TacSession()
@@ -183,7 +190,7 @@ def _engine_tac() -> dict[str, np.ndarray]:
     script = [
         (2.0, None, z, False),
         (0.1, None, z, True),
-        (3.0, None, (0.5, 0.0, -0.3), True),
+        (3.0, None, stick, True),
         (0.1, lambda: s.set_tac_mode("cooperative"), z, True),
         (3.0, None, z, True),
         (0.1, lambda: s.set_tac_mode("off"), z, False),
@@ -239,6 +246,7 @@ CASES: dict[str, Callable[[], dict[str, np.ndarray]]] = {
     "sim_antisway": _antisway,
     "engine_teleop": _engine_teleop,
     "engine_tac": _engine_tac,
+    "engine_tac_neutral": lambda: _engine_tac((0.0, 0.0, 0.0)),
     "engine_lab": _engine_lab,
 }
 

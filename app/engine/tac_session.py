@@ -7,7 +7,9 @@ vessel's motion fades into over two peak periods while scene time runs on), ``se
 ``set_tac_mode`` (off / tac / cooperative, switched live), ``estop`` (the head and crane freeze where they
 are; latched until ``reset``).  After a reset they stay frozen until the operator
 selects a mode again.  Input runs through the one :class:`~app.teleop.pipeline.InputPipeline` (a
-profile's stop button latches the E-STOP here too).  Teleop commands are refused with a clear message.
+profile's stop button latches the E-STOP here too); in ``tac`` and ``cooperative`` the armed stick moves the
+TCP's target in the world (issue 30, item 2: :meth:`TacSession._drive`).  Teleop commands (robot, solver,
+mode, frame) are refused with a clear message.
 """
 
 from __future__ import annotations
@@ -44,6 +46,14 @@ from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
 
+# the operator's stick (issue 30, item 2): x, y horizontal and z up (the profile's axes), in {n} (NED: z down)
+STICK_TO_NED = np.diag([1.0, 1.0, -1.0])
+TCP_SPEED = 0.5  # m/s at full stick (assumed: half the head's reach a second, 90°/s arms)
+#: how far the stick may move the TCP's target from its calm-water point, per axis of {n} [m] (assumed): the head
+#: alone (tac) within a quarter of its workspace's smallest extent; with the crane (cooperative) within the crane's
+#: working range around the point of eq. (60)
+TARGET_RANGE_COOPERATIVE = np.array([5.0, 5.0, 3.0])
+
 # drawing only: the supply vessel's box (Lpp, B; deck at the crane base 3 m above CO, keel at T = 6 m)
 SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
 
@@ -69,6 +79,12 @@ class TacSession(Scene):
         self.last: dict[str, Any] = {}
         self.sea_seq = 0
         self._publish_count = 0
+        pts = self.system.workspace.points
+        self.target_range = {
+            "tac": np.full(3, 0.25 * float(np.min(pts.max(axis=0) - pts.min(axis=0)))),
+            "cooperative": TARGET_RANGE_COOPERATIVE,
+        }
+        self.target_limited = False
         hull = self.system.workspace.hull
         self._hull = {
             "points": np.round(hull.points[hull.vertices], 4).tolist(),
@@ -162,6 +178,8 @@ class TacSession(Scene):
             raise CommandError("E-STOP is latched; reset first")
         self.sim.set_mode(mode)
         self.scenario = self.sim.scenario
+        if mode != self.mode:
+            self.input.disarm("compensation mode changed")  # a held stick must not move the TCP in the new mode
         self.mode = mode
         self.holding = False
         self.note("info", f"compensation mode: {mode}")
@@ -186,9 +204,11 @@ class TacSession(Scene):
         if n <= 0:
             return
         self._carry -= n * self.scenario.dt
-        if self.input.step(now).stop:
+        inp = self.input.step(now)
+        if inp.stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
         frozen = self.estop_latched or self.holding
+        self._drive(inp, frozen, n * self.scenario.dt)
         chunks = []
         while n > 0:  # every step of the tick, also across the end of a sea record
             if self.sim.done:  # a long session: a fresh sea record that continues this one (H65)
@@ -201,6 +221,12 @@ class TacSession(Scene):
         al = self.alarms
         al.at(now)
         al.set("estop", self.estop_latched, text="E-STOP latched: reset to continue")
+        driving = self.mode in ("tac", "cooperative")  # the stick moves the TCP's target (issue 30, item 2)
+        fl = self.input.flags()
+        al.set("device_lost", driving and self.input.lost, text="Input device lost: the TCP's target holds")
+        stale = driving and fl["device"] and fl["stale_input"] and self.input.stale_while_driving
+        al.set("stale_input", stale, text="Input stale: the TCP's target holds")
+        al.set("target_limit", self.target_limited, text=f"TCP target at its {self.mode} range: it stops there")
         al.set(  # holding after a reset is a status (the plant light), not an alarm: nothing is wrong
             "saturation",
             value=0.0 if frozen else 100.0 * share,
@@ -222,6 +248,20 @@ class TacSession(Scene):
                 "p_c_n": c.p_c_n[-1].tolist(),
                 "p_s_n": c.p_s_n[-1].tolist(),
             }
+
+    def _drive(self, inp, frozen: bool, dt: float) -> None:
+        """The stick moves the TCP's target in the world (issue 30, item 2) while the head (tac) or the crane and
+        head (cooperative) compensate: a centred stick holds the TCP still in the world, a deflection moves it
+        there on top of the compensation.  Only when armed and enabled (deadman, fresh), never frozen or in
+        ``off``; the target's offset stays within the mode's range (:meth:`TacSimulator.move_target`)."""
+        self.target_limited = False
+        if frozen or self.mode == "off" or not inp.enabled or self.estop_latched:
+            return
+        s = np.asarray(inp.signal[:3], dtype=float)
+        if not np.any(s):
+            return
+        dp = STICK_TO_NED @ (TCP_SPEED * s) * dt
+        self.target_limited = self.sim.move_target(dp, self.target_range[self.mode])
 
     def _scene(self) -> TacScenePoints:
         """Points in {n} for drawing: ship box corners, crane polyline, head knees, TCP, desired point."""

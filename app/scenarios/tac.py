@@ -280,6 +280,7 @@ class TacSimulator:
         self.beta_d = BETA_EQ60.copy()
         head = system.head
         self.p_d_n = system.tcp_n(np.zeros(6), self.beta_d, system.p_d_t)  # p_d^n: TCP in calm water
+        self.p_d_n0 = self.p_d_n.copy()  # where the operator's moves of p_d^n start from (issue 30, item 2)
         self.n_steps = round(sc.duration / sc.dt)
         self.k = 0
         self.head_servo = HeadServo(PidGains(), head.lower, head.upper, system.alpha_d, head.speed)
@@ -310,9 +311,22 @@ class TacSimulator:
         c.beta, c.beta_dot = np.array(oc.beta, dtype=float), np.array(oc.beta_dot, dtype=float)
         self._beta_c_prev = None if old._beta_c_prev is None else np.array(old._beta_c_prev, dtype=float)
         self._beta0_hint = old._beta0_hint
+        self.p_d_n = np.array(old.p_d_n, dtype=float)  # where the operator has moved the TCP target
         self._started = old._started
         self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
         self.use_kernels = old.use_kernels
+
+    def move_target(self, dp_n: NDArray[np.float64], limit: NDArray[np.float64]) -> bool:
+        """Move the TCP's target p_d^n by ``dp_n`` in {n} (the operator's stick, issue 30, item 2), its offset from
+        the calm-water point kept within ±``limit`` per axis: a step that would take an axis further out is not
+        taken on that axis (one already outside, after a mode change, may only come back).  True when a step
+        was held back."""
+        old = self.p_d_n - self.p_d_n0
+        new = old + np.asarray(dp_n, dtype=float)
+        out = (np.abs(new) > limit) & (np.abs(new) > np.abs(old))
+        new[out] = old[out]
+        self.p_d_n = self.p_d_n0 + new
+        return bool(np.any(out))
 
     @property
     def use_kernels(self) -> bool:
