@@ -243,3 +243,29 @@ def test_the_rao_file_dialog_leaves_stop_live(qtbot, window):
     qtbot.waitUntil(lambda: tab.state.estop, timeout=GUI_WAIT)
     assert dlg.isVisible()
     dlg.close()
+
+
+def test_the_on_screen_stick_moves_the_tcp_target_through_the_engine(qtbot, window):
+    """Issue 30, items 2 and 7: the crane-head tab has the stick; armed (neutral, then Shift held) it moves the
+    TCP's target in the world through the engine, and releasing it holds the target."""
+    from PyQt5.QtCore import Qt
+
+    win, _ = window
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and len(tab.state.p_d_n) == 3, timeout=GUI_WAIT)
+    p0 = np.array(tab.state.p_d_n)
+    stick = tab.stick
+    assert win._stick_of_current_tab() is stick
+    stick.release_all()
+    qtbot.wait(150)
+    stick.key(Qt.Key_Shift, True)
+    qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
+    stick.pad.set_position(1.0, 0.0, True)
+    qtbot.waitUntil(lambda: np.array(tab.state.p_d_n)[0] - p0[0] > 0.1, timeout=GUI_WAIT)
+    stick.pad.set_position(0.0, 0.0, False)
+    stick.key(Qt.Key_Shift, False)
+    qtbot.wait(300)
+    held = np.array(tab.state.p_d_n)
+    qtbot.wait(500)
+    np.testing.assert_array_equal(np.array(tab.state.p_d_n), held)

@@ -96,7 +96,7 @@ def test_item6_lab_lights_compensating_jog_and_enable_from_the_engine(qtbot, win
     assert _has(win, "● plant: compensating")
     assert tab.lights.lights["plant"].state == "ok"
     assert "EM8000 engag" in tab.lights.lights["plant"].text() and "EM1500 engag" in tab.lights.lights["plant"].text()
-    assert _has(win, "● input: not used (Comau MOTION_COMP")
+    assert not _has(win, "● input: not used (Comau MOTION_COMP")  # under VVMC the stick moves the work point
     # VVMC off: the Comau in REMOTE takes the stick and the jog
     tab.comau.vvmc.click()
     qtbot.waitUntil(lambda: not tab.state.vvmc and tab.state.comau.mode == "remote", timeout=GUI_WAIT)
@@ -146,7 +146,8 @@ def test_item6_crane_head_tab_lights_compensating_no_plc_estop_and_holding(qtbot
     assert not any("PLC" in t for t in lights), lights
     assert not any("plant: holding" in t for t in lights), lights
     assert _has(win, "● plant: compensating: head (tac)")
-    assert _has(win, "● input: not used: the head compensates by itself")
+    # the tab's stick is routed to the crane head: its light follows the stick (issue 30, item 2), never "not used"
+    assert any(t.startswith("● input: ") and "not used" not in t and "on-screen stick" in t for t in lights), lights
     assert "simulated plant" in tab.lights.title.text() and tab.mode.isEnabled()
     win.estop("Space")
     qtbot.waitUntil(lambda: tab.state.estop and _has(win, "● plant: E-STOP: head and crane stopped"), timeout=GUI_WAIT)

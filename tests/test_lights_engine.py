@@ -75,7 +75,8 @@ def test_lab_plant_light_engaged_vvmc_estop_and_reset():
 
 def test_lab_input_light_names_the_jog_the_stick_and_none():
     """Item 6: a running joint jog is the operator's input ("jog q2 +50 %"), never "no input"; the armed
-    stick drives the Comau in REMOTE; with VVMC on no machine takes the stick; under E-STOP none is taken."""
+    stick drives the Comau in REMOTE; with VVMC on it drives the work point and the load (issue 30, item 4: "Comau
+    VVMC and winch VVMC"), disarmed by the switch; under E-STOP none is taken."""
     ses = LabSession()
     t = _run(ses, 0.0, 0.1, enable=False)
     light = lab_input_light(_wire(ses))
@@ -95,7 +96,9 @@ def test_lab_input_light_names_the_jog_the_stick_and_none():
     assert light.look == "off" and light.detail == "idle: test stick (enable released)"  # released: disarmed
     ses.lab_vvmc(True)
     t = _run(ses, t, 0.1, enable=False)
-    assert lab_input_light(_wire(ses)).detail == "not used (Comau MOTION_COMP, winch MOTION_COMP)"
+    assert lab_input_light(_wire(ses)).detail == "idle: test stick (enable released)"
+    t = _run(ses, t, 0.1, enable=True)  # armed again at neutral: the stick drives under VVMC
+    assert lab_input_light(_wire(ses)).detail == "enabled: test stick drives Comau VVMC and winch VVMC"
     ses.estop()
     _run(ses, t, 0.1, enable=False)
     assert lab_input_light(_wire(ses)).detail == "not taken: E-STOP latched"
@@ -109,13 +112,15 @@ def test_lab_plc_light_says_the_plant_is_simulated():
 
 def test_crane_head_lights_compensating_estop_holding_and_off():
     """Item 6: the head compensating in tac mode is "compensating", not "holding"; E-STOP red; after the
-    reset it holds until a mode is chosen; mode off locks the head.  No stick drives it; no PLC light."""
+    reset it holds until a mode is chosen; mode off locks the head.  The stick's light follows the stick's rules
+    where it moves the TCP's target (tac, cooperative: issue 30, item 2), and says "not used" where it moves
+    nothing; no PLC light."""
     ses = TacSession()
     t = _run(ses, 0.0, 1.0)
     lights = tac_lights(_wire(ses))
     assert set(lights) == {"engine", "input", "plant"}  # no PLC: the crane head has none
     assert lights["plant"].look in ("ok", "warn") and lights["plant"].detail.startswith("compensating: head (tac)")
-    assert lights["input"].detail == "not used: the head compensates by itself"
+    assert (lights["input"].look, lights["input"].detail) == ("off", "no input device")
     ses.set_tac_mode("cooperative")
     t = _run(ses, t, 0.2)
     assert tac_lights(_wire(ses))["plant"].detail.startswith("compensating: crane and head (cooperative)")
@@ -123,6 +128,7 @@ def test_crane_head_lights_compensating_estop_holding_and_off():
     t = _run(ses, t, 0.2)
     plant = tac_lights(_wire(ses))["plant"]
     assert (plant.look, plant.detail) == ("error", "E-STOP: head and crane stopped")
+    assert tac_lights(_wire(ses))["input"].detail.startswith("not used (E-STOP)")
     ses.reset()
     t = _run(ses, t, 0.2)
     plant = tac_lights(_wire(ses))["plant"]

@@ -266,10 +266,12 @@ class MainWindow(QMainWindow):
             return self.teleop.stick
         if page is self.motion_lab:
             return self.motion_lab.stick
+        if page is self.crane_head:
+            return self.crane_head.stick
         return None
 
     def release_keys(self) -> None:
-        for stick in (self.teleop.stick, self.motion_lab.stick):
+        for stick in (self.teleop.stick, self.motion_lab.stick, self.crane_head.stick):
             if stick.keys or stick.pad.held or stick.enabled:
                 stick.release_all()
 
@@ -369,7 +371,7 @@ class MainWindow(QMainWindow):
         elif w is self.motion_lab:
             self.teleop.inputs.route(self.motion_lab.link, self.motion_lab.stick)
         elif w is self.crane_head:
-            self.teleop.inputs.route(self.crane_head.link, None)
+            self.teleop.inputs.route(self.crane_head.link, self.crane_head.stick)
         else:
             self.teleop.inputs.route(None, None)
 
@@ -564,7 +566,11 @@ class MainWindow(QMainWindow):
 
     def _refresh_looks(self) -> None:
         """ENABLE from the engines' newest states; messages whose condition is gone are cleared."""
-        for origin, stick in (("teleop", self.teleop.stick), ("Motion-Lab", self.motion_lab.stick)):
+        for origin, stick in (
+            ("teleop", self.teleop.stick),
+            ("Motion-Lab", self.motion_lab.stick),
+            ("crane head", self.crane_head.stick),
+        ):
             link = self.links().get(origin)
             st = getattr(link, "latest", None) if link is not None and origin not in self.lost else None
             stick.show_engine(st if st is not None and hasattr(st, "flags") else None)

@@ -21,6 +21,7 @@ from PyQt5.QtWidgets import (
     QLabel,
     QPushButton,
     QSplitter,
+    QVBoxLayout,
     QWidget,
 )
 
@@ -29,6 +30,7 @@ from ui.widgets.fields import EngineFields
 from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
 from ui.widgets.scene_view import DrawnScene, make_view
 from ui.widgets.status import SceneLights
+from ui.widgets.stick import VirtualStick
 from ui.widgets.vessel import VesselRow
 
 HISTORY_S = 60.0
@@ -315,14 +317,33 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         # views above the plots left the scene 130 px tall in a 1280×800 window.)
         controls.setMaximumWidth(340)
         self.hull_plot.setMinimumHeight(122)  # with the vessel row and the lights the page fits 1280 × 800
+        # the operator's stick (issue 30, item 2): moves the TCP's target in the world in tac and cooperative
+        self.stick_box = QGroupBox("Stick: TCP in the world (x, y; z up)")
+        sl = QVBoxLayout(self.stick_box)
+        sl.setContentsMargins(4, 2, 4, 2)
+        self.stick = VirtualStick(pad_size=80)  # compact: the scene above keeps its height on a 1280 × 800 screen
+        self.stick.setToolTip(
+            "moves the head's TCP in the world (0.5 m/s at full stick) while the head (tac) or the crane and head "
+            "(cooperative) cancel the sea; a centred stick holds it still; hold Shift or the ENABLE button "
+            "(deadman); a joystick works the same way; off and a stopped machine ignore it"
+        )
+        sl.addWidget(self.stick)
+        self.stick_box.setMaximumHeight(110)
         left = QSplitter(Qt.Vertical)
         left.addWidget(controls)
         left.addWidget(self.hull_plot)
         left.setStretchFactor(1, 1)
         left.setChildrenCollapsible(False)
+        middle = QSplitter(Qt.Vertical)  # the scene over the stick, as at a console
+        middle.addWidget(self.scene)
+        middle.addWidget(self.stick_box)
+        middle.setStretchFactor(0, 1)
+        middle.setStretchFactor(1, 0)
+        middle.setSizes([1000, 100])  # the scene takes what the stick leaves
+        middle.setChildrenCollapsible(False)
         main = QSplitter(Qt.Horizontal)
         main.addWidget(left)
-        main.addWidget(self.scene)
+        main.addWidget(middle)
         main.addWidget(plots)
         main.setChildrenCollapsible(False)
         self.scene.setMinimumWidth(240)

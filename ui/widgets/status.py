@@ -130,7 +130,8 @@ def teleop_lights(state) -> dict[str, Light]:
 # crane head ------------------------------------------------------------------------------------------------
 def tac_lights(state) -> dict[str, Light]:
     """Vessel, crane and Delta head: the head compensates in ``tac`` and ``cooperative`` unless an E-STOP or a
-    reset froze it (the engine's ``holding``); ``off`` locks it.  No stick drives this scene."""
+    reset froze it (the engine's ``holding``); ``off`` locks it.  In ``tac`` and ``cooperative`` the stick moves the
+    TCP's target in the world (issue 30, item 2): its light is the stick's, as in the other scenes."""
     if state.estop:
         plant = Light("error", "E-STOP: head and crane stopped")
     elif state.holding:
@@ -145,10 +146,11 @@ def tac_lights(state) -> dict[str, Light]:
         detail = f"compensating: {how} ({state.tac_mode})" + (", SATURATED" if sat else "")
         plant = Light("warn" if sat else "ok", detail)
     f = state.flags
-    if f.device and not f.stale_input:
-        inp = Light("off", f"not used by the head (stop button read): {f.device_name[:32]}")
+    if state.tac_mode == "off" or state.estop or state.holding:  # the stick moves nothing here (issue 30, item 2)
+        why = "E-STOP" if state.estop else "holding" if state.holding else "mode off"
+        inp = Light("off", f"not used ({why}): {f.device_name[:32] or 'no input device'}")
     else:
-        inp = Light("off", "not used: the head compensates by itself")
+        inp = _stick_light(f, ["the TCP's target"])
     return {"engine": engine_light(state), "input": inp, "plant": plant}
 
 
@@ -216,18 +218,21 @@ def lab_plant_light(state) -> Light:
 
 
 def lab_input_light(state) -> Light:
-    """The input that drives a lab machine: a joint jog, the stick (Comau or winch REMOTE), or none (VVMC,
-    LOCAL, HOLD: no machine takes it)."""
+    """The input that drives a lab machine: a joint jog, the stick (Comau or winch REMOTE; under VVMC the work point
+    on EM1500 and the load to the deck, issue 30, item 4, on the simulated plant), or none (LOCAL, HOLD, SETTLED,
+    VVMC over the lab's PLC: no machine takes it)."""
     if state.estop:
         return Light("off", "not taken: E-STOP latched")
     jog = state.comau_jog
     if jog is not None and jog.joint:
         return Light("ok", f"jog q{jog.joint} {100 * jog.speed:+.0f} % ({state.flags.device_name[:32] or 'GUI'})")
     modes = [(n, m.mode if m is not None else "?") for n, m in (("Comau", state.comau), ("winch", state.winch))]
-    takers = [n for n, m in modes if m == "remote"]
+    simulated = state.plant is None or state.plant.backend != "plc"  # the PLC's MOTION_COMP takes no stick
+    names = {"remote": "REMOTE", "motion_comp": "VVMC"}
+    takers = [f"{n} {names[m]}" for n, m in modes if m == "remote" or (m == "motion_comp" and simulated)]
     if not takers:
         return Light("off", "not used (" + ", ".join(f"{n} {m.upper()}" for n, m in modes) + ")")
-    return _stick_light(state.flags, [f"{n} REMOTE" for n in takers])
+    return _stick_light(state.flags, takers)
 
 
 def lab_plc_light(state) -> Light:

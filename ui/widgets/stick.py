@@ -32,9 +32,9 @@ class StickPad(QWidget):
 
     moved = pyqtSignal(float, float, bool)  # x, y, held
 
-    def __init__(self, parent=None) -> None:
+    def __init__(self, parent=None, size: int = 140) -> None:
         super().__init__(parent)
-        self.setMinimumSize(140, 140)
+        self.setMinimumSize(size, size)
         self.setToolTip(
             "virtual stick: drag to move the tool in x (right) and y (up); release to let go. "
             "Full deflection = k_p [m] (position mode) or k_v [m/s] (velocity mode)"
@@ -102,10 +102,10 @@ class VirtualStick(QWidget):
 
     changed = pyqtSignal(float, float, float, float, bool)
 
-    def __init__(self, parent=None, aux_axis: str | None = None) -> None:
+    def __init__(self, parent=None, aux_axis: str | None = None, pad_size: int = 140) -> None:
         super().__init__(parent)
         lay = QHBoxLayout(self)
-        self.pad = StickPad()
+        self.pad = StickPad(size=pad_size)
         lay.addWidget(self.pad, 1)
         self.z = self._slider(lay, "z", "z deflection in [−1, 1] (Page Up/Down); springs back to 0 when released")
         self.w = (
