@@ -20,7 +20,7 @@ import numpy as np
 from app.control import tac_kernels
 from app.models.block import Block
 
-__all__ = ["CRANE_LAW", "HEAD_PID", "PidGains"]
+__all__ = ["CRANE_AHC", "CRANE_LAW", "HEAD_PID", "PidGains"]
 
 
 @dataclass(frozen=True)
@@ -109,4 +109,38 @@ CRANE_LAW = Block(
     params=("lower", "upper", "speed", "accel", "share", "k_p"),
     reference=_crane_law_reference,
     kernel=tac_kernels.crane_law_block,
+)
+
+
+# ----------------------------------------------------------------------------- the crane's winch (issue 30, item 3)
+def _crane_ahc_reference(x, u, p, dt):
+    """The NumPy reference of :data:`CRANE_AHC` (no kernel yet: one call per step from Python)."""
+    (z_target, has_target) = x
+    track, speed_cmd, L, (z_tcp, z_tcp_dot) = u
+    (speed,) = p
+    s = min(max(float(speed_cmd), -speed), speed)
+    if not track:  # the operator's speed pays out (positive) or hauls in
+        return x, (L + s * dt, s)
+    if not has_target:  # hold the hook where it hangs now, in the world
+        z_target, has_target = z_tcp + L, True
+    z_target = z_target + s * dt  # paying out lowers the hook in the world (NED: z down)
+    return (z_target, has_target), (z_target - z_tcp, s - z_tcp_dot)
+
+
+#: the crane winch's active heave compensation (the field's standard: the wire paid out and hauled in against
+#: the suspension point's heave so the hook keeps its height in the world, e.g. Küchler et al., "Active
+#: control for an offshore crane using prediction of the vessel's motion", IEEE/ASME Trans. Mechatronics 16(2),
+#: 2011), in {n} (NED, z down):
+#:
+#:     L_ref = z_h* − z_tcp,   L̇_ref = ż_h* − ż_tcp,   ż_h* = the operator's winch speed,
+#:
+#: the hook L below the TCP (small swing; the wire's angle is the anti-swing law's).  Off (``track`` False) the
+#: operator's speed drives the drum.  The drum that follows is the plant :data:`app.sim.motionlab.WINCH_DRUM`.
+CRANE_AHC = Block(
+    "crane winch law (active heave compensation)",
+    state=("z_target", "has_target"),
+    inputs=("track", "speed_cmd", "L", "tcp_z"),
+    outputs=("L_ref", "L_dot_ref"),
+    params=("speed",),
+    reference=_crane_ahc_reference,
 )

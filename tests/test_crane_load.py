@@ -1,0 +1,80 @@
+"""Issue 30, item 3: a suspended load on the offshore crane: the wire over a winch with its limits, the hook and
+payload as a pendulum driven by the head TCP's acceleration, and the winch's active heave compensation (AHC)."""
+
+import numpy as np
+import pytest
+
+from app.scenarios.tac import TacScenario, TacSimulator
+from app.scenes.crane_load import CraneLoad, WinchSpec
+
+DT = 0.01
+
+
+def _run(mode: str, seconds: float, ahc: bool, speed: float = 0.0, hs: float = 3.0, seed: int = 1):
+    sim = TacSimulator(TacScenario(duration=seconds + 1.0, hs=hs, mode=mode, seed=seed))
+    load = CraneLoad(ahc=ahc, speed_command=speed)
+    hooks, tcps, lengths, rates, swings = [], [], [], [], []
+    while not sim.done:
+        c = sim.advance(50)
+        for p in c.p_c_n:
+            load.step(p, DT)
+            tcps.append(p)
+            hooks.append(load.hook(p))
+            lengths.append(load.length)
+            rates.append(load.length_rate)
+            swings.append(load.swing_angle())
+    return load, *(np.array(a) for a in (hooks, tcps, lengths, rates, swings))
+
+
+def test_the_winchs_heave_compensation_holds_the_hook_while_the_tcp_heaves():
+    """The TCP heaving 1 m at 9 s (no sideways motion: no swing): the AHC winch keeps the hook's height in the
+    world within a few centimetres; without it the hook heaves with the TCP."""
+    t = np.arange(0.0, 60.0, DT)
+    z = -20.0 + 1.0 * np.sin(2 * np.pi * t / 9.0)
+    out = {}
+    for ahc in (True, False):
+        load = CraneLoad(ahc=ahc)
+        hook = []
+        for zk in z:
+            p = np.array([0.0, 0.0, zk])
+            load.step(p, DT)
+            hook.append(load.hook(p)[2])
+        out[ahc] = np.array(hook)[1000:]
+    assert np.std(out[False]) > 0.65  # 1 m amplitude: 0.71 m rms
+    assert np.max(np.abs(out[True] - np.mean(out[True]))) < 0.05, np.max(np.abs(out[True] - np.mean(out[True])))
+
+
+def test_in_waves_the_winch_follows_its_compensation_and_stays_in_its_limits():
+    """Mode off, Hs 3 m beam sea: the wire follows the AHC's length (the hook's height target minus the TCP's)
+    to centimetres, within the winch's length and speed limits; what the hook still does vertically is its swing."""
+    load, _, tcp, L, rates, swing = _run("off", 60.0, ahc=True)
+    assert np.std(tcp[2000:, 2]) > 0.3  # the TCP heaves
+    z_target = load.law[0]
+    follow = L[2000:] - (z_target - tcp[2000:, 2])
+    assert np.max(np.abs(follow)) < 0.1, np.max(np.abs(follow))
+    assert np.all((L >= 3.0 - 1e-9) & (L <= 40.0 + 1e-9)) and np.max(np.abs(rates)) <= WinchSpec().speed + 1e-9
+    assert np.max(swing) > 0.05  # the vessel's roll swings the load: the anti-swing law's job (item 3)
+
+
+def test_the_operators_winch_speed_lowers_the_hook_in_the_world_within_the_winchs_limits():
+    _, hook, _, L, rates, _ = _run("tac", 20.0, ahc=True, speed=0.5, hs=1.0)
+    s = slice(500, None)
+    fall = np.polyfit(np.arange(len(hook))[s] * DT, hook[s, 2], 1)[0]  # NED: lowering is +z
+    assert fall == pytest.approx(0.5, abs=0.05)
+    assert np.max(np.abs(rates)) <= WinchSpec().speed * (1 + 1e-9)
+    assert np.all(np.diff(L) / DT <= WinchSpec().speed + 1e-9)
+
+
+def test_the_load_swings_when_the_tcp_moves_and_hangs_still_when_it_is_held():
+    """The pendulum is driven by the TCP: riding the vessel (off) the load swings; with the head holding the TCP
+    still in the world (tac) it hangs almost still."""
+    *_, swing_off = _run("off", 40.0, ahc=True)
+    *_, swing_tac = _run("tac", 40.0, ahc=True)
+    assert np.max(swing_off) > 5 * np.max(swing_tac[500:]), (np.max(swing_off), np.max(swing_tac[500:]))
+
+
+def test_the_tension_of_a_still_hanging_load_is_its_weight():
+    load = CraneLoad()
+    for _ in range(100):
+        load.step(np.array([0.0, 0.0, -20.0]), DT)
+    assert load.tension() == pytest.approx(load.static_tension(), rel=1e-9)
