@@ -7,7 +7,9 @@ this file); ``tests/test_behaviour_kept.py`` compares a fresh run with them to 1
 meant since: on 2026-11-29 (issue 30, item 2) the crane-head engine's stick moves the TCP's target and a mode
 change disarms, so ``engine_tac`` was recorded again, with ``engine_tac_neutral`` (the same script, stick
 centred) beside it; that one gave the 2026-11-28 ``engine_tac`` record bit for bit in all 47 arrays but the
-armed and enabled flags after the mode change at 5.1 s (disarmed now, safety H97).
+armed and enabled flags after the mode change at 5.1 s (disarmed now, safety H97).  Both were recorded once
+more the same day when the crane's hanging load joined the snapshot (item 3): the 47 arrays recorded before
+were unchanged, 7 arrays were added (``snap.load.*``, ``snap.scene.hook``).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -78,3 +78,30 @@ def test_the_tension_of_a_still_hanging_load_is_its_weight():
     for _ in range(100):
         load.step(np.array([0.0, 0.0, -20.0]), DT)
     assert load.tension() == pytest.approx(load.static_tension(), rel=1e-9)
+
+
+def test_the_crane_head_engine_carries_the_load_and_the_sticks_w_lowers_it():
+    """Through the engine (issue 30, items 2 and 3): the snapshot reports the load; armed, the stick's w pays out and
+    the hook goes down in the world with the AHC on (tac); an E-STOP holds the wire where it is."""
+    from app.engine.tac_session import WINCH_SPEED, TacSession
+    from app.teleop.devices import InputSample
+    from tests.test_crane_stick import arm, run
+
+    ses = TacSession(scenario=TacScenario(duration=1e5, hs=1.0, mode="tac"))
+    t = run(ses, 2.0)
+    load = ses.snapshot().load
+    assert load is not None and load.ahc and load.wire_length == pytest.approx(10.0, abs=0.05)
+    assert load.tension_factor == pytest.approx(1.0, abs=0.05)
+    hook0 = np.array(load.hook)
+    t = arm(ses, t)
+    lower = InputSample((0.0, 0.0, 0.0, 0.5), (True, False), "test stick")
+    t = run(ses, 2.0, lower, t)
+    d = np.array(ses.snapshot().load.hook) - hook0
+    w = (0.5 - 0.1) / 0.9  # the default profile's deadzone 0.1, rescaled
+    assert d[2] == pytest.approx(w * WINCH_SPEED * 2.0, abs=0.05), d  # NED: down is +z
+    assert np.array(ses.snapshot().scene.hook) == pytest.approx(np.array(ses.snapshot().load.hook), abs=1e-3)
+    ses.estop()
+    t = run(ses, 1.0, lower, t)
+    L = ses.snapshot().load.wire_length
+    run(ses, 1.0, lower, t)
+    assert ses.snapshot().load.wire_length == pytest.approx(L, abs=1e-3) and not ses.snapshot().load.ahc

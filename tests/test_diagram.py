@@ -69,6 +69,9 @@ def test_describe_prints_the_diagram_and_its_json(capsys):
         "crane": "app.sim.head",
         "pid": "app.control.tac",
         "motors": "app.sim.head",
+        "winch_law": "app.control.tac",  # the crane's winch and load (issue 30, item 3): the lab's blocks reused
+        "drum": "app.sim.motionlab",
+        "load": "app.sim.motionlab",
     }
     assert any(w["from"] == "pid" and w["to"] == "motors" for w in data["wires"])
 

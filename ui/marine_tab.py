@@ -93,7 +93,10 @@ class TacDrawing:
 
         if self.crane is not None and self.head is not None and sample is not None:
             F = self.crane.frames(np.asarray(sample.beta, dtype=float))
-            return tac_meshes(self.crane.links, F, self.head, sample.alpha, sample.p_c_t, sample.eta, self.ship)
+            hook = getattr(scene, "hook", None) or None  # the hanging load (issue 30, item 3)
+            return tac_meshes(
+                self.crane.links, F, self.head, sample.alpha, sample.p_c_t, sample.eta, self.ship, hook=hook
+            )
         ship = _up(scene.ship)  # 8 corners: x, y, z each over (low, high)
         lo, hi = ship.min(axis=0), ship.max(axis=0)
         out = [box(0.5 * (lo + hi), np.eye(3), np.maximum(hi - lo, 1e-3), (0.6, 0.6, 0.6, 1.0), "ship")]

@@ -32,6 +32,7 @@ from app.marine.waves import SPECTRA
 from app.models.registry import resolve
 from app.models.xml import read_robot_file
 from app.net.snapshots import (
+    CraneLoadState,
     Hull,
     SeaState,
     ShipBox,
@@ -42,6 +43,7 @@ from app.net.snapshots import (
     WaveField,
 )
 from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacChunk, TacScenario, TacSimulator
+from app.scenes.crane_load import CraneLoad
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
@@ -49,6 +51,7 @@ SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the sat
 # the operator's stick (issue 30, item 2): x, y horizontal and z up (the profile's axes), in {n} (NED: z down)
 STICK_TO_NED = np.diag([1.0, 1.0, -1.0])
 TCP_SPEED = 0.5  # m/s at full stick (assumed: half the head's reach a second, 90°/s arms)
+WINCH_SPEED = 1.0  # m/s at full stick on the w axis (the winch's own limit is higher: app/scenes/crane_load.py)
 #: how far the stick may move the TCP's target from its calm-water point, per axis of {n} [m] (assumed): the head
 #: alone (tac) within a quarter of its workspace's smallest extent; with the crane (cooperative) within the crane's
 #: working range around the point of eq. (60)
@@ -73,7 +76,8 @@ class TacSession(Scene):
         self.system = self.sim.system
         self._carry = 0.0
         self.holding = False  # after an E-STOP reset: frozen until a mode is commanded
-        self.input = InputPipeline(note=self.note)
+        self.input = InputPipeline(note=self.note, axes=4)  # x, y, z: the TCP; w: the winch (issue 30)
+        self.load = CraneLoad()  # the wire, winch and hanging load under the TCP (issue 30, item 3)
         self.alarms = AlarmList("Crane head", note=self.note)
         self._saturated = deque(maxlen=SATURATION_WINDOW)
         self.last: dict[str, Any] = {}
@@ -216,6 +220,8 @@ class TacSession(Scene):
             chunks.append(self.sim.advance(n, frozen=frozen))
             n -= chunks[-1].t.size
         c = chunks[0] if len(chunks) == 1 else TacChunk.concat(chunks)
+        for p in c.p_c_n:  # the load hangs from the TCP: one step per simulation step
+            self.load.step(p, self.scenario.dt)
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms
@@ -255,6 +261,10 @@ class TacSession(Scene):
         there on top of the compensation.  Only when armed and enabled (deadman, fresh), never frozen or in
         ``off``; the target's offset stays within the mode's range (:meth:`TacSimulator.move_target`)."""
         self.target_limited = False
+        # the winch: heave compensation while the head compensates; the stick's w pays out (positive) or hauls in
+        drive = not frozen and inp.enabled and not self.estop_latched
+        self.load.ahc = self.mode != "off" and not frozen
+        self.load.speed_command = WINCH_SPEED * float(inp.signal[3]) if drive and len(inp.signal) > 3 else 0.0
         if frozen or self.mode == "off" or not inp.enabled or self.estop_latched:
             return
         s = np.asarray(inp.signal[:3], dtype=float)
@@ -262,6 +272,17 @@ class TacSession(Scene):
             return
         dp = STICK_TO_NED @ (TCP_SPEED * s) * dt
         self.target_limited = self.sim.move_target(dp, self.target_range[self.mode])
+
+    def _load_state(self) -> CraneLoadState:
+        ld = self.load
+        return CraneLoadState(
+            hook=np.round(ld.hook(np.asarray(self.last["p_c_n"])), 4).tolist(),
+            wire_length=round(ld.length, 4),
+            wire_speed=round(ld.length_rate, 4),
+            swing_deg=round(float(np.degrees(ld.swing_angle())), 3),
+            tension_factor=round(float(ld.tension() / ld.static_tension()), 4),
+            ahc=bool(ld.ahc),
+        )
 
     def _scene(self) -> TacScenePoints:
         """Points in {n} for drawing: ship box corners, crane polyline, head knees, TCP, desired point."""
@@ -282,7 +303,8 @@ class TacSession(Scene):
         def to_n(p):
             return np.round(p @ R_n_b.T + o, 4).tolist()
 
-        return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b))
+        hook = self.load.hook(np.asarray(self.last["p_c_n"])).tolist()
+        return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b), hook=hook)
 
     def describe(self) -> TacDescription:
         sc = self.scenario
@@ -323,6 +345,7 @@ class TacSession(Scene):
             tac_mode=self.scenario.mode,
             x_d=self.system.x_d,
             p_d_n=self.sim.p_d_n.tolist(),
+            load=self._load_state() if self.last else None,
             sample=TacSample(**self.last) if self.last else None,
             scene=self._scene() if self.last else None,
         )

@@ -224,6 +224,19 @@ class TacScenePoints:
     ship: list[list[float]]  # the ship box's 8 corners
     crane: list[list[float]]  # crane joint origins, base to the head's base
     head: list[list[float]]  # the head's three knees and its TCP
+    hook: list[float] = field(default_factory=list)  # the hanging load (issue 30, item 3); empty: none
+
+
+@dataclass(kw_only=True, slots=True)
+class CraneLoadState:
+    """The crane's wire, winch and hanging load (issue 30, item 3), in {n} [m]."""
+
+    hook: list[float]  # the load in {n}
+    wire_length: float  # [m]
+    wire_speed: float  # [m/s], paying out positive
+    swing_deg: float  # the wire's angle from the vertical
+    tension_factor: float  # the wire's tension over the load's weight
+    ahc: bool  # the winch's heave compensation on
 
 
 @dataclass(kw_only=True, slots=True)
@@ -236,6 +249,7 @@ class TacSnapshot(Snapshot):
     tac_mode: str = "off"
     x_d: float = 0.0  # desired head centre on the head's x axis [m]
     p_d_n: list[float] = field(default_factory=list)  # desired TCP in {n} [m]
+    load: CraneLoadState | None = None  # the hanging load (issue 30, item 3)
     sample: TacSample | None = None
     scene: TacScenePoints | None = None
 

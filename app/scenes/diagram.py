@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 from app.control.antisway import SWING_CONTROL
 from app.control.lab import COMAU_LAW, WINCH_LAW
-from app.control.tac import CRANE_LAW, HEAD_PID
+from app.control.tac import CRANE_AHC, CRANE_LAW, HEAD_PID
 from app.errors import BosunError
 from app.models.block import Block
 from app.sim.actuators import JOINT_ACTUATORS
@@ -302,7 +302,7 @@ TAC_DIAGRAM = Diagram(
     runs="app.scenarios.tac.TacSimulator.advance: the vessel motion, then app.scenes.tac_kernels.tac_chunk "
     "(one compiled call per chunk), or the NumPy reference",
     nodes=(
-        part("operator", "operator", "app.engine.tac_session", "-> mode, p_d", "HMI: mode, set-point"),
+        part("operator", "operator", "app.engine.tac_session", "-> mode, p_d, winch_speed", "HMI: mode, stick"),
         part("vessel", "plant", "app.marine.vessel", "-> eta, nu", "vessel in irregular seas"),
         part("mru", "sensor", "app.marine.sensors", "eta, nu -> eta_m, nu_m", "motion reference unit"),
         part(
@@ -325,6 +325,10 @@ TAC_DIAGRAM = Diagram(
         Node("motors", "plant", "app.sim.head", HEAD_MOTORS, note="DC motors, eq. 58"),
         part("windup", "controller", "app.scenes.tac_kernels", "trial, limited, saturated -> integral", "anti-windup"),
         part("head_fk", "sensor", "app.models.crane_head", "alpha, beta, eta -> p_c", "Delta FK, eqs. 17-25"),
+        part("tcp", "sensor", "app.scenes.crane_load", "p_c -> tcp_z, a_tcp", "TCP height, rate, acceleration"),
+        Node("winch_law", "controller", "app.control.tac", CRANE_AHC, note="heave compensation (AHC)"),
+        Node("drum", "plant", "app.sim.motionlab", WINCH_DRUM, note="crane winch"),
+        Node("load", "plant", "app.sim.motionlab", PENDULUM, note="hook and payload, eqs. 29-30"),
     ),
     wires=tuple(
         wire(w)
@@ -354,6 +358,16 @@ TAC_DIAGRAM = Diagram(
             "motors.alpha -> head_fk.alpha",
             "crane.beta -> head_fk.beta",
             "vessel.eta -> head_fk.eta",
+            "head_fk.p_c -> tcp.p_c",
+            "operator.mode -> winch_law.track",
+            "operator.winch_speed -> winch_law.speed_cmd",
+            "drum.L_w -> winch_law.L",
+            "tcp.tcp_z -> winch_law.tcp_z",
+            "winch_law.L_ref -> drum.L_ref",
+            "winch_law.L_dot_ref -> drum.L_dot_ref",
+            "tcp.a_tcp -> load.a_t_d",
+            "drum.L_w -> load.L",
+            "drum.L_w_dot -> load.L_dot",
         )
     ),
 )

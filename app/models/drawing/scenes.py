@@ -15,7 +15,7 @@ from app.models.drawing.machines import (
     serial_robot_meshes,
     stewart_meshes,
 )
-from app.models.drawing.mesh import Mesh, dedupe, homogeneous_rotation, up_rotation
+from app.models.drawing.mesh import Mesh, cylinder, dedupe, homogeneous_rotation, sphere, up_rotation
 from app.models.drawing.sea import hull_mesh
 
 __all__ = [
@@ -25,7 +25,7 @@ __all__ = [
 
 
 # ---------------------------------------------------------------------------------------------- scenes
-def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=None) -> list[Mesh]:
+def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=None, hook=None) -> list[Mesh]:
     """The crane-head scene in the display frame (x north, y west, z up) [m].
 
     Parameters
@@ -41,6 +41,8 @@ def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=N
         Vessel pose in {n}: north, east, down [m], roll, pitch, yaw [rad] (Fossen zyx).
     ship : object with length, beam, deck_z, keel_z, optional
         The hull's box in {b} (a ``ShipBox``); no hull when None.
+    hook : (3,), optional
+        The hanging load in {n} (issue 30, item 3): a wire from the TCP and the hook are drawn.
     """
     eta = np.asarray(eta, dtype=float)
     T_n_b = np.eye(4)
@@ -57,6 +59,13 @@ def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=N
         crane = [m for m in crane if not m.name.startswith("mount")]
     out += [m for m in crane if m.name != "tool"]
     out += delta_meshes(head_spec, alpha, p_c_t, T_d_b @ F[-1])
+    if hook is not None and len(hook) == 3:
+        T_d_t = T_d_b @ F[-1]
+        tcp_d = T_d_t[:3, :3] @ np.asarray(p_c_t, dtype=float) + T_d_t[:3, 3]
+        hook_d = up_rotation("-z") @ np.asarray(hook, dtype=float)  # {n} (z down) to the display frame (z up)
+        if np.linalg.norm(hook_d - tcp_d) > 1e-6:
+            out.append(cylinder(tcp_d, hook_d, 0.04, 8, color=(0.15, 0.15, 0.15, 1.0), name="wire"))
+        out.append(sphere(hook_d, 0.5, 12, name="load"))
     return out
 
 
