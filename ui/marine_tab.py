@@ -321,14 +321,16 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         controls.setMaximumWidth(340)
         self.hull_plot.setMinimumHeight(122)  # with the vessel row and the lights the page fits 1280 × 800
         # the operator's stick (issue 30, item 2): moves the TCP's target in the world in tac and cooperative
-        self.stick_box = QGroupBox("Stick: TCP in the world (x, y; z up)")
+        self.stick_box = QGroupBox("Stick: TCP in the world (x, y; z up); w the winch")
         sl = QVBoxLayout(self.stick_box)
         sl.setContentsMargins(4, 2, 4, 2)
-        self.stick = VirtualStick(pad_size=80)  # compact: the scene above keeps its height on a 1280 × 800 screen
+        # compact: the scene above keeps its height on a 1280 × 800 screen; w: the winch (issue 30, item 3)
+        self.stick = VirtualStick(aux_axis="w winch", pad_size=80)
         self.stick.setToolTip(
             "moves the head's TCP in the world (0.5 m/s at full stick) while the head (tac) or the crane and head "
-            "(cooperative) cancel the sea; a centred stick holds it still; hold Shift or the ENABLE button "
-            "(deadman); a joystick works the same way; off and a stopped machine ignore it"
+            "(cooperative) cancel the sea; a centred stick holds it still; w pays the winch out (lowering the hook in "
+            "the world, 1 m/s at full) or hauls in; hold Shift or the ENABLE button (deadman); a joystick works the "
+            "same way; off and a stopped machine ignore the TCP axes"
         )
         sl.addWidget(self.stick)
         self.stick_box.setMaximumHeight(110)

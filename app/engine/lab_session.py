@@ -219,6 +219,13 @@ class LabSession(Scene):
             self._local_speed_time = time.monotonic()  # the GUI resends while the slider is held
 
     @command
+    def set_frame(self, frame: str) -> None:
+        """The frame the stick commands in (issue 30, item 1): in the lab it follows the mode, the Comau's base in
+        REMOTE and EM1500's deck under VVMC (the target frame); a frame asked for is refused with that reason."""
+        now = "target (EM1500's deck, VVMC on)" if self.vvmc else "base (the Comau's, REMOTE)"
+        raise CommandError(f"frame {frame}: the lab's stick commands in the frame of its mode, now {now}")
+
+    @command
     def lab_vvmc(self, on: bool) -> None:
         self._guard()
         self.input.disarm("VVMC switched")  # off puts the Comau in REMOTE: a held stick must not drive it

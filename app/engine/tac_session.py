@@ -188,6 +188,16 @@ class TacSession(Scene):
         self.holding = False
         self.note("info", f"compensation mode: {mode}")
 
+    @command
+    def set_frame(self, frame: str) -> None:
+        """The frame the stick commands in (issue 30, item 1): this scene moves the TCP's target in the world; the
+        vessel's (base), the head's (tool) and a target deck's frames are refused with the reason."""
+        if frame != "world":
+            raise CommandError(
+                f"frame {frame}: the crane-head scene moves the TCP in the world frame only (a target deck and the "
+                "vessel's frame are not in this scene yet)"
+            )
+
     def estop(self, source: str = "operator") -> None:
         self._latch(f"E-STOP from {source}: head and crane stopped")
 

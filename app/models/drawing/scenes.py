@@ -15,7 +15,7 @@ from app.models.drawing.machines import (
     serial_robot_meshes,
     stewart_meshes,
 )
-from app.models.drawing.mesh import Mesh, cylinder, dedupe, homogeneous_rotation, sphere, up_rotation
+from app.models.drawing.mesh import Mesh, box, cylinder, dedupe, homogeneous_rotation, up_rotation
 from app.models.drawing.sea import hull_mesh
 
 __all__ = [
@@ -64,8 +64,8 @@ def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=N
         tcp_d = T_d_t[:3, :3] @ np.asarray(p_c_t, dtype=float) + T_d_t[:3, 3]
         hook_d = up_rotation("-z") @ np.asarray(hook, dtype=float)  # {n} (z down) to the display frame (z up)
         if np.linalg.norm(hook_d - tcp_d) > 1e-6:
-            out.append(cylinder(tcp_d, hook_d, 0.04, 8, color=(0.15, 0.15, 0.15, 1.0), name="wire"))
-        out.append(sphere(hook_d, 0.5, 12, name="load"))
+            out.append(cylinder(tcp_d, hook_d, 0.12, 8, color=(0.9, 0.9, 0.9, 1.0), name="wire"))  # seen at 100 m
+        out.append(box(hook_d, np.eye(3), (2.0, 2.0, 1.5), color=(0.95, 0.75, 0.1, 1.0), name="load"))  # a 5 t crate
     return out
 
 
