@@ -268,4 +268,11 @@ def warm_up_steps() -> list:
         ),
         lambda: command_clip(z6, z6, -o6, o6),
         lambda: pendulum_block((0.1, 0.0, 0.0, 0.0), (z3, 1.0, 0.0), (0.1, 9.81), 0.01),
+        # the crane's winch drum, stepped from Python by app.scenes.crane_load (issue 30; the lab's is in lab_step)
+        lambda: drum_block(
+            (vec(1, 10.0), vec(1), vec(1), np.zeros(4, dtype=np.bool_)),
+            (vec(1, 10.0), vec(1)),
+            (vec(1, 3.0), vec(1, 40.0), vec(1, 1.5), vec(1, 2.0), 0.05),
+            0.01,
+        ),
     ]
