@@ -105,3 +105,25 @@ def test_the_crane_head_engine_carries_the_load_and_the_sticks_w_lowers_it():
     L = ses.snapshot().load.wire_length
     run(ses, 1.0, lower, t)
     assert ses.snapshot().load.wire_length == pytest.approx(L, abs=1e-3) and not ses.snapshot().load.ahc
+
+
+def test_heave_compensation_switched_back_on_holds_the_hook_where_it_is_then():
+    """AHC off while the hook is lowered by hand, then on again: the winch holds the hook's new height; it does not
+    haul it back to the height it had when AHC was last on (an unbidden move)."""
+    load = CraneLoad()
+    p = np.array([0.0, 0.0, -20.0])
+    for _ in range(100):
+        load.step(p, DT)
+    load.ahc, load.speed_command = False, 0.5
+    for _ in range(200):  # 2 s paying out by hand: the hook 1 m lower
+        load.step(p, DT)
+    load.speed_command = 0.0
+    for _ in range(100):
+        load.step(p, DT)
+    L = load.length
+    load.ahc = True
+    rates = []
+    for _ in range(200):
+        load.step(p, DT)
+        rates.append(abs(load.length_rate))
+    assert max(rates) < 1e-6 and load.length == pytest.approx(L, abs=1e-6)

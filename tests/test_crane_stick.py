@@ -8,6 +8,7 @@ import pytest
 from app.engine.tac_session import TCP_SPEED, TacSession
 from app.scenarios.tac import TacScenario
 from app.teleop.devices import InputSample
+from tests.test_safety_engine import run_lab as run  # the engines' tick loop at 50 Hz (DT)
 
 DT = 0.02  # the engine's 50 Hz
 
@@ -16,25 +17,13 @@ def stick(x=0.0, y=0.0, z=0.0, enable=True):
     return InputSample((x, -y, z, 0.0), (enable, False), "test stick")  # default profile: axis 1 is -y
 
 
-def run(ses, seconds, sample=None, t0=0.0):
-    t = t0
-    for _ in range(round(seconds / DT)):
-        t += DT
-        if sample is not None:
-            ses.feed(sample, t)
-        ses.tick(t, DT)
-    return t
-
-
 def arm(ses, t0=0.0):
     t = run(ses, 0.1, stick(enable=False), t0)
     return run(ses, 0.1, stick(enable=True), t)
 
 
 def session(mode: str, hs: float = 3.0) -> TacSession:
-    ses = TacSession(scenario=TacScenario(duration=1e5, hs=hs, mode=mode))
-    ses.input.axes = 4
-    return ses
+    return TacSession(scenario=TacScenario(duration=1e5, hs=hs, mode=mode))  # its input has 4 axes: x, y, z, w
 
 
 @pytest.mark.parametrize("mode", ["tac", "cooperative"])

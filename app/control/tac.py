@@ -119,8 +119,8 @@ def _crane_ahc_reference(x, u, p, dt):
     track, speed_cmd, L, (z_tcp, z_tcp_dot) = u
     (speed,) = p
     s = min(max(float(speed_cmd), -speed), speed)
-    if not track:  # the operator's speed pays out (positive) or hauls in
-        return x, (L + s * dt, s)
+    if not track:  # the operator's speed pays out (positive) or hauls in; a later AHC holds the hook where it is then
+        return (z_target, False), (L + s * dt, s)
     if not has_target:  # hold the hook where it hangs now, in the world
         z_target, has_target = z_tcp + L, True
     z_target = z_target + s * dt  # paying out lowers the hook in the world (NED: z down)

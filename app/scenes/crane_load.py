@@ -113,8 +113,3 @@ class CraneLoad:
         Ld = (self.length - L0) / dt if dt > 0 else Ld0
         u_load = (np.ascontiguousarray(self.tcp_a), L0, Ld)
         self.swing, _ = PENDULUM.step(self.swing, u_load, (self.spec.damping, G), dt, self.use_kernels)
-
-    def set_ahc(self, on: bool) -> None:
-        """Heave compensation on (the hook held at its height in the world from the next step) or off."""
-        self.ahc = bool(on)
-        self.law = (0.0, False)
