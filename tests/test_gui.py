@@ -18,6 +18,7 @@ from PyQt5.QtCore import QSettings
 from app.engine.server import EngineServer
 from app.engine.session import Session
 from app.net.snapshots import InputFlags, TeleopSnapshot
+from tests.gui_rig import drive_until
 from tests.helpers import GUI_WAIT
 from ui.csv_logger import StateCsvLogger
 from ui.glprobe import gl_available
@@ -46,17 +47,6 @@ def window(qtbot, engine, tmp_path):
     qtbot.waitUntil(lambda: win.teleop.state is not None, timeout=GUI_WAIT)
     yield win
     win.close()
-
-
-def hold_enable(qtbot, window, stick=None):
-    """The operator's arming gesture on the on-screen stick: neutral and released, then hold Shift."""
-    from PyQt5.QtCore import Qt
-
-    stick = stick or window.teleop.stick
-    stick.release_all()
-    qtbot.wait(150)
-    stick.key(Qt.Key_Shift, True)
-    qtbot.waitUntil(lambda: window.teleop.state.flags.armed, timeout=GUI_WAIT)
 
 
 def test_fallback_2d_view_when_gl_is_unavailable(qtbot):
@@ -98,9 +88,14 @@ def test_virtual_stick_moves_the_plotted_tool_point(qtbot, window):
     plots = window.teleop.plots
     qtbot.waitUntil(lambda: plots.ring is not None and plots.ring.n > 5, timeout=GUI_WAIT)
     x0 = plots.ring.view()[-1, 7]
-    hold_enable(qtbot, window)
-    window.teleop.stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: plots.ring.view()[-1, 7] - x0 > 0.05, timeout=GUI_WAIT)
+    stick = window.teleop.stick
+    drive_until(
+        qtbot,
+        stick,
+        lambda: window.teleop.state.flags,
+        lambda: stick.pad.set_position(1.0, 0.0, True),
+        lambda: plots.ring.view()[-1, 7] - x0 > 0.05,
+    )
     window.teleop.stick.pad.set_position(0.0, 0.0, False)
     assert plots.frames_drawn > 0
 

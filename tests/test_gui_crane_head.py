@@ -8,7 +8,7 @@ pytest.importorskip("PyQt5")
 from app.engine.session import Session
 from app.engine.tac_session import TacSession
 from app.net.transport import Client, TransportError
-from tests.gui_rig import main_window
+from tests.gui_rig import drive_until, main_window
 from tests.helpers import GUI_WAIT
 from ui.link import EngineLink
 from ui.marine_tab import SceneView2D
@@ -257,12 +257,13 @@ def test_the_on_screen_stick_moves_the_tcp_target_through_the_engine(qtbot, wind
     p0 = np.array(tab.state.p_d_n)
     stick = tab.stick
     assert win._stick_of_current_tab() is stick
-    stick.release_all()
-    qtbot.wait(150)
-    stick.key(Qt.Key_Shift, True)
-    qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
-    stick.pad.set_position(1.0, 0.0, True)
-    qtbot.waitUntil(lambda: np.array(tab.state.p_d_n)[0] - p0[0] > 0.1, timeout=GUI_WAIT)
+    drive_until(
+        qtbot,
+        stick,
+        lambda: tab.state.flags,
+        lambda: stick.pad.set_position(1.0, 0.0, True),
+        lambda: np.array(tab.state.p_d_n)[0] - p0[0] > 0.1,
+    )
     stick.pad.set_position(0.0, 0.0, False)
     stick.key(Qt.Key_Shift, False)
     qtbot.wait(300)

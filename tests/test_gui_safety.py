@@ -22,6 +22,8 @@ from PyQt5.QtWidgets import QApplication, QLineEdit, QListView
 
 from app.engine.server import EngineServer
 from app.engine.session import Session
+from tests.gui_rig import arm_stick
+from tests.gui_rig import drive_until as rig_drive_until
 from tests.helpers import GUI_WAIT, process_running
 from ui.engine_process import free_port
 from ui.link import EngineLink
@@ -110,37 +112,12 @@ def log_text(win):
 
 def arm(qtbot, win, stick=None, flags=lambda w: w.teleop.state.flags):
     """Neutral and released, then hold Shift: the engine arms."""
-    stick = stick or win.teleop.stick
-    stick.release_all()
-    qtbot.wait(150)
-    stick.key(Qt.Key_Shift, True)
-    try:
-        qtbot.waitUntil(lambda: flags(win).armed, timeout=GUI_WAIT)
-    except Exception:
-        raise AssertionError(f"not armed: engine flags {flags(win)}, GUI stick {stick.values()}") from None
+    arm_stick(qtbot, stick or win.teleop.stick, lambda: flags(win))
 
 
 def drive_until(qtbot, win, deflect, until, stick=None, flags=lambda w: w.teleop.state.flags):
-    """Arm, call ``deflect()`` (keys or pad), and wait until ``until()``.
-
-    The engine disarms when no input reaches it for 200 ms (stale halt) and when the GUI's link, finding it
-    silent for 0.5 s, connects anew; a CI runner at load 4 on two cores starved this test that long (CI,
-    2026-11-29: the engine disarmed, the held key kept the stick off centre, and the wait ran out; an engine
-    stopped for 0.6 s gives the same).  A disarm is the safe answer, so the operator's is taken: centre, arm
-    again, deflect again, up to five times.  Any other way of not getting there fails."""
-    stick = stick or win.teleop.stick
-    reasons = []
-    for _attempt in range(5):
-        arm(qtbot, win, stick, flags)
-        deflect()
-        try:
-            qtbot.waitUntil(lambda: until() or not flags(win).armed, timeout=GUI_WAIT)
-        except Exception:
-            raise AssertionError(f"not driven: engine flags {flags(win)}, GUI stick {stick.values()}") from None
-        if until():
-            return
-        reasons.append(flags(win).input_reason)
-    raise AssertionError(f"disarmed five times before getting there: {reasons}")
+    """Arm, deflect, wait until ``until()``, arming again after a disarm (tests.gui_rig.drive_until)."""
+    rig_drive_until(qtbot, stick or win.teleop.stick, lambda: flags(win), deflect, until)
 
 
 def key(widget, k, press=True, autorep=False, mods=Qt.NoModifier):
