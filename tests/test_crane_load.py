@@ -77,7 +77,7 @@ def test_the_tension_of_a_still_hanging_load_is_its_weight():
     load = CraneLoad()
     for _ in range(100):
         load.step(np.array([0.0, 0.0, -20.0]), DT)
-    assert load.tension() == pytest.approx(load.static_tension(), rel=1e-9)
+    assert load.tension == pytest.approx(load.static_tension(), rel=1e-9)
 
 
 def test_the_crane_head_engine_carries_the_load_and_the_sticks_w_lowers_it():

@@ -290,7 +290,7 @@ class TacSession(Scene):
             wire_length=round(ld.length, 4),
             wire_speed=round(ld.length_rate, 4),
             swing_deg=round(float(np.degrees(ld.swing_angle())), 3),
-            tension_factor=round(float(ld.tension() / ld.static_tension()), 4),
+            tension_factor=round(float(ld.tension / ld.static_tension()), 4),
             ahc=bool(ld.ahc),
         )
 

@@ -36,6 +36,7 @@ __all__ = [
     "drum_block",
     "follow_clamped",
     "leg_lengths",
+    "load_block",
     "motion_filter_update",
     "pendulum_block",
     "pendulum_step",
@@ -249,6 +250,86 @@ def drum_block(x, u, p, dt):
     return (wl, wv, wa, at_limit), (wl, wv)
 
 
+@_jit
+def _load_forces(r, v, s, sd, L, Ld, present, d, n, vd, p):
+    """:func:`app.sim.load._forces` on scalars: the load's acceleration (3 floats), the tension, the deck's
+    normal force and the gap."""
+    m, ea, zeta_w, c_a, k_c, zeta_c, mu, v_s, g = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]
+    e0, e1, e2 = r[0] - s[0], r[1] - s[1], r[2] - s[2]
+    ell = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+    u0, u1, u2 = e0 / ell, e1 / ell, e2 / ell
+    k = ea / L
+    stretch = ell - L
+    T = 0.0
+    if stretch > 0.0:
+        rate = u0 * (v[0] - sd[0]) + u1 * (v[1] - sd[1]) + u2 * (v[2] - sd[2])
+        T = max(0.0, k * stretch + 2.0 * zeta_w * math.sqrt(k * m) * (rate - Ld))
+    f0 = -T * u0 - m * c_a * v[0]
+    f1 = -T * u1 - m * c_a * v[1]
+    f2 = -T * u2 - m * c_a * v[2] + m * g
+    Fn, gap = 0.0, math.inf
+    if present:
+        gap = n[0] * (r[0] - d[0]) + n[1] * (r[1] - d[1]) + n[2] * (r[2] - d[2])
+        if gap < 0.0:
+            q0, q1, q2 = v[0] - vd[0], v[1] - vd[1], v[2] - vd[2]
+            rel_n = n[0] * q0 + n[1] * q1 + n[2] * q2
+            Fn = max(0.0, k_c * (-gap) + 2.0 * zeta_c * math.sqrt(k_c * m) * (-rel_n))
+            t0, t1, t2 = q0 - n[0] * rel_n, q1 - n[1] * rel_n, q2 - n[2] * rel_n
+            w = mu * Fn / math.sqrt(t0 * t0 + t1 * t1 + t2 * t2 + v_s * v_s)
+            f0 = f0 + Fn * n[0] - w * t0
+            f1 = f1 + Fn * n[1] - w * t1
+            f2 = f2 + Fn * n[2] - w * t2
+    return f0 / m, f1 / m, f2 / m, T, Fn, gap
+
+
+@_jit
+def load_block(x, u, p, dt):
+    """:data:`app.sim.load.LOAD` (its NumPy reference: ``app.sim.load._load_reference``): state (r, v) (3,) each,
+    updated in place; inputs (s₀, s₁, L₀, L₁, deck = (present, d, n̂, v_d)); parameters the LoadSpec record.
+    y = (tension, contact force, gap) at the step's end."""
+    r, v = x
+    s0, s1, L0, L1, deck = u
+    present, d0, n, vd = deck
+    n_sub = p[9]
+    h = dt / n_sub
+    sd = (s1 - s0) / dt
+    Ld = (L1 - L0) / dt
+    pf = np.array([p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]])
+    s = np.empty(3)
+    d = np.empty(3)
+    rk = np.empty(3)
+    vk = np.empty(3)
+    a = np.empty((4, 3))
+    vs = np.empty((4, 3))
+    for i in range(n_sub):
+        tau0 = i * h
+        for stage in range(4):
+            if stage == 0:
+                tau, c = tau0, 0.0
+            elif stage == 3:
+                tau, c = tau0 + h, h
+            else:
+                tau, c = tau0 + 0.5 * h, 0.5 * h
+            for j in range(3):
+                if stage == 0:
+                    rk[j], vk[j] = r[j], v[j]
+                else:
+                    rk[j] = r[j] + c * vs[stage - 1, j]
+                    vk[j] = v[j] + c * a[stage - 1, j]
+                s[j] = s0[j] + sd[j] * tau
+                d[j] = d0[j] + vd[j] * tau
+                vs[stage, j] = vk[j]
+            a0, a1, a2, _, _, _ = _load_forces(rk, vk, s, sd, L0 + Ld * tau, Ld, present, d, n, vd, pf)
+            a[stage, 0], a[stage, 1], a[stage, 2] = a0, a1, a2
+        for j in range(3):
+            r[j] = r[j] + (h / 6.0) * (vs[0, j] + 2.0 * vs[1, j] + 2.0 * vs[2, j] + vs[3, j])
+            v[j] = v[j] + (h / 6.0) * (a[0, j] + 2.0 * a[1, j] + 2.0 * a[2, j] + a[3, j])
+    for j in range(3):
+        d[j] = d0[j] + vd[j] * dt
+    _, _, _, T, Fn, gap = _load_forces(r, v, s1, sd, L1, Ld, present, d, n, vd, pf)
+    return (r, v), (T, Fn, gap)
+
+
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) every kernel the plants call from Python, with the
     argument types they pass (for :func:`app.warmup.warm_up`)."""
@@ -273,6 +354,13 @@ def warm_up_steps() -> list:
             (vec(1, 10.0), vec(1), vec(1), np.zeros(4, dtype=np.bool_)),
             (vec(1, 10.0), vec(1)),
             (vec(1, 3.0), vec(1, 40.0), vec(1, 1.5), vec(1, 2.0), 0.05),
+            0.01,
+        ),
+        # the crane's load on its wire (issue 30), stepped from Python by app.scenes.crane_load
+        lambda: load_block(
+            (vec(3), vec(3)),
+            (vec(3, -10.0), vec(3, -10.0), 10.0, 10.0, (on, vec(3), np.array([0.0, 0.0, -1.0]), vec(3))),
+            (5000.0, 5.0e7, 0.05, 0.02, 2.0e7, 1.0, 0.3, 0.01, 9.81, 10),
             0.01,
         ),
     ]
