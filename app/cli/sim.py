@@ -1,4 +1,4 @@
-"""``bosun sim tac|tac-sweep|vvmc|antisway``: the papers' simulations."""
+"""``bosun sim tac|tac-sweep|vvmc|antisway|transfer``: the papers' simulations and the compensated lift."""
 
 from __future__ import annotations
 
@@ -209,10 +209,80 @@ def cmd_sim_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_sim_transfer(args: argparse.Namespace) -> int:
+    """The compensated lift (issue 30, item 6): one transfer, and with ``--landings N`` N seeded landings."""
+    import time
+
+    from app.analysis.transfer_report import save_transfer
+    from app.scenarios.transfer import TransferError, TransferScenario, landings, simulate
+
+    if args.scene == "lab":
+        raise BosunError("sim transfer --scene lab: the Motion-Lab's transfer is not built yet (issue 30); use crane")
+    if args.landings is not None and args.landings < 1:
+        raise BosunError(f"--landings must be at least 1, got {args.landings}")
+    with _as_usage_error(TransferError):
+        sc = TransferScenario(
+            **_fields(args, "hs", "tp", "heading", "spectrum", "seed", "rao", "target", "mode", "operator"),
+            target_rao=args.target_vessel,
+            target_heading=args.target_heading,
+        )
+        if sc.operator != "scripted":
+            from app.scenarios.transfer import StickFile
+
+            StickFile.read(sc.operator)  # a bad file is refused before anything runs
+    out = _make_out(args, f"transfer_{sc.target}_{sc.mode}_hs{sc.hs:g}_seed{sc.seed}")
+    bar = _progress_bar("sim transfer", unit="s")
+    t0 = time.perf_counter()
+    with _as_usage_error(TransferError):
+        res = simulate(sc)
+    wall = time.perf_counter() - t0
+    speed = res.summary.get("duration_s", 0.0) / wall if wall > 0 else float("inf")
+    many = None
+    if args.landings:
+        many = landings(sc, args.landings, progress=lambda k, n: bar(k, n))
+    doc = _write_run(args, out, lambda tmp: save_transfer(res, tmp, many, speed))
+    if args.json:
+        return 0
+    _print_transfer(sc, doc, out)
+    return 0
+
+
+def _print_transfer(sc, doc: dict, out) -> None:
+    def num(v, fmt):
+        return "—" if v is None else format(v, fmt)
+
+    print(
+        f"transfer to the {sc.target}, {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
+        f"seed {sc.seed}, operator {sc.operator}"
+    )
+    print(
+        f"  path rms error {doc['path_rms_error_m']:.3f} m (target frame); touchdown at "
+        f"{num(doc['touchdown_relative_speed_mps'], '.3f')} m/s relative (commanded "
+        f"{num(doc['commanded_lowering_speed_mps'], 'g')}); re-hits {doc['rehits']}"
+    )
+    print(
+        f"  swing peak {num(doc['peak_swing_deg'], '.2f')}°, residual {num(doc['residual_swing_deg'], '.2f')}° rms; "
+        f"tension peak {doc['peak_tension_factor']:.2f}× static; {doc['duration_s']:.1f} s"
+    )
+    al = doc["alarms"]
+    raised = [f"{k} {v:g}" for k, v in al.items() if v]
+    print(f"  alarms: {', '.join(raised) if raised else 'none'}")
+    if "landings" in doc:
+        ld = doc["landings"]
+        print(
+            f"  {ld['n']} landings: touchdown speed error p95 {num(ld['touchdown_speed_error_p95_mps'], '.3f')} m/s, "
+            f"re-hit free {num(ld['rehit_free_share'], '.0%')}"
+        )
+    print(f"  {doc['speed_x_realtime']:.0f}× real time; wrote {out}/timeseries.csv, transfer.png, summary.json")
+
+
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
     sims = group(
-        sub, "sim", "simulations: sim tac, sim tac-sweep (crane head), sim vvmc, sim antisway (Motion-Lab)", "sim"
+        sub,
+        "sim",
+        "simulations: sim tac, sim tac-sweep (crane head), sim vvmc, sim antisway (Motion-Lab), sim transfer (a lift)",
+        "sim",
     )
 
     def add_sea_args(p: argparse.ArgumentParser) -> None:
@@ -291,6 +361,39 @@ def register(sub) -> None:
         )
         b.add_argument("--antisway", action="store_true", help="add the load-swing estimator and anti-swing law")
         add_out(b, "vvmc_hsHS_seedSEED_SENSORS")
+    transfer_help = "the compensated lift: an operator lands a load on a platform or a vessel (CSV, PNG, JSON)"
+    with command(sims, "transfer", cmd_sim_transfer, json=False, help=transfer_help) as b:
+        b.add_argument("--scene", choices=["crane", "lab"], default="crane", help="default crane")
+        add_hs(b, 3.0)
+        add_tp(b, 9.0)
+        b.add_argument(
+            "--heading", type=_finite_float, default=90.0, help="wave heading to the crane's vessel [deg] (default 90)"
+        )
+        add_spectrum(b)
+        add_wave_seed(b)
+        add_vessel(b, "the crane's vessel: supply (default), supply-closed-form, or an RAO file")
+        b.add_argument("--target", choices=["platform", "vessel"], default="platform", help="default platform")
+        b.add_argument(
+            "--target-vessel", default=None, metavar="NAME|FILE", help="--target vessel: its RAOs (default: --vessel's)"
+        )
+        b.add_argument(
+            "--target-heading",
+            type=_finite_float,
+            default=60.0,
+            help="--target vessel: wave heading to it [deg] (default 60)",
+        )
+        b.add_argument(
+            "--mode", choices=["off", "compensated", "antisway"], default="compensated", help="default compensated"
+        )
+        b.add_argument(
+            "--operator",
+            default="scripted",
+            metavar="scripted|FILE",
+            help="the scripted reference operator, or a stick file to replay (CSV t,x,y,z,w)",
+        )
+        b.add_argument("--landings", type=int, default=None, metavar="N", help="also N seeded landings (statistics)")
+        add_json(b)
+        add_out(b, "transfer_TARGET_MODE_hsHS_seedSEED")
     antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"
     with command(sims, "antisway", cmd_sim_antisway, help=antisway_help) as b:
         add_hs(b, 2.0)

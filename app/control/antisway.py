@@ -26,6 +26,7 @@ load model of Motion-Lab paper eqs. (23)–(30) (:mod:`app.models.pendulum`, fra
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -121,6 +122,13 @@ class GainSchedule:
         return ka, kb
 
 
+@functools.lru_cache(maxsize=16)
+def _schedule(design: AntiSwingDesign, L_min: float, L_max: float) -> GainSchedule:
+    """One gain schedule per design and lengths (80 Riccati equations: a tenth of a second; a study of many runs
+    solves them once)."""
+    return GainSchedule(design, L_min, L_max)
+
+
 @dataclass
 class AntiSwing:
     """The anti-swing law: the swing estimate (α, β, α̇, β̇) and the wire length in, the tool's offset
@@ -132,13 +140,14 @@ class AntiSwing:
     design: AntiSwingDesign = field(default_factory=AntiSwingDesign)
     schedule: bool = True
     active: bool = False
+    lengths: tuple[float, float] = (0.3, 6.0)  # the gain schedule's wire lengths [m] (the lab's winch)
     p: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
     v: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
     a: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
     saturated: bool = False
 
     def __post_init__(self) -> None:
-        self._schedule = GainSchedule(self.design)
+        self._schedule = _schedule(self.design, *self.lengths)
         self._fixed = (lqr_gain(self.design.L, self.design, +1.0), lqr_gain(self.design.L, self.design, -1.0))
 
     def gains(self, L: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -295,6 +295,11 @@ class TacSimulator:
         self._started = False
         self._beta_c_prev: NDArray[np.float64] | None = None
         self._use_kernels = tac_kernels.ENABLED
+        #: steps of vessel motion computed at once and handed out by :meth:`advance` (0: each advance computes its
+        #: own; a caller that advances a step or two at a time, ``sim transfer``, sets it: one vectorised call
+        #: instead of hundreds)
+        self.lookahead = 0
+        self._ahead: tuple[int, VesselState] | None = None
 
     def continue_from(self, old: TacSimulator, blend: float) -> None:
         """Take over from ``old``, live (a sea or vessel change in the engine): its clock continues (this
@@ -382,7 +387,7 @@ class TacSimulator:
         t = (self.k + 1 + np.arange(n)) * sc.dt
         if isinstance(self.vessel, SeaTransition) and n:
             self.vessel = self.vessel.settled(float(t[0]))
-        true = self.vessel.state(t)
+        true = self._vessel_state(t)
         meas = self.mru.measure(true) if self.mru is not None else true
         if not self._started and n:
             first = self.vessel.state(np.array([self.k * sc.dt]))
@@ -431,6 +436,19 @@ class TacSimulator:
         e_s = np.linalg.norm(self.p_d_n - p_s_n, axis=1)
         self.k += n
         return TacChunk(t, true.eta, beta, p_ref_t, p_c_t, alpha_ref, alpha, u, p_c_n, p_s_n, e_c, e_s, saturated)
+
+    def _vessel_state(self, t: NDArray[np.float64]) -> VesselState:
+        """The vessel's motion at the next steps ``t``: computed now, or cut from the look-ahead block."""
+        n = t.size
+        if self.lookahead <= 0 or isinstance(self.vessel, SeaTransition) or n == 0:
+            return self.vessel.state(t)
+        k0 = self.k + 1
+        a = self._ahead
+        if a is None or k0 < a[0] or k0 + n > a[0] + a[1].t.size:
+            m = max(self.lookahead, n)
+            a = self._ahead = (k0, self.vessel.state((k0 + np.arange(m)) * self.scenario.dt))
+        i, s = k0 - a[0], a[1]
+        return VesselState(s.t[i : i + n], s.eta[i : i + n], s.nu[i : i + n], s.nu_dot[i : i + n])
 
     def _advance_compiled(self, t: NDArray[np.float64], true, meas, frozen: bool) -> TacChunk:
         """:meth:`advance` after the vessel motion in one call of :func:`~app.scenes.tac_kernels.tac_chunk`."""
