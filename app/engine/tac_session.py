@@ -43,7 +43,14 @@ from app.net.snapshots import (
     WaveField,
 )
 from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacChunk, TacScenario, TacSimulator
-from app.scenes.crane_load import CraneLoad
+from app.scenes.crane_load import (
+    SLACK_FACTOR,
+    SNAP_FACTOR,
+    SWING_LIMIT_DEG,
+    CraneLoad,
+    LandingWatch,
+    Platform,
+)
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
@@ -61,9 +68,17 @@ TARGET_RANGE_COOPERATIVE = np.array([5.0, 5.0, 3.0])
 SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
 
 
+#: the target platform (issue 30, item 5), from the load's calm-water point: 4 m forward, its deck 2 m below the
+#: load, 6 m × 6 m (assumed; beyond the head's reach alone, within the cooperative crane's)
+PLATFORM_OFFSET = np.array([4.0, 0.0, 2.0])
+PLATFORM_HALF = (3.0, 3.0)
+UP = np.array([0.0, 0.0, -1.0])
+
+
 @dataclass
 class TacSession(Scene):
     scenario: TacScenario = field(default_factory=lambda: TacScenario(duration=1e5))
+    platform: Platform | None = None  # None: the default platform (PLATFORM_OFFSET from the load)
 
     KIND: ClassVar[str] = "tac"
     TITLE: ClassVar[str] = "the crane-head scene"
@@ -78,6 +93,10 @@ class TacSession(Scene):
         self.holding = False  # after an E-STOP reset: frozen until a mode is commanded
         self.input = InputPipeline(note=self.note, axes=4)  # x, y, z: the TCP; w: the winch (issue 30)
         self.load = CraneLoad()  # the wire, winch and hanging load under the TCP (issue 30, item 3)
+        if self.platform is None:
+            centre = self.load.hook(self.sim.p_d_n0) + PLATFORM_OFFSET
+            self.platform = Platform(tuple(float(v) for v in centre), PLATFORM_HALF)
+        self.watch = LandingWatch(relift=True)  # the landing on it (issue 30, item 5)
         self.alarms = AlarmList("Crane head", note=self.note)
         self._saturated = deque(maxlen=SATURATION_WINDOW)
         self.last: dict[str, Any] = {}
@@ -180,6 +199,16 @@ class TacSession(Scene):
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
         if self.estop_latched:
             raise CommandError("E-STOP is latched; reset first")
+        hook = self.load.hook(self.sim.p_d_n)
+        if mode == "off" and self.mode != "off" and self.platform.over(hook):
+            # H100: off, the hook rides the vessel into the deck (or lifts a landed load and drops it), and the crane
+            # drives back to its nominal configuration, dragging the load across the deck
+            above = float(self.platform.centre[2] - hook[2])  # NED: the deck is below, at a larger z
+            where = "rests on" if self.watch.in_contact else f"hangs {above:.1f} m over"
+            raise CommandError(
+                f"compensation stays on while the load {where} the platform: lift it clear and move it off the "
+                "deck first"
+            )
         self.sim.set_mode(mode)
         self.scenario = self.sim.scenario
         if mode != self.mode:
@@ -230,8 +259,13 @@ class TacSession(Scene):
             chunks.append(self.sim.advance(n, frozen=frozen))
             n -= chunks[-1].t.size
         c = chunks[0] if len(chunks) == 1 else TacChunk.concat(chunks)
+        ld, watch, events = self.load, self.watch, [False] * 4
         for p in c.p_c_n:  # the load hangs from the TCP: one step per simulation step
-            self.load.step(p, self.scenario.dt)
+            ld.deck = self.platform.deck(ld.hook(p))
+            ld.step(p, self.scenario.dt)
+            watch.step(ld, np.zeros(3), UP)
+            for i, ev in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
+                events[i] = events[i] or ev
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms
@@ -243,6 +277,11 @@ class TacSession(Scene):
         stale = driving and fl["device"] and fl["stale_input"] and self.input.stale_while_driving
         al.set("stale_input", stale, text="Input stale: the TCP's target holds")
         al.set("target_limit", self.target_limited, text=f"TCP target at its {self.mode} range: it stops there")
+        slack, snap, rehit, sideways = events  # the landing (issue 30, item 5)
+        al.set("slack_wire", slack, text="Slack wire: the load is not on the deck and the wire does not carry it")
+        al.set("snap_load", snap, text=f"Snap load: the wire pulled over {SNAP_FACTOR:g}× the load's weight")
+        al.set("rehit", rehit, text=f"Re-hit: the load struck the deck again ({watch.contacts - 1} since touchdown)")
+        al.set("sideways_contact", sideways, text="The load touched the deck while sliding sideways")
         al.set(  # holding after a reset is a status (the plant light), not an alarm: nothing is wrong
             "saturation",
             value=0.0 if frozen else 100.0 * share,
@@ -292,6 +331,14 @@ class TacSession(Scene):
             swing_deg=round(float(np.degrees(ld.swing_angle())), 3),
             tension_factor=round(float(ld.tension / ld.static_tension()), 4),
             ahc=bool(ld.ahc),
+            clearance=round(float(ld.gap), 4) if bool(ld.deck[0]) else None,
+            rel_speed=round(self.watch.rel_speed, 4),
+            contact=self.watch.in_contact,
+            landed=self.watch.touched,
+            rehits=max(0, self.watch.contacts - 1),
+            swing_limit_deg=SWING_LIMIT_DEG,
+            slack_factor=SLACK_FACTOR,
+            snap_factor=SNAP_FACTOR,
         )
 
     def _scene(self) -> TacScenePoints:
@@ -314,7 +361,8 @@ class TacSession(Scene):
             return np.round(p @ R_n_b.T + o, 4).tolist()
 
         hook = self.load.hook(np.asarray(self.last["p_c_n"])).tolist()
-        return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b), hook=hook)
+        deck = self.platform.corners()
+        return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b), hook=hook, deck=deck)
 
     def describe(self) -> TacDescription:
         sc = self.scenario

@@ -225,6 +225,7 @@ class TacScenePoints:
     crane: list[list[float]]  # crane joint origins, base to the head's base
     head: list[list[float]]  # the head's three knees and its TCP
     hook: list[float] = field(default_factory=list)  # the hanging load (issue 30, item 3); empty: none
+    deck: list[list[float]] = field(default_factory=list)  # the target platform's deck corners (issue 30, item 5)
 
 
 @dataclass(kw_only=True, slots=True)
@@ -237,6 +238,15 @@ class CraneLoadState:
     swing_deg: float  # the wire's angle from the vertical
     tension_factor: float  # the wire's tension over the load's weight
     ahc: bool  # the winch's heave compensation on
+    # the landing (issue 30, item 5): the deck below, when the load is over it
+    clearance: float | None = None  # the load's height above the deck [m]; None: not over the deck
+    rel_speed: float = 0.0  # the load's speed towards the deck [m/s]
+    contact: bool = False  # the load touches the deck
+    landed: bool = False  # it has touched down (until lifted clear again)
+    rehits: int = 0  # contacts after the first of this landing
+    swing_limit_deg: float = 5.0
+    slack_factor: float = 0.1  # tension under this × static without the deck carrying the load: slack
+    snap_factor: float = 1.5  # tension over this × static: a snap load
 
 
 @dataclass(kw_only=True, slots=True)

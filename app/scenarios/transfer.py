@@ -45,24 +45,22 @@ from app.marine.vessels import vessel_rao
 from app.marine.waves import SPECTRA, WaveComponents
 from app.models.pendulum import G
 from app.scenarios.tac import TacScenario, TacSimulator
-from app.scenes.crane_load import CraneLoad
+from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, LandingWatch
 
 __all__ = [
-    "MODES", "TARGETS", "ScriptedOperator", "StickFile", "TransferError", "TransferScenario", "landings", "simulate",
+    "MODES", "SLACK_FACTOR", "SNAP_FACTOR", "TARGETS", "ScriptedOperator", "StickFile", "TransferError",
+    "TransferScenario", "landings", "simulate",
 ]  # fmt: skip
 
 MODES = ("off", "compensated", "antisway")
 TARGETS = ("platform", "vessel")
 TCP_SPEED = 0.5  # m/s at full stick, horizontally (app.engine.tac_session: the crane-head scene's)
 WINCH_SPEED = 1.0  # m/s at full stick on w
-SLACK_FACTOR = 0.1  # a wire pulling under 10 % of the load's weight while the deck does not carry it is slack
-SNAP_FACTOR = 1.5  # tension over 1.5 × static is a snap load (issue 30, item 5)
 CHUNK = 2  # steps the crane and head advance with the TCP's target held (the crane-head engine's 50 Hz tick)
 #: the anti-swing's sensors (the lab's, app.scenarios.swing): the TCP's acceleration 0.05 m/s² per axis (the
 #: crane's joints and the MRU), the wire's angles 0.5° (a wire-angle sensor); one standard deviation
 NOISE = np.array([0.05, 0.05, 0.05, math.radians(0.5), math.radians(0.5)])
 T_MAX = 1800.0  # s: a run ends by then whatever the operator does
-SIDEWAYS_SPEED = 0.1  # m/s: contact while the load slides faster than this over the deck is an alarm (assumed)
 
 
 #: the anti-swing law's design for the crane's load at L = 10 m: five times the lab's weight on the swing, a tenth on
@@ -335,7 +333,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     offset = np.zeros(3)
     beta_hint, calm_prev = float(sim.beta_d[0]), None
     rows, phases = [], []
-    touched, touch_speed, contacts, was_contact, rel_speed_prev = False, None, 0, False, 0.0
+    watch = LandingWatch()
     slack_n = snap_n = sideways_n = 0
     t = 0.0
     d_prev = d
@@ -354,7 +352,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
         c = sim.advance(CHUNK)
         tcps = c.p_s_n if sc.mode == "off" else c.p_c_n
         for tcp in tcps:
-            v_cmd = operator.command(t, dt, touched)
+            v_cmd = operator.command(t, dt, watch.touched)
             cmd = cmd + v_cmd * dt
             t = t + dt
             if vessel2 is not None:  # the target deck at the step's end, and its velocity over the step
@@ -366,22 +364,10 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             load.speed_command = float(v_cmd[2]) if sc.mode == "off" else float((R_deck @ v_cmd)[2] + deck_v[2])
             load.deck = (True, d, n_up, deck_v)
             load.step(tcp, dt)
-            r, v = load.state
-            rel = v - deck_v
-            rel_n = float(n_up @ rel)
-            rel_speed = -rel_n  # towards the deck, positive
-            in_contact = load.contact_force > 0.0
-            if in_contact and not was_contact:
-                contacts += 1
-                if not touched:
-                    touched, touch_speed = True, rel_speed_prev
-            was_contact, rel_speed_prev = in_contact, rel_speed
-            ratio = load.tension / load.static_tension()
-            slack_n += ratio < SLACK_FACTOR and not in_contact
-            snap_n += ratio > SNAP_FACTOR
-            if in_contact:
-                v_t = rel - n_up * rel_n
-                sideways_n += math.sqrt(float(v_t @ v_t)) > SIDEWAYS_SPEED
+            r = load.state[0]
+            watch.step(load, deck_v, n_up)
+            touched, rel_speed, ratio = watch.touched, watch.rel_speed, load.tension / load.static_tension()
+            slack_n, snap_n, sideways_n = slack_n + watch.slack, snap_n + watch.snap, sideways_n + watch.sideways
             e = r - tcp
             ell = math.sqrt(float(e @ e))
             swing = math.degrees(math.acos(min(1.0, max(-1.0, e[2] / ell))))
@@ -409,7 +395,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             progress(t, T_MAX)
     data = np.array(rows, dtype=float) if rows else np.zeros((0, len(COLUMNS)))
     res = TransferResult(sc, list(COLUMNS), data, phases)
-    res.summary = summarise(res, operator, touch_speed, contacts, slack_n, snap_n, sideways_n)
+    res.summary = summarise(res, operator, watch.touch_speed, watch.contacts, slack_n, snap_n, sideways_n)
     return res
 
 

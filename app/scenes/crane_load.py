@@ -17,6 +17,7 @@ wire's EA, the landing) are :class:`app.sim.load.LoadSpec`'s, with their sources
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,7 +28,13 @@ from app.models.pendulum import G
 from app.sim.load import LOAD, LoadSpec, hanging, no_deck
 from app.sim.motionlab import WINCH_DRUM
 
-__all__ = ["CraneLoad", "WinchSpec"]
+__all__ = ["CraneLoad", "LandingWatch", "Platform", "WinchSpec"]
+
+SLACK_FACTOR = 0.1  # a wire pulling under 10 % of the load's weight while no deck carries the load is slack
+SNAP_FACTOR = 1.5  # tension over 1.5 × static is a snap load (issue 30, item 5)
+SIDEWAYS_SPEED = 0.1  # m/s: contact while the load slides faster than this over the deck (assumed)
+SWING_LIMIT_DEG = 5.0  # the landing panel's swing limit (assumed: a load swinging more is not landed)
+LIFT_OFF = 0.5  # m: a landed load this far above the deck again has been lifted: the next contact is a new landing
 
 
 @dataclass(frozen=True)
@@ -130,3 +137,68 @@ class CraneLoad:
         u_load = (prev, p, L0, self.length, self.deck)
         self.state, (T, Fn, gap) = LOAD.step(self.state, u_load, self._load_p, dt, self.use_kernels)
         self.tension, self.contact_force, self.gap = float(T), float(Fn), float(gap)
+
+
+@dataclass(frozen=True)
+class Platform:
+    """A fixed platform's deck: a horizontal rectangle in {n} (NED) centred at ``centre`` (its surface), ±``half``
+    along x and y.  :meth:`deck` is the load's deck record: present only while the load is over it."""
+
+    centre: tuple[float, float, float]
+    half: tuple[float, float] = (4.0, 4.0)
+
+    def over(self, r: NDArray[np.float64]) -> bool:
+        c = self.centre
+        return abs(float(r[0]) - c[0]) <= self.half[0] and abs(float(r[1]) - c[1]) <= self.half[1]
+
+    def deck(self, r: NDArray[np.float64]) -> tuple:
+        return (self.over(r), np.array(self.centre, dtype=float), np.array([0.0, 0.0, -1.0]), np.zeros(3))
+
+    def corners(self) -> list[list[float]]:
+        (x, y, z), (hx, hy) = self.centre, self.half
+        return [[x - hx, y - hy, z], [x + hx, y - hy, z], [x + hx, y + hy, z], [x - hx, y + hy, z]]
+
+
+@dataclass
+class LandingWatch:
+    """What a landing does, step by step, from the load after its step and the deck's velocity and up normal: the
+    speed towards the deck, the first contact (and the speed just before it), every contact after it (a re-hit),
+    and this step's slack wire, snap load and sideways contact (issue 30, item 5).
+
+    ``relift``: a landed load lifted :data:`LIFT_OFF` clear of the deck starts a new landing (the engine, where the
+    operator lifts again); off, every contact of the run counts (``sim transfer``: one landing a run)."""
+
+    relift: bool = False
+    touched: bool = False
+    touch_speed: float | None = None
+    contacts: int = 0
+    rel_speed: float = 0.0
+    in_contact: bool = False
+    rehit: bool = False
+    slack: bool = False
+    snap: bool = False
+    sideways: bool = False
+
+    def step(self, load: CraneLoad, deck_v: NDArray[np.float64], n_up: NDArray[np.float64]) -> None:
+        rel = load.state[1] - deck_v
+        rel_n = float(n_up @ rel)
+        before = self.rel_speed
+        self.rel_speed = -rel_n  # towards the deck, positive
+        contact = load.contact_force > 0.0
+        onset = contact and not self.in_contact
+        self.in_contact = contact
+        if self.relift and self.touched and load.gap > LIFT_OFF:
+            self.touched, self.touch_speed, self.contacts = False, None, 0
+        if onset:
+            self.contacts += 1
+            if not self.touched:
+                self.touched, self.touch_speed = True, before
+        self.rehit = onset and self.contacts > 1
+        ratio = load.tension / load.static_tension()
+        self.slack = ratio < SLACK_FACTOR and not contact
+        self.snap = ratio > SNAP_FACTOR
+        if contact:
+            v_t = rel - n_up * rel_n
+            self.sideways = math.sqrt(float(v_t @ v_t)) > SIDEWAYS_SPEED
+        else:
+            self.sideways = False
