@@ -140,7 +140,25 @@ def other_tabs(app: QApplication, win: MainWindow) -> None:
     pump(app, 0.5)
     grab_window(win).save(str(OUT / "analysis.png"))
     win.tabs.setCurrentWidget(win.crane_head)
-    pump(app, 25.0)  # the crane-head scene: Hs 3 m beam sea, head compensating
+    pump(app, 10.0)  # the crane-head scene: Hs 3 m beam sea, head compensating
+    tab = win.crane_head
+    tab.mode.setCurrentText("cooperative")
+    tab.mode.activated.emit(tab.mode.currentIndex())  # the crane joins in: the TCP may go 5 m
+    pump(app, 2.0)
+    hook = tab.stick
+    hook.release_all()
+    pump(app, 0.3)
+    hook.key(Qt.Key_Shift, True)  # armed
+    pump(app, 0.3)
+    hook.pad.set_position(0.3, 0.0, True)  # the load forward over the platform, gently (issue 30, item 5)
+    pump(app, 40.0)
+    hook.pad.set_position(0.0, 0.0, True)
+    hook.w.setValue(30)  # lowered towards the deck
+    pump(app, 5.0)
+    hook.w.setValue(0)
+    pump(app, 2.0)
+    hook.release_all()
+    pump(app, 1.0)
     grab_window(win).save(str(OUT / "crane_head.png"))
     print(f"view: {win.teleop.view.kind}; plots redrawn {win.teleop.plots.frames_drawn} times")
     print(f"crane-head scene view: {win.crane_head.scene.kind}")

@@ -18,15 +18,16 @@ from PyQt5.QtWidgets import (
     QFormLayout,
     QGridLayout,
     QGroupBox,
+    QHBoxLayout,
     QLabel,
     QPushButton,
     QSplitter,
-    QVBoxLayout,
     QWidget,
 )
 
 from ui.scene_tab import SceneEngineMixin
 from ui.widgets.fields import EngineFields
+from ui.widgets.landing import LandingPanel
 from ui.widgets.plots import Ring, TwinAxis, axis_label, blank_axis, legend, refit, refit_on_show
 from ui.widgets.scene_view import DrawnScene, make_view
 from ui.widgets.status import SceneLights
@@ -64,7 +65,8 @@ TAC_LIGHTS = (
 
 SCENE_TIP = (
     "Vessel (red hull, grey deck) on the sea (blue), offshore crane (orange), Delta crane head (cyan, "
-    "TCP red), desired point (green) [m]; x north, y west, z up"
+    "TCP red), desired point (green), the load (yellow crate) on its wire and the target platform (green slab) [m]; "
+    "x north, y west, z up"
 )
 
 
@@ -94,8 +96,9 @@ class TacDrawing:
         if self.crane is not None and self.head is not None and sample is not None:
             F = self.crane.frames(np.asarray(sample.beta, dtype=float))
             hook = getattr(scene, "hook", None) or None  # the hanging load (issue 30, item 3)
+            deck = getattr(scene, "deck", None) or None  # the target platform (issue 30, item 5)
             return tac_meshes(
-                self.crane.links, F, self.head, sample.alpha, sample.p_c_t, sample.eta, self.ship, hook=hook
+                self.crane.links, F, self.head, sample.alpha, sample.p_c_t, sample.eta, self.ship, hook=hook, deck=deck
             )
         ship = _up(scene.ship)  # 8 corners: x, y, z each over (low, high)
         lo, hi = ship.min(axis=0), ship.max(axis=0)
@@ -321,8 +324,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         controls.setMaximumWidth(340)
         self.hull_plot.setMinimumHeight(122)  # with the vessel row and the lights the page fits 1280 × 800
         # the operator's stick (issue 30, item 2): moves the TCP's target in the world in tac and cooperative
-        self.stick_box = QGroupBox("Stick: TCP in the world (x, y; z up); w the winch")
-        sl = QVBoxLayout(self.stick_box)
+        self.stick_box = QGroupBox("Stick: TCP in the world (x, y; z up); w the winch — and the landing")
+        sl = QHBoxLayout(self.stick_box)
         sl.setContentsMargins(4, 2, 4, 2)
         # compact: the scene above keeps its height on a 1280 × 800 screen; w: the winch (issue 30, item 3)
         self.stick = VirtualStick(aux_axis="w winch", pad_size=80)
@@ -333,7 +336,9 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             "same way; off and a stopped machine ignore the TCP axes"
         )
         sl.addWidget(self.stick)
-        self.stick_box.setMaximumHeight(110)
+        self.landing = LandingPanel()  # the landing on the target platform beside the stick (issue 30, item 7)
+        sl.addWidget(self.landing, 1)
+        self.stick_box.setMaximumHeight(118)
         left = QSplitter(Qt.Vertical)
         left.addWidget(controls)
         left.addWidget(self.hull_plot)
@@ -439,6 +444,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self._t_last = s.t
         if state.scene is not None:
             self.scene.update_scene(state.scene, state.p_d_n, s)
+        self.landing.show_load(getattr(state, "load", None))
         self.ref_dot.setData([s.p_ref_t[0]], [s.p_ref_t[2]])
         self.pc_dot.setData([s.p_c_t[0]], [s.p_c_t[2]])
         if self.isVisible():  # a hidden tab draws when shown again (_shown)

@@ -25,7 +25,9 @@ __all__ = [
 
 
 # ---------------------------------------------------------------------------------------------- scenes
-def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=None, hook=None) -> list[Mesh]:
+def tac_meshes(
+    crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=None, hook=None, deck=None
+) -> list[Mesh]:
     """The crane-head scene in the display frame (x north, y west, z up) [m].
 
     Parameters
@@ -42,7 +44,10 @@ def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=N
     ship : object with length, beam, deck_z, keel_z, optional
         The hull's box in {b} (a ``ShipBox``); no hull when None.
     hook : (3,), optional
-        The hanging load in {n} (issue 30, item 3): a wire from the TCP and the hook are drawn.
+        The load's underside in {n} (issue 30, item 3): a 5 t crate standing on it and the wire from the TCP to its
+        top are drawn.
+    deck : (4, 3), optional
+        The target platform's deck corners in {n} (issue 30, item 5): a 1 m thick slab under them.
     """
     eta = np.asarray(eta, dtype=float)
     T_n_b = np.eye(4)
@@ -63,9 +68,17 @@ def tac_meshes(crane_links, crane_frames_b, head_spec, alpha, p_c_t, eta, ship=N
         T_d_t = T_d_b @ F[-1]
         tcp_d = T_d_t[:3, :3] @ np.asarray(p_c_t, dtype=float) + T_d_t[:3, 3]
         hook_d = up_rotation("-z") @ np.asarray(hook, dtype=float)  # {n} (z down) to the display frame (z up)
-        if np.linalg.norm(hook_d - tcp_d) > 1e-6:
-            out.append(cylinder(tcp_d, hook_d, 0.12, 8, color=(0.9, 0.9, 0.9, 1.0), name="wire"))  # seen at 100 m
-        out.append(box(hook_d, np.eye(3), (2.0, 2.0, 1.5), color=(0.95, 0.75, 0.1, 1.0), name="load"))  # a 5 t crate
+        top = hook_d + np.array([0.0, 0.0, 1.5])  # the crate's top, where the sling meets the wire
+        if np.linalg.norm(top - tcp_d) > 1e-6:
+            out.append(cylinder(tcp_d, top, 0.12, 8, color=(0.9, 0.9, 0.9, 1.0), name="wire"))  # seen at 100 m
+        crate = hook_d + np.array([0.0, 0.0, 0.75])
+        out.append(box(crate, np.eye(3), (2.0, 2.0, 1.5), color=(0.95, 0.75, 0.1, 1.0), name="load"))  # a 5 t crate
+    if deck is not None and len(deck) == 4:
+        c = np.asarray(deck, dtype=float) @ up_rotation("-z").T
+        lo, hi = c.min(axis=0), c.max(axis=0)
+        centre = 0.5 * (lo + hi) - np.array([0.0, 0.0, 0.5])
+        size = (hi[0] - lo[0], hi[1] - lo[1], 1.0)
+        out.append(box(centre, np.eye(3), size, color=(0.35, 0.75, 0.4, 1.0), name="platform"))
     return out
 
 

@@ -1,0 +1,109 @@
+"""The landing panel (issue 30, item 7): the load's clearance to the deck, its speed towards it, its swing and the
+wire's tension, each a bar against its limits, as the crane-head engine reports them (``TacSnapshot.load``)."""
+
+from __future__ import annotations
+
+from PyQt5.QtCore import QRectF, Qt
+from PyQt5.QtGui import QColor, QPainter, QPen
+from PyQt5.QtWidgets import QGridLayout, QLabel, QSizePolicy, QWidget
+
+from ui.widgets.status import LIGHT
+
+GREY = QColor(110, 110, 120)
+
+
+class LimitBar(QWidget):
+    """A horizontal bar from ``lo`` to ``hi`` (a signed one fills from zero), marks at its limits, the value as
+    text on it; green, amber (``warn``) or red (``error``); grey with a dash when there is no value."""
+
+    def __init__(self, lo: float, hi: float, marks: tuple[float, ...] = (), parent=None) -> None:
+        super().__init__(parent)
+        self.lo, self.hi, self.marks = lo, hi, marks
+        self.value: float | None = None
+        self.text = "—"
+        self.state = "unknown"
+        self.setMinimumSize(120, 16)
+        self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Fixed)
+
+    def set(self, value: float | None, text: str, state: str = "ok") -> None:
+        self.value, self.text, self.state = value, text, state if value is not None else "unknown"
+        self.update()
+
+    def _x(self, v: float, w: float) -> float:
+        return w * (min(max(v, self.lo), self.hi) - self.lo) / (self.hi - self.lo)
+
+    def paintEvent(self, _ev) -> None:
+        p = QPainter(self)
+        w, h = float(self.width()), float(self.height())
+        p.fillRect(QRectF(0, 0, w, h), QColor(40, 40, 48))
+        if self.value is not None:
+            x0 = self._x(max(self.lo, 0.0), w)
+            x1 = self._x(self.value, w)
+            color = QColor(LIGHT[self.state]) if self.state in LIGHT and self.state != "unknown" else GREY
+            p.fillRect(QRectF(min(x0, x1), 2, max(abs(x1 - x0), 2.0), h - 4), color)
+        p.setPen(QPen(QColor(230, 230, 230), 1))
+        for m in self.marks:
+            x = self._x(m, w)
+            p.drawLine(int(x), 0, int(x), int(h))
+        p.setPen(QColor(250, 250, 250))
+        p.drawText(QRectF(4, 0, w - 8, h), Qt.AlignVCenter | Qt.AlignLeft, self.text)
+        p.end()
+
+
+class LandingPanel(QWidget):
+    """Four bars and a line of status: the landing as the engine reports it (issue 30, items 5 and 7)."""
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        grid = QGridLayout(self)
+        grid.setContentsMargins(0, 0, 0, 0)
+        grid.setVerticalSpacing(2)
+        self.clearance = LimitBar(0.0, 5.0)
+        self.speed = LimitBar(-0.5, 0.5, marks=(0.0,))
+        self.swing = LimitBar(0.0, 10.0, marks=(5.0,))
+        self.tension = LimitBar(0.0, 2.0, marks=(0.1, 1.0, 1.5))
+        rows = (
+            ("clearance", self.clearance, "the load's underside above the target platform's deck [m] (— not over it)"),
+            ("to deck", self.speed, "the load's speed towards the deck [m/s]: positive closes in"),
+            ("swing", self.swing, "the wire's angle from the vertical [°] against its limit (the mark)"),
+            ("tension", self.tension, "the wire's tension over the load's weight; marks: slack 0.1, 1, snap 1.5"),
+        )
+        for i, (name, bar, tip) in enumerate(rows):
+            label = QLabel(name)
+            label.setToolTip(tip)
+            bar.setToolTip(tip)
+            grid.addWidget(label, i, 0)
+            grid.addWidget(bar, i, 1)
+        self.status = QLabel("—")
+        self.status.setTextFormat(Qt.RichText)
+        grid.addWidget(self.status, len(rows), 0, 1, 2)
+        grid.setColumnStretch(1, 1)
+
+    def show_load(self, load) -> None:
+        """Bars from a ``CraneLoadState`` (None: no load reported)."""
+        if load is None:
+            for bar in (self.clearance, self.speed, self.swing, self.tension):
+                bar.set(None, "—")
+            self.status.setText("—")
+            return
+        c = load.clearance
+        if c is None:
+            self.clearance.set(None, "not over the platform")
+        else:
+            state = "ok" if c > 1.0 or load.contact else "warn"
+            self.clearance.set(max(c, 0.0), "on the deck" if load.contact else f"{c:.2f} m", state)
+        near = c is not None and c < 1.0 and not load.contact
+        v = load.rel_speed
+        fast = near and v > 0.3  # closing in faster than a landing should (assumed; the scripted operator's 0.2)
+        self.speed.set(v, f"{v:+.2f} m/s", "warn" if fast else "ok")
+        lim = load.swing_limit_deg
+        self.swing.set(load.swing_deg, f"{load.swing_deg:.1f}°", "error" if load.swing_deg > lim else "ok")
+        f = load.tension_factor
+        bad = f > load.snap_factor or (f < load.slack_factor and not load.contact)
+        text = f"{f:.2f}× static" + (" — slack" if f < load.slack_factor else "")
+        self.tension.set(f, text, "error" if bad else "ok")
+        parts = ["<b>landed</b>" if load.landed else "in the air"]
+        if load.rehits:
+            parts.append(f"<span style='color:{LIGHT['warn']}'><b>{load.rehits} re-hit(s)</b></span>")
+        parts.append("winch AHC on" if load.ahc else "winch AHC off")
+        self.status.setText(" · ".join(parts))
