@@ -9,7 +9,12 @@ change disarms, so ``engine_tac`` was recorded again, with ``engine_tac_neutral`
 centred) beside it; that one gave the 2026-11-28 ``engine_tac`` record bit for bit in all 47 arrays but the
 armed and enabled flags after the mode change at 5.1 s (disarmed now, safety H97).  Both were recorded once
 more the same day when the crane's hanging load joined the snapshot (item 3): the 47 arrays recorded before
-were unchanged, 7 arrays were added (``snap.load.*``, ``snap.scene.hook``).
+were unchanged, 7 arrays were added (``snap.load.*``, ``snap.scene.hook``).  And again the same day (items 5 and
+8): the load hangs on an elastic wire now (``snap.load.hook``, ``swing_deg``, ``tension_factor`` and
+``snap.scene.hook`` changed), the snapshot carries the landing and the platform (arrays added), the slack-wire
+and snap-load alarms came with the mode change to off, and the head returns to α_d at 0.25 rad/s after it (safety
+H103): the head's arrays (``snap.sample.alpha``, ``u``, ``p_c_t``, ``p_c_n``, ``e_c``, ``snap.scene.head``) differ
+from the sample at 8.4 s on, after the switch at 8.2 s, and are the record's before it.
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -1,7 +1,8 @@
 """Issue 29, item 4: behaviour kept, to the number.  Today's simulations and engines (``tests/behaviour.py``:
 ``sim tac`` in every mode, ``sim tac-sweep``, ``sim vvmc`` with each sensor, with and without anti-swing,
 ``sim antisway``, and three engines over a scripted session) give the numbers recorded before the block
-redesign, to 1e-9 relative (an absolute floor of 1e-9 of the array's own scale for entries near zero)."""
+redesign, to 1e-9 relative (an absolute floor of 1e-9 of the array's own scale for entries near zero, and of
+1e-12 for numbers that are rounding noise)."""
 
 import numpy as np
 import pytest
@@ -18,6 +19,11 @@ def test_every_case_is_recorded(baseline):
     assert set(baseline) == set(CASES)
 
 
+#: below this (SI units: a picometre, a picoradian) a number is rounding noise: the lab tool's distance from a work
+#: point it sits on came out 4.46e-15 m where recorded and 4.63e-15 m on another 2-core AMD EPYC (2026-11-29: its
+#: NumPy and SciPy OpenBLAS builds round the estimator's 4x4 products differently), which 1e-9 of its own scale fails
+ABS_FLOOR = 1e-12
+
 #: fields renamed since the recording (the numbers stay): new name -> recorded name
 RENAMED = {
     "snap.sea.heading_deg": "snap.sea.heading",  # protocol 3: a field name carries its unit (issue 29, item 5)
@@ -31,7 +37,8 @@ def compare(case, got, want):
         g = got[name]
         assert g.shape == w.shape, (name, g.shape, w.shape)
         scale = float(np.nanmax(np.abs(w))) if w.size and np.isfinite(w).any() else 0.0
-        np.testing.assert_allclose(g, w, rtol=1e-9, atol=1e-9 * scale, equal_nan=True, err_msg=f"{case}: {name}")
+        atol = max(1e-9 * scale, ABS_FLOOR)
+        np.testing.assert_allclose(g, w, rtol=1e-9, atol=atol, equal_nan=True, err_msg=f"{case}: {name}")
 
 
 @pytest.mark.slow

@@ -16,8 +16,8 @@ from tests.test_safety_engine import run_lab as run
 DT = 0.02
 
 
-def stick(x=0.0, w=0.0, enable=True):
-    return InputSample((x, 0.0, 0.0, w), (enable, False), "test stick")
+def stick(x=0.0, w=0.0, enable=True, y=0.0):
+    return InputSample((x, -y, 0.0, w), (enable, False), "test stick")  # the default profile: axis 1 is −y
 
 
 def arm(ses, t0=0.0):
@@ -86,3 +86,27 @@ def test_the_snapshot_draws_the_platform():
     run(ses, 0.2)
     deck = np.array(ses.snapshot().scene.deck)
     assert deck.shape == (4, 3) and np.ptp(deck[:, 0]) == pytest.approx(6.0) and np.ptp(deck[:, 2]) == 0.0
+
+
+def test_compensation_switched_off_returns_the_head_slowly_and_does_not_snatch_the_load():
+    """H103: switched off, the head's arms went back to α_d at their motors' full speed (a step of metres per
+    second at the TCP; with the load on its elastic wire a snap load: 2.3× in calm water, 4.9× at Hs 1 m, 10.8× in
+    the scripted session at Hs 3 m).  Now they return at HOLD_RATE: 1.13× in calm water.  What is left at the
+    switch is the vessel's own velocity, which the TCP takes up at once (1.95× at Hs 1 m; the alarm says so)."""
+    from app.scenarios.tac import HOLD_RATE
+
+    ses = TacSession(scenario=TacScenario(duration=1e5, hs=0.01, mode="tac"))
+    t = arm(ses, run(ses, 2.0))
+    t = run(ses, 3.0, stick(y=-1.0), t)  # the target 1.5 m west (not over the platform): the arms far from α_d
+    t = run(ses, 2.0, stick(), t)
+    a0 = np.array(ses.snapshot().sample.alpha)
+    ses.set_tac_mode("off")
+    alphas, peak = [], 0.0
+    for _ in range(int(6.0 / DT)):
+        t = run(ses, DT, stick(enable=False), t)
+        alphas.append(ses.snapshot().sample.alpha)
+        peak = max(peak, ses.snapshot().load.tension_factor)
+    rate = np.abs(np.diff(np.array([a0, *alphas]), axis=0)).max() / DT
+    assert rate < 1.3 * HOLD_RATE, rate  # the servo follows the ramp (a step drove the motors at 3.7 rad/s)
+    assert np.abs(np.array(alphas[-1]) - np.array(ses.system.alpha_d)).max() < 1e-3  # back at α_d
+    assert peak < 1.5, peak  # no snap load in calm water

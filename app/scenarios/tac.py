@@ -45,6 +45,7 @@ from app.scenes.tac import CraneServo, HeadServo
 
 MODES = ("off", "tac", "cooperative")
 BETA_EQ60 = np.array([-math.pi / 2, math.pi / 4, -math.pi / 4])  # eq. (60)
+HOLD_RATE = 0.25  # rad/s: the head's arms return to α_d at this rate when the compensation goes off (assumed)
 SEA_BLEND_PERIODS = 2.0  # a live sea or vessel change fades the motions over this many peak periods
 
 
@@ -299,6 +300,9 @@ class TacSimulator:
         #: own; a caller that advances a step or two at a time, ``sim transfer``, sets it: one vectorised call
         #: instead of hundreds)
         self.lookahead = 0
+        #: what the head's servo holds in ``off``: α_d, reached at HOLD_RATE from where a mode change left the arms
+        #: (H103: a step to α_d drove the motors at full speed, 5 m/s at the TCP, and snatched the hanging load)
+        self._hold_ref = np.array(system.alpha_d, dtype=float)
         self._ahead: tuple[int, VesselState] | None = None
 
     def continue_from(self, old: TacSimulator, blend: float) -> None:
@@ -318,6 +322,7 @@ class TacSimulator:
         self._beta0_hint = old._beta0_hint
         self.p_d_n = np.array(old.p_d_n, dtype=float)  # where the operator has moved the TCP target
         self._started = old._started
+        self._hold_ref = np.array(old._hold_ref, dtype=float)
         self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
         self.use_kernels = old.use_kernels
 
@@ -351,6 +356,8 @@ class TacSimulator:
         bumpless there and reaches a far reference at its motors' speed limit)."""
         if mode not in MODES:
             raise ScenarioError(f"mode must be one of {', '.join(MODES)}, got '{mode}'")
+        if mode == "off" and self.scenario.mode != "off":
+            self._hold_ref = np.array(self.head_servo.alpha, dtype=float)
         self.scenario = replace(self.scenario, mode=mode)
         self.head_servo.reset(self.head_servo.alpha)
         self._beta_c_prev = None
@@ -422,7 +429,7 @@ class TacSimulator:
             u = alpha.copy()
             saturated = np.zeros(n, dtype=bool)
         elif sc.mode == "off":  # the servo holds the head at p_d^t
-            alpha, u = self.head_servo.run(np.broadcast_to(sys_.alpha_d, (n, 3)), np.zeros((n, 3)), sc.dt)
+            alpha, u = self.head_servo.run(np.broadcast_to(self._hold(n), (n, 3)), np.zeros((n, 3)), sc.dt)
             saturated = np.zeros(n, dtype=bool)
         else:
             alpha, u = self.head_servo.run(ref.alpha_ref, ref.alpha_dot_ref, sc.dt)
@@ -436,6 +443,14 @@ class TacSimulator:
         e_s = np.linalg.norm(self.p_d_n - p_s_n, axis=1)
         self.k += n
         return TacChunk(t, true.eta, beta, p_ref_t, p_c_t, alpha_ref, alpha, u, p_c_n, p_s_n, e_c, e_s, saturated)
+
+    def _hold(self, n: int) -> NDArray[np.float64]:
+        """The head's hold reference in ``off`` for the next ``n`` steps: α_d, approached at :data:`HOLD_RATE`
+        (held over the chunk: the engine's is two steps)."""
+        step = HOLD_RATE * n * self.scenario.dt
+        d = self.system.alpha_d - self._hold_ref
+        self._hold_ref = self._hold_ref + np.clip(d, -step, step)
+        return self._hold_ref
 
     def _vessel_state(self, t: NDArray[np.float64]) -> VesselState:
         """The vessel's motion at the next steps ``t``: computed now, or cut from the look-ahead block."""
@@ -466,7 +481,7 @@ class TacSimulator:
             crane_mode = tk.CRANE_HOLD
         # head: locked where it is (E-STOP), held at p_d^t by its servo (off), or compensating
         head_mode = tk.HEAD_LOCK if frozen else tk.HEAD_HOLD if sc.mode == "off" else tk.HEAD_SERVO
-        alpha_lock = head.alpha if frozen else sys_.alpha_d
+        alpha_lock = head.alpha if frozen else self._hold(t.size) if sc.mode == "off" else sys_.alpha_d
         beta, beta_dot = np.array(crane.beta, dtype=float), np.array(crane.beta_dot, dtype=float)  # fresh: in place
         alpha, integral, u = (np.array(x, dtype=float) for x in (head.alpha, head.integral, head.u))
         has_prev = self._beta_c_prev is not None

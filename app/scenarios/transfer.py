@@ -253,7 +253,7 @@ class TargetVessel:
     def __post_init__(self) -> None:
         psi = math.radians(self.wave_heading_deg - self.heading_deg)  # the second vessel's yaw in the world
         self.psi = psi
-        self.Rz = euler_zyx_to_matrix(np.array([0.0, 0.0, psi]))
+        self.R_n_b_yaw = euler_zyx_to_matrix(np.array([0.0, 0.0, psi]))  # its calm-water frame in {n}
         # its origin: the landing spot straight above/below it, so the deck point in its frame is (0, 0, z)
         self.origin = np.array([self.place[0], self.place[1], 0.0])
         self.deck_b = np.array([0.0, 0.0, self.place[2]])
@@ -268,9 +268,10 @@ class TargetVessel:
         deck's roll, pitch and yaw from calm water, R_z(ψ) R(η) R_z(ψ)ᵀ (its axes are the world's in calm water,
         so the operator's x is the same on both targets)."""
         eta, _ = self.motion.at(t)
-        R = self.Rz @ euler_zyx_to_matrix(eta[3:6])
-        d = self.origin + self.Rz @ eta[:3] + R @ self.deck_b
-        return d, -R[:, 2], R @ self.Rz.T
+        R_n_b_own = euler_zyx_to_matrix(eta[3:6])  # its body in its calm-water frame
+        R = self.R_n_b_yaw @ R_n_b_own
+        d = self.origin + self.R_n_b_yaw @ eta[:3] + R @ self.deck_b
+        return d, -R[:, 2], R @ self.R_n_b_yaw.T
 
 
 # ----------------------------------------------------------------------------- the run

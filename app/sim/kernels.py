@@ -251,9 +251,11 @@ def drum_block(x, u, p, dt):
 
 
 @_jit
-def _load_forces(r, v, s, sd, L, Ld, present, d, n, vd, p):
+def _load_forces(r, v, wire, deck, p):
     """:func:`app.sim.load._forces` on scalars: the load's acceleration (3 floats), the tension, the deck's
-    normal force and the gap."""
+    normal force and the gap; ``wire`` = (s, ṡ, L, L̇), ``deck`` = (present, d, n̂, v_d)."""
+    s, sd, L, Ld = wire
+    present, d, n, vd = deck
     m, ea, zeta_w, c_a, k_c, zeta_c, mu, v_s, g = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]
     e0, e1, e2 = r[0] - s[0], r[1] - s[1], r[2] - s[2]
     ell = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
@@ -319,14 +321,14 @@ def load_block(x, u, p, dt):
                 s[j] = s0[j] + sd[j] * tau
                 d[j] = d0[j] + vd[j] * tau
                 vs[stage, j] = vk[j]
-            a0, a1, a2, _, _, _ = _load_forces(rk, vk, s, sd, L0 + Ld * tau, Ld, present, d, n, vd, pf)
+            a0, a1, a2, _, _, _ = _load_forces(rk, vk, (s, sd, L0 + Ld * tau, Ld), (present, d, n, vd), pf)
             a[stage, 0], a[stage, 1], a[stage, 2] = a0, a1, a2
         for j in range(3):
             r[j] = r[j] + (h / 6.0) * (vs[0, j] + 2.0 * vs[1, j] + 2.0 * vs[2, j] + vs[3, j])
             v[j] = v[j] + (h / 6.0) * (a[0, j] + 2.0 * a[1, j] + 2.0 * a[2, j] + a[3, j])
     for j in range(3):
         d[j] = d0[j] + vd[j] * dt
-    _, _, _, T, Fn, gap = _load_forces(r, v, s1, sd, L1, Ld, present, d, n, vd, pf)
+    _, _, _, T, Fn, gap = _load_forces(r, v, (s1, sd, L1, Ld), (present, d, n, vd), pf)
     return (r, v), (T, Fn, gap)
 
 
