@@ -115,3 +115,26 @@ def test_the_command_writes_its_files_and_refuses_mistakes_in_one_line(tmp_path)
         p = subprocess.run(args, capture_output=True, text=True, timeout=120)
         assert p.returncode == 2 and msg in p.stderr and "Traceback" not in p.stderr, p.stderr
         assert len(p.stderr.strip().splitlines()) == 1
+
+
+def test_an_estimator_that_loses_the_load_starts_again_and_the_run_completes(monkeypatch):
+    """A flailing load far outside the pendulum model (Hs 6 m, seed 102: the saturated head jerked the TCP at
+    hundreds of m/s²) drove the estimator's covariance to NaN, and the next step raised LinAlgError: the run (and
+    the acceptance sweep) crashed.  Now the estimator starts again from "no swing" and the run goes on."""
+    import app.scenarios.transfer as transfer
+
+    real, calls = transfer.SWING_CONTROL, []
+
+    class Poisoned:
+        @staticmethod
+        def step(x, u, p, dt):
+            x, y = real.step(x, u, p, dt)
+            calls.append(1)
+            if len(calls) == 2000:  # once, mid-move: the covariance turns NaN
+                x = (x[0], np.full((4, 4), np.nan), *x[2:])
+            return x, y
+
+    monkeypatch.setattr(transfer, "SWING_CONTROL", Poisoned)
+    s = simulate(TransferScenario(mode="antisway", hs=1.0)).summary
+    assert s["estimator_resets"] == 1 and s["touchdown_relative_speed_mps"] is not None
+    assert np.isfinite(s["path_rms_error_m"]) and s["path_rms_error_m"] < 0.5

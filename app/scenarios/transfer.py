@@ -335,7 +335,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     beta_hint, calm_prev = float(sim.beta_d[0]), None
     rows, phases = [], []
     watch = LandingWatch()
-    slack_n = snap_n = sideways_n = 0
+    slack_n = snap_n = sideways_n = resets = 0
     t = 0.0
     d_prev = d
     while not operator.done and t < T_MAX:
@@ -378,9 +378,18 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
                 w = noise.pop()
                 a_d = load.tcp_a + w[:3]
                 z = np.array([-math.asin(min(1.0, max(-1.0, e[0] / ell))), math.atan2(e[1], e[2])]) + w[3:]
-                active = not touched  # on the deck the wire's angle is no swing
+                active = not touched and not watch.slack  # on the deck, or slack, the wire's angle is no swing
                 u = (np.ascontiguousarray(a_d), z, float(load.length), float(load.length_rate), active)
                 swing_x, (p_d, _, _, _, _) = SWING_CONTROL.step(swing_x, u, swing_p, dt)
+                if not (np.all(np.isfinite(swing_x[0])) and np.all(np.isfinite(swing_x[1]))):
+                    # the estimator lost the load (a flailing load far outside its pendulum model: Hs 6 m, the
+                    # head saturated, TCP accelerations of hundreds of m/s²): it starts again from "no swing", the
+                    # law's offset kept where it is finite
+                    fresh = _swing_control(load, dt)[0]
+                    law = tuple(v if np.all(np.isfinite(v)) else np.zeros(2) for v in swing_x[4:7])
+                    swing_x = (*fresh[:4], *law, fresh[7])
+                    p_d = np.array([*law[0], 0.0])
+                    resets += 1
                 offset = np.asarray(p_d, dtype=float)
             load_t = r - d if vessel2 is None else R_deck.T @ (r - d)
             err = load_t - cmd
@@ -397,6 +406,8 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     data = np.array(rows, dtype=float) if rows else np.zeros((0, len(COLUMNS)))
     res = TransferResult(sc, list(COLUMNS), data, phases)
     res.summary = summarise(res, operator, watch.touch_speed, watch.contacts, slack_n, snap_n, sideways_n)
+    if swing_p is not None:
+        res.summary["estimator_resets"] = resets
     return res
 
 
