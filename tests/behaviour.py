@@ -14,7 +14,9 @@ were unchanged, 7 arrays were added (``snap.load.*``, ``snap.scene.hook``).  And
 ``snap.scene.hook`` changed), the snapshot carries the landing and the platform (arrays added), the slack-wire
 and snap-load alarms came with the mode change to off, and the head returns to α_d at 0.25 rad/s after it (safety
 H103): the head's arrays (``snap.sample.alpha``, ``u``, ``p_c_t``, ``p_c_n``, ``e_c``, ``snap.scene.head``) differ
-from the sample at 8.4 s on, after the switch at 8.2 s, and are the record's before it.
+from the sample at 8.4 s on, after the switch at 8.2 s, and are the record's before it.  Then the load's
+anti-swing joined the snapshot (``snap.load.antisway``, ``antisway_offset``: two arrays added, nothing else
+changed: off, its offset is exactly zero).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -121,9 +121,9 @@ def test_an_estimator_that_loses_the_load_starts_again_and_the_run_completes(mon
     """A flailing load far outside the pendulum model (Hs 6 m, seed 102: the saturated head jerked the TCP at
     hundreds of m/s²) drove the estimator's covariance to NaN, and the next step raised LinAlgError: the run (and
     the acceptance sweep) crashed.  Now the estimator starts again from "no swing" and the run goes on."""
-    import app.scenarios.transfer as transfer
+    import app.scenes.crane_load as crane_load
 
-    real, calls = transfer.SWING_CONTROL, []
+    real, calls = crane_load.SWING_CONTROL, []
 
     class Poisoned:
         @staticmethod
@@ -134,7 +134,7 @@ def test_an_estimator_that_loses_the_load_starts_again_and_the_run_completes(mon
                 x = (x[0], np.full((4, 4), np.nan), *x[2:])
             return x, y
 
-    monkeypatch.setattr(transfer, "SWING_CONTROL", Poisoned)
+    monkeypatch.setattr(crane_load, "SWING_CONTROL", Poisoned)
     s = simulate(TransferScenario(mode="antisway", hs=1.0)).summary
     assert s["estimator_resets"] == 1 and s["touchdown_relative_speed_mps"] is not None
     assert np.isfinite(s["path_rms_error_m"]) and s["path_rms_error_m"] < 0.5

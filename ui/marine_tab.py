@@ -13,6 +13,7 @@ import numpy as np
 import pyqtgraph as pg
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QFormLayout,
@@ -242,6 +243,13 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.vessel.error.connect(lambda text: self.notice.emit("error", f"crane head: RAO file not sent: {text}"))
         form.addRow("vessel", self.vessel)
         form.addRow("mode", self.mode)
+        self.antisway = QCheckBox("anti-swing of the load")  # issue 30: the lab's estimator and law, reused
+        self.antisway.setToolTip(
+            "the load's swing estimator and anti-swing law move the TCP's target against the swing while the head "
+            "(and crane) compensate; off, their offset returns to zero"
+        )
+        self.antisway.clicked.connect(lambda on: self._send("set_crane_antisway", on=bool(on)))
+        form.addRow("", self.antisway)
         self.readout = QLabel("not connected")
         self.readout.setTextFormat(Qt.RichText)
         self.readout.setWordWrap(True)  # long lines wrap, never cut at the column's edge
@@ -373,7 +381,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
 
     def _set_enabled(self, on: bool) -> None:
         self._controls = on
-        for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode, self.vessel):
+        for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode, self.vessel, self.antisway):
             w.setEnabled(on)
         self.start.setVisible(not on)
 
@@ -403,7 +411,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and "no longer the operator" in error:
             self.notice.emit("error", f"crane head: operator role lost: {error}")
-        if not ok and re in ("set_sea", "set_tac_mode", "set_vessel", "reset"):
+        if not ok and re in ("set_sea", "set_tac_mode", "set_vessel", "set_crane_antisway", "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state
@@ -444,7 +452,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self._t_last = s.t
         if state.scene is not None:
             self.scene.update_scene(state.scene, state.p_d_n, s)
-        self.landing.show_load(getattr(state, "load", None))
+        load = getattr(state, "load", None)
+        self.landing.show_load(load)
+        if load is not None and self.antisway.isChecked() != load.antisway:
+            self.antisway.setChecked(load.antisway)  # the engine's (another console may switch it)
         self.ref_dot.setData([s.p_ref_t[0]], [s.p_ref_t[2]])
         self.pc_dot.setData([s.p_c_t[0]], [s.p_c_t[2]])
         if self.isVisible():  # a hidden tab draws when shown again (_shown)

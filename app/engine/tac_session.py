@@ -48,6 +48,7 @@ from app.scenes.crane_load import (
     SNAP_FACTOR,
     SWING_LIMIT_DEG,
     CraneLoad,
+    CraneSwingControl,
     LandingWatch,
     Platform,
 )
@@ -97,6 +98,10 @@ class TacSession(Scene):
             centre = self.load.hook(self.sim.p_d_n0) + PLATFORM_OFFSET
             self.platform = Platform(tuple(float(v) for v in centre), PLATFORM_HALF)
         self.watch = LandingWatch(relift=True)  # the landing on it (issue 30, item 5)
+        # the load's anti-swing (the lab's estimator and law, reused): off until the operator switches it on
+        self.swing = CraneSwingControl(self.load, self.scenario.dt, np.random.default_rng(30), active=False)
+        self.antisway = False
+        self._offset = np.zeros(3)  # the anti-swing offset applied to the TCP's target
         self.alarms = AlarmList("Crane head", note=self.note)
         self._saturated = deque(maxlen=SATURATION_WINDOW)
         self.last: dict[str, Any] = {}
@@ -218,6 +223,13 @@ class TacSession(Scene):
         self.note("info", f"compensation mode: {mode}")
 
     @command
+    def set_crane_antisway(self, on: bool) -> None:
+        """The load's anti-swing law on or off (issue 30, item 3): on, it adds an offset against the swing to the
+        TCP's target while the head (and crane) compensate; off, the offset returns to zero along the law."""
+        self.antisway = bool(on)
+        self.note("info", f"load anti-swing {'on' if on else 'off'}")
+
+    @command
     def set_frame(self, frame: str) -> None:
         """The frame the stick commands in (issue 30, item 1): this scene moves the TCP's target in the world; the
         vessel's (base), the head's (tool) and a target deck's frames are refused with the reason."""
@@ -252,6 +264,11 @@ class TacSession(Scene):
             self.estop(source=f"the stop button of {self.input.profile.name}")
         frozen = self.estop_latched or self.holding
         self._drive(inp, frozen, n * self.scenario.dt)
+        # the anti-swing offset of the last step onto the TCP's target (held over the tick, as the stick's move)
+        offset = self.swing.offset
+        self.sim.p_d_n = self.sim.p_d_n + (offset - self._offset)
+        self._offset = offset.copy()
+        self.swing.active = self.antisway and self.mode != "off" and not frozen
         chunks = []
         while n > 0:  # every step of the tick, also across the end of a sea record
             if self.sim.done:  # a long session: a fresh sea record that continues this one (H65)
@@ -264,6 +281,8 @@ class TacSession(Scene):
             ld.deck = self.platform.deck(ld.hook(p))
             ld.step(p, self.scenario.dt)
             watch.step(ld, np.zeros(3), UP)
+            e = ld.state[0] - p
+            self.swing.step(e, float(np.sqrt(e @ e)), not watch.touched and not watch.slack)
             for i, ev in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
                 events[i] = events[i] or ev
         self._saturated.extend(c.saturated.tolist())
@@ -339,6 +358,8 @@ class TacSession(Scene):
             swing_limit_deg=SWING_LIMIT_DEG,
             slack_factor=SLACK_FACTOR,
             snap_factor=SNAP_FACTOR,
+            antisway=self.antisway,
+            antisway_offset=np.round(self._offset[:2], 4).tolist(),
         )
 
     def _scene(self) -> TacScenePoints:

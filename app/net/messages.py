@@ -282,6 +282,14 @@ class SetTacMode(Message):
     mode: str = spec("enum", ("off", "tac", "cooperative"))
 
 
+@scene_command("set_crane_antisway")
+class SetCraneAntisway(Message):
+    """Crane-head scene (issue 30): the load's swing estimator and anti-swing law on (an offset of the TCP's target
+    against the swing) or off (the offset returns to zero along the law)."""
+
+    on: bool = spec("bool")
+
+
 # ------------------------------------------------------------------ Motion-Lab (``bosun server --plant lab``)
 @scene_command("lab_platform")
 class LabPlatform(Message):

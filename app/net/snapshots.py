@@ -247,6 +247,8 @@ class CraneLoadState:
     swing_limit_deg: float = 5.0
     slack_factor: float = 0.1  # tension under this × static without the deck carrying the load: slack
     snap_factor: float = 1.5  # tension over this × static: a snap load
+    antisway: bool = False  # the load's anti-swing law on (set_crane_antisway)
+    antisway_offset: list[float] = field(default_factory=lambda: [0.0, 0.0])  # its offset of the TCP's target [m]
 
 
 @dataclass(kw_only=True, slots=True)

@@ -37,7 +37,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from app.control.antisway import SWING_CONTROL, AntiSwing, AntiSwingDesign, SwingEkf
 from app.errors import BosunError
 from app.geometry import euler_zyx_to_matrix
 from app.marine.vessel import VesselMotion
@@ -45,7 +44,7 @@ from app.marine.vessels import vessel_rao
 from app.marine.waves import SPECTRA, WaveComponents
 from app.models.pendulum import G
 from app.scenarios.tac import TacScenario, TacSimulator
-from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, LandingWatch
+from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, CraneSwingControl, LandingWatch
 
 __all__ = [
     "MODES", "SLACK_FACTOR", "SNAP_FACTOR", "TARGETS", "ScriptedOperator", "StickFile", "TransferError",
@@ -57,17 +56,7 @@ TARGETS = ("platform", "vessel")
 TCP_SPEED = 0.5  # m/s at full stick, horizontally (app.engine.tac_session: the crane-head scene's)
 WINCH_SPEED = 1.0  # m/s at full stick on w
 CHUNK = 2  # steps the crane and head advance with the TCP's target held (the crane-head engine's 50 Hz tick)
-#: the anti-swing's sensors (the lab's, app.scenarios.swing): the TCP's acceleration 0.05 m/s² per axis (the
-#: crane's joints and the MRU), the wire's angles 0.5° (a wire-angle sensor); one standard deviation
-NOISE = np.array([0.05, 0.05, 0.05, math.radians(0.5), math.radians(0.5)])
 T_MAX = 1800.0  # s: a run ends by then whatever the operator does
-
-
-#: the anti-swing law's design for the crane's load at L = 10 m: five times the lab's weight on the swing, a tenth on
-#: the offset.  Chosen from a sweep of six weight sets on seeds 1–2 (residual swing against compensated only: the
-#: lab's 0.34–0.41, this 0.17, others 0.2–1.24): the result is sensitive to the weights, because the law assumes
-#: the TCP takes its acceleration at once while the head follows its target with its servo's lag.
-CRANE_ANTISWAY = AntiSwingDesign(L=10.0, Q=(2000.0, 200.0, 2.0, 1.0), a_max=1.0, offset_max=1.5)
 
 
 class TransferError(BosunError):
@@ -291,19 +280,6 @@ COLUMNS = (
 )  # fmt: skip
 
 
-def _swing_control(load: CraneLoad, dt: float):
-    """The lab's swing estimator and anti-swing law (:data:`SWING_CONTROL`), designed for the crane's load: the
-    LQR at L = 10 m with the load's air damping, scheduled over the winch's 3–40 m, T_s the scene's step; the
-    offset within the head's reach (1.5 m) and 1 m/s²."""
-    ls = load.load_spec
-    design = replace(CRANE_ANTISWAY, c=ls.air_damping, Ts=dt)
-    law = AntiSwing(design=design, lengths=(load.spec.min_length, load.spec.max_length), active=True)
-    ekf = SwingEkf(c=ls.air_damping, g=G, sigma_accel=0.05, measurement="angles", sigma_angle=math.radians(0.5))
-    record = (ekf.record(), law.record(), G, 0.2)
-    x = (ekf.x, ekf.P, np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), float(load.length))
-    return x, record
-
-
 def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult:
     """One transfer (module text); ``progress(t, t_max)`` now and then, ``cancel()`` True stops it.
 
@@ -329,13 +305,12 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     d, n_up, R_deck = (landing, up, eye) if vessel2 is None else vessel2.deck(0.0)
     cmd = R_deck.T @ (start - d)  # the hook's commanded point in the target frame (origin: the landing spot)
     rng = np.random.default_rng(sc.seed + 30_000)
-    noise: list = []
-    swing_x, swing_p = _swing_control(load, dt) if sc.mode == "antisway" else (None, None)
+    swing = CraneSwingControl(load, dt, rng, noise=sc.sensor_noise) if sc.mode == "antisway" else None
     offset = np.zeros(3)
     beta_hint, calm_prev = float(sim.beta_d[0]), None
     rows, phases = [], []
     watch = LandingWatch()
-    slack_n = snap_n = sideways_n = resets = 0
+    slack_n = snap_n = sideways_n = 0
     t = 0.0
     d_prev = d
     while not operator.done and t < T_MAX:
@@ -371,30 +346,13 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             slack_n, snap_n, sideways_n = slack_n + watch.slack, snap_n + watch.snap, sideways_n + watch.sideways
             e = r - tcp
             ell = math.sqrt(float(e @ e))
-            swing = math.degrees(math.acos(min(1.0, max(-1.0, e[2] / ell))))
-            if swing_x is not None:
-                if not len(noise):  # the sensors' noise, drawn a block at a time
-                    noise = list(rng.normal(0.0, 1.0, (1000, 5)) * NOISE) if sc.sensor_noise else [np.zeros(5)] * 1000
-                w = noise.pop()
-                a_d = load.tcp_a + w[:3]
-                z = np.array([-math.asin(min(1.0, max(-1.0, e[0] / ell))), math.atan2(e[1], e[2])]) + w[3:]
-                active = not touched and not watch.slack  # on the deck, or slack, the wire's angle is no swing
-                u = (np.ascontiguousarray(a_d), z, float(load.length), float(load.length_rate), active)
-                swing_x, (p_d, _, _, _, _) = SWING_CONTROL.step(swing_x, u, swing_p, dt)
-                if not (np.all(np.isfinite(swing_x[0])) and np.all(np.isfinite(swing_x[1]))):
-                    # the estimator lost the load (a flailing load far outside its pendulum model: Hs 6 m, the
-                    # head saturated, TCP accelerations of hundreds of m/s²): it starts again from "no swing", the
-                    # law's offset kept where it is finite
-                    fresh = _swing_control(load, dt)[0]
-                    law = tuple(v if np.all(np.isfinite(v)) else np.zeros(2) for v in swing_x[4:7])
-                    swing_x = (*fresh[:4], *law, fresh[7])
-                    p_d = np.array([*law[0], 0.0])
-                    resets += 1
-                offset = np.asarray(p_d, dtype=float)
+            swing_deg = math.degrees(math.acos(min(1.0, max(-1.0, e[2] / ell))))
+            if swing is not None:  # on the deck, or slack, the wire's angle is no swing
+                offset = swing.step(e, ell, not touched and not watch.slack)
             load_t = r - d if vessel2 is None else R_deck.T @ (r - d)
             err = load_t - cmd
             row = (
-                t, *cmd, *load_t, math.sqrt(float(err @ err)), *tcp, *d, load.gap, rel_speed, swing, ratio,
+                t, *cmd, *load_t, math.sqrt(float(err @ err)), *tcp, *d, load.gap, rel_speed, swing_deg, ratio,
                 load.contact_force / 1e3, load.length, offset[0], offset[1],
             )  # fmt: skip
             rows.append(row)
@@ -406,8 +364,8 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     data = np.array(rows, dtype=float) if rows else np.zeros((0, len(COLUMNS)))
     res = TransferResult(sc, list(COLUMNS), data, phases)
     res.summary = summarise(res, operator, watch.touch_speed, watch.contacts, slack_n, snap_n, sideways_n)
-    if swing_p is not None:
-        res.summary["estimator_resets"] = resets
+    if swing is not None:
+        res.summary["estimator_resets"] = swing.resets
     return res
 
 
