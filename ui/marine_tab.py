@@ -242,14 +242,17 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.vessel = VesselRow(lambda **f: self._send("set_vessel", **f))  # issue 17, item 2
         self.vessel.error.connect(lambda text: self.notice.emit("error", f"crane head: RAO file not sent: {text}"))
         form.addRow("vessel", self.vessel)
-        form.addRow("mode", self.mode)
-        self.antisway = QCheckBox("anti-swing of the load")  # issue 30: the lab's estimator and law, reused
+        self.antisway = QCheckBox("anti-swing")  # issue 30: the load's (the lab's estimator and law, reused)
         self.antisway.setToolTip(
             "the load's swing estimator and anti-swing law move the TCP's target against the swing while the head "
             "(and crane) compensate; off, their offset returns to zero"
         )
         self.antisway.clicked.connect(lambda on: self._send("set_crane_antisway", on=bool(on)))
-        form.addRow("", self.antisway)
+        mode_row = QHBoxLayout()  # one row: the 1280 × 800 page has no height to spare
+        mode_row.setContentsMargins(0, 0, 0, 0)
+        mode_row.addWidget(self.mode, 1)
+        mode_row.addWidget(self.antisway)
+        form.addRow("mode", mode_row)
         self.readout = QLabel("not connected")
         self.readout.setTextFormat(Qt.RichText)
         self.readout.setWordWrap(True)  # long lines wrap, never cut at the column's edge
