@@ -42,6 +42,7 @@ def test_round_trip_every_client_message():
         "release_operator": {},
         "set_sea": {"spectrum": "torsethaugen", "hs": 3.0, "tp": 9.0, "heading": 135.0},
         "set_tac_mode": {"mode": "cooperative"},
+        "set_crane_antisway": {"on": True},
         "lab_platform": {"platform": "em8000", "action": "engage"},
         "lab_source": {
             "platform": "em1500",
