@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.scenarios.transfer import TransferScenario, simulate
+from app.scenarios.transfer import TransferScenario, landing_statistics, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 MSS = ROOT.parent / "shared" / "data" / "supply_mss.mat"
@@ -34,9 +34,9 @@ def _many(pool, scs):
 
 
 def _landings(runs, sc) -> tuple[float, float]:
-    err = [abs(r["touchdown_relative_speed_mps"] - sc.lower_speed) for r in runs if r["touchdown_relative_speed_mps"]]
-    clean = sum(r["rehits"] == 0 and r["touchdown_relative_speed_mps"] is not None for r in runs)
-    return float(np.percentile(err, 95)) if err else float("nan"), clean / len(runs)
+    st = landing_statistics(runs, sc.lower_speed)
+    p95 = st["touchdown_speed_error_p95_mps"]
+    return (float("nan") if p95 is None else p95), st["rehit_free_share"]
 
 
 def figures(pool, base: TransferScenario, n_landings: int) -> dict:

@@ -48,7 +48,7 @@ from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, CraneSwi
 
 __all__ = [
     "MODES", "SLACK_FACTOR", "SNAP_FACTOR", "TARGETS", "ScriptedOperator", "StickFile", "TransferError",
-    "TransferScenario", "landings", "simulate",
+    "TransferScenario", "landing_statistics", "landings", "simulate",
 ]  # fmt: skip
 
 MODES = ("off", "compensated", "antisway")
@@ -131,13 +131,8 @@ class ScriptedOperator:
         sc, v = self.sc, np.zeros(3)
         if self.phase == "wait" and t - self._t_phase >= sc.wait:
             self._next("lift", t)
-        if self.phase == "lift":
-            if self._paid >= sc.lift - 1e-9:
-                self._next("move", t)
-            else:
-                step = min(sc.lower_speed * dt, sc.lift - self._paid)
-                self._paid += step
-                v[2] = -step / dt
+        if self.phase == "lift" and not self._pay(v, -1.0, sc.lift, dt):
+            self._next("move", t)
         if self.phase == "move":
             left = sc.move - self._moved
             brake = self._v * self._v / (2 * sc.move_accel)
@@ -159,19 +154,24 @@ class ScriptedOperator:
                 self._next("set_down", t)
             else:
                 v[2] = sc.lower_speed
-        if self.phase == "set_down":
-            if self._paid >= sc.slack - 1e-9:
-                self._next("hold", t)
-            else:
-                step = min(sc.lower_speed * dt, sc.slack - self._paid)
-                self._paid += step
-                v[2] = step / dt
+        if self.phase == "set_down" and not self._pay(v, 1.0, sc.slack, dt):
+            self._next("hold", t)
         if self.phase == "hold" and t - self._t_phase >= sc.wait:
             self.done = True
         return v
 
     def _next(self, phase: str, t: float) -> None:
         self.phase, self._t_phase = phase, t
+
+    def _pay(self, v: NDArray[np.float64], sign: float, total: float, dt: float) -> bool:
+        """The winch's step of a lift (``sign`` −1, up) or a set-down (+1) of ``total`` metres at the lowering speed
+        into ``v``; False once the whole distance is paid."""
+        if self._paid >= total - 1e-9:
+            return False
+        step = min(self.sc.lower_speed * dt, total - self._paid)
+        self._paid += step
+        v[2] = sign * step / dt
+        return True
 
 
 @dataclass
@@ -299,8 +299,9 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     p0 = sim.p_d_n0.copy()  # the TCP in calm water; the load hangs below it
     start = load.hook(p0)  # where the load starts, in the world (calm water)
     landing = start + np.array([sc.move, 0.0, sc.deck_drop])
-    vessel2 = TargetVessel(sc.target_rao, sc.target_heading, sim.vessel.sea, sc.heading, landing)
-    vessel2 = vessel2 if sc.target == "vessel" else None
+    vessel2 = None
+    if sc.target == "vessel":
+        vessel2 = TargetVessel(sc.target_rao, sc.target_heading, sim.vessel.sea, sc.heading, landing)
     up, eye = np.array([0.0, 0.0, -1.0]), np.eye(3)
     d, n_up, R_deck = (landing, up, eye) if vessel2 is None else vessel2.deck(0.0)
     cmd = R_deck.T @ (start - d)  # the hook's commanded point in the target frame (origin: the landing spot)
@@ -409,22 +410,25 @@ def summarise(res: TransferResult, operator, touch_speed, contacts, slack_n, sna
 def landings(sc: TransferScenario, n: int, progress=None, cancel=None) -> dict:
     """``n`` seeded landings (seeds ``sc.seed`` … ``sc.seed + n − 1``): the touchdown speed's error against the
     commanded lowering speed (95th percentile) and the share of landings without a re-hit."""
-    errors, clean, runs = [], 0, []
+    runs = []
     for k in range(n):
         if cancel is not None and cancel():
             break
-        r = simulate(replace(sc, seed=sc.seed + k))
-        s = r.summary
+        s = simulate(replace(sc, seed=sc.seed + k)).summary
         runs.append({key: s.get(key) for key in ("touchdown_relative_speed_mps", "rehits", "path_rms_error_m")})
-        if s.get("touchdown_relative_speed_mps") is not None:
-            errors.append(abs(s["touchdown_relative_speed_mps"] - sc.lower_speed))
-        clean += s.get("rehits", 1) == 0 and s.get("touchdown_relative_speed_mps") is not None
         if progress is not None:
             progress(k + 1, n)
-    done = len(runs)
+    return {**landing_statistics(runs, sc.lower_speed), "runs": runs}
+
+
+def landing_statistics(runs: list[dict], lower_speed: float) -> dict:
+    """Of runs' summaries: their number, the 95th percentile of the touchdown speed's error against the commanded
+    lowering speed, and the share that touched down without a re-hit (a run that never touched down is not)."""
+    touched = [r for r in runs if r.get("touchdown_relative_speed_mps") is not None]
+    errors = [abs(r["touchdown_relative_speed_mps"] - lower_speed) for r in touched]
+    clean = sum(r.get("rehits", 1) == 0 for r in touched)
     return {
-        "n": done,
+        "n": len(runs),
         "touchdown_speed_error_p95_mps": float(np.percentile(errors, 95)) if errors else None,
-        "rehit_free_share": clean / done if done else None,
-        "runs": runs,
+        "rehit_free_share": clean / len(runs) if runs else None,
     }
