@@ -107,7 +107,7 @@ def test_the_command_writes_its_files_and_refuses_mistakes_in_one_line(tmp_path)
     header = (out / "timeseries.csv").read_text(encoding="utf-8").splitlines()[0]
     assert header.startswith("t,cmd_x") and header.endswith(",phase")
     for extra, msg in (
-        (["--scene", "lab"], "not built yet"),
+        (["--scene", "lab", "--target-vessel", "x"], "--target-vessel is the crane's"),
         (["--operator", str(tmp_path / "missing.csv")], "cannot read the stick file"),
         (["--landings", "0"], "--landings must be at least 1"),
     ):

@@ -27,18 +27,17 @@ def plot_transfer(res: TransferResult, out: Path) -> list[Path]:
     sc, d = res.scenario, res.rows
     c = {name: d[:, i] for i, name in enumerate(res.columns)}
     plt = pyplot()
-    title = (
-        f"Transfer to the {sc.target}: {sc.mode}, Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
-        f"seed {sc.seed}"
-    )
+    where = "EM1500" if sc.scene == "lab" else f"the {sc.target}"
+    title = f"Transfer to {where}: {sc.mode}, Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, seed {sc.seed}"
     paths: list[Path] = []
     save = figure_saver(plt, out, title, paths)
     fig, ax = plt.subplots(2, 2, figsize=(11, 6.5))
     a = ax[0, 0]
-    a.plot(c["cmd_x"], -c["cmd_z"], color="0.3", lw=1.0, ls="--", label="commanded")
-    a.plot(c["load_x"], -c["load_z"], color="C0", lw=0.9, label="load")
+    h = "y" if np.ptp(c["cmd_y"]) > np.ptp(c["cmd_x"]) else "x"  # the move's axis (the lab moves along y)
+    a.plot(c[f"cmd_{h}"], -c["cmd_z"], color="0.3", lw=1.0, ls="--", label="commanded")
+    a.plot(c[f"load_{h}"], -c["load_z"], color="C0", lw=0.9, label="load")
     a.axhline(0.0, color="C2", lw=2.0, label="deck")
-    a.set_xlabel("x in the target frame [m]")
+    a.set_xlabel(f"{h} in the target frame [m]")
     a.set_ylabel("height above the deck [m]")
     a.set_title("the load's path (target frame)", fontsize=9)
     a.legend(fontsize=7)

@@ -216,12 +216,15 @@ def cmd_sim_transfer(args: argparse.Namespace) -> int:
     from app.analysis.transfer_report import save_transfer
     from app.scenarios.transfer import TransferError, TransferScenario, landings, simulate
 
-    if args.scene == "lab":
-        raise BosunError("sim transfer --scene lab: the Motion-Lab's transfer is not built yet (issue 30); use crane")
+    if args.scene == "lab" and args.target is not None:
+        raise BosunError("sim transfer --scene lab: --target is the crane's; the lab lands on EM1500's deck")
+    if args.scene == "lab" and (args.target_vessel is not None):
+        raise BosunError("sim transfer --scene lab: --target-vessel is the crane's; EM1500 plays --vessel too")
     if args.landings is not None and args.landings < 1:
         raise BosunError(f"--landings must be at least 1, got {args.landings}")
     with _as_usage_error(TransferError):
-        sc = TransferScenario(
+        sc = TransferScenario.for_scene(
+            args.scene,
             **_fields(args, "hs", "tp", "heading", "spectrum", "seed", "rao", "target", "mode", "operator"),
             target_rao=args.target_vessel,
             target_heading=args.target_heading,
@@ -248,11 +251,13 @@ def cmd_sim_transfer(args: argparse.Namespace) -> int:
 
 
 def _print_transfer(sc, doc: dict, out) -> None:
+    where = "EM1500 (Motion-Lab)" if sc.scene == "lab" else f"the {sc.target}"
+
     def num(v, fmt):
         return "—" if v is None else format(v, fmt)
 
     print(
-        f"transfer to the {sc.target}, {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
+        f"transfer to {where}, {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
         f"seed {sc.seed}, operator {sc.operator}"
     )
     print(
@@ -363,24 +368,34 @@ def register(sub) -> None:
         add_out(b, "vvmc_hsHS_seedSEED_SENSORS")
     transfer_help = "the compensated lift: an operator lands a load on a platform or a vessel (CSV, PNG, JSON)"
     with command(sims, "transfer", cmd_sim_transfer, json=False, help=transfer_help) as b:
-        b.add_argument("--scene", choices=["crane", "lab"], default="crane", help="default crane")
-        add_hs(b, 3.0)
-        add_tp(b, 9.0)
         b.add_argument(
-            "--heading", type=_finite_float, default=90.0, help="wave heading to the crane's vessel [deg] (default 90)"
+            "--scene",
+            choices=["crane", "lab"],
+            default="crane",
+            help="crane (default): the offshore crane and Delta head; lab: the Motion-Lab's Comau, winch and EM1500",
+        )
+        b.add_argument(
+            "--hs", type=_positive_float, default=None, help="significant wave height [m] (default 3; lab 2)"
+        )
+        b.add_argument("--tp", type=_positive_float, default=None, help="peak period [s] (default 9; lab 8)")
+        b.add_argument(
+            "--heading",
+            type=_finite_float,
+            default=None,
+            help="wave heading to the crane's vessel (lab: EM8000's) [deg] (default 90; lab 150)",
         )
         add_spectrum(b)
         add_wave_seed(b)
         add_vessel(b, "the crane's vessel: supply (default), supply-closed-form, or an RAO file")
-        b.add_argument("--target", choices=["platform", "vessel"], default="platform", help="default platform")
+        b.add_argument("--target", choices=["platform", "vessel"], default=None, help="crane: default platform")
         b.add_argument(
             "--target-vessel", default=None, metavar="NAME|FILE", help="--target vessel: its RAOs (default: --vessel's)"
         )
         b.add_argument(
             "--target-heading",
             type=_finite_float,
-            default=60.0,
-            help="--target vessel: wave heading to it [deg] (default 60)",
+            default=None,
+            help="--target vessel (lab: EM1500): wave heading to it [deg] (default 60; lab 90)",
         )
         b.add_argument(
             "--mode", choices=["off", "compensated", "antisway"], default="compensated", help="default compensated"

@@ -53,6 +53,14 @@ __all__ = [
 
 MODES = ("off", "compensated", "antisway")
 TARGETS = ("platform", "vessel")
+SCENES = ("crane", "lab")
+LAB_MOVE_MAX = 1.0  # m: the Comau's reach across EM1500 (app.scenarios.lab_transfer)
+#: the Motion-Lab's transfer (issue 30, item 6, "lab: 1 m … 0.05 m/s"): sim vvmc's sea and vessels (EM8000's at 150°,
+#: EM1500's at 90°), the PLC's 5 ms step, a 0.2 m lift, 1 m across at 0.1 m/s (0.1 m/s² ramps), lowered at 0.05 m/s
+LAB_DEFAULTS = {
+    "hs": 2.0, "tp": 8.0, "heading": 150.0, "target": "em1500", "target_heading": 90.0, "dt": 0.005, "lift": 0.2,
+    "move": 1.0, "move_speed": 0.1, "move_accel": 0.1, "lower_speed": 0.05, "slack": 0.05,
+}  # fmt: skip
 TCP_SPEED = 0.5  # m/s at full stick, horizontally (app.engine.tac_session: the crane-head scene's)
 WINCH_SPEED = 1.0  # m/s at full stick on w
 CHUNK = 2  # steps the crane and head advance with the TCP's target held (the crane-head engine's 50 Hz tick)
@@ -67,6 +75,7 @@ class TransferError(BosunError):
 class TransferScenario:
     """One transfer: the sea, the vessels, the target and the mode; angles in degrees at this edge."""
 
+    scene: str = "crane"  # or "lab" (the Motion-Lab: build it with for_scene, whose defaults are the lab's)
     hs: float = 3.0
     tp: float = 9.0
     heading: float = 90.0  # wave heading relative to the supply vessel [deg]
@@ -90,10 +99,26 @@ class TransferScenario:
     wait: float = 10.0  # s before the lift, after the move, and after the set-down
     sensor_noise: bool = True  # the anti-swing sees the TCP's acceleration and the wire's angles with noise
 
+    @classmethod
+    def for_scene(cls, scene: str = "crane", **values) -> TransferScenario:
+        """A scenario of ``scene`` (crane or lab) with that scene's defaults (:data:`LAB_DEFAULTS` for the lab)
+        under ``values``; None values take the default."""
+        if scene not in SCENES:
+            raise TransferError(f"scene must be one of {', '.join(SCENES)}, got {scene!r}")
+        given = {k: v for k, v in values.items() if v is not None}
+        return cls(scene=scene, **{**(LAB_DEFAULTS if scene == "lab" else {}), **given})
+
     def __post_init__(self) -> None:
+        lab = self.scene == "lab"
+        targets = ("em1500",) if lab else TARGETS
         checks = [
+            (self.scene in SCENES, f"scene must be one of {', '.join(SCENES)}, got {self.scene!r}"),
             (self.mode in MODES, f"mode must be one of {', '.join(MODES)}, got {self.mode!r}"),
-            (self.target in TARGETS, f"target must be one of {', '.join(TARGETS)}, got {self.target!r}"),
+            (
+                self.target in targets,
+                f"{self.scene}: the target must be one of {', '.join(targets)}, "
+                f"got {self.target!r}" + (" (the lab lands on EM1500's deck)" if lab else ""),
+            ),
             (self.spectrum in SPECTRA, f"spectrum must be one of {', '.join(SPECTRA)}, got {self.spectrum!r}"),
             (math.isfinite(self.hs) and 0 < self.hs <= 15, f"hs must be in (0, 15] m, got {self.hs}"),
             (math.isfinite(self.tp) and 2 <= self.tp <= 30, f"tp must be in [2, 30] s, got {self.tp}"),
@@ -104,6 +129,14 @@ class TransferScenario:
             (0 <= self.move <= 10.0, f"move must be in [0, 10] m (the cooperative range), got {self.move}"),
             (0 <= self.lift <= 3.0 and 0.5 <= self.deck_drop <= 10.0, "lift in [0, 3] m, deck drop in [0.5, 10] m"),
         ]
+        if lab:  # the Motion-Lab's reach: the Comau's tool speed in REMOTE, the winch's speed, the reachable move
+            checks += [
+                (self.move <= LAB_MOVE_MAX, f"lab: move must be in [0, {LAB_MOVE_MAX:g}] m, got {self.move}"),
+                (self.move_speed <= 0.25, f"lab: move speed at most 0.25 m/s (the Comau's), got {self.move_speed}"),
+                (self.lower_speed <= 0.2, f"lab: lowering speed at most 0.2 m/s (the winch's), got {self.lower_speed}"),
+                (self.lift <= 0.5, f"lab: lift at most 0.5 m, got {self.lift}"),
+                (self.dt <= 0.01, f"lab: dt at most 0.01 s, got {self.dt}"),
+            ]
         for ok, msg in checks:
             if not ok:
                 raise TransferError(msg)
@@ -119,6 +152,7 @@ class ScriptedOperator:
     frame (NED axes: z down) and the phase, from the time and whether the load has touched down."""
 
     sc: TransferScenario
+    axis: int = 0  # the move's axis in the target frame (the crane's x; the lab's y of EM1500's frame)
     phase: str = "wait"
     _t_phase: float = 0.0
     _moved: float = 0.0
@@ -145,7 +179,7 @@ class ScriptedOperator:
             else:
                 step = min(self._v * dt, left)
                 self._moved += step
-                v[0] = step / dt
+                v[self.axis] = step / dt
         if self.phase == "settle" and t - self._t_phase >= sc.wait:
             self._next("lower", t)
         if self.phase == "lower":
@@ -183,12 +217,13 @@ class StickFile:
 
     t: NDArray[np.float64]
     axes: NDArray[np.float64]
+    speeds: tuple[float, float, float] = (TCP_SPEED, TCP_SPEED, WINCH_SPEED)  # m/s at full stick: x and y, z, w
     phase: str = "replay"
     done: bool = False
     move_end: float | None = None
 
     @classmethod
-    def read(cls, path: str | Path) -> StickFile:
+    def read(cls, path: str | Path, speeds: tuple[float, float, float] | None = None) -> StickFile:
         path = Path(path)
         try:
             text = path.read_text(encoding="utf-8")
@@ -217,7 +252,7 @@ class StickFile:
             axes.append(vals[1:])
         if len(t) < 2:
             raise TransferError(f"{path}: at least two samples are needed")
-        return cls(np.array(t), np.array(axes))
+        return cls(np.array(t), np.array(axes), *(() if speeds is None else (tuple(speeds),)))
 
     def command(self, t: float, dt: float, touched: bool) -> NDArray[np.float64]:
         if t >= self.t[-1]:
@@ -225,7 +260,8 @@ class StickFile:
             return np.zeros(3)
         k = max(0, int(np.searchsorted(self.t, t, side="right")) - 1)
         x, y, z, w = self.axes[k]
-        return np.array([TCP_SPEED * x, TCP_SPEED * y, -TCP_SPEED * z + WINCH_SPEED * w])
+        v_xy, v_z, v_w = self.speeds
+        return np.array([v_xy * x, v_xy * y, -v_z * z + v_w * w])
 
 
 # ----------------------------------------------------------------------------- the target deck
@@ -285,6 +321,10 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
 
     The crane and head advance :data:`CHUNK` steps at a time with the TCP's target held (the crane-head engine's
     50 Hz tick); the operator, the winch, the load, the deck and the anti-swing law step every ``dt``."""
+    if sc.scene == "lab":
+        from app.scenarios.lab_transfer import simulate_lab
+
+        return simulate_lab(sc, progress, cancel)
     operator = StickFile.read(sc.operator) if sc.operator != "scripted" else ScriptedOperator(sc)
     tac = TacScenario(
         hs=sc.hs, tp=sc.tp, heading=sc.heading, spectrum=sc.spectrum, seed=sc.seed, rao=sc.rao, dt=sc.dt,

@@ -44,6 +44,9 @@ WORK_REACH_MARGIN = 0.15
 #: z up, so the stick's z raises the work point as it raises the tool in REMOTE (where {r} has z up)
 R_B2_DECK = np.diag([1.0, -1.0, -1.0])
 REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
+#: the frames VVMC can hold the work point in: ``deck``, fixed on EM1500 (the paper's: the point rolls with the
+#: deck), or ``level``, over a spot on EM1500's deck along gravity (the landing frame, issue 30: :meth:`set_work_frame`)
+WORK_FRAMES = ("deck", "level")
 
 
 class LabError(BosunError):
@@ -130,6 +133,10 @@ class MotionLab:
         # the operator's shift of the work point in {b2} under VVMC (issue 30, item 4) and its rate
         self.work_shift, self.work_shift_rate = np.zeros(3), np.zeros(3)
         self.work_shift_limited = False  # the last shift was stopped by WORK_SHIFT_MAX or the Comau's reach
+        # the level work frame: the spot on EM1500's deck (in {b2}, z = 0) and the point's offset from it in {n2}
+        self.work_frame = "deck"
+        self._level_load, self._level_pay = None, 0.0
+        self.level_spot, self.level_offset = np.zeros(3), np.zeros(3)
         self.winch = Winch(layout.winch)
         self.pendulum = Pendulum(damping=layout.payload_damping)
         self.T_n1_g = np.linalg.inv(layout.T_world_n1)
@@ -245,6 +252,26 @@ class MotionLab:
         use = bool(getattr(self.robot, "use_kernels", False))
         return nearest_ik(self.arm, p_tr, q_near, self.joints.lower, self.joints.upper, use)
 
+    def place_work_point(self, shift_b2: ArrayLike) -> None:
+        """Start with the work point moved by ``shift_b2`` (in {b2}) and the Comau's tool on it, both platforms at
+        neutral (a transfer's pick-up point, :mod:`app.scenarios.lab_transfer`); a shift past
+        :data:`WORK_SHIFT_MAX` or out of the Comau's reach (with its margin) is refused."""
+        shift = np.asarray(shift_b2, dtype=float)
+        if shift.shape != (3,) or not np.all(np.isfinite(shift)):
+            raise LabError("a work point shift is 3 finite numbers (m, in EM1500's frame)")
+        if np.any(np.abs(shift) > WORK_SHIFT_MAX) or not self._reachable(shift):
+            raise LabError(f"the work point shifted by {np.round(shift, 3).tolist()} m is out of the Comau's reach")
+        T_n1_n2 = self.T_n1_g @ self.layout.T_world_n2
+        R_r, p_r = self.layout.T_b1_r[:3, :3], self.layout.T_b1_r[:3, 3]
+        p_n1 = T_n1_n2[:3, :3] @ (self.layout.work_point_b2 + shift) + T_n1_n2[:3, 3]
+        q = self._ik(R_r.T @ (p_n1 - p_r), self.q_work)
+        assert q is not None  # _reachable said so
+        self.work_shift, self.work_shift_rate = shift.copy(), np.zeros(3)
+        if self.work_frame == "level":
+            self._capture_level()
+        self.joints.reset(q)
+        self.refresh()
+
     # ------------------------------------------------------------------ commands
     def set_comau_mode(self, mode: str) -> None:
         if mode not in COMAU_MODES:
@@ -254,6 +281,37 @@ class MotionLab:
         if mode == "motion_comp":  # VVMC starts on the work point itself (no shift left from before)
             self.work_shift, self.work_shift_rate = np.zeros(3), np.zeros(3)
             self.work_shift_limited = False
+            if self.work_frame == "level":
+                self._capture_level()
+
+    def set_work_frame(self, frame: str, spot_b2: ArrayLike | None = None) -> None:
+        """Hold the work point, under VVMC, in ``frame`` (:data:`WORK_FRAMES`).  ``deck``: fixed on EM1500 (the
+        paper's VVMC; 3.3 m above the deck, the point sweeps 0.29 m sideways at 5° of roll, and a load hanging from
+        it swings).  ``level``: over a spot on EM1500's deck along gravity: the spot (below the work point, on the
+        top plate) moves with the deck, the point's offset from it stays in EM1500's level neutral frame {n2}, so
+        the tool follows the spot's heave, surge and sway but not the deck's tilt (what a hanging load can follow).
+        ``spot_b2``: the spot on the deck (x, y in {b2}; a landing spot), else the one under the work point.  The
+        switch keeps the work point where it is."""
+        if frame not in WORK_FRAMES:
+            raise LabError(f"work frame must be one of {', '.join(WORK_FRAMES)}, got {frame!r}")
+        self.work_frame = frame
+        self._spot_given = None
+        if spot_b2 is not None:
+            spot = np.asarray(spot_b2, dtype=float)
+            if spot.shape != (3,) or not np.all(np.isfinite(spot)):
+                raise LabError("a spot on the deck is 3 finite numbers (m, in EM1500's frame)")
+            self._spot_given = np.array([spot[0], spot[1], 0.0])
+        if frame == "level":
+            self._capture_level()
+
+    def _capture_level(self) -> None:
+        """The level frame's spot (the deck point under the work point) and the offset that keeps the point."""
+        w = self.layout.work_point_b2 + self.work_shift
+        self._level_load, self._level_pay = None, 0.0  # the winch's target in the level frame, from its capture
+        given = getattr(self, "_spot_given", None)
+        self.level_spot = np.array([w[0], w[1], 0.0]) if given is None else given.copy()
+        R = StewartPlatform.rotation_rates(*self._seen_state(1))[0]
+        self.level_offset = R @ (w - self.level_spot)
 
     def set_winch_mode(self, mode: str) -> None:
         if mode not in WINCH_MODES:
@@ -334,6 +392,9 @@ class MotionLab:
         :data:`WORK_SHIFT_MAX` and the Comau's reach; the law holds the tool on the moved point relative to EM1500
         (its feed-forward has the shift's rate).  Stopped, braked or in any other mode the shift holds."""
         cmd = self.tool_velocity_cmd
+        if self.work_frame == "level" and self.comau_mode == "motion_comp" and dt > 0:
+            self._shift_level(dt)
+            return
         if self.comau_mode != "motion_comp" or self.frozen or not (cmd[0] or cmd[1] or cmd[2]) or dt <= 0:
             if self.work_shift_rate[0] or self.work_shift_rate[1] or self.work_shift_rate[2]:
                 self.work_shift_rate = np.zeros(3)  # the shift holds (the common case costs no array work)
@@ -348,6 +409,49 @@ class MotionLab:
                 shift, self.work_shift_limited = self.work_shift, True
         self.work_shift_rate = (shift - self.work_shift) / dt
         self.work_shift = shift
+
+    def _seen_state(self, k: int) -> tuple[NDArray, NDArray, NDArray]:
+        """Platform k's η, η̇, η̈ as the controllers see it (the sensor's, or true)."""
+        if self.measured is not None:
+            return self.measured[k]
+        p = self.platforms[k]
+        return p.eta, p.eta_dot, p.eta_ddot
+
+    def _shift_level(self, dt: float) -> None:
+        """The level work frame (:meth:`set_work_frame`): the operator's velocity (deck axes, z up) moves the point's
+        offset c from the spot s in {n2} (z down), within WORK_SHIFT_MAX and the Comau's reach, checked at neutral,
+        where the shift is s + c − w.  The shift in {b2} is then d = s − w + Rᵀ c and its rate ḋ = Ṙᵀ c + Rᵀ ċ, with
+        EM1500's rotation R and its rate Ṙ as the controllers see them (eqs. 33, 47), so the tool point is at
+        s + c in {n2}'s axes: it follows the spot's heave, surge and sway, not the deck's tilt."""
+        w0, spot = self.layout.work_point_b2, self.level_spot
+        cmd = self.tool_velocity_cmd
+        c_dot = np.zeros(3)
+        if not self.frozen and (cmd[0] or cmd[1] or cmd[2]):
+            c_dot = R_B2_DECK @ np.asarray(cmd, dtype=float)  # {n2} has {b2}'s axes at neutral (z down)
+            want = spot + self.level_offset + c_dot * dt - w0
+            shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
+            self.work_shift_limited = bool(np.any(shift != want))
+            if self.work_shift_limited or not self._reachable(shift):
+                c_dot, self.work_shift_limited = np.zeros(3), True
+            else:
+                self.level_offset = self.level_offset + c_dot * dt
+        R, Rd, _ = StewartPlatform.rotation_rates(*self._seen_state(1))
+        c = self.level_offset
+        self.work_shift = spot - w0 + R.T @ c
+        self.work_shift_rate = Rd.T @ c + R.T @ c_dot
+        if self.payload_target_b2 is not None and self.winch.mode == "motion_comp":
+            # the winch's target in the level frame too: under the tool, at its height above the spot in {n2} (the
+            # operator's lowering, which the law adds along {b2}'s z within the step, carried over step by step)
+            if self._level_load is None:
+                self._level_load = R @ (self.payload_target_b2 - spot)
+            else:
+                self._level_load[2] += self._level_pay
+            self._level_load[:2] = c[:2]
+            self.payload_target_b2[:] = spot + R.T @ self._level_load
+            top = self.winch.spec["speed"]
+            self._level_pay = float(np.clip(self.winch.speed_command, -top, top)) * dt
+        else:
+            self._level_load = None
 
     def _reachable(self, shift: NDArray[np.float64]) -> bool:
         """The work point shifted by ``shift`` (in {b2}), and WORK_REACH_MARGIN around it along each axis, in
