@@ -1,10 +1,11 @@
 """Issue 30's acceptance figures for the crane's transfer (docs/transfer.md): run from the repository root,
 
-    .venv/bin/python scripts/transfer_acceptance.py [--landings 100] [--jobs 2] [--sweep-landings 20]
+    .venv/bin/python scripts/transfer_acceptance.py [--landings 100] [--jobs 2] [--sweep-landings 20] [--lab]
 
 prints markdown tables: seeds 1–4 at Hs 3 m per vessel and target (the path error against --mode off, the
 residual swing against compensated), the landings' statistics, and the highest Hs (0.5 m steps) at which each
-mode and target meets the three figures.  The ShipX/VERES table (``../shared/data/supply_mss.mat``) is test data:
+mode and target meets the three figures; ``--lab``: the Motion-Lab's figures instead (Hs 2 m, Tp 8 s, seeds 1–4,
+``sim transfer --scene lab``).  The ShipX/VERES table (``../shared/data/supply_mss.mat``) is test data:
 it is read from beside the repository and skipped when absent."""
 
 from __future__ import annotations
@@ -74,9 +75,30 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=len(os.sched_getaffinity(0)))
     ap.add_argument("--no-sweep", action="store_true")
     ap.add_argument("--sweep-only", action="store_true")
+    ap.add_argument("--lab", action="store_true", help="the Motion-Lab's figures only")
     args = ap.parse_args()
     vessels = [("default (computed RAOs)", None)] + ([("ShipX/VERES table", str(MSS))] if MSS.exists() else [])
     t0 = time.perf_counter()
+    if args.lab:
+        with ProcessPoolExecutor(args.jobs) as pool:
+            print(
+                "| vessel (both platforms) | path rms, seeds 1–4 [m]: off / compensated / antisway | compensated/off "
+                "(max) | antisway/off (max) | residual swing antisway/compensated (max) | landings compensated: p95 "
+                "error, re-hit free | landings antisway |"
+            )
+            print("|---|---|---|---|---|---|---|")
+            for vname, rao in vessels:
+                f = figures(pool, TransferScenario.for_scene("lab", rao=rao), args.landings)
+                p = f["path"]
+                paths = " / ".join(f"{np.mean(p[m]):.4f}" for m in ("off", "compensated", "antisway"))
+                lc, la = f["compensated"], f["antisway"]
+                print(
+                    f"| {vname} | {paths} | {f['path_ratio']['compensated']:.1%} | {f['path_ratio']['antisway']:.1%} "
+                    f"| {f['residual_ratio']:.0%} | {lc[0]:.3f} m/s, {lc[1]:.0%} | {la[0]:.3f} m/s, {la[1]:.0%} |",
+                    flush=True,
+                )
+        print(f"\n({time.perf_counter() - t0:.0f} s on {args.jobs} processes)")
+        return 0
     with ProcessPoolExecutor(args.jobs) as pool:
         print(
             "| vessel | target | path rms, seeds 1–4 [m]: off / compensated / antisway | compensated/off (max) | "

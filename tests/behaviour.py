@@ -16,7 +16,12 @@ and snap-load alarms came with the mode change to off, and the head returns to �
 H103): the head's arrays (``snap.sample.alpha``, ``u``, ``p_c_t``, ``p_c_n``, ``e_c``, ``snap.scene.head``) differ
 from the sample at 8.4 s on, after the switch at 8.2 s, and are the record's before it.  Then the load's
 anti-swing joined the snapshot (``snap.load.antisway``, ``antisway_offset``: two arrays added, nothing else
-changed: off, its offset is exactly zero).
+changed: off, its offset is exactly zero).  On 2026-11-29 (issue 30, item 5, the lab's landing) ``engine_lab`` was
+recorded again: the simulated lab's load hangs on the crane's elastic wire and can land on EM1500, and the lab's
+pendulum reports that wire (app/scenes/lab_load.py).  The platforms' arrays are unchanged; the pendulum's, the
+swing estimator's and the winch's differ by the two load models' difference (at most 2.6·10⁻⁴ rad of swing,
+8·10⁻⁶ m of wire), and after the anti-swing's start at 29.8 s the Comau's and tool's by its offset's (at most
+0.2 mm); ``snap.load.*`` was added.
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

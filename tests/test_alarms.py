@@ -297,7 +297,7 @@ def test_a_swinging_load_raises_the_alarm_and_names_the_angle():
         t += dt
         ses.tick(t, dt)
     assert not ses.alarms.active("load_swing")
-    ses.lab.pendulum.alpha = math.radians(10.0)  # a kick: 10° out, let go
+    ses.load.kick(math.radians(10.0), 0.0)  # a kick: 10° out, let go (the load on its wire, app/scenes/lab_load.py)
     for _ in range(100):  # 2 s: more than its 1 s on-delay
         t += dt
         ses.tick(t, dt)

@@ -306,8 +306,7 @@ def test_load_swing_tab_activates_anti_swing_and_shows_estimate_beside_the_true_
     def kicked_tick(*args, **kw):  # the kick lands between two steps, in the engine's own thread
         if kick:
             kick.pop()
-            pd = ses.lab.pendulum
-            pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = math.radians(4.0), 0.0, 0.0, 0.0
+            ses.load.kick(math.radians(4.0), 0.0)  # the load on its wire (app/scenes/lab_load.py)
         return tick(*args, **kw)
 
     ses.tick = kicked_tick

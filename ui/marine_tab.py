@@ -140,12 +140,22 @@ class SceneView3D(DrawnScene):
     def __init__(self, parent=None) -> None:
         super().__init__(_machines_3d, TacDrawing(), parent)
         self.view = self.machines.view
+        self.ride = False  # the camera rides with the target deck (issue 30, item 7)
+
+    def set_ride(self, on: bool) -> None:
+        """The camera rides with the target deck (on) or goes back to the fitted view (off)."""
+        self.ride = bool(on)
+        if not on:
+            self.machines.set_preset(self.machines.preset)
 
     def draw_now(self, scene, p_d_n, sample=None) -> None:
         from app.models.drawing import merge
 
         meshes = self.draw.meshes(scene, sample)
         m = self.machines
+        deck = getattr(scene, "deck", None)
+        if self.ride and deck:
+            m.follow(_up(deck).mean(axis=0))
         m.set_mesh("machines", merge(meshes))
         size = 3.0 * (self.draw.ship.length if self.draw.ship is not None else 80.0)
         m.set_mesh("sea", self.draw.sea(sample, size), translucent=True)
@@ -168,6 +178,9 @@ class SceneView2D(DrawnScene):
     def __init__(self, parent=None) -> None:
         super().__init__(_machines_2d, TacDrawing(), parent)
         self.plot = self.machines.plots["astern"]["plot"]
+
+    def set_ride(self, on: bool) -> None:
+        """The 2D views are fixed to the world: there is no camera to ride with the deck."""
 
     def draw_now(self, scene, p_d_n, sample=None) -> None:
         from app.models.drawing import sea_profile
@@ -253,6 +266,30 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         mode_row.addWidget(self.mode, 1)
         mode_row.addWidget(self.antisway)
         form.addRow("mode", mode_row)
+        # the landing target, the stick's frame and the camera (issue 30, items 1, 5 and 7)
+        self.target = QComboBox()
+        self.target.addItems(["platform", "vessel"])
+        self.target.setToolTip(
+            "the deck the load is landed on: the fixed platform, or a second vessel's deck at its place in the same "
+            "sea (the TCP then follows its deck); not while the load is over the present one"
+        )
+        self.target.activated.connect(lambda i: self._send("set_crane_target", target=self.target.itemText(i)))
+        self.frame = QComboBox()
+        self.frame.addItems(["world", "target"])
+        self.frame.setToolTip(
+            "the stick's frame: world (a centred stick holds the TCP still in the world) or target (it holds the TCP "
+            "over the target deck, following its surge, sway and heave); a change disarms the stick"
+        )
+        self.frame.activated.connect(lambda i: self._send("set_frame", frame=self.frame.itemText(i)))
+        self.ride = QCheckBox("ride deck")
+        self.ride.setToolTip("the 3D camera rides with the target deck (looks at it wherever it moves)")
+        self.ride.toggled.connect(lambda on: getattr(self.scene, "set_ride", lambda _on: None)(on))
+        target_row = QHBoxLayout()
+        target_row.setContentsMargins(0, 0, 0, 0)
+        target_row.addWidget(self.target, 1)
+        target_row.addWidget(self.frame, 1)
+        target_row.addWidget(self.ride)
+        form.addRow("target", target_row)
         self.readout = QLabel("not connected")
         self.readout.setTextFormat(Qt.RichText)
         self.readout.setWordWrap(True)  # long lines wrap, never cut at the column's edge
@@ -384,7 +421,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
 
     def _set_enabled(self, on: bool) -> None:
         self._controls = on
-        for w in (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode, self.vessel, self.antisway):
+        widgets = (self.spectrum, self.hs, self.tp, self.heading, self.apply_sea, self.mode, self.vessel, self.antisway)
+        for w in (*widgets, self.target, self.frame):
             w.setEnabled(on)
         self.start.setVisible(not on)
 
@@ -414,7 +452,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and "no longer the operator" in error:
             self.notice.emit("error", f"crane head: operator role lost: {error}")
-        if not ok and re in ("set_sea", "set_tac_mode", "set_vessel", "set_crane_antisway", "reset"):
+        refusable = ("set_sea", "set_tac_mode", "set_vessel", "set_crane_antisway", "set_crane_target", "set_frame")
+        if not ok and re in (*refusable, "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state
@@ -445,6 +484,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
                 self.sea_fields.engine_value(w, v)
         if self.mode.currentText() != state.tac_mode and not self.mode.view().isVisible():
             self.mode.setCurrentText(state.tac_mode)  # the engine's mode (another console may change it)
+        for box, value in ((self.target, getattr(state, "target", "platform")), (self.frame, state.frame)):
+            if box.currentText() != value and not box.view().isVisible():
+                box.setCurrentText(value)  # the engine's (a refused choice goes back)
+        self.landing.deck_name = "the target platform" if self.target.currentText() == "platform" else "the vessel"
         s = state.sample
         if s is None:
             return

@@ -46,6 +46,7 @@ from app.models.xml import read_robot_file
 from app.net.snapshots import (
     ComauJog,
     ComauState,
+    CraneLoadState,
     LabDescription,
     LabScenePoints,
     LabSnapshot,
@@ -61,7 +62,9 @@ from app.plant.base import GENERATOR_DEFAULT, LabBackend
 from app.plant.simulated import SimulatedLab
 from app.plc.symbols import GENERATOR_FREQUENCY_HZ, GENERATOR_PHASE_DEG
 from app.scenarios.swing import SwingControl
+from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, SWING_LIMIT_DEG, LandingWatch
 from app.scenes.lab import REMOTE_TOOL_SPEED, MotionLab
+from app.scenes.lab_load import LabLoad
 from app.teleop.pipeline import InputPipeline
 
 STEP = 0.01
@@ -114,9 +117,15 @@ class LabSession(Scene):
         # the load-swing estimator and anti-swing law (issue 16, item 4): on the simulated lab, stepped with it
         self.swing: SwingControl | None = None
         self._swing_reason = ""
+        # the load on its elastic wire, landing on EM1500's deck (issue 30, item 5): on the simulated lab, whose
+        # pendulum then reports that load's wire (app/scenes/lab_load.py); the real lab's load is the lab's own
+        self.load: LabLoad | None = None
+        self.watch = LandingWatch(relift=True)
+        self._landing_events = [False] * 4  # slack, snap, re-hit, sideways since the last alarm check
         if self.plc is None:
+            self.load = LabLoad(self.lab)
             self.swing = SwingControl(self.lab, np.random.default_rng(16_4), active=False)
-            self.plant.after_step = self._swing_step
+            self.plant.after_step = self._after_step
         if self.plc is None:
             self.note("info", f"Motion-Lab: {', '.join(self.names)} SETTLED, Comau REMOTE, winch LOCAL")
         else:
@@ -322,14 +331,31 @@ class LabSession(Scene):
             self._swing_reason = reason
             self.note("warning", f"anti-swing OFF: {reason}")
 
+    def _after_step(self, dt: float) -> None:
+        """After each plant step: the load on its wire and the landing, then the swing estimator and law."""
+        ld, watch = self.load, self.watch
+        if ld is not None:
+            ld.step(dt)
+            watch.step(ld, ld.deck_v, ld.n_up)
+            ev = self._landing_events
+            for i, now in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
+                ev[i] = ev[i] or now
+        self._swing_step(dt)
+
     def _swing_step(self, dt: float) -> None:
-        """After each plant step: the estimator sees the step, the law sets the next step's offset."""
+        """The estimator sees the step, the law sets the next step's offset; it rests (its offset returning to zero)
+        while the load is on the deck or the wire slack, where the wire's angle is no swing."""
         sw = self.swing
         if sw is None:
             return
         if sw.active and (self.estop_latched or not self.vvmc or self.lab.comau_mode != "motion_comp"):
             self._swing_off("E-STOP" if self.estop_latched else "VVMC off")
+        rest = sw.active and (self.watch.touched or self.watch.slack)
+        if rest:
+            sw.active = False
         sw.step(dt)
+        if rest:
+            sw.active = True
 
     def _swing_state(self) -> SwingState | None:
         sw = self.swing
@@ -426,6 +452,13 @@ class LabSession(Scene):
         limited = lab.comau_mode == "motion_comp" and pushed and bool(getattr(lab, "work_shift_limited", False))
         al.set("work_point_limit", limited, text="Work point at the Comau's reach: it stops there")
         al.set("payload_below_deck", self._payload_below_deck(), text="Load below the EM1500 deck")
+        slack, snap, rehit, sideways = self._landing_events  # the landing on EM1500 (issue 30, item 5)
+        self._landing_events = [False] * 4
+        al.set("slack_wire", slack, text="Slack wire: the load is not on the deck and the wire does not carry it")
+        al.set("snap_load", snap, text=f"Snap load: the wire pulled over {SNAP_FACTOR:g}× the load's weight")
+        contacts = self.watch.contacts - 1
+        al.set("rehit", rehit, text=f"Re-hit: the load struck EM1500's deck again ({contacts} since touchdown)")
+        al.set("sideways_contact", sideways, text="The load touched EM1500's deck while sliding sideways")
         amp = self._swing_amplitude()
         al.set("load_swing", value=math.degrees(amp), text=f"Load swinging {math.degrees(amp):.1f}° from the vertical")
         self._check_link()
@@ -459,13 +492,44 @@ class LabSession(Scene):
             text=f"PLC data invalid: {link.invalid[0] if link.invalid else ''}{more}; motion refused",
         )
 
+    #: how far below EM1500's top plate the load may be before it is "below the deck": the simulated load resting
+    #: on the deck sinks about a millimetre into it (app/scenes/lab_load.py), which is a landing, not a strike
+    BELOW_DECK = 0.01
+
     def _payload_below_deck(self) -> bool:
-        """The load inside EM1500's footprint and below its top plate (z-down body frame: z > 0)."""
+        """The load inside EM1500's footprint and below its top plate (z-down body frame: z > 0) by more than a
+        landed load sinks into it (:attr:`BELOW_DECK`; the real lab's pendulum-borne load: by anything)."""
         lab = self.lab
         H = lab.platform_pose(1)
-        p_b2 = H[:3, :3].T @ (lab.p_p_g() - H[:3, 3])
+        p = lab.p_p_g() if self.load is None else self.load.position_g()
+        p_b2 = H[:3, :3].T @ (p - H[:3, 3])
         radius = float(np.max(np.linalg.norm(lab.models[1].b_b[:, :2], axis=1)))
-        return bool(np.hypot(p_b2[0], p_b2[1]) <= radius and p_b2[2] > 0.0)
+        depth = 0.0 if self.load is None else self.BELOW_DECK
+        return bool(np.hypot(p_b2[0], p_b2[1]) <= radius and p_b2[2] > depth)
+
+    def _load_state(self) -> CraneLoadState | None:
+        """The load and its landing on EM1500's deck (None on the PLC backend: the real load has no such model)."""
+        ld = self.load
+        if ld is None:
+            return None
+        e, ell = ld.wire()
+        return CraneLoadState(
+            hook=np.round(ld.position_g(), 4).tolist(),
+            wire_length=round(ld.length, 4),
+            wire_speed=round(float(self.lab.winch.speed), 4),
+            swing_deg=round(math.degrees(math.acos(max(-1.0, min(1.0, float(e[2]) / ell)))), 3),
+            tension_factor=round(ld.tension / ld.static_tension(), 4),
+            ahc=self.lab.winch.mode == "motion_comp",
+            clearance=round(ld.gap, 4) if math.isfinite(ld.gap) else None,
+            rel_speed=round(self.watch.rel_speed, 4),
+            contact=self.watch.in_contact,
+            landed=self.watch.touched,
+            rehits=max(0, self.watch.contacts - 1),
+            swing_limit_deg=SWING_LIMIT_DEG,
+            slack_factor=SLACK_FACTOR,
+            snap_factor=SNAP_FACTOR,
+            antisway=bool(self.swing is not None and self.swing.active),
+        )
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
         for kind, text in self.plant.poll(now):  # the real plant's data and link events, also while paused
@@ -607,6 +671,7 @@ class LabSession(Scene):
             machines=self.plant.machines(time.monotonic()),
             comau_jog=self._jog_state(),
             swing=self._swing_state(),
+            load=self._load_state(),
         )
 
     def _jog_state(self) -> ComauJog:

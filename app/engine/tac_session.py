@@ -42,7 +42,7 @@ from app.net.snapshots import (
     TacSnapshot,
     WaveField,
 )
-from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, TacChunk, TacScenario, TacSimulator
+from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
 from app.scenes.crane_load import (
     SLACK_FACTOR,
     SNAP_FACTOR,
@@ -52,6 +52,7 @@ from app.scenes.crane_load import (
     LandingWatch,
     Platform,
 )
+from app.scenes.target_deck import TargetVessel, VesselDeck
 from app.teleop.pipeline import InputPipeline
 
 SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the saturated share is counted
@@ -74,6 +75,14 @@ SHIP_LENGTH, SHIP_BEAM, SHIP_DECK_Z, SHIP_KEEL_Z = 82.8, 19.2, -3.0, 6.0
 PLATFORM_OFFSET = np.array([4.0, 0.0, 2.0])
 PLATFORM_HALF = (3.0, 3.0)
 UP = np.array([0.0, 0.0, -1.0])
+#: the crane's targets (issue 30, item 5): the fixed platform, or a second vessel's deck at the platform's place (the
+#: default vessel's RAOs, the waves at TARGET_HEADING to it: ``sim transfer --target vessel``'s default)
+TARGETS = ("platform", "vessel")
+TARGET_HEADING = 60.0
+#: the second vessel's motion data older than this is lost (issue 30, item 8; assumed: 25 samples of a 50 Hz link)
+TARGET_STALE = 0.5
+#: the frames the crane-head scene's stick commands in: the world, or the target deck (following it, level axes)
+FRAMES = ("world", "target")
 
 
 @dataclass
@@ -98,6 +107,14 @@ class TacSession(Scene):
             centre = self.load.hook(self.sim.p_d_n0) + PLATFORM_OFFSET
             self.platform = Platform(tuple(float(v) for v in centre), PLATFORM_HALF)
         self.watch = LandingWatch(relift=True)  # the landing on it (issue 30, item 5)
+        # the target: the platform or a second vessel's deck; the stick's frame; the second vessel's motion link
+        self.target, self.frame = "platform", "world"
+        self.vessel_deck: VesselDeck | None = None
+        self.target_link = True  # tac_target_link: the second vessel's motion data arriving (simulated)
+        self._target_seen: float | None = None  # engine time of its last data
+        self.target_lost = False
+        self._spot_seen: np.ndarray | None = None  # the deck spot the TCP's target last followed
+        self._now = 0.0
         # the load's anti-swing (the lab's estimator and law, reused): off until the operator switches it on
         self.swing = CraneSwingControl(self.load, self.scenario.dt, np.random.default_rng(30), active=False)
         self.antisway = False
@@ -141,8 +158,13 @@ class TacSession(Scene):
         for this scenario and vessel (:meth:`set_vessel`)."""
         old = self.sim
         new = built or TacSimulator(self.scenario, self.system, rao=self.vessel.rao(self.scenario.roll_damping))
-        new.continue_from(old, SEA_BLEND_PERIODS * max(old.scenario.tp, self.scenario.tp))
+        blend = SEA_BLEND_PERIODS * max(old.scenario.tp, self.scenario.tp)
+        new.continue_from(old, blend)
         self.sim = new
+        if self.vessel_deck is not None:  # the second vessel in the new sea, faded into as the crane's vessel is
+            was = self.vessel_deck.vessel.motion
+            self.vessel_deck = self._vessel_deck()
+            self.vessel_deck.vessel.motion = SeaTransition(was, self.vessel_deck.vessel.motion, self._t(), blend)
         self.sea_seq += 1
         self.changed()
 
@@ -204,15 +226,11 @@ class TacSession(Scene):
             raise CommandError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
         if self.estop_latched:
             raise CommandError("E-STOP is latched; reset first")
-        hook = self.load.hook(self.sim.p_d_n)
-        if mode == "off" and self.mode != "off" and self.platform.over(hook):
+        if mode == "off" and self.mode != "off" and self._over_target():
             # H100: off, the hook rides the vessel into the deck (or lifts a landed load and drops it), and the crane
             # drives back to its nominal configuration, dragging the load across the deck
-            above = float(self.platform.centre[2] - hook[2])  # NED: the deck is below, at a larger z
-            where = "rests on" if self.watch.in_contact else f"hangs {above:.1f} m over"
             raise CommandError(
-                f"compensation stays on while the load {where} the platform: lift it clear and move it off the "
-                "deck first"
+                f"compensation stays on while the load {self._where()}: lift it clear and move it off the deck first"
             )
         self.sim.set_mode(mode)
         self.scenario = self.sim.scenario
@@ -231,13 +249,74 @@ class TacSession(Scene):
 
     @command
     def set_frame(self, frame: str) -> None:
-        """The frame the stick commands in (issue 30, item 1): this scene moves the TCP's target in the world; the
-        vessel's (base), the head's (tool) and a target deck's frames are refused with the reason."""
-        if frame != "world":
+        """The frame the stick commands in (issue 30, item 1): ``world`` (a centred stick holds the TCP still in the
+        world) or ``target`` (it holds the TCP over the target deck's spot, following the deck's surge, sway and
+        heave with level axes; the fixed platform's is the world's).  The vessel's (base) and the head's (tool)
+        frames are refused with the reason.  A change disarms the input (H96)."""
+        if frame not in FRAMES:
             raise CommandError(
-                f"frame {frame}: the crane-head scene moves the TCP in the world frame only (a target deck and the "
-                "vessel's frame are not in this scene yet)"
+                f"frame {frame}: the crane-head scene commands in the world or the target deck's frame (the "
+                "vessel's and the head's frames are not in this scene)"
             )
+        if frame != self.frame:
+            self.input.disarm("command frame changed")
+            self._spot_seen = None  # following starts from where the deck is now: nothing jumps
+        self.frame = frame
+        self.note("info", f"frame: {frame}" + (" (the fixed platform: the world's)" if self._fixed(frame) else ""))
+
+    def _fixed(self, frame: str) -> bool:
+        return frame == "target" and self.target == "platform"
+
+    @command
+    def set_crane_target(self, target: str) -> None:
+        """The deck the load is landed on (issue 30, item 5): the fixed ``platform`` or a second ``vessel``'s deck at
+        the platform's place in the same sea.  Not while the load is over the present target's deck (hanging or
+        landed).  The vessel target selects the target frame (the TCP follows its deck); the input is disarmed."""
+        if target not in TARGETS:
+            raise CommandError(f"target must be one of {', '.join(TARGETS)}, got {target!r}")
+        if target == self.target:
+            return
+        if self._over_target():
+            raise CommandError(f"the target stays while the load {self._where()}: lift it clear and move it off first")
+        self.target = target
+        self.vessel_deck = self._vessel_deck() if target == "vessel" else None
+        self._target_seen, self.target_lost, self._spot_seen = None, False, None
+        self.watch = LandingWatch(relift=True)
+        self.input.disarm("landing target changed")
+        self.frame = "target" if target == "vessel" else "world"
+        self.note("info", f"target: {target}; frame: {self.frame}")
+
+    @command
+    def tac_target_link(self, up: bool) -> None:
+        """The second vessel's motion link up or down (simulated: training, and the "target lost" hazard's test).
+        Down, its data age; past :data:`TARGET_STALE` the target is lost (alarm ``target_lost``)."""
+        if self.target != "vessel":
+            raise CommandError("the target link is the second vessel's: select target vessel first")
+        self.target_link = bool(up)
+        self.note("warning" if not up else "info", f"second vessel's motion link {'up' if up else 'down'}")
+
+    def _vessel_deck(self) -> VesselDeck:
+        vessel = TargetVessel(
+            None, TARGET_HEADING, self.sim.vessel.sea, self.scenario.heading, np.array(self.platform.centre)
+        )
+        return VesselDeck(vessel, PLATFORM_HALF)
+
+    def _t(self) -> float:
+        return self.sim.k * self.scenario.dt
+
+    def _over_target(self) -> bool:
+        hook = self.load.hook(self.sim.p_d_n)
+        if self.vessel_deck is not None:
+            return self.vessel_deck.over(hook, self._t())
+        return self.platform.over(hook)
+
+    def _where(self) -> str:
+        hook = self.load.hook(self.sim.p_d_n)
+        deck = "the platform" if self.vessel_deck is None else "the target vessel's deck"
+        if self.watch.in_contact:
+            return f"rests on {deck}"
+        z = self.platform.centre[2] if self.vessel_deck is None else self.vessel_deck.vessel.pose(self._t())[0][2]
+        return f"hangs {float(z - hook[2]):.1f} m over {deck}"  # NED: the deck is below, at a larger z
 
     def estop(self, source: str = "operator") -> None:
         self._latch(f"E-STOP from {source}: head and crane stopped")
@@ -264,6 +343,7 @@ class TacSession(Scene):
             self.estop(source=f"the stop button of {self.input.profile.name}")
         frozen = self.estop_latched or self.holding
         self._drive(inp, frozen, n * self.scenario.dt)
+        following = self._follow_target(now, frozen)
         # the anti-swing offset of the last step onto the TCP's target (held over the tick, as the stick's move)
         offset = self.swing.offset
         self.sim.p_d_n = self.sim.p_d_n + (offset - self._offset)
@@ -277,10 +357,18 @@ class TacSession(Scene):
             n -= chunks[-1].t.size
         c = chunks[0] if len(chunks) == 1 else TacChunk.concat(chunks)
         ld, watch, events = self.load, self.watch, [False] * 4
-        for p in c.p_c_n:  # the load hangs from the TCP: one step per simulation step
-            ld.deck = self.platform.deck(ld.hook(p))
-            ld.step(p, self.scenario.dt)
-            watch.step(ld, np.zeros(3), UP)
+        step, base, zero = self.scenario.dt, ld.speed_command, np.zeros(3)
+        for p, tk in zip(c.p_c_n, c.t, strict=True):  # the load hangs from the TCP: one step per simulation step
+            if self.vessel_deck is not None:  # the second vessel's deck under the load, and its velocity
+                ld.deck = self.vessel_deck.deck(ld.hook(p), float(tk), step)
+                deck_v, n_up = ld.deck[3], ld.deck[2]
+                # following its deck, the winch's heave compensation holds the hook's height over it (its heave rate)
+                ld.speed_command = base + (float(deck_v[2]) if following else 0.0)
+            else:
+                ld.deck = self.platform.deck(ld.hook(p))
+                deck_v, n_up = zero, UP
+            ld.step(p, step)
+            watch.step(ld, deck_v, n_up)
             e = ld.state[0] - p
             self.swing.step(e, float(np.sqrt(e @ e)), not watch.touched and not watch.slack)
             for i, ev in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
@@ -296,6 +384,12 @@ class TacSession(Scene):
         stale = driving and fl["device"] and fl["stale_input"] and self.input.stale_while_driving
         al.set("stale_input", stale, text="Input stale: the TCP's target holds")
         al.set("target_limit", self.target_limited, text=f"TCP target at its {self.mode} range: it stops there")
+        al.set(
+            "target_lost",
+            self.target_lost,
+            text=f"Target vessel's motion data {self._target_age():.1f} s old: the TCP and the winch hold in the "
+            "world, not over its deck; lift the load clear",
+        )
         slack, snap, rehit, sideways = events  # the landing (issue 30, item 5)
         al.set("slack_wire", slack, text="Slack wire: the load is not on the deck and the wire does not carry it")
         al.set("snap_load", snap, text=f"Snap load: the wire pulled over {SNAP_FACTOR:g}× the load's weight")
@@ -322,6 +416,41 @@ class TacSession(Scene):
                 "p_c_n": c.p_c_n[-1].tolist(),
                 "p_s_n": c.p_s_n[-1].tolist(),
             }
+
+    def _target_age(self) -> float:
+        return 0.0 if self._target_seen is None else max(0.0, self._now - self._target_seen)
+
+    def _follow_target(self, now: float, frozen: bool) -> bool:
+        """The target frame on a vessel target (issue 30, items 1 and 5): the TCP's target follows the deck spot's
+        surge and sway (the winch its heave, in the load's step), from where the deck was when following began,
+        so nothing jumps.  Its motion data older than :data:`TARGET_STALE` lose the target (H105): the TCP and
+        the winch hold in the world, the input is disarmed, and following starts afresh when the data are back.
+        Returns whether the deck is followed this tick."""
+        self._now = now
+        if self.vessel_deck is None:
+            self.target_lost = False
+            return False
+        if self.target_link or self._target_seen is None:
+            self._target_seen = now
+        lost = self._target_age() > TARGET_STALE
+        if lost != self.target_lost:
+            self.target_lost = lost
+            self._spot_seen = None
+            self.input.disarm("target vessel's data lost" if lost else "target vessel's data back")
+            self.note("error" if lost else "info", "target vessel lost: holding in the world" if lost else
+                      "target vessel's data back: following its deck from where it is now")  # fmt: skip
+        following = self.frame == "target" and not lost and self.mode != "off" and not frozen
+        if not following:
+            self._spot_seen = None
+            return False
+        spot = self.vessel_deck.vessel.pose(self._t())[0]
+        if self._spot_seen is not None:
+            dp = spot - self._spot_seen
+            dp[2] = 0.0  # the heave is the winch's
+            if self.sim.move_target(dp, self.target_range[self.mode]):
+                self.target_limited = True
+        self._spot_seen = spot
+        return True
 
     def _drive(self, inp, frozen: bool, dt: float) -> None:
         """The stick moves the TCP's target in the world (issue 30, item 2) while the head (tac) or the crane and
@@ -382,7 +511,7 @@ class TacSession(Scene):
             return np.round(p @ R_n_b.T + o, 4).tolist()
 
         hook = self.load.hook(np.asarray(self.last["p_c_n"])).tolist()
-        deck = self.platform.corners()
+        deck = self.platform.corners() if self.vessel_deck is None else self.vessel_deck.corners(self._t())
         return TacScenePoints(ship=to_n(ship_b), crane=to_n(crane_b), head=to_n(head_b), hook=hook, deck=deck)
 
     def describe(self) -> TacDescription:
@@ -425,6 +554,10 @@ class TacSession(Scene):
             x_d=self.system.x_d,
             p_d_n=self.sim.p_d_n.tolist(),
             load=self._load_state() if self.last else None,
+            target=self.target,
+            frame=self.frame,
+            target_age=round(self._target_age(), 3) if self.vessel_deck is not None else None,
+            target_lost=self.target_lost,
             sample=TacSample(**self.last) if self.last else None,
             scene=self._scene() if self.last else None,
         )

@@ -290,6 +290,20 @@ class SetCraneAntisway(Message):
     on: bool = spec("bool")
 
 
+@scene_command("set_crane_target")
+class SetCraneTarget(Message):
+    """Crane-head scene (issue 30): the deck the load is landed on, the fixed platform or a second vessel's."""
+
+    target: str = spec("enum", ("platform", "vessel"))
+
+
+@scene_command("tac_target_link")
+class TacTargetLink(Message):
+    """Crane-head scene (issue 30): the second vessel's motion link up or down (simulated: training and tests)."""
+
+    up: bool = spec("bool")
+
+
 # ------------------------------------------------------------------ Motion-Lab (``bosun server --plant lab``)
 @scene_command("lab_platform")
 class LabPlatform(Message):

@@ -230,7 +230,8 @@ class TacScenePoints:
 
 @dataclass(kw_only=True, slots=True)
 class CraneLoadState:
-    """The crane's wire, winch and hanging load (issue 30, item 3), in {n} [m]."""
+    """The hanging load on its wire and its landing (issue 30, items 3 and 5) [m]: the crane's (``hook`` in {n}, NED)
+    or the Motion-Lab's (``hook`` in the world {g}, z up; ``ahc``: the winch in MOTION_COMP)."""
 
     hook: list[float]  # the load in {n}
     wire_length: float  # [m]
@@ -262,6 +263,10 @@ class TacSnapshot(Snapshot):
     x_d: float = 0.0  # desired head centre on the head's x axis [m]
     p_d_n: list[float] = field(default_factory=list)  # desired TCP in {n} [m]
     load: CraneLoadState | None = None  # the hanging load (issue 30, item 3)
+    target: str = "platform"  # the landing target: the fixed platform or a second vessel's deck (issue 30, item 5)
+    frame: str = "world"  # the stick's frame: world, or target (following the target deck)
+    target_age: float | None = None  # the second vessel's motion data age [s] (None: a fixed platform)
+    target_lost: bool = False  # its data older than the engine's limit: the TCP holds in the world
     sample: TacSample | None = None
     scene: TacScenePoints | None = None
 
@@ -466,6 +471,7 @@ class LabSnapshot(Snapshot):
     machines: list[MachineLight] = field(default_factory=list)  # the lab HMI's machine and sensor lights (item 5)
     comau_jog: ComauJog | None = None  # the Comau's joint jog (item 5)
     swing: SwingState | None = None  # the load-swing estimator and anti-swing (item 4; None: not available)
+    load: CraneLoadState | None = None  # the load on its wire and its landing on EM1500 (issue 30; hook in {g})
 
 
 @dataclass(kw_only=True, slots=True)

@@ -19,7 +19,8 @@ commands.
 
 The target deck is a plane: a fixed platform (horizontal, still) or a second vessel's deck (its own RAO table and
 heading in the same sea: the components' directions turned into its frame and their phases moved to its place,
-:class:`TargetVessel`).  The target frame is the deck's: origin at the landing spot, axes the deck's.
+:class:`TargetVessel`).  The target frame moves with the deck's landing spot (its origin) and keeps level axes, the
+world's (:meth:`TargetVessel.deck` says why).
 
 The scripted operator (:class:`ScriptedOperator`), the reference: hold 10 s, lift 1 m at the lowering speed, move
 10 m along x of the target frame at 0.5 m/s with 0.25 m/s² ramps, wait 10 s (the residual swing is measured
@@ -38,13 +39,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from app.errors import BosunError
-from app.geometry import euler_zyx_to_matrix
-from app.marine.vessel import VesselMotion
-from app.marine.vessels import vessel_rao
-from app.marine.waves import SPECTRA, WaveComponents
-from app.models.pendulum import G
+from app.marine.waves import SPECTRA
 from app.scenarios.tac import TacScenario, TacSimulator
 from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, CraneSwingControl, LandingWatch
+from app.scenes.target_deck import TargetVessel
 
 __all__ = [
     "MODES", "SLACK_FACTOR", "SNAP_FACTOR", "TARGETS", "ScriptedOperator", "StickFile", "TransferError",
@@ -262,41 +260,6 @@ class StickFile:
         x, y, z, w = self.axes[k]
         v_xy, v_z, v_w = self.speeds
         return np.array([v_xy * x, v_xy * y, -v_z * z + v_w * w])
-
-
-# ----------------------------------------------------------------------------- the target deck
-@dataclass
-class TargetVessel:
-    """The second vessel: its RAO table and its heading to the waves, at its place in the same sea."""
-
-    rao_name: str | None
-    heading_deg: float
-    sea: WaveComponents
-    wave_heading_deg: float  # the sea's mean heading relative to the supply vessel (whose frame is the world's)
-    place: NDArray[np.float64]  # the landing spot in the world (calm water)
-
-    def __post_init__(self) -> None:
-        psi = math.radians(self.wave_heading_deg - self.heading_deg)  # the second vessel's yaw in the world
-        self.psi = psi
-        self.R_n_b_yaw = euler_zyx_to_matrix(np.array([0.0, 0.0, psi]))  # its calm-water frame in {n}
-        # its origin: the landing spot straight above/below it, so the deck point in its frame is (0, 0, z)
-        self.origin = np.array([self.place[0], self.place[1], 0.0])
-        self.deck_b = np.array([0.0, 0.0, self.place[2]])
-        s = self.sea
-        k = s.omega**2 / G
-        shift = k * (self.origin[0] * np.cos(s.direction) + self.origin[1] * np.sin(s.direction))
-        own = WaveComponents(s.omega, s.amplitude, s.phase - shift, s.direction - psi)
-        self.motion = VesselMotion(vessel_rao(self.rao_name), own)
-
-    def deck(self, t: float) -> tuple[NDArray, NDArray, NDArray]:
-        """The landing spot and the deck's up normal in the world at time t, and the target frame's rotation: the
-        deck's roll, pitch and yaw from calm water, R_z(ψ) R(η) R_z(ψ)ᵀ (its axes are the world's in calm water,
-        so the operator's x is the same on both targets)."""
-        eta, _ = self.motion.at(t)
-        R_n_b_own = euler_zyx_to_matrix(eta[3:6])  # its body in its calm-water frame
-        R = self.R_n_b_yaw @ R_n_b_own
-        d = self.origin + self.R_n_b_yaw @ eta[:3] + R @ self.deck_b
-        return d, -R[:, 2], R @ self.R_n_b_yaw.T
 
 
 # ----------------------------------------------------------------------------- the run

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from app.control.lab import BRAKE, COMAU_LAW, WINCH_LAW
 from app.errors import BosunError
+from app.models import lab_kernels as model_kernels
 from app.models.closed_form import ComauArm
 from app.models.comau import ComauKinematics, nearest_ik, tool_on_platform
 from app.models.lab import LabLayout
@@ -431,11 +432,11 @@ class MotionLab:
             want = spot + self.level_offset + c_dot * dt - w0
             shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
             self.work_shift_limited = bool(np.any(shift != want))
-            if self.work_shift_limited or not self._reachable(shift):
+            if self.work_shift_limited or not self._reachable_near(shift):
                 c_dot, self.work_shift_limited = np.zeros(3), True
             else:
                 self.level_offset = self.level_offset + c_dot * dt
-        R, Rd, _ = StewartPlatform.rotation_rates(*self._seen_state(1))
+        R, Rd = self._tilt(1)
         c = self.level_offset
         self.work_shift = spot - w0 + R.T @ c
         self.work_shift_rate = Rd.T @ c + R.T @ c_dot
@@ -452,6 +453,27 @@ class MotionLab:
             self._level_pay = float(np.clip(self.winch.speed_command, -top, top)) * dt
         else:
             self._level_load = None
+
+    def _tilt(self, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Platform k's R and Ṙ (eqs. 33, 47) as the controllers see it (compiled with the lab's kernels)."""
+        eta, eta_dot, eta_ddot = self._seen_state(k)
+        if self._use_kernels:
+            R, Rd, _ = model_kernels.stewart_rates(
+                *(np.ascontiguousarray(a, dtype=float) for a in (eta, eta_dot, eta_ddot))
+            )
+            return R, Rd
+        R, Rd, _ = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+        return R, Rd
+
+    def _reachable_near(self, shift: NDArray[np.float64]) -> bool:
+        """:meth:`_reachable`, checked again once the shift has moved 10 mm from the last shift found reachable (the
+        0.15 m margin of the check holds far more than that in between)."""
+        last = getattr(self, "_reach_ok", None)
+        if last is not None and float(np.max(np.abs(shift - last))) <= 0.01:
+            return True
+        ok = self._reachable(shift)
+        self._reach_ok = shift.copy() if ok else None
+        return ok
 
     def _reachable(self, shift: NDArray[np.float64]) -> bool:
         """The work point shifted by ``shift`` (in {b2}), and WORK_REACH_MARGIN around it along each axis, in

@@ -132,3 +132,16 @@ class LabLoad:
         pd.beta = math.atan2(float(u[1]), float(u[2]))
         pd.alpha_dot = -float(ud[0]) / ca
         pd.beta_dot = float(u[2] * ud[1] - u[1] * ud[2]) / max(1e-12, float(u[1] ** 2 + u[2] ** 2))
+
+    def kick(self, alpha: float, beta: float, alpha_dot: float = 0.0, beta_dot: float = 0.0) -> None:
+        """Put the load at the swing angles (and rates) of eq. (23) from the tool point, on its wire as stretched
+        now (a swing to start from: tests, and a training kick); the lab's pendulum reports it at once."""
+        _, ell = self.wire()
+        sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
+        u = np.array([-sa, ca * sb, ca * cb])
+        u_dot = np.array(
+            [-alpha_dot * ca, -alpha_dot * sa * sb + beta_dot * ca * cb, -alpha_dot * sa * cb - beta_dot * ca * sb]
+        )
+        v_tool = R_G_D.T @ self.lab.v_t_g
+        self.state = (self._s + ell * u, v_tool + ell * u_dot)
+        self.sync()

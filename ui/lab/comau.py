@@ -26,6 +26,7 @@ from PyQt5.QtWidgets import (
 
 from ui.lab.common import COMAU_MODES, ENABLE_LOOK, JOG_RESEND_MS, STOP_COLOR, progress_bar, set_bar
 from ui.widgets.columns import scroll_column
+from ui.widgets.landing import LandingPanel
 from ui.widgets.plots import axis_label, legend, refit, refit_on_show
 from ui.widgets.status import MOVING
 from ui.widgets.stick import VirtualStick
@@ -126,7 +127,7 @@ class ComauWinchPage(QWidget):
         wl.addRow(self.winch_slider_label)
         wl.addRow(self.winch_slider)
         rbox = self.drive_box = QGroupBox(DRIVE_TITLES[False])
-        rl = QVBoxLayout(rbox)
+        rl = QHBoxLayout(rbox)
         self.stick = VirtualStick(aux_axis="w winch")
         self.stick.setToolTip(
             "drives the Comau tool point (REMOTE, 0.25 m/s at full stick) and the winch (REMOTE, slider w); with VVMC "
@@ -135,6 +136,9 @@ class ComauWinchPage(QWidget):
             "the same way"
         )
         rl.addWidget(self.stick)
+        # the landing on EM1500's deck beside the stick (issue 30, items 5 and 7; the simulated lab reports it)
+        self.landing = LandingPanel(deck="EM1500", fast=0.1, ahc=("winch MOTION_COMP", "winch not compensating"))
+        rl.addWidget(self.landing, 1)
         # not a toggle: a click asks the engine for the other state, and the button shows the engine's state
         # only (a checkable button showed the request, also one the engine refused)
         self.vvmc = QPushButton("VVMC OFF")
@@ -181,8 +185,8 @@ class ComauWinchPage(QWidget):
         right = QVBoxLayout()
         rbox.setMaximumHeight(200)
         top = QHBoxLayout()
-        top.addWidget(rbox, 2)
-        top.addWidget(self.wire_plot, 3)
+        top.addWidget(rbox, 3)
+        top.addWidget(self.wire_plot, 2)
         right.addLayout(top, 1)
         right.addWidget(self.joint_plot, 1)
         grid.addWidget(scroll_column(lw, max_width=480), 0, 0)  # the controls scroll, the plots keep the height
@@ -315,6 +319,7 @@ class ComauWinchPage(QWidget):
     def show_state(self, state) -> None:
         """Bars, modes, jog, ENABLE, VVMC and the readout as the engine reports them."""
         self.state = state
+        self.landing.show_load(getattr(state, "load", None))
         self._show_jog(state)
         self._show_enable(state)
         c, w, d = state.comau, state.winch, self.desc

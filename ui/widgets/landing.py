@@ -53,8 +53,14 @@ class LimitBar(QWidget):
 class LandingPanel(QWidget):
     """Four bars and a line of status: the landing as the engine reports it (issue 30, items 5 and 7)."""
 
-    def __init__(self, parent=None) -> None:
+    def __init__(
+        self, parent=None, deck: str = "the target platform", fast: float = 0.3, ahc=("winch AHC on", "winch AHC off")
+    ) -> None:
+        """``deck``: what the clearance is measured to; ``fast``: a speed towards the deck, within 1 m of it, shown
+        amber (assumed: the crane's 0.3 against its 0.2 m/s landing; the lab's 0.1 against 0.05 m/s); ``ahc``: the
+        status line's words for the winch compensating or not."""
         super().__init__(parent)
+        self.deck_name, self.fast, self.ahc_words = deck, fast, ahc
         grid = QGridLayout(self)
         grid.setContentsMargins(0, 0, 0, 0)
         grid.setVerticalSpacing(2)
@@ -63,7 +69,7 @@ class LandingPanel(QWidget):
         self.swing = LimitBar(0.0, 10.0, marks=(5.0,))
         self.tension = LimitBar(0.0, 2.0, marks=(0.1, 1.0, 1.5))
         rows = (
-            ("clearance", self.clearance, "the load's underside above the target platform's deck [m] (— not over it)"),
+            ("clearance", self.clearance, f"the load's underside above {deck}'s deck [m] (— not over it)"),
             ("to deck", self.speed, "the load's speed towards the deck [m/s]: positive closes in"),
             ("swing", self.swing, "the wire's angle from the vertical [°] against its limit (the mark)"),
             ("tension", self.tension, "the wire's tension over the load's weight; marks: slack 0.1, 1, snap 1.5"),
@@ -88,13 +94,13 @@ class LandingPanel(QWidget):
             return
         c = load.clearance
         if c is None:
-            self.clearance.set(None, "not over the platform")
+            self.clearance.set(None, f"not over {self.deck_name}")
         else:
             state = "ok" if c > 1.0 or load.contact else "warn"
             self.clearance.set(max(c, 0.0), "on the deck" if load.contact else f"{c:.2f} m", state)
         near = c is not None and c < 1.0 and not load.contact
         v = load.rel_speed
-        fast = near and v > 0.3  # closing in faster than a landing should (assumed; the scripted operator's 0.2)
+        fast = near and v > self.fast  # closing in faster than a landing should
         self.speed.set(v, f"{v:+.2f} m/s", "warn" if fast else "ok")
         lim = load.swing_limit_deg
         self.swing.set(load.swing_deg, f"{load.swing_deg:.1f}°", "error" if load.swing_deg > lim else "ok")
@@ -105,5 +111,5 @@ class LandingPanel(QWidget):
         parts = ["<b>landed</b>" if load.landed else "in the air"]
         if load.rehits:
             parts.append(f"<span style='color:{LIGHT['warn']}'><b>{load.rehits} re-hit(s)</b></span>")
-        parts.append("winch AHC on" if load.ahc else "winch AHC off")
+        parts.append(self.ahc_words[0] if load.ahc else self.ahc_words[1])
         self.status.setText(" · ".join(parts))

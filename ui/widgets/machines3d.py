@@ -308,6 +308,11 @@ class MachineView3D(QWidget):
             pos=pg.Vector(*self.center), distance=self.distance, elevation=elevation, azimuth=azimuth
         )
 
+    def follow(self, point) -> None:
+        """Keep the camera looking at ``point`` (a moving deck it rides with), at its distance and angles."""
+        self.view.opts["center"] = pg.Vector(*(float(v) for v in point))
+        self.view.update()
+
     def reset_view(self) -> None:
         self.preset = "iso"
         if self._extent is not None:

@@ -1,0 +1,90 @@
+"""Issue 30, item 5 in the lab engine: the simulated Motion-Lab's load rides the crane's elastic wire and lands on
+EM1500's deck (app/scenes/lab_load.py wired into LabSession); the engine reports the landing in its snapshot
+(``LabSnapshot.load``) and raises the landing alarms (slack wire, snap load, re-hit, sideways contact)."""
+
+import numpy as np
+
+from app.engine.lab_session import LabSession
+from app.teleop.devices import InputSample
+
+DT = 0.02
+
+
+class Rig:
+    def __init__(self) -> None:
+        self.s = LabSession()
+        self.t = 0.0
+
+    def run(self, seconds: float, axes=(0.0, 0.0, 0.0, 0.0), enable: bool = False) -> None:
+        for _ in range(round(seconds / DT)):
+            self.t += DT
+            self.s.feed(InputSample(tuple(axes), (enable, False), "test"), self.t)
+            self.s.tick(self.t, DT)
+
+    def raised(self) -> "Rig":
+        for p in self.s.names:
+            self.s.lab_platform(p, "neutral")
+        self.run(16.0)
+        return self
+
+    def arm(self) -> None:
+        """Centred, the deadman released and pressed again: the pipeline arms on the press."""
+        self.run(0.1, enable=False)
+        self.run(0.4, enable=True)
+
+    def alarms(self) -> set[str]:
+        return {a.key for a in self.s.snapshot().alarms if a.active}
+
+
+def test_the_operator_lowers_the_load_onto_em1500_and_the_engine_reports_the_landing():
+    rig = Rig().raised()
+    s = rig.s
+    snap = s.snapshot()
+    assert snap.load is not None and snap.load.clearance is not None and snap.load.clearance > 0.3
+    assert not snap.load.landed and snap.load.tension_factor == np.float64(snap.load.tension_factor)
+    s.lab_vvmc(True)
+    rig.arm()
+    seen_clearance = []
+    for _ in range(100):  # w pays out: the winch lowers the load relative to EM1500's deck (0.2 m/s at full stick)
+        rig.run(0.2, axes=(0.0, 0.0, 0.0, 0.5), enable=True)
+        ld = s.snapshot().load
+        seen_clearance.append(ld.clearance)
+        if ld.contact:
+            break
+    ld = s.snapshot().load
+    assert ld.contact and ld.landed and ld.rehits == 0, ld
+    assert ld.clearance is not None and -0.003 < ld.clearance <= 0.0  # on the deck, about a millimetre in
+    assert max(c for c in seen_clearance if c is not None) > 0.05  # it came down from above
+    rig.run(2.0, enable=True)  # centred: the load rests there, the wire taking part of it
+    ld = s.snapshot().load
+    assert ld.landed and ld.contact
+    active = rig.alarms()
+    assert not active & {"payload_below_deck", "snap_load", "slack_wire", "rehit"}, active
+    # hauled in, the load lifts off and, half a metre clear, a new landing begins
+    rig.run(5.0, axes=(0.0, 0.0, 0.0, -1.0), enable=True)
+    ld = s.snapshot().load
+    assert not ld.contact and not ld.landed and ld.clearance > 0.5
+
+
+def test_a_load_left_on_a_heaving_deck_without_compensation_is_re_hit_and_the_alarm_says_so():
+    """VVMC off, the winch holding: EM1500 in waves lifts the landed load and drops away under it, and the deck
+    strikes it again: the engine counts the re-hits and raises the re-hit alarm (H102)."""
+    rig = Rig().raised()
+    s = rig.s
+    s.lab_winch(mode="remote")
+    rig.arm()
+    for _ in range(100):
+        rig.run(0.2, axes=(0.0, 0.0, 0.0, 0.5), enable=True)
+        if s.snapshot().load.contact:
+            break
+    rig.run(0.1, enable=True)  # stop paying out the moment it lands: the wire nearly taut over a heaving deck
+    assert s.snapshot().load.landed
+    s.lab_source("em1500", "simulation", hs=2.0, tp=8.0, heading=90.0, seed=3)
+    s.lab_platform("em1500", "engage")
+    raised = set()
+    for _ in range(60):
+        rig.run(0.5)
+        raised |= rig.alarms()
+    ld = s.snapshot().load
+    assert ld.rehits >= 1 and "rehit" in raised, (ld, raised)
+    assert "payload_below_deck" not in raised
