@@ -98,16 +98,17 @@ def test_a_frame_the_scene_lacks_or_does_not_know_is_refused_with_a_reason():
 
 
 def test_the_crane_and_lab_scenes_answer_a_frame_request_with_their_frame():
-    """The crane-head scene commands the TCP in the world or the target deck's frame (the rest refused with the
-    reason); the lab's frame follows its mode (REMOTE: the Comau's base; VVMC: EM1500's deck), so a request says
-    which."""
+    """The crane-head scene commands the TCP in the world, the vessel's (base) or the target deck's frame (the
+    tool frame refused with the reason); the lab's frame follows its mode (REMOTE: the Comau's base; VVMC: EM1500's
+    deck), so a request says which."""
     from app.engine.lab_session import LabSession
     from app.engine.tac_session import TacSession
 
     tac = TacSession()
     tac.set_frame("world")
     tac.set_frame("target")
-    with pytest.raises(CommandError, match="world or the target deck's frame"):
+    tac.set_frame("base")
+    with pytest.raises(CommandError, match="the head's frame is not in this scene"):
         tac.set_frame("tool")
     lab = LabSession()
     with pytest.raises(CommandError, match=r"now base \(the Comau's, REMOTE\)"):

@@ -275,10 +275,11 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         )
         self.target.activated.connect(lambda i: self._send("set_crane_target", target=self.target.itemText(i)))
         self.frame = QComboBox()
-        self.frame.addItems(["world", "target"])
+        self.frame.addItems(["world", "base", "target"])
         self.frame.setToolTip(
-            "the stick's frame: world (a centred stick holds the TCP still in the world) or target (it holds the TCP "
-            "over the target deck, following its surge, sway and heave); a change disarms the stick"
+            "the stick's frame: world (a centred stick holds the TCP still in the world), base (it rides the crane's "
+            "own vessel: a load picked up from its deck) or target (it holds the TCP over the target deck, following "
+            "its surge, sway and heave); a change disarms the stick"
         )
         self.frame.activated.connect(lambda i: self._send("set_frame", frame=self.frame.itemText(i)))
         self.ride = QCheckBox("ride deck")

@@ -81,8 +81,9 @@ TARGETS = ("platform", "vessel")
 TARGET_HEADING = 60.0
 #: the second vessel's motion data older than this is lost (issue 30, item 8; assumed: 25 samples of a 50 Hz link)
 TARGET_STALE = 0.5
-#: the frames the crane-head scene's stick commands in: the world, or the target deck (following it, level axes)
-FRAMES = ("world", "target")
+#: the frames the crane-head scene's stick commands in: the world, the vessel's (base: riding with its deck, its
+#: heading's axes) or the target deck's (following it, level axes)
+FRAMES = ("world", "base", "target")
 
 
 @dataclass
@@ -115,6 +116,7 @@ class TacSession(Scene):
         self.target_lost = False
         self._spot_seen: np.ndarray | None = None  # the deck spot the TCP's target last followed
         self._now = 0.0
+        self._p_b: np.ndarray | None = None  # base frame: the followed point in the vessel's body frame {b}
         # the load's anti-swing (the lab's estimator and law, reused): off until the operator switches it on
         self.swing = CraneSwingControl(self.load, self.scenario.dt, np.random.default_rng(30), active=False)
         self.antisway = False
@@ -250,17 +252,19 @@ class TacSession(Scene):
     @command
     def set_frame(self, frame: str) -> None:
         """The frame the stick commands in (issue 30, item 1): ``world`` (a centred stick holds the TCP still in the
-        world) or ``target`` (it holds the TCP over the target deck's spot, following the deck's surge, sway and
-        heave with level axes; the fixed platform's is the world's).  The vessel's (base) and the head's (tool)
-        frames are refused with the reason.  A change disarms the input (H96)."""
+        world), ``base`` (it holds the TCP over a point of the crane's own vessel, riding its surge, sway and heave:
+        a load picked up from its deck; the stick moves along the vessel's heading) or ``target`` (over the target
+        deck's spot, following its surge, sway and heave with level axes; the fixed platform's is the world's).
+        The heave is the winch's in both.  The head's (tool) frame is refused with the reason.  A change disarms
+        the input (H96)."""
         if frame not in FRAMES:
             raise CommandError(
-                f"frame {frame}: the crane-head scene commands in the world or the target deck's frame (the "
-                "vessel's and the head's frames are not in this scene)"
+                f"frame {frame}: the crane-head scene commands in the world, base (the vessel's) or target deck's "
+                "frame (the head's frame is not in this scene)"
             )
         if frame != self.frame:
             self.input.disarm("command frame changed")
-            self._spot_seen = None  # following starts from where the deck is now: nothing jumps
+            self._spot_seen, self._p_b = None, None  # following starts from where the deck is now: nothing jumps
         self.frame = frame
         self.note("info", f"frame: {frame}" + (" (the fixed platform: the world's)" if self._fixed(frame) else ""))
 
@@ -344,6 +348,7 @@ class TacSession(Scene):
         frozen = self.estop_latched or self.holding
         self._drive(inp, frozen, n * self.scenario.dt)
         following = self._follow_target(now, frozen)
+        riding = self._follow_base(frozen) if self.frame == "base" else False
         # the anti-swing offset of the last step onto the TCP's target (held over the tick, as the stick's move)
         offset = self.swing.offset
         self.sim.p_d_n = self.sim.p_d_n + (offset - self._offset)
@@ -358,12 +363,17 @@ class TacSession(Scene):
         c = chunks[0] if len(chunks) == 1 else TacChunk.concat(chunks)
         ld, watch, events = self.load, self.watch, [False] * 4
         step, base, zero = self.scenario.dt, ld.speed_command, np.zeros(3)
-        for p, tk in zip(c.p_c_n, c.t, strict=True):  # the load hangs from the TCP: one step per simulation step
+        ride_z = self._base_point(np.asarray(self.last["eta"]))[2] if riding else 0.0
+        for k, (p, tk) in enumerate(zip(c.p_c_n, c.t, strict=True)):  # the load: one step per simulation step
+            if riding:  # the base frame: the winch holds the hook's height over the vessel's point (its heave rate)
+                z = self._base_point(c.eta[k])[2]
+                ld.speed_command, ride_z = base + (z - ride_z) / step, z
             if self.vessel_deck is not None:  # the second vessel's deck under the load, and its velocity
                 ld.deck = self.vessel_deck.deck(ld.hook(p), float(tk), step)
                 deck_v, n_up = ld.deck[3], ld.deck[2]
                 # following its deck, the winch's heave compensation holds the hook's height over it (its heave rate)
-                ld.speed_command = base + (float(deck_v[2]) if following else 0.0)
+                if not riding:
+                    ld.speed_command = base + (float(deck_v[2]) if following else 0.0)
             else:
                 ld.deck = self.platform.deck(ld.hook(p))
                 deck_v, n_up = zero, UP
@@ -439,11 +449,33 @@ class TacSession(Scene):
             self.input.disarm("target vessel's data lost" if lost else "target vessel's data back")
             self.note("error" if lost else "info", "target vessel lost: holding in the world" if lost else
                       "target vessel's data back: following its deck from where it is now")  # fmt: skip
-        following = self.frame == "target" and not lost and self.mode != "off" and not frozen
+        if self.frame != "target":  # the base frame follows its own point (_follow_base)
+            return False
+        following = not lost and self.mode != "off" and not frozen
+        return self._follow_point(following, lambda: self.vessel_deck.vessel.pose(self._t())[0])
+
+    def _base_point(self, eta: np.ndarray) -> np.ndarray:
+        """The base frame's followed point in {n} for the vessel at η (its body point ``_p_b``)."""
+        return eta[:3] + euler_zyx_to_matrix(eta[3:6]) @ self._p_b
+
+    def _follow_base(self, frozen: bool) -> bool:
+        """The base frame (issue 30, item 1): the TCP's target rides a point of the crane's own vessel (the TCP's
+        target when following began, in the vessel's body frame), its surge and sway here, its heave the winch's."""
+        following = self.frame == "base" and self.mode != "off" and not frozen and bool(self.last)
+        if following and self._p_b is None:
+            eta = np.asarray(self.last["eta"])
+            self._p_b = euler_zyx_to_matrix(eta[3:6]).T @ (self.sim.p_d_n - eta[:3])
+        elif not following:
+            self._p_b = None
+        return self._follow_point(following, lambda: self._base_point(np.asarray(self.last["eta"])))
+
+    def _follow_point(self, following: bool, point) -> bool:
+        """Move the TCP's target by the followed point's horizontal step since the last tick (from where it was
+        when following began: nothing jumps); within the mode's range (its alarm)."""
         if not following:
             self._spot_seen = None
             return False
-        spot = self.vessel_deck.vessel.pose(self._t())[0]
+        spot = point()
         if self._spot_seen is not None:
             dp = spot - self._spot_seen
             dp[2] = 0.0  # the heave is the winch's
@@ -468,6 +500,14 @@ class TacSession(Scene):
         if not np.any(s):
             return
         dp = STICK_TO_NED @ (TCP_SPEED * s) * dt
+        if self.frame == "base" and self.last:  # along the vessel's heading; the followed point moves with it
+            eta = np.asarray(self.last["eta"])
+            dp = euler_zyx_to_matrix(np.array([0.0, 0.0, eta[5]])) @ dp
+            before = self.sim.p_d_n.copy()
+            self.target_limited = self.sim.move_target(dp, self.target_range[self.mode])
+            if self._p_b is not None:
+                self._p_b = self._p_b + euler_zyx_to_matrix(eta[3:6]).T @ (self.sim.p_d_n - before)
+            return
         self.target_limited = self.sim.move_target(dp, self.target_range[self.mode])
 
     def _load_state(self) -> CraneLoadState:
