@@ -76,6 +76,7 @@ def main() -> int:
     ap.add_argument("--no-sweep", action="store_true")
     ap.add_argument("--sweep-only", action="store_true")
     ap.add_argument("--lab", action="store_true", help="the Motion-Lab's figures only")
+    ap.add_argument("--targets", default="platform,vessel", help="the crane's targets to measure (default both)")
     args = ap.parse_args()
     vessels = [("default (computed RAOs)", None)] + ([("ShipX/VERES table", str(MSS))] if MSS.exists() else [])
     t0 = time.perf_counter()
@@ -107,7 +108,7 @@ def main() -> int:
         )
         print("|---|---|---|---|---|---|---|---|")
         for vname, rao in [] if args.sweep_only else vessels:
-            for target in ("platform", "vessel"):
+            for target in args.targets.split(","):
                 base = TransferScenario(hs=3.0, tp=9.0, heading=90.0, rao=rao, target=target, target_rao=rao)
                 f = figures(pool, base, args.landings)
                 p = f["path"]
@@ -128,7 +129,7 @@ def main() -> int:
                 "path ratio / residual ratio / p95 [m/s] / re-hit free, per Hs 0.5–6 m |"
             )
             print("|---|---|---|---|---|")
-            for target in ("platform", "vessel"):
+            for target in args.targets.split(","):
                 rows = {"compensated": [], "antisway": []}
                 for hs in np.arange(0.5, 6.01, 0.5):
                     base = TransferScenario(hs=float(hs), tp=9.0, heading=90.0, target=target)

@@ -21,7 +21,11 @@ recorded again: the simulated lab's load hangs on the crane's elastic wire and c
 pendulum reports that wire (app/scenes/lab_load.py).  The platforms' arrays are unchanged; the pendulum's, the
 swing estimator's and the winch's differ by the two load models' difference (at most 2.6·10⁻⁴ rad of swing,
 8·10⁻⁶ m of wire), and after the anti-swing's start at 29.8 s the Comau's and tool's by its offset's (at most
-0.2 mm); ``snap.load.*`` was added.
+0.2 mm); ``snap.load.*`` was added.  Recorded once more the same day: VVMC now engages from where the tool is, at
+the speed it has, onto the work point (safety H106), so from the switch at 23.7 s the Comau's, the tool's, the
+winch's and the load's arrays differ (the tool 6 cm off the work point at its worst while it engages; before, the
+law stepped onto it); ``engine_tac`` and ``engine_tac_neutral`` got ``snap.target_lost`` (the vessel target,
+H105; their 153 other arrays unchanged).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

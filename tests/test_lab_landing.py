@@ -88,3 +88,35 @@ def test_a_load_left_on_a_heaving_deck_without_compensation_is_re_hit_and_the_al
     ld = s.snapshot().load
     assert ld.rehits >= 1 and "rehit" in raised, (ld, raised)
     assert "payload_below_deck" not in raised
+
+
+def test_vvmc_engages_without_snatching_the_load():
+    """H106: EM8000 in waves (Hs 2.5 m) carries the Comau's tool off the work point and sets it moving; VVMC
+    switched on stepped the tool onto the point at once and the load's stiff wire rang to 1.6–1.9× the load's
+    weight, slack between (Snap load, critical).  Now it engages from where the tool is, at the speed it has: the
+    wire stays under the snap limit and never slack, no landing alarm is raised, and the tool is on the work point
+    once the engagement is over."""
+    rig = Rig().raised()
+    s = rig.s
+    s.lab_source("em8000", "simulation", hs=2.5, tp=8.0, heading=150.0, seed=1)
+    s.lab_platform("em8000", "engage")
+    s.lab_platform("em1500", "engage")
+    rig.run(3.0)
+    off = np.linalg.norm(s.lab.last.e_t_b2)
+    assert off > 0.02, off  # the tool is off the work point before VVMC
+    tension, raised = [], set()
+    after = s._after_step
+
+    def watch(dt):
+        after(dt)
+        tension.append(s.load.tension / s.load.static_tension())
+
+    s.plant.after_step = watch
+    s.lab_vvmc(True)
+    for _ in range(20):
+        rig.run(0.5)
+        raised |= rig.alarms()
+    assert max(tension) < 1.5 and min(tension) > 0.1, (max(tension), min(tension))
+    assert not raised & {"snap_load", "slack_wire"}, raised
+    assert not s.lab.engagement()[0].any()  # engaged
+    assert np.linalg.norm(s.lab.last.e_t_b2) < 0.005

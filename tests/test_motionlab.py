@@ -729,15 +729,20 @@ def _swing_lab(swing_deg: float = 4.0, L: float = 2.0):
     ses = LabSession()
     ses.lab_vvmc(True)
     ses.lab.winch.filter.x[0] = L
-    t = _tick(ses, 2.0)  # the Comau settles on the work point, the load at rest
-    pd = ses.lab.pendulum
-    pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = math.radians(swing_deg), 0.0, 0.0, 0.0
+    t = _tick(ses, 2.0)
+    while ses.lab.engagement()[0].any():  # VVMC's engagement (H106) brings the tool onto the work point gently
+        t = _tick(ses, 0.5, t)
+    t = _tick(ses, 2.0, t)  # the Comau settles on the work point, the load at rest
+    ses.load.kick(math.radians(swing_deg), 0.0)  # the load on its wire (app/scenes/lab_load.py)
     ses.lab_antisway("reset")  # the estimator converged on "no swing": told to expect one again (the HMI's Reset)
     return ses, t
 
 
-def _swing_deg(snap) -> float:
-    return math.degrees(snap.pendulum.swing)
+def _swing_deg(ses) -> float:
+    """The swing's amplitude [deg] (the engine's, from the swing's energy): the angle itself passes through zero
+    twice a period, so a sample of it says little (with the load on its elastic wire, the angle at 12 s was 1.75°
+    of a 3.1° amplitude)."""
+    return math.degrees(ses._swing_amplitude())
 
 
 def test_antisway_in_the_engine_damps_a_swing_the_estimate_follows_it():
@@ -748,7 +753,7 @@ def test_antisway_in_the_engine_damps_a_swing_the_estimate_follows_it():
     ses, t = _swing_lab()
     t = _tick(ses, 10.0, t)
     snap = ses.snapshot()
-    assert snap.swing is not None and not snap.swing.active and _swing_deg(snap) > 2.0
+    assert snap.swing is not None and not snap.swing.active and _swing_deg(ses) > 2.0
     assert snap.swing.offset == [0.0, 0.0]
     ses, t = _swing_lab()
     ses.lab_antisway("activate")
@@ -766,7 +771,7 @@ def test_antisway_in_the_engine_damps_a_swing_the_estimate_follows_it():
     t = _tick(ses, 10.0, t, check=watch)
     snap = ses.snapshot()
     assert snap.swing.active and snap.swing.reason == ""
-    assert _swing_deg(snap) < 0.5, _swing_deg(snap)
+    assert _swing_deg(ses) < 0.5, _swing_deg(ses)
     assert 0.005 < worst["off"] <= 0.3 and worst["err"] < 0.6 and worst["z"] < 4.0, worst
     assert np.linalg.norm(snap.tool_error_b2) < 0.01  # back on the work point as the swing dies
 

@@ -239,10 +239,12 @@ def test_a_lab_step_equals_the_reference_in_every_mode(comau, winch, frozen, tar
                 close(getattr(sa, name), getattr(sb, name))
             close([sa.L_w, sa.L_w_dot, *sa.swing, sa.payload_height_error],
                   [sb.L_w, sb.L_w_dot, *sb.swing, sb.payload_height_error])  # fmt: skip
-            close(a.a_t_g, b.a_t_g)
             # the filters' accelerations are (v' − v)/dt: a few ulps of speed apart (the heave-compensated target
             # moving with the operator's speed, issue 30: L̇ 2e-14 apart) are 1e-12 of acceleration, so the same
-            # criterion as the speeds', ATOL of speed, is ATOL/dt of acceleration
+            # criterion as the speeds', ATOL of speed, is ATOL/dt of acceleration; the tool's acceleration (eq. 57)
+            # is built from the joints' (VVMC's engagement, H106, moves the work point from the first step: 1.7e-12
+            # of 9.4 m/s², 1.8e-13 relative)
+            close(a.a_t_g, b.a_t_g, atol=ATOL / 0.01)
             for x, y in ((a.joints.a, b.joints.a), (a.winch.filter.a, b.winch.filter.a)):
                 close(x, y, atol=ATOL / 0.01)
             for ra, rb in zip(a._rates, b._rates, strict=True):

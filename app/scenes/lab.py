@@ -48,6 +48,10 @@ REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
 #: the frames VVMC can hold the work point in: ``deck``, fixed on EM1500 (the paper's: the point rolls with the
 #: deck), or ``level``, over a spot on EM1500's deck along gravity (the landing frame, issue 30: :meth:`set_work_frame`)
 WORK_FRAMES = ("deck", "level")
+#: VVMC's engagement (H106): the tool goes from where it is, at the speed it has, onto the work point along a cubic
+#: lasting at least ENGAGE_TIME and long enough that its offset's own rate stays about ENGAGE_SPEED (assumed values;
+#: stepping onto the point jerked the load on its wire to 1.6–1.9× its weight and slack between, at Hs 2.5 m)
+ENGAGE_TIME, ENGAGE_SPEED = 3.0, 0.1
 
 
 class LabError(BosunError):
@@ -137,6 +141,7 @@ class MotionLab:
         # the level work frame: the spot on EM1500's deck (in {b2}, z = 0) and the point's offset from it in {n2}
         self.work_frame = "deck"
         self._level_load, self._level_pay = None, 0.0
+        self._engage: tuple | None = None  # VVMC's engagement: (e₀, ė₀ in {b2}, its duration, time since it began)
         self.level_spot, self.level_offset = np.zeros(3), np.zeros(3)
         self.winch = Winch(layout.winch)
         self.pendulum = Pendulum(damping=layout.payload_damping)
@@ -270,6 +275,7 @@ class MotionLab:
         self.work_shift, self.work_shift_rate = shift.copy(), np.zeros(3)
         if self.work_frame == "level":
             self._capture_level()
+        self._engage = None  # the tool is put on the point: nothing to engage
         self.joints.reset(q)
         self.refresh()
 
@@ -284,6 +290,42 @@ class MotionLab:
             self.work_shift_limited = False
             if self.work_frame == "level":
                 self._capture_level()
+            self._start_engagement()
+        else:
+            self._engage = None
+
+    def _start_engagement(self) -> None:
+        """H106: from where the tool is, and how it moves, relative to the work point (e₀ and ė₀ in {b2}) onto the
+        work point along the cubic Hermite e(τ) = (2τ³ − 3τ² + 1) e₀ + (τ³ − 2τ² + τ) T ė₀, τ = t/T, which starts
+        at e₀ with the rate ė₀ (no step in the tool's position or velocity: the stiff wire rang to 1.87× the
+        load's weight at a velocity step of a few cm/s) and ends on the point at rest relative to it;
+        T = max(ENGAGE_TIME, 1.5 |e₀| / ENGAGE_SPEED)."""
+        self._rates = self._rotation_rates()  # the tool where the machines are now (a scenario may have moved them)
+        self._update_tool()
+        p2 = self.platforms[1]
+        T_g_n2 = self.layout.T_world_n2
+        R, Rd, _ = StewartPlatform.rotation_rates(p2.eta, p2.eta_dot, p2.eta_ddot)
+        R2, Rd2 = T_g_n2[:3, :3] @ R, T_g_n2[:3, :3] @ Rd
+        o2 = T_g_n2[:3, :3] @ p2.eta[:3] + T_g_n2[:3, 3]
+        r = self.p_t_g - o2
+        e0 = R2.T @ r - (self.layout.work_point_b2 + self.work_shift)
+        e0_dot = Rd2.T @ r + R2.T @ (self.v_t_g - T_g_n2[:3, :3] @ p2.eta_dot[:3])
+        size = float(np.linalg.norm(e0))
+        if size < 1e-9 and float(np.linalg.norm(e0_dot)) < 1e-9:
+            self._engage = None
+            return
+        self._engage = (e0, e0_dot, max(ENGAGE_TIME, 1.5 * size / ENGAGE_SPEED), 0.0)
+
+    def engagement(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The engagement's offset of the work point in {b2} and its rate now (zeros once it is done)."""
+        if self._engage is None:
+            return np.zeros(3), np.zeros(3)
+        e0, e0_dot, T, t = self._engage
+        tau = min(1.0, t / T)
+        t2, t3 = tau * tau, tau * tau * tau
+        e = (2.0 * t3 - 3.0 * t2 + 1.0) * e0 + (t3 - 2.0 * t2 + tau) * T * e0_dot
+        e_dot = (6.0 * t2 - 6.0 * tau) * e0 / T + (3.0 * t2 - 4.0 * tau + 1.0) * e0_dot
+        return e, e_dot
 
     def set_work_frame(self, frame: str, spot_b2: ArrayLike | None = None) -> None:
         """Hold the work point, under VVMC, in ``frame`` (:data:`WORK_FRAMES`).  ``deck``: fixed on EM1500 (the
@@ -384,8 +426,21 @@ class MotionLab:
             p.step(dt)
         self._measure()
         self._shift_work_point(dt)
+        if self._engage is not None:  # the engagement at the step's end (the law's target is for the step's end)
+            e0, e0_dot, T, t = self._engage
+            self._engage = (e0, e0_dot, T, t + dt)
         self.last = self._step_compiled(dt) if self._use_kernels else self._step_reference(dt)
+        if self._engage is not None and (self._engage[3] >= self._engage[2] or self.comau_mode != "motion_comp"):
+            self._engage = None
         return self.last
+
+    def _law_shift(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The work point's shift the Comau's law tracks: the operator's (and the level frame's) and the
+        engagement's (H106)."""
+        if self._engage is None:
+            return self.work_shift, self.work_shift_rate
+        d, dd = self.engagement()
+        return np.ascontiguousarray(self.work_shift + d), np.ascontiguousarray(self.work_shift_rate + dd)
 
     def _shift_work_point(self, dt: float) -> None:
         """REMOTE under VVMC (issue 30, item 4): in MOTION_COMP the operator's velocity (``tool_velocity_cmd``, in
@@ -518,7 +573,7 @@ class MotionLab:
         seen = (False, *true) if self.measured is None else (True, *self.measured[0], *self.measured[1])
         v_cmd = np.ascontiguousarray(self.tool_velocity_cmd, dtype=float)
         x = ((f.x, f.v, f.a), (wf.x, wf.v, wf.a), (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot), (target, has))
-        offset = (*self.tool_offset, self.work_shift, self.work_shift_rate)
+        offset = (*self.tool_offset, *self._law_shift())
         u = (true, seen, (mode, v_cmd, offset, track, float(w.speed_command)))
         wire = (wf.lower, wf.upper, wf.speed, wf.accel, float(wf.tau))
         p = (self._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)))
@@ -527,6 +582,12 @@ class MotionLab:
         if has and self.payload_target_b2 is None:
             self.payload_target_b2 = target.copy()
         self._rates = self._rate_views
+        if self._engage is not None:  # the sample's work point is the operator's, not the engagement's way to it
+            d = offset[2] - self.work_shift
+            e_b2 += d
+            R2 = self._rates_buf[1, 0]
+            T_g_n2 = self._T_world_n[1]
+            p_w_g[:] = p_w_g - T_g_n2[:3, :3] @ (R2 @ d)
         return LabSample(
             t=self.t,
             eta1=p1.filter.x.copy(),
@@ -555,7 +616,7 @@ class MotionLab:
         g = self._geometry
         # the Comau: its law, then its drives
         v_cmd = np.asarray(self.tool_velocity_cmd, dtype=float)
-        offset = (*self.tool_offset, self.work_shift, self.work_shift_rate)
+        offset = (*self.tool_offset, *self._law_shift())
         u = (mode, f.x, v_cmd, offset, (e1, ed1, R1, Rd1, e2, ed2, R2, Rd2))
         law_p = (*g[:3], *g[5:9], f.lower, f.upper)
         _, command = COMAU_LAW.step((), u, law_p, dt, use_kernels=False)
