@@ -270,3 +270,33 @@ def test_the_on_screen_stick_moves_the_tcp_target_through_the_engine(qtbot, wind
     held = np.array(tab.state.p_d_n)
     qtbot.wait(500)
     np.testing.assert_array_equal(np.array(tab.state.p_d_n), held)
+
+
+def _choose(combo, text: str) -> None:
+    """What the operator's pick of ``text`` in the list emits (the project's convention: the arrow keys are the
+    stick's, and an offscreen popup does not take a click)."""
+    combo.setCurrentText(text)
+    combo.activated.emit(combo.currentIndex())
+
+
+def test_the_target_and_frame_selectors_reach_the_engine_and_the_refusal_is_shown(qtbot, window):
+    """Issue 30, items 1, 5 and 7: the target row's selectors switch the engine to the vessel target (its frame then
+    target, its deck drawn moving) and back to the world frame; the stick's title says the frame; a refusal (the
+    tool frame is not this scene's) comes back as a message, the selector as before."""
+    win, _ = window
+    tab = win.crane_head
+    notices = []
+    tab.notice.connect(lambda level, text: notices.append(text))
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.target.isEnabled(), timeout=GUI_WAIT)
+    _choose(tab.target, "vessel")
+    qtbot.waitUntil(lambda: tab.state.target == "vessel" and tab.state.frame == "target", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: tab.frame.currentText() == "target", timeout=GUI_WAIT)
+    assert "over the target deck" in tab.stick_box.title()
+    deck0 = np.array(tab.state.scene.deck)
+    qtbot.waitUntil(lambda: not np.allclose(np.array(tab.state.scene.deck), deck0), timeout=GUI_WAIT)  # it moves
+    _choose(tab.frame, "world")
+    qtbot.waitUntil(lambda: tab.state.frame == "world" and "in the world" in tab.stick_box.title(), timeout=GUI_WAIT)
+    tab._send("set_frame", frame="tool")  # what no selector offers: the engine's refusal reaches the operator
+    qtbot.waitUntil(lambda: any("set_frame refused" in n for n in notices), timeout=GUI_WAIT)
+    assert tab.frame.currentText() == "world"

@@ -489,6 +489,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             if box.currentText() != value and not box.view().isVisible():
                 box.setCurrentText(value)  # the engine's (a refused choice goes back)
         self.landing.deck_name = "the target platform" if self.target.currentText() == "platform" else "the vessel"
+        where = {"world": "in the world", "base": "riding the vessel", "target": "over the target deck"}
+        title = f"Stick: TCP {where.get(state.frame, state.frame)} (x, y; z up); w the winch — and the landing"
+        if self.stick_box.title() != title:
+            self.stick_box.setTitle(title)
         s = state.sample
         if s is None:
             return
