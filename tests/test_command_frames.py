@@ -99,8 +99,8 @@ def test_a_frame_the_scene_lacks_or_does_not_know_is_refused_with_a_reason():
 
 def test_the_crane_and_lab_scenes_answer_a_frame_request_with_their_frame():
     """The crane-head scene commands the TCP in the world, the vessel's (base) or the target deck's frame (the
-    tool frame refused with the reason); the lab's frame follows its mode (REMOTE: the Comau's base; VVMC: EM1500's
-    deck), so a request says which."""
+    tool frame refused with the reason); the lab's frames follow its mode (REMOTE: the Comau's base; VVMC: EM1500's
+    deck, the target, or the lab's world), so a request for another says which it may be."""
     from app.engine.lab_session import LabSession
     from app.engine.tac_session import TacSession
 
@@ -111,8 +111,15 @@ def test_the_crane_and_lab_scenes_answer_a_frame_request_with_their_frame():
     with pytest.raises(CommandError, match="the head's frame is not in this scene"):
         tac.set_frame("tool")
     lab = LabSession()
-    with pytest.raises(CommandError, match=r"now base \(the Comau's, REMOTE\)"):
+    lab.set_frame("base")
+    with pytest.raises(CommandError, match=r"now REMOTE: base \(turn VVMC on for target or world\)"):
         lab.set_frame("world")
     lab.lab_vvmc(True)
-    with pytest.raises(CommandError, match="now target"):
+    assert lab.snapshot().frame == "target"
+    with pytest.raises(CommandError, match="now VVMC on: target or world"):
         lab.set_frame("base")
+    lab.set_frame("world")
+    assert lab.snapshot().frame == "world" and lab.lab.work_frame == "world"
+    lab.lab_vvmc(False)
+    lab.lab_vvmc(True)
+    assert lab.snapshot().frame == "target"  # a VVMC starts in EM1500's frame

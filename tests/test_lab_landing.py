@@ -120,3 +120,31 @@ def test_vvmc_engages_without_snatching_the_load():
     assert not raised & {"snap_load", "slack_wire"}, raised
     assert not s.lab.engagement()[0].any()  # engaged
     assert np.linalg.norm(s.lab.last.e_t_b2) < 0.005
+
+
+def test_in_the_lab_s_world_frame_vvmc_holds_the_tool_still_in_the_lab():
+    """Item 1 in the lab: under VVMC the frame ``world`` holds the Comau's tool still in the lab's world while
+    both platforms move (only EM8000's motion compensated: the lab's TAC), where ``target`` holds it on EM1500's
+    moving work point; the switch disarms the stick and the tool does not jump."""
+    rig = Rig().raised()
+    s = rig.s
+    for k, p in enumerate(s.names):
+        s.lab_source(p, "simulation", hs=2.5, tp=8.0, heading=150.0 - 60.0 * k, seed=1 + k)
+        s.lab_platform(p, "engage")
+    rig.run(5.0)
+    s.lab_vvmc(True)
+    rig.run(12.0)  # engaged
+    sweep = {}
+    for frame in ("target", "world"):
+        s.set_frame(frame)
+        assert s.snapshot().frame == frame and not s.snapshot().flags.armed
+        before = s.lab.p_t_g.copy()
+        rig.run(0.05)
+        assert np.linalg.norm(s.lab.p_t_g - before) < 0.02  # no jump at the switch (EM1500 moves ≤ 0.3 m/s)
+        rig.run(3.0)
+        pts = []
+        for _ in range(200):
+            rig.run(0.05)
+            pts.append(s.lab.p_t_g.copy())
+        sweep[frame] = float(np.max(np.ptp(np.array(pts), axis=0)))
+    assert sweep["world"] < 0.005 and sweep["target"] > 20 * sweep["world"], sweep

@@ -229,15 +229,32 @@ class LabSession(Scene):
 
     @command
     def set_frame(self, frame: str) -> None:
-        """The frame the stick commands in (issue 30, item 1): in the lab it follows the mode, the Comau's base in
-        REMOTE and EM1500's deck under VVMC (the target frame); a frame asked for is refused with that reason."""
-        now = "target (EM1500's deck, VVMC on)" if self.vvmc else "base (the Comau's, REMOTE)"
-        raise CommandError(f"frame {frame}: the lab's stick commands in the frame of its mode, now {now}")
+        """The frame the stick commands in (issue 30, item 1).  REMOTE: the Comau's ``base``.  Under VVMC: ``target``
+        (EM1500's deck: VVMC holds the tool on the work point on it, the paper's) or ``world`` (the lab's world: the
+        tool held still there, only EM8000's motion compensated; the winch holds the load's height there).  Another
+        is refused with the reason; a change disarms the input (H96) and keeps the work point where it is."""
+        if self.plc is not None and frame == "world":
+            raise CommandError("frame world: the real lab's VVMC is its PLC's program, which holds EM1500's frame")
+        allowed = ("target", "world") if self.vvmc else ("base",)
+        if frame not in allowed:
+            now = "VVMC on: target or world" if self.vvmc else "REMOTE: base (turn VVMC on for target or world)"
+            raise CommandError(f"frame {frame}: the lab's stick commands in the frame of its mode, now {now}")
+        if frame == self._frame():
+            return
+        self.input.disarm("command frame changed")
+        self.lab.set_work_frame("world" if frame == "world" else "deck")
+        self.note("info", f"frame: {frame}")
+
+    def _frame(self) -> str:
+        if not self.vvmc:
+            return "base"
+        return "world" if self.lab.work_frame == "world" else "target"
 
     @command
     def lab_vvmc(self, on: bool) -> None:
         self._guard()
         self.input.disarm("VVMC switched")  # off puts the Comau in REMOTE: a held stick must not drive it
+        self.lab.set_work_frame("deck")  # a VVMC starts in the target frame, EM1500's (the paper's)
         self._plant(self.plant.vvmc, on)
         self.vvmc = on
         if not on:
@@ -664,6 +681,7 @@ class LabSession(Scene):
             ),
             pendulum=PendulumState(alpha=float(s.swing[0]), beta=float(s.swing[1]), swing=float(lab.pendulum.swing)),
             vvmc=self.vvmc,
+            frame=self._frame(),
             tool_error_b2=s.e_t_b2.tolist(),
             payload_height_error=float(s.payload_height_error),
             scene=self._scene(),

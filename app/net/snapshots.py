@@ -464,6 +464,7 @@ class LabSnapshot(Snapshot):
     winch: WinchState | None = None
     pendulum: PendulumState | None = None
     vvmc: bool = False
+    frame: str = "base"  # the stick's frame: base (REMOTE), target or world (VVMC on)
     tool_error_b2: list[float] = field(default_factory=list)  # tool − work point in EM1500's body frame [m]
     payload_height_error: float = 0.0  # [m]
     scene: LabScenePoints | None = None

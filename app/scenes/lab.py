@@ -47,7 +47,7 @@ R_B2_DECK = np.diag([1.0, -1.0, -1.0])
 REMOTE_TOOL_SPEED = 0.25  # m/s at full stick (Comau REMOTE)
 #: the frames VVMC can hold the work point in: ``deck``, fixed on EM1500 (the paper's: the point rolls with the
 #: deck), or ``level``, over a spot on EM1500's deck along gravity (the landing frame, issue 30: :meth:`set_work_frame`)
-WORK_FRAMES = ("deck", "level")
+WORK_FRAMES = ("deck", "level", "world")
 #: VVMC's engagement (H106): the tool goes from where it is, at the speed it has, onto the work point along a cubic
 #: lasting at least ENGAGE_TIME and long enough that its offset's own rate stays about ENGAGE_SPEED (assumed values;
 #: stepping onto the point jerked the load on its wire to 1.6–1.9× its weight and slack between, at Hs 2.5 m)
@@ -273,7 +273,7 @@ class MotionLab:
         q = self._ik(R_r.T @ (p_n1 - p_r), self.q_work)
         assert q is not None  # _reachable said so
         self.work_shift, self.work_shift_rate = shift.copy(), np.zeros(3)
-        if self.work_frame == "level":
+        if self.work_frame != "deck":
             self._capture_level()
         self._engage = None  # the tool is put on the point: nothing to engage
         self.joints.reset(q)
@@ -288,7 +288,7 @@ class MotionLab:
         if mode == "motion_comp":  # VVMC starts on the work point itself (no shift left from before)
             self.work_shift, self.work_shift_rate = np.zeros(3), np.zeros(3)
             self.work_shift_limited = False
-            if self.work_frame == "level":
+            if self.work_frame != "deck":
                 self._capture_level()
             self._start_engagement()
         else:
@@ -333,10 +333,14 @@ class MotionLab:
         it swings).  ``level``: over a spot on EM1500's deck along gravity: the spot (below the work point, on the
         top plate) moves with the deck, the point's offset from it stays in EM1500's level neutral frame {n2}, so
         the tool follows the spot's heave, surge and sway but not the deck's tilt (what a hanging load can follow).
-        ``spot_b2``: the spot on the deck (x, y in {b2}; a landing spot), else the one under the work point.  The
-        switch keeps the work point where it is."""
+        ``world``: fixed in the lab's world (EM1500's neutral frame {n2}, so only EM8000's motion is compensated:
+        the lab's version of the crane-head paper's TAC; the winch holds the load's height in the world too).
+        ``spot_b2``: the level frame's spot on the deck (x, y in {b2}; a landing spot), else the one under the work
+        point.  The switch keeps the work point where it is."""
         if frame not in WORK_FRAMES:
             raise LabError(f"work frame must be one of {', '.join(WORK_FRAMES)}, got {frame!r}")
+        if self.comau_mode == "motion_comp" and frame != self.work_frame:
+            self._keep_point()  # the frame changes under VVMC: the point stays where it is, its shift in {b2} now
         self.work_frame = frame
         self._spot_given = None
         if spot_b2 is not None:
@@ -344,16 +348,26 @@ class MotionLab:
             if spot.shape != (3,) or not np.all(np.isfinite(spot)):
                 raise LabError("a spot on the deck is 3 finite numbers (m, in EM1500's frame)")
             self._spot_given = np.array([spot[0], spot[1], 0.0])
-        if frame == "level":
+        if frame in ("level", "world"):
             self._capture_level()
 
+    def _keep_point(self) -> None:
+        """The deck frame's shift is the work point's place on EM1500: keep it at the moving frame's present value
+        (the level and world frames recompute theirs each step)."""
+        self.work_shift_rate = np.zeros(3)
+
     def _capture_level(self) -> None:
-        """The level frame's spot (the deck point under the work point) and the offset that keeps the point."""
+        """The level frame's spot (the deck point under the work point) and the offset that keeps the point; the
+        world frame's: the point itself, fixed in {n2}'s coordinates (the lab's world), and no offset."""
         w = self.layout.work_point_b2 + self.work_shift
         self._level_load, self._level_pay = None, 0.0  # the winch's target in the level frame, from its capture
+        eta = self._seen_state(1)[0]
+        R = StewartPlatform.rotation_rates(*self._seen_state(1))[0]
+        if self.work_frame == "world":
+            self.level_spot, self.level_offset = eta[:3] + R @ w, np.zeros(3)
+            return
         given = getattr(self, "_spot_given", None)
         self.level_spot = np.array([w[0], w[1], 0.0]) if given is None else given.copy()
-        R = StewartPlatform.rotation_rates(*self._seen_state(1))[0]
         self.level_offset = R @ (w - self.level_spot)
 
     def set_winch_mode(self, mode: str) -> None:
@@ -448,7 +462,7 @@ class MotionLab:
         :data:`WORK_SHIFT_MAX` and the Comau's reach; the law holds the tool on the moved point relative to EM1500
         (its feed-forward has the shift's rate).  Stopped, braked or in any other mode the shift holds."""
         cmd = self.tool_velocity_cmd
-        if self.work_frame == "level" and self.comau_mode == "motion_comp" and dt > 0:
+        if self.work_frame in ("level", "world") and self.comau_mode == "motion_comp" and dt > 0:
             self._shift_level(dt)
             return
         if self.comau_mode != "motion_comp" or self.frozen or not (cmd[0] or cmd[1] or cmd[2]) or dt <= 0:
@@ -479,22 +493,29 @@ class MotionLab:
         where the shift is s + c − w.  The shift in {b2} is then d = s − w + Rᵀ c and its rate ḋ = Ṙᵀ c + Rᵀ ċ, with
         EM1500's rotation R and its rate Ṙ as the controllers see them (eqs. 33, 47), so the tool point is at
         s + c in {n2}'s axes: it follows the spot's heave, surge and sway, not the deck's tilt."""
-        w0, spot = self.layout.work_point_b2, self.level_spot
+        w0 = self.layout.work_point_b2
+        R, Rd = self._tilt(1)
+        if self.work_frame == "world":  # the spot fixed in {n2}: seen from EM1500 it moves, d/dt Rᵀ(P − η)
+            eta, eta_dot = self._seen_state(1)[:2]
+            r = self.level_spot - eta[:3]
+            spot, spot_dot, neutral = R.T @ r, Rd.T @ r - R.T @ eta_dot[:3], self.level_spot
+        else:
+            spot, spot_dot = self.level_spot, np.zeros(3)
+            neutral = spot
         cmd = self.tool_velocity_cmd
         c_dot = np.zeros(3)
         if not self.frozen and (cmd[0] or cmd[1] or cmd[2]):
             c_dot = R_B2_DECK @ np.asarray(cmd, dtype=float)  # {n2} has {b2}'s axes at neutral (z down)
-            want = spot + self.level_offset + c_dot * dt - w0
+            want = neutral + self.level_offset + c_dot * dt - w0
             shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
             self.work_shift_limited = bool(np.any(shift != want))
             if self.work_shift_limited or not self._reachable_near(shift):
                 c_dot, self.work_shift_limited = np.zeros(3), True
             else:
                 self.level_offset = self.level_offset + c_dot * dt
-        R, Rd = self._tilt(1)
         c = self.level_offset
         self.work_shift = spot - w0 + R.T @ c
-        self.work_shift_rate = Rd.T @ c + R.T @ c_dot
+        self.work_shift_rate = spot_dot + Rd.T @ c + R.T @ c_dot
         if self.payload_target_b2 is not None and self.winch.mode == "motion_comp":
             # the winch's target in the level frame too: under the tool, at its height above the spot in {n2} (the
             # operator's lowering, which the law adds along {b2}'s z within the step, carried over step by step)

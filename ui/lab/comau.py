@@ -36,6 +36,7 @@ WINCH_MODES = ("local", "remote", "motion_comp")
 DRIVE_TITLES = {
     False: "REMOTE drive (Comau tool x, y, z; winch w)",
     True: "VVMC drive (work point on EM1500 x, y, z; w lowers the load to the deck)",
+    "world": "VVMC drive, world frame (the tool held still in the lab: x, y, z; w the load)",
 }
 
 
@@ -154,7 +155,21 @@ class ComauWinchPage(QWidget):
         left = QVBoxLayout()
         left.addWidget(cbox)
         left.addWidget(wbox)
-        left.addWidget(self.vvmc)
+        # the frame VVMC holds the tool in (issue 30, item 1): EM1500's deck (target, the paper's) or the lab's world
+        self.frame = QComboBox()
+        self.frame.addItems(["target", "world"])
+        self.frame.setToolTip(
+            "with VVMC on: target holds the tool on the work point on EM1500 (the paper's VVMC), world holds it still "
+            "in the lab (only EM8000's motion compensated); the stick moves the point in that frame; a change "
+            "disarms the stick"
+        )
+        self.frame.activated.connect(lambda i: self._send("set_frame", frame=self.frame.itemText(i)))
+        vrow = QHBoxLayout()
+        vrow.setContentsMargins(0, 0, 0, 0)
+        vrow.addWidget(self.vvmc, 2)
+        vrow.addWidget(QLabel("frame"))
+        vrow.addWidget(self.frame, 1)
+        left.addLayout(vrow)
         left.addWidget(self.readout)
         left.addStretch(1)
         lw = QWidget()
@@ -340,8 +355,13 @@ class ComauWinchPage(QWidget):
             widget.setEnabled(free)
         self.winch_slider.setEnabled(free and w.mode == "local")
         look = "VVMC ON" if state.vvmc else "VVMC OFF"
-        if self.drive_box.title() != DRIVE_TITLES[bool(state.vvmc)]:
-            self.drive_box.setTitle(DRIVE_TITLES[bool(state.vvmc)])
+        title = DRIVE_TITLES["world" if state.vvmc and getattr(state, "frame", "") == "world" else bool(state.vvmc)]
+        if self.drive_box.title() != title:
+            self.drive_box.setTitle(title)
+        self.frame.setEnabled(free and bool(state.vvmc))
+        frame = getattr(state, "frame", "base")
+        if frame in ("target", "world") and self.frame.currentText() != frame and not self.frame.view().isVisible():
+            self.frame.setCurrentText(frame)  # the engine's (a VVMC starts in target)
         if self.vvmc.text() != look:
             self.vvmc.setText(look)
             self.vvmc.setStyleSheet("QPushButton { background: #2f6f2f; color: white; }" if state.vvmc else "")
