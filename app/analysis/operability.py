@@ -32,6 +32,7 @@ import math
 import multiprocessing
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -399,7 +400,10 @@ def _client(scheduler: str | None, workers: int | None):
     before = set(multiprocessing.active_children())
     cluster = None
     try:
-        with _quiet_resource_tracker():
+        with _quiet_resource_tracker(), warnings.catch_warnings():
+            # the scheduler's HTTP server (health routes, even without the dashboard) on a port another cluster
+            # holds moves to a free one and says so on stderr: not a study's news (two studies at once, a notebook)
+            warnings.filterwarnings("ignore", message="Port .* is already in use", category=UserWarning)
             cluster = LocalCluster(
                 n_workers=n, threads_per_worker=1, processes=True,
                 dashboard_address=None, silence_logs=logging.CRITICAL,  # a worker's heartbeat racing the shutdown
@@ -589,8 +593,10 @@ def run_study(
     n_workers, address = 0, "cache"
     if todo:
         # an interrupted cluster start leaves tasks whose failure asyncio reports at garbage collection
-        # ("Task exception was never retrieved", a traceback after "bosun: interrupted"): not a study's news
-        with _quiet("asyncio") if scheduler is None else contextlib.nullcontext():
+        # ("Task exception was never retrieved", a traceback after "bosun: interrupted"): not a study's news; nor is
+        # the client's batched comm to workers just ended on Ctrl-C ("distributed.batched - INFO - Batched Comm
+        # Closed" with a CommClosedError traceback before "bosun: interrupted": the CI's failure, 2026-11-29)
+        with _quiet("asyncio", "distributed") if scheduler is None else _quiet("distributed.batched"):
             n_workers, address = _run_cells(study, todo, done, total, cache, scheduler, workers, progress)
     elif progress is not None:
         progress(cached, total)

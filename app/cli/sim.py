@@ -225,7 +225,9 @@ def cmd_sim_transfer(args: argparse.Namespace) -> int:
     with _as_usage_error(TransferError):
         sc = TransferScenario.for_scene(
             args.scene,
-            **_fields(args, "hs", "tp", "heading", "spectrum", "seed", "rao", "target", "mode", "operator"),
+            **_fields(
+                args, "hs", "tp", "heading", "spectrum", "seed", "rao", "target", "mode", "operator", "move_accel"
+            ),
             target_rao=args.target_vessel,
             target_heading=args.target_heading,
         )
@@ -405,6 +407,14 @@ def register(sub) -> None:
             default="scripted",
             metavar="scripted|FILE",
             help="the scripted reference operator, or a stick file to replay (CSV t,x,y,z,w)",
+        )
+        b.add_argument(
+            "--move-accel",
+            type=_positive_float,
+            default=None,
+            metavar="A",
+            help="the scripted operator's speed ramps [m/s²] (default 0.25; lab 0.1); 0.079 lasts one period of the "
+            "crane's 10 m pendulum, a move that leaves no swing",
         )
         b.add_argument("--landings", type=int, default=None, metavar="N", help="also N seeded landings (statistics)")
         add_json(b)

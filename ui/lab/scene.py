@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt5.QtWidgets import QHBoxLayout, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QCheckBox, QHBoxLayout, QVBoxLayout, QWidget
 
 from ui.widgets.plots import axis_label, legend, refit, refit_on_show
 from ui.widgets.scene_view import DrawnScene, make_view
@@ -93,12 +93,21 @@ class LabScene3D(DrawnScene):
     def __init__(self) -> None:
         super().__init__(_machines_3d, LabDrawing())
         self.view = self.machines.view
+        self.ride = False  # the camera rides with EM1500's deck, the target (issue 30, item 7)
+
+    def set_ride(self, on: bool) -> None:
+        self.ride = bool(on)
+        if not on:
+            self.machines.set_preset(self.machines.preset)
 
     def draw_now(self, sc) -> None:
         from app.models.drawing import merge
 
         meshes = self.draw.meshes(sc)
         m = self.machines
+        top = (getattr(sc, "platforms", None) or {}).get("em1500", {}).get("top")
+        if self.ride and top:
+            m.follow(np.mean(np.asarray(top, dtype=float), axis=0))
         m.set_mesh("lab", merge(meshes))
         m.set_line("wire", [sc.tool, sc.payload], (0.92, 0.92, 0.92, 1), 1.5)
         m.set_points("goal", [sc.work_point], (0.2, 0.85, 0.3, 1), 10)
@@ -119,6 +128,11 @@ class ScenePage(QWidget):
         self.scene = make_lab_scene(use_gl)
         lay.addWidget(self.scene, 3)
         plots = QVBoxLayout()
+        self.ride = QCheckBox("camera rides EM1500's deck")
+        self.ride.setToolTip("the 3D camera looks at EM1500's deck wherever it moves (the target deck)")
+        self.ride.toggled.connect(lambda on: getattr(self.scene, "set_ride", lambda _on: None)(on))
+        self.ride.setEnabled(hasattr(self.scene, "set_ride"))  # the 2D views are fixed to the lab
+        plots.addWidget(self.ride)
         self.swing_plot = pg.PlotWidget(title="load swing (eqs. 29–30)")
         axis_label(self.swing_plot.getPlotItem(), "left", "swing angle", "deg")
         legend(self.swing_plot.getPlotItem(), cols=2)
