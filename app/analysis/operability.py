@@ -596,6 +596,8 @@ def run_study(
         # ("Task exception was never retrieved", a traceback after "bosun: interrupted"): not a study's news; nor is
         # the client's batched comm to workers just ended on Ctrl-C ("distributed.batched - INFO - Batched Comm
         # Closed" with a CommClosedError traceback before "bosun: interrupted": the CI's failure, 2026-11-29)
+        with contextlib.suppress(ImportError):  # Dask's import sets its loggers' levels: quieted after it
+            import distributed  # noqa: F401
         with _quiet("asyncio", "distributed") if scheduler is None else _quiet("distributed.batched"):
             n_workers, address = _run_cells(study, todo, done, total, cache, scheduler, workers, progress)
     elif progress is not None:

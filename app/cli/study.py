@@ -13,6 +13,12 @@ from app.errors import BosunError
 # ----------------------------------------------------------------------------- operability (issue 17)
 def cmd_study_operability(args: argparse.Namespace) -> int:
     """The crane-head compensation's operability over a scatter diagram, one simulation per cell on Dask."""
+    # Dask's own log lines are not the command's news, for the whole command: a Ctrl-C that ends the local
+    # workers made the client's loop thread log "Batched Comm Closed" with a traceback after the study had
+    # returned (the quiet context around the run had ended), before "bosun: interrupted" (CI, 2026-11-29, twice)
+    # (after Dask's import, which sets its loggers' levels from its config: set before it, they were undone)
+    import logging
+
     from app.analysis.operability import (
         OperabilityError,
         OperabilityStudy,
@@ -23,6 +29,12 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
         save,
     )
 
+    try:
+        import distributed  # noqa: F401
+    except ImportError:  # run_study says how to install it
+        pass
+    for name in ("distributed", "distributed.client", "distributed.gc"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
     with _as_usage_error(OperabilityError):
         # a bad scheduler first: refused within seconds, before the vessel and the simulation are loaded
         scheduler = check_scheduler(args.scheduler) if args.scheduler else None
