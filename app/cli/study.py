@@ -17,6 +17,7 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
     # workers made the client's loop thread log "Batched Comm Closed" with a traceback after the study had
     # returned (the quiet context around the run had ended), before "bosun: interrupted" (CI, 2026-11-29, twice)
     # (after Dask's import, which sets its loggers' levels from its config: set before it, they were undone)
+    import contextlib
     import logging
 
     from app.analysis.operability import (
@@ -29,10 +30,8 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
         save,
     )
 
-    try:
+    with contextlib.suppress(ImportError):  # without Dask, run_study says how to install it
         import distributed  # noqa: F401
-    except ImportError:  # run_study says how to install it
-        pass
     for name in ("distributed", "distributed.client", "distributed.gc"):
         logging.getLogger(name).setLevel(logging.CRITICAL)
     with _as_usage_error(OperabilityError):
