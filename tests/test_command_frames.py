@@ -105,6 +105,7 @@ def test_the_crane_and_lab_scenes_answer_a_frame_request_with_their_frame():
     from app.engine.tac_session import TacSession
 
     tac = TacSession()
+    tac.set_tac_mode("cooperative")  # the base frame follows the vessel: it needs the crane (H107)
     tac.set_frame("world")
     tac.set_frame("target")
     tac.set_frame("base")

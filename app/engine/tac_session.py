@@ -81,6 +81,14 @@ TARGETS = ("platform", "vessel")
 TARGET_HEADING = 60.0
 #: the second vessel's motion data older than this is lost (issue 30, item 8; assumed: 25 samples of a 50 Hz link)
 TARGET_STALE = 0.5
+#: following a deck or the vessel eases in over this long (H107; assumed: a few of the wire's and servo's times)
+FOLLOW_RAMP = 4.0
+#: H107: following the vessel or a vessel target needs the crane: the head alone (tac) reaches a quarter of its
+#: workspace while the point moves metres; it saturated and snatched the load (5.5× its weight, slack between)
+FOLLOW_NEEDS_CRANE = (
+    "following a moving deck needs the crane and head together (cooperative): the head alone reaches ±0.5 m, the "
+    "deck moves metres"
+)
 #: the frames the crane-head scene's stick commands in: the world, the vessel's (base: riding with its deck, its
 #: heading's axes) or the target deck's (following it, level axes)
 FRAMES = ("world", "base", "target")
@@ -114,7 +122,9 @@ class TacSession(Scene):
         self.target_link = True  # tac_target_link: the second vessel's motion data arriving (simulated)
         self._target_seen: float | None = None  # engine time of its last data
         self.target_lost = False
-        self._spot_seen: np.ndarray | None = None  # the deck spot the TCP's target last followed
+        # following a deck (or the vessel): where the point was when it began, what has been applied, for how long
+        self._follow: dict | None = None
+        self._follow_gain = (0.0, 0.0, 0.0)  # (s, ṡ, D_z) of the ramp, for the winch's heave rate
         self._now = 0.0
         self._p_b: np.ndarray | None = None  # base frame: the followed point in the vessel's body frame {b}
         # the load's anti-swing (the lab's estimator and law, reused): off until the operator switches it on
@@ -234,6 +244,9 @@ class TacSession(Scene):
             raise CommandError(
                 f"compensation stays on while the load {self._where()}: lift it clear and move it off the deck first"
             )
+        if mode != "cooperative" and self._moving_frame(self.frame):
+            raise CommandError(f"mode {mode}: the {self.frame} frame follows a moving point; {FOLLOW_NEEDS_CRANE} "
+                               "(choose the world frame first)")  # fmt: skip
         self.sim.set_mode(mode)
         self.scenario = self.sim.scenario
         if mode != self.mode:
@@ -262,11 +275,17 @@ class TacSession(Scene):
                 f"frame {frame}: the crane-head scene commands in the world, base (the vessel's) or target deck's "
                 "frame (the head's frame is not in this scene)"
             )
+        if self._moving_frame(frame) and self.mode != "cooperative":
+            raise CommandError(f"frame {frame}: {FOLLOW_NEEDS_CRANE}")
         if frame != self.frame:
             self.input.disarm("command frame changed")
-            self._spot_seen, self._p_b = None, None  # following starts from where the deck is now: nothing jumps
+            self._follow, self._p_b = None, None  # following starts from where the deck is now: nothing jumps
         self.frame = frame
         self.note("info", f"frame: {frame}" + (" (the fixed platform: the world's)" if self._fixed(frame) else ""))
+
+    def _moving_frame(self, frame: str) -> bool:
+        """Whether ``frame`` makes the TCP follow a moving point (the vessel's, or a vessel target's deck)."""
+        return frame == "base" or (frame == "target" and self.target == "vessel")
 
     def _fixed(self, frame: str) -> bool:
         return frame == "target" and self.target == "platform"
@@ -284,11 +303,17 @@ class TacSession(Scene):
             raise CommandError(f"the target stays while the load {self._where()}: lift it clear and move it off first")
         self.target = target
         self.vessel_deck = self._vessel_deck() if target == "vessel" else None
-        self._target_seen, self.target_lost, self._spot_seen = None, False, None
+        self._target_seen, self.target_lost, self._follow = None, False, None
         self.watch = LandingWatch(relift=True)
         self.input.disarm("landing target changed")
-        self.frame = "target" if target == "vessel" else "world"
-        self.note("info", f"target: {target}; frame: {self.frame}")
+        self.frame = "target" if target == "vessel" and self.mode == "cooperative" else "world"
+        self._follow, self._p_b = None, None
+        more = (
+            ""
+            if self.frame == "target" or target == "platform"
+            else " (to follow its deck: cooperative, then frame target)"
+        )
+        self.note("info", f"target: {target}; frame: {self.frame}{more}")
 
     @command
     def tac_target_link(self, up: bool) -> None:
@@ -347,8 +372,9 @@ class TacSession(Scene):
             self.estop(source=f"the stop button of {self.input.profile.name}")
         frozen = self.estop_latched or self.holding
         self._drive(inp, frozen, n * self.scenario.dt)
-        following = self._follow_target(now, frozen)
-        riding = self._follow_base(frozen) if self.frame == "base" else False
+        following = self._follow_target(now, frozen, n * self.scenario.dt)
+        riding = self._follow_base(frozen, n * self.scenario.dt) if self.frame == "base" else False
+        gain, gain_rate, lag_z = self._follow_gain
         # the anti-swing offset of the last step onto the TCP's target (held over the tick, as the stick's move)
         offset = self.swing.offset
         self.sim.p_d_n = self.sim.p_d_n + (offset - self._offset)
@@ -367,13 +393,14 @@ class TacSession(Scene):
         for k, (p, tk) in enumerate(zip(c.p_c_n, c.t, strict=True)):  # the load: one step per simulation step
             if riding:  # the base frame: the winch holds the hook's height over the vessel's point (its heave rate)
                 z = self._base_point(c.eta[k])[2]
-                ld.speed_command, ride_z = base + (z - ride_z) / step, z
+                ld.speed_command = base + gain * (z - ride_z) / step + gain_rate * lag_z
+                ride_z = z
             if self.vessel_deck is not None:  # the second vessel's deck under the load, and its velocity
                 ld.deck = self.vessel_deck.deck(ld.hook(p), float(tk), step)
                 deck_v, n_up = ld.deck[3], ld.deck[2]
                 # following its deck, the winch's heave compensation holds the hook's height over it (its heave rate)
                 if not riding:
-                    ld.speed_command = base + (float(deck_v[2]) if following else 0.0)
+                    ld.speed_command = base + (gain * float(deck_v[2]) + gain_rate * lag_z if following else 0.0)
             else:
                 ld.deck = self.platform.deck(ld.hook(p))
                 deck_v, n_up = zero, UP
@@ -430,7 +457,7 @@ class TacSession(Scene):
     def _target_age(self) -> float:
         return 0.0 if self._target_seen is None else max(0.0, self._now - self._target_seen)
 
-    def _follow_target(self, now: float, frozen: bool) -> bool:
+    def _follow_target(self, now: float, frozen: bool, dt: float) -> bool:
         """The target frame on a vessel target (issue 30, items 1 and 5): the TCP's target follows the deck spot's
         surge and sway (the winch its heave, in the load's step), from where the deck was when following began,
         so nothing jumps.  Its motion data older than :data:`TARGET_STALE` lose the target (H105): the TCP and
@@ -445,20 +472,20 @@ class TacSession(Scene):
         lost = self._target_age() > TARGET_STALE
         if lost != self.target_lost:
             self.target_lost = lost
-            self._spot_seen = None
+            self._follow = None
             self.input.disarm("target vessel's data lost" if lost else "target vessel's data back")
             self.note("error" if lost else "info", "target vessel lost: holding in the world" if lost else
                       "target vessel's data back: following its deck from where it is now")  # fmt: skip
         if self.frame != "target":  # the base frame follows its own point (_follow_base)
             return False
         following = not lost and self.mode != "off" and not frozen
-        return self._follow_point(following, lambda: self.vessel_deck.vessel.pose(self._t())[0])
+        return self._follow_point(following, lambda: self.vessel_deck.vessel.pose(self._t())[0], dt)
 
     def _base_point(self, eta: np.ndarray) -> np.ndarray:
         """The base frame's followed point in {n} for the vessel at η (its body point ``_p_b``)."""
         return eta[:3] + euler_zyx_to_matrix(eta[3:6]) @ self._p_b
 
-    def _follow_base(self, frozen: bool) -> bool:
+    def _follow_base(self, frozen: bool, dt: float) -> bool:
         """The base frame (issue 30, item 1): the TCP's target rides a point of the crane's own vessel (the TCP's
         target when following began, in the vessel's body frame), its surge and sway here, its heave the winch's."""
         following = self.frame == "base" and self.mode != "off" and not frozen and bool(self.last)
@@ -467,21 +494,32 @@ class TacSession(Scene):
             self._p_b = euler_zyx_to_matrix(eta[3:6]).T @ (self.sim.p_d_n - eta[:3])
         elif not following:
             self._p_b = None
-        return self._follow_point(following, lambda: self._base_point(np.asarray(self.last["eta"])))
+        return self._follow_point(following, lambda: self._base_point(np.asarray(self.last["eta"])), dt)
 
-    def _follow_point(self, following: bool, point) -> bool:
-        """Move the TCP's target by the followed point's horizontal step since the last tick (from where it was
-        when following began: nothing jumps); within the mode's range (its alarm)."""
+    def _follow_point(self, following: bool, point, dt: float) -> bool:
+        """Move the TCP's target with the followed point's horizontal displacement D since following began, eased
+        in: A = s(τ) D, s = 3τ² − 2τ³, τ = t / FOLLOW_RAMP (the TCP starts from rest and ends on the point with no
+        lag: a step to the deck's velocity rang the load's wire from 0.63 to 1.43× its weight); within the mode's
+        range (its alarm).  The winch's heave rate is eased the same way (``_follow_gain``: s, ṡ and D_z)."""
         if not following:
-            self._spot_seen = None
+            self._follow, self._follow_gain = None, (0.0, 0.0, 0.0)
             return False
-        spot = point()
-        if self._spot_seen is not None:
-            dp = spot - self._spot_seen
-            dp[2] = 0.0  # the heave is the winch's
-            if self.sim.move_target(dp, self.target_range[self.mode]):
-                self.target_limited = True
-        self._spot_seen = spot
+        spot = np.asarray(point(), dtype=float)
+        f = self._follow
+        if f is None:
+            f = self._follow = {"spot0": spot.copy(), "applied": np.zeros(3), "t": 0.0}
+        else:
+            f["t"] += dt
+        tau = min(1.0, f["t"] / FOLLOW_RAMP)
+        s, s_dot = tau * tau * (3.0 - 2.0 * tau), 6.0 * tau * (1.0 - tau) / FOLLOW_RAMP
+        D = spot - f["spot0"]
+        A = s * D
+        dp = A - f["applied"]
+        dp[2] = 0.0  # the heave is the winch's
+        f["applied"] = A
+        if (dp[0] or dp[1]) and self.sim.move_target(dp, self.target_range[self.mode]):
+            self.target_limited = True
+        self._follow_gain = (s, s_dot, float(D[2]))
         return True
 
     def _drive(self, inp, frozen: bool, dt: float) -> None:
