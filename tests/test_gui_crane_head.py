@@ -289,6 +289,8 @@ def test_the_target_and_frame_selectors_reach_the_engine_and_the_refusal_is_show
     tab.notice.connect(lambda level, text: notices.append(text))
     win.tabs.setCurrentWidget(tab)
     qtbot.waitUntil(lambda: tab.state is not None and tab.target.isEnabled(), timeout=GUI_WAIT)
+    _choose(tab.mode, "cooperative")  # following a moving deck needs the crane (H107)
+    qtbot.waitUntil(lambda: tab.state.tac_mode == "cooperative", timeout=GUI_WAIT)
     _choose(tab.target, "vessel")
     qtbot.waitUntil(lambda: tab.state.target == "vessel" and tab.state.frame == "target", timeout=GUI_WAIT)
     qtbot.waitUntil(lambda: tab.frame.currentText() == "target", timeout=GUI_WAIT)
