@@ -62,7 +62,7 @@ from app.plant.base import GENERATOR_DEFAULT, LabBackend
 from app.plant.simulated import SimulatedLab
 from app.plc.symbols import GENERATOR_FREQUENCY_HZ, GENERATOR_PHASE_DEG
 from app.scenarios.swing import SwingControl
-from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, SWING_LIMIT_DEG, LandingWatch
+from app.scenes.crane_load import SNAP_FACTOR, LandingWatch
 from app.scenes.lab import REMOTE_TOOL_SPEED, MotionLab
 from app.scenes.lab_load import LabLoad
 from app.teleop.pipeline import InputPipeline
@@ -538,13 +538,7 @@ class LabSession(Scene):
             tension_factor=round(ld.tension / ld.static_tension(), 4),
             ahc=self.lab.winch.mode == "motion_comp",
             clearance=round(ld.gap, 4) if math.isfinite(ld.gap) else None,
-            rel_speed=round(self.watch.rel_speed, 4),
-            contact=self.watch.in_contact,
-            landed=self.watch.touched,
-            rehits=max(0, self.watch.contacts - 1),
-            swing_limit_deg=SWING_LIMIT_DEG,
-            slack_factor=SLACK_FACTOR,
-            snap_factor=SNAP_FACTOR,
+            **self.watch.report(),
             antisway=bool(self.swing is not None and self.swing.active),
         )
 

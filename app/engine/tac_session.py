@@ -44,9 +44,7 @@ from app.net.snapshots import (
 )
 from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
 from app.scenes.crane_load import (
-    SLACK_FACTOR,
     SNAP_FACTOR,
-    SWING_LIMIT_DEG,
     CraneLoad,
     CraneSwingControl,
     LandingWatch,
@@ -558,13 +556,7 @@ class TacSession(Scene):
             tension_factor=round(float(ld.tension / ld.static_tension()), 4),
             ahc=bool(ld.ahc),
             clearance=round(float(ld.gap), 4) if bool(ld.deck[0]) else None,
-            rel_speed=round(self.watch.rel_speed, 4),
-            contact=self.watch.in_contact,
-            landed=self.watch.touched,
-            rehits=max(0, self.watch.contacts - 1),
-            swing_limit_deg=SWING_LIMIT_DEG,
-            slack_factor=SLACK_FACTOR,
-            snap_factor=SNAP_FACTOR,
+            **self.watch.report(),
             antisway=self.antisway,
             antisway_offset=np.round(self._offset[:2], 4).tolist(),
         )

@@ -180,6 +180,19 @@ class LandingWatch:
     snap: bool = False
     sideways: bool = False
 
+    def report(self) -> dict:
+        """The landing's fields of a snapshot's load state (``app.net.snapshots.CraneLoadState``), with the limits
+        they are shown against."""
+        return {
+            "rel_speed": round(self.rel_speed, 4),
+            "contact": self.in_contact,
+            "landed": self.touched,
+            "rehits": max(0, self.contacts - 1),
+            "swing_limit_deg": SWING_LIMIT_DEG,
+            "slack_factor": SLACK_FACTOR,
+            "snap_factor": SNAP_FACTOR,
+        }
+
     def step(self, load: CraneLoad, deck_v: NDArray[np.float64], n_up: NDArray[np.float64]) -> None:
         rel = load.state[1] - deck_v
         rel_n = float(n_up @ rel)
