@@ -367,12 +367,7 @@ class LabSession(Scene):
             return
         if sw.active and (self.estop_latched or not self.vvmc or self.lab.comau_mode != "motion_comp"):
             self._swing_off("E-STOP" if self.estop_latched else "VVMC off")
-        rest = sw.active and (self.watch.touched or self.watch.slack)
-        if rest:
-            sw.active = False
-        sw.step(dt)
-        if rest:
-            sw.active = True
+        sw.step(dt, in_play=not (self.watch.touched or self.watch.slack))
 
     def _swing_state(self) -> SwingState | None:
         sw = self.swing

@@ -175,6 +175,7 @@ class TacSession(Scene):
             was = self.vessel_deck.vessel.motion
             self.vessel_deck = self._vessel_deck()
             self.vessel_deck.vessel.motion = SeaTransition(was, self.vessel_deck.vessel.motion, self._t(), blend)
+            self.vessel_deck.vessel.__dict__.pop("_poses", None)  # poses of the motion just replaced
         self.sea_seq += 1
         self.changed()
 

@@ -121,8 +121,7 @@ def simulate_lab(sc: TransferScenario, progress=None, cancel=None) -> TransferRe
         watch.step(load, load.deck_v, load.n_up)
         slack_n, snap_n, sideways_n = slack_n + watch.slack, snap_n + watch.snap, sideways_n + watch.sideways
         if swing is not None:  # on the deck, or slack, the wire's angle is no swing: the law rests
-            swing.active = not watch.touched and not watch.slack
-            swing.step(dt)
+            swing.step(dt, in_play=not watch.touched and not watch.slack)
             off = lab.platform_pose(1)[:3, :3].T @ (layout.T_world_n1[:3, :3] @ lab.tool_offset[0])
         H2 = lab.platform_pose(1)
         spot = H2[:3, :3] @ land + H2[:3, 3]  # the landing spot on the deck, in {g}

@@ -77,9 +77,11 @@ class SwingControl:
         pd = self.lab.pendulum
         return np.array([pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot])
 
-    def step(self, dt: float) -> None:
+    def step(self, dt: float, in_play: bool = True) -> None:
         """Estimate with what the step just taken showed; set the offset for the next step (one step of
-        :data:`~app.control.antisway.SWING_CONTROL`, compiled unless ``use_kernels`` is False)."""
+        :data:`~app.control.antisway.SWING_CONTROL`, compiled unless ``use_kernels`` is False).  ``in_play`` False
+        (the load landed, or its wire slack: the wire's angle is no swing) rests the law as ``active`` False does,
+        without changing ``active`` (the operator's choice)."""
         lab, pd = self.lab, self.lab.pendulum
         L, Ld = lab.winch.length, lab.winch.speed
         a_d = R_G_D.T @ lab.a_t_g + self.rng.normal(0.0, self.sigma_accel, 3)
@@ -88,10 +90,11 @@ class SwingControl:
         else:
             z = L * pd.direction() + self.rng.normal(0.0, self.sigma_pos, 3)
         ekf, law = self.ekf, self.law
-        law.active = self.active
+        on = bool(self.active and in_play)
+        law.active = on
         x = (ekf.x, ekf.P, self.tilt, self.tilt_rate, law.p, law.v, law.a, self._L_prev)
         x, (p_d, v_d, law.saturated, ekf.innovation, nis) = SWING_CONTROL.step(
-            x, (a_d, z, float(L), float(Ld), bool(self.active)), self._record, dt, self.use_kernels
+            x, (a_d, z, float(L), float(Ld), on), self._record, dt, self.use_kernels
         )
         ekf.x, ekf.P, self.tilt, self.tilt_rate, law.p, law.v, law.a, self._L_prev = x
         ekf.nis = float(nis)

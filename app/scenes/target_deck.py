@@ -63,10 +63,19 @@ class TargetVessel:
         return d, -R[:, 2], np.eye(3)
 
     def pose(self, t: float) -> tuple[NDArray, NDArray]:
-        """The landing spot in the world and the deck's rotation (its body in the world) at time t."""
+        """The landing spot in the world and the deck's rotation (its body in the world) at time t.  The last two
+        are kept: a load step asks for t and t − dt, the next for t + dt and t again (the vessel's motion is a sum
+        over every wave component)."""
+        cache = self.__dict__.setdefault("_poses", {})
+        if t in cache:
+            return cache[t]
         eta = self._eta(t)
         R = self.R_n_b_yaw @ euler_zyx_to_matrix(eta[3:6])
-        return self.origin + self.R_n_b_yaw @ eta[:3] + R @ self.deck_b, R
+        out = (self.origin + self.R_n_b_yaw @ eta[:3] + R @ self.deck_b, R)
+        if len(cache) >= 2:
+            cache.pop(next(iter(cache)))
+        cache[t] = out
+        return out
 
     def _eta(self, t: float) -> NDArray[np.float64]:
         """The vessel's motion at t (a VesselMotion's, or a sea transition's: anything with eta_derivatives)."""
