@@ -162,3 +162,25 @@ def test_following_eases_in_and_needs_the_crane():
     tac.run(1.0)
     tac.s.set_crane_target("vessel")
     assert tac.s.snapshot().frame == "world"  # the target chosen, not followed: the head alone cannot
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="H108 not mitigated yet: resuming compensation after an E-STOP drives the head "
+    "and crane from where they froze onto the compensating reference at full speed (docs/safety.md)",
+)
+def test_resuming_compensation_after_a_stop_does_not_snatch_the_load():
+    """Found trying STOP and reset as an operator (issue 30's load): Hs 3 m, cooperative, the platform target; an
+    E-STOP freezes head and crane while the vessel moves on; after the reset, choosing cooperative again sends the
+    machine from its frozen pose onto the compensating reference at once, and the load's wire snatched at 16× its
+    weight, slack between.  Resumption should ease in, as switching off does (H103) and following does (H107)."""
+    rig = Rig(mode="cooperative")
+    rig.run(10.0)
+    rig.s.estop()
+    rig.run(3.0)
+    rig.s.reset()
+    rig.run(1.0)
+    tension = []
+    rig.s.set_tac_mode("cooperative")
+    rig.run(8.0, each=lambda: tension.append(rig.s.load.tension / rig.s.load.static_tension()))
+    assert max(tension) < 1.5 and min(tension) > 0.1, (min(tension), max(tension))
