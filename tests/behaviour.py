@@ -25,7 +25,10 @@ swing estimator's and the winch's differ by the two load models' difference (at 
 the speed it has, onto the work point (safety H106), so from the switch at 23.7 s the Comau's, the tool's, the
 winch's and the load's arrays differ (the tool 6 cm off the work point at its worst while it engages; before, the
 law stepped onto it); ``engine_tac`` and ``engine_tac_neutral`` got ``snap.target_lost`` (the vessel target,
-H105; their 153 other arrays unchanged).
+H105; their 153 other arrays unchanged).  Both were recorded again on 2026-11-29 (safety H108): the switch to off
+at 8.2 s now fades the head's, crane's and winch's references from the compensating ones to the hold over 5 s,
+so from the sample at 8.4 s the head's, crane's and load's arrays differ and are the record's before it, and the
+slack-wire and snap-load alarms that switch raised are gone (their arrays with them).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -44,6 +44,32 @@ def test_the_winchs_heave_compensation_holds_the_hook_while_the_tcp_heaves():
     assert np.max(np.abs(out[True] - np.mean(out[True]))) < 0.05, np.max(np.abs(out[True] - np.mean(out[True])))
 
 
+@pytest.mark.parametrize("fade", [True, False])
+def test_the_heave_compensation_switched_on_or_off_eases_in(fade):
+    """H108: switched on under a hook that rides a heaving TCP, the AHC stepped the drum's rate from 0 to the TCP's
+    heave rate (about 0.7 m/s here) in one step, a jerk the wire rings with; switched off it let go at once.  With
+    ``ahc_ease`` it fades over seconds both ways: no step of the drum's rate over what its acceleration limit gives
+    in a few steps, and once faded it holds the hook (on) or leaves the wire's length (off).  Without the fade
+    (``ahc_ease`` 0, the old behaviour) the step is there: the test's own check."""
+    t = np.arange(0.0, 40.0, DT)
+    z = -20.0 + 1.0 * np.sin(2 * np.pi * t / 9.0)
+    load = CraneLoad(spec=WinchSpec(ahc_ease=5.0 if fade else 0.0), ahc=False)
+    hook = []
+    for k, zk in enumerate(z):
+        load.ahc = 1000 <= k < 2500  # on at 10 s, off at 25 s
+        p = np.array([0.0, 0.0, zk])
+        load.step(p, DT)
+        hook.append((load.length_rate, load.hook(p)[2]))
+    rate, hz = np.array(hook).T
+    jump = max(np.max(np.abs(np.diff(rate[995:1010]))), np.max(np.abs(np.diff(rate[2495:2510]))))
+    if fade:
+        assert jump < 0.01, jump  # about 1 mm/s a step: the fade's own acceleration
+        assert np.ptp(hz[2000:2500]) < 0.1  # eased in: the hook held in the world
+        assert np.ptp(hz[3100:]) > 1.5  # eased out: riding the TCP's 2 m heave again
+    else:
+        assert jump >= 0.015, jump  # the drum's acceleration limit over one step: 2 m/s² × 0.01 s
+
+
 def test_in_waves_the_winch_follows_its_compensation_and_stays_in_its_limits():
     """Mode off, Hs 3 m beam sea: the wire follows the AHC's length (the hook's height target minus the TCP's)
     to centimetres, within the winch's length and speed limits; what the hook still does vertically is its swing."""

@@ -22,7 +22,7 @@ from app.control.tac import PidGains
 from app.engine.scene import CommandError
 from app.engine.tac_session import TacSession
 from app.models.registry import load_robot
-from app.scenarios.tac import SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
+from app.scenarios.tac import RESUME_TIME, SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
 from app.scenes import tac_kernels
 from app.scenes.tac import HeadServo
 from app.sim.head import motor_step
@@ -141,7 +141,8 @@ def test_a_new_sea_record_in_a_long_session_does_not_restart_the_scene(monkeypat
 def test_mode_changes_and_a_stop_keep_every_arm_within_its_speed(monkeypatch):
     """Compensation off drives the head to p_d^t through its servo (it jumped there), on again to the
     reference (it jumped back), the cooperative crane within its joints' speeds; a STOP holds, and after the
-    reset the head catches up with the reference at no more than 90°/s."""
+    reset the head catches up with the reference at no more than 90°/s (faded in over RESUME_TIME since H108:
+    it used to jump there at full speed)."""
     ses = TacSession()
     rec = Recorder(ses, monkeypatch)
     rec.run(5.0)
@@ -154,9 +155,9 @@ def test_mode_changes_and_a_stop_keep_every_arm_within_its_speed(monkeypatch):
     rec.run(1.0)
     k = rec.index()
     ses.set_tac_mode("tac")
-    rec.run(4.0)
+    rec.run(RESUME_TIME + 1.0)
     rec.check()
-    assert rec.arm_peak_deg_s(k, rec.index()) > 30.0  # the head did catch up after the stop
+    assert rec.arm_peak_deg_s(k, rec.index()) > 10.0  # the head did catch up after the stop
     assert max(rec.e_c[-100:]) < 0.1
 
 

@@ -192,26 +192,33 @@ def test_whole_simulation_both_ways(mode, mru_noise):
 
 @pytest.mark.slow
 def test_live_changes_in_small_chunks_both_ways():
-    """The engine's use: two steps a tick, modes switched live, E-STOP, the crane driving back to eq. (60)."""
-    sims = []
+    """The engine's use: two steps a tick, modes switched live, E-STOP, the crane driving back to eq. (60), and the
+    fades of H108 between them (resumed from a pose, released from cooperative and from tac)."""
+    sims, fades = [], set()
     for compiled in (True, False):
         sim = TacSimulator(TacScenario(hs=3.0, duration=1e5, mode="cooperative", seed=2), make_system(compiled))
         sim.use_kernels = compiled
         sims.append(sim)
     plan = [("cooperative", False, 400), ("tac", False, 300), ("tac", True, 50), ("off", False, 100)]
-    plan += [("cooperative", False, 200), ("cooperative", True, 30), ("cooperative", False, 100)]
+    plan += [("cooperative", False, 200), ("cooperative", True, 30), ("cooperative", False, 300)]
+    plan += [("off", False, 300), ("tac", False, 300), ("off", False, 300)]
     for mode, frozen, ticks in plan:
         for sim in sims:
             if sim.scenario.mode != mode:
                 sim.set_mode(mode)
         away = np.abs(sims[0].crane_servo.beta - BETA_EQ60).max()
         for _ in range(ticks):
+            f = sims[0]._fade
+            if f is not None:
+                fades.add(("release" if f[1] else "resume", mode, bool(f[4])))
             a, b = (sim.advance(2, frozen=frozen) for sim in sims)
             assert_same_chunks(a, b)
         close(sims[0].crane_servo.beta, sims[1].crane_servo.beta, 1e-9)
         close(sims[0].head_servo.alpha, sims[1].head_servo.alpha, 1e-9)
         if mode == "tac" and not frozen:  # the crane drove back towards eq. (60)
             assert np.abs(sims[0].crane_servo.beta - BETA_EQ60).max() < away
+    assert fades >= {("resume", "off", False), ("resume", "cooperative", False), ("resume", "tac", False)}
+    assert fades >= {("release", "off", True), ("release", "off", False)}, fades
 
 
 def test_use_kernels_reaches_every_part():

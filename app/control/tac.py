@@ -115,16 +115,20 @@ CRANE_LAW = Block(
 # ----------------------------------------------------------------------------- the crane's winch (issue 30, item 3)
 def _crane_ahc_reference(x, u, p, dt):
     """The NumPy reference of :data:`CRANE_AHC` (no kernel yet: one call per step from Python)."""
-    (z_target, has_target) = x
-    track, speed_cmd, L, (z_tcp, z_tcp_dot) = u
+    (z_target, has_target, L_ride) = x
+    track, speed_cmd, L, (z_tcp, z_tcp_dot), (g, g_dot) = u
     (speed,) = p
     s = min(max(float(speed_cmd), -speed), speed)
     if not track:  # the operator's speed pays out (positive) or hauls in; a later AHC holds the hook where it is then
-        return (z_target, False), (L + s * dt, s)
+        return (z_target, False, L_ride), (L + s * dt, s)
     if not has_target:  # hold the hook where it hangs now, in the world
-        z_target, has_target = z_tcp + L, True
+        z_target, has_target, L_ride = z_tcp + L, True, L
     z_target = z_target + s * dt  # paying out lowers the hook in the world (NED: z down)
-    return (z_target, has_target), (z_target - z_tcp, s - z_tcp_dot)
+    if g >= 1.0:
+        return (z_target, has_target, L_ride), (z_target - z_tcp, s - z_tcp_dot)
+    L_ride = L_ride + s * dt  # easing in (H108): from riding the TCP (L_ride) to held in the world
+    d = z_target - z_tcp - L_ride
+    return (z_target, has_target, L_ride), (L_ride + g * d, s - g * z_tcp_dot + g_dot * d)
 
 
 #: the crane winch's active heave compensation (the field's standard: the wire paid out and hauled in against
@@ -135,11 +139,16 @@ def _crane_ahc_reference(x, u, p, dt):
 #:     L_ref = z_h* − z_tcp,   L̇_ref = ż_h* − ż_tcp,   ż_h* = the operator's winch speed,
 #:
 #: the hook L below the TCP (small swing; the wire's angle is the anti-swing law's).  Off (``track`` False) the
-#: operator's speed drives the drum.  The drum that follows is the plant :data:`app.sim.motionlab.WINCH_DRUM`.
+#: operator's speed drives the drum.  Switched on or off under a hanging load it fades (H108: at once, the drum's
+#: step from riding the TCP's heave to holding the hook rang the wire to 1.44× the load's weight): with the gain g
+#: of the input ``ease`` = (g, ġ) going from 0 to 1 (or 1 to 0), L_ref = L_r + g (z_h* − z_tcp − L_r) and its
+#: rate, L_r the length riding the TCP (the length when tracking began or the fade out did, plus the operator's
+#: payout).  The drum that follows is
+#: the plant :data:`app.sim.motionlab.WINCH_DRUM`.
 CRANE_AHC = Block(
     "crane winch law (active heave compensation)",
-    state=("z_target", "has_target"),
-    inputs=("track", "speed_cmd", "L", "tcp_z"),
+    state=("z_target", "has_target", "L_ride"),
+    inputs=("track", "speed_cmd", "L", "tcp_z", "ease"),
     outputs=("L_ref", "L_dot_ref"),
     params=("speed",),
     reference=_crane_ahc_reference,

@@ -42,7 +42,7 @@ from app.net.snapshots import (
     TacSnapshot,
     WaveField,
 )
-from app.scenarios.tac import MODES, SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
+from app.scenarios.tac import MODES, RESUME_TIME, SEA_BLEND_PERIODS, SeaTransition, TacChunk, TacScenario, TacSimulator
 from app.scenes.crane_load import (
     SNAP_FACTOR,
     CraneLoad,
@@ -246,13 +246,14 @@ class TacSession(Scene):
         if mode != "cooperative" and self._moving_frame(self.frame):
             raise CommandError(f"mode {mode}: the {self.frame} frame follows a moving point; {FOLLOW_NEEDS_CRANE} "
                                "(choose the world frame first)")  # fmt: skip
+        fades = self.holding or (mode == "off") != (self.mode == "off")  # H108: the new references fade in
         self.sim.set_mode(mode)
         self.scenario = self.sim.scenario
         if mode != self.mode:
             self.input.disarm("compensation mode changed")  # a held stick must not move the TCP in the new mode
         self.mode = mode
         self.holding = False
-        self.note("info", f"compensation mode: {mode}")
+        self.note("info", f"compensation mode: {mode}" + (f" (fading in over {RESUME_TIME:g} s)" if fades else ""))
 
     @command
     def set_crane_antisway(self, on: bool) -> None:
@@ -529,7 +530,7 @@ class TacSession(Scene):
         self.target_limited = False
         # the winch: heave compensation while the head compensates; the stick's w pays out (positive) or hauls in
         drive = not frozen and inp.enabled and not self.estop_latched
-        self.load.ahc = self.mode != "off" and not frozen
+        self.load.ahc, self.load.stopped = self.mode != "off" and not frozen, self.estop_latched
         self.load.speed_command = WINCH_SPEED * float(inp.signal[3]) if drive and len(inp.signal) > 3 else 0.0
         if frozen or self.mode == "off" or not inp.enabled or self.estop_latched:
             return

@@ -46,6 +46,12 @@ from app.scenes.tac import CraneServo, HeadServo
 MODES = ("off", "tac", "cooperative")
 BETA_EQ60 = np.array([-math.pi / 2, math.pi / 4, -math.pi / 4])  # eq. (60)
 HOLD_RATE = 0.25  # rad/s: the head's arms return to α_d at this rate when the compensation goes off (assumed)
+#: s: a change of the servos' references eases in over this time (H108): a resumption (after an E-STOP, or
+#: compensation chosen in ``off``) from the pose the machine is in, a release (compensation switched off) from the
+#: compensating references to the hold.  At once, head and crane jumped onto the new references and snatched the
+#: hanging load (16x its weight resuming after a stop, 2.9x switching off at Hs 3 m).  Assumed: about a wave
+#: period, so the TCP's velocity changes by the vessel's over seconds, not at once.
+RESUME_TIME = 5.0
 SEA_BLEND_PERIODS = 2.0  # a live sea or vessel change fades the motions over this many peak periods
 
 
@@ -304,6 +310,10 @@ class TacSimulator:
         #: (H103: a step to α_d drove the motors at full speed, 5 m/s at the TCP, and snatched the hanging load)
         self._hold_ref = np.array(system.alpha_d, dtype=float)
         self._ahead: tuple[int, VesselState] | None = None
+        #: a change of references easing in (H108): [time since it began, release, α_f, β_f, from cooperative];
+        #: a resumption eases in from the pose α_f, β_f, a release from the compensating references; None: none
+        self._fade: list | None = None
+        self._was_frozen = False
 
     def continue_from(self, old: TacSimulator, blend: float) -> None:
         """Take over from ``old``, live (a sea or vessel change in the engine): its clock continues (this
@@ -323,6 +333,8 @@ class TacSimulator:
         self.p_d_n = np.array(old.p_d_n, dtype=float)  # where the operator has moved the TCP target
         self._started = old._started
         self._hold_ref = np.array(old._hold_ref, dtype=float)
+        self._fade = None if old._fade is None else list(old._fade)
+        self._was_frozen = old._was_frozen
         self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
         self.use_kernels = old.use_kernels
 
@@ -353,14 +365,48 @@ class TacSimulator:
 
     def set_mode(self, mode: str) -> None:
         """Switch the compensation mode live; the joints continue from where they are (the head servo restarts
-        bumpless there and reaches a far reference at its motors' speed limit)."""
+        bumpless there), and the new references fade in over :data:`RESUME_TIME` (H108): compensation chosen in
+        ``off`` from the pose the machine is in, ``off`` from the compensating references (tac and cooperative
+        between themselves need none: the head's reference already follows the crane's pose)."""
         if mode not in MODES:
             raise ScenarioError(f"mode must be one of {', '.join(MODES)}, got '{mode}'")
-        if mode == "off" and self.scenario.mode != "off":
-            self._hold_ref = np.array(self.head_servo.alpha, dtype=float)
+        old = self.scenario.mode
+        if mode == "off" and old != "off":
+            self._hold_ref = np.array(self.head_servo.alpha, dtype=float)  # H103: the hold from where the arms are
+            self._begin_fade(release=True, cooperative=old == "cooperative")  # H108: from the compensating references
+        elif old == "off" and mode != "off":
+            self._begin_fade()  # H108: the compensating references eased in from where head and crane are
         self.scenario = replace(self.scenario, mode=mode)
         self.head_servo.reset(self.head_servo.alpha)
         self._beta_c_prev = None
+
+    def _begin_fade(self, release: bool = False, cooperative: bool = False) -> None:
+        """Ease the servos' references in over :data:`RESUME_TIME` (H108): from the pose the machine is in now (a
+        resumption), or from the compensating references of the mode left (a release; ``cooperative``: the
+        crane's too)."""
+        if self._started:
+            pose = (np.array(self.head_servo.alpha, dtype=float), np.array(self.crane_servo.beta, dtype=float))
+            self._fade = [0.0, release, *pose, cooperative]
+
+    def _fade_gains(self, n: int) -> tuple[NDArray, NDArray, NDArray] | None:
+        """The ease-in's s and ṡ for the next ``n`` steps, and whether each still eases (None: no fade)."""
+        if self._fade is None:
+            return None
+        tau = (self._fade[0] + (1 + np.arange(n)) * self.scenario.dt) / RESUME_TIME
+        tc = np.clip(tau, 0.0, 1.0)
+        return tc**3 * (10.0 + tc * (6.0 * tc - 15.0)), 30.0 * (tc * (1.0 - tc)) ** 2 / RESUME_TIME, tau < 1.0
+
+    def _fade_on(self, n: int) -> None:
+        """The fade's clock after ``n`` steps; it ends once eased in."""
+        if self._fade is not None:
+            self._fade[0] += n * self.scenario.dt
+            if self._fade[0] >= RESUME_TIME - 1e-9:
+                self._fade = None
+
+    @property
+    def _releasing_crane(self) -> bool:
+        """Whether the crane still runs the cooperative law, released to β_d (cooperative switched off)."""
+        return self._fade is not None and self._fade[1] and self._fade[4]
 
     @property
     def done(self) -> bool:
@@ -399,24 +445,32 @@ class TacSimulator:
         if not self._started and n:
             first = self.vessel.state(np.array([self.k * sc.dt]))
             self._start(first)
+        if frozen:
+            self._fade, self._was_frozen = None, True
+        elif self._was_frozen and n:
+            self._was_frozen = False
+            self._begin_fade()  # H108: out of an E-STOP, from the frozen pose
         if self._use_kernels:
-            return self._advance_compiled(t, true, meas, frozen)
+            chunk = self._advance_compiled(t, true, meas, frozen)
+            self._fade_on(n)
+            return chunk
+        ease, fade = self._fade_gains(n), self._fade
         # crane
         crane = self.crane_servo
         if frozen:
             crane.beta_dot = np.zeros(3)
             beta = np.broadcast_to(crane.beta, (n, 3)).copy()
             beta_dot = np.zeros((n, 3))
-        elif sc.mode == "cooperative":
+        elif sc.mode == "cooperative" or self._releasing_crane:
             beta_c = sys_.crane_ik_tcp(self._target_b(meas.eta), self._beta0_hint)
             self._beta0_hint = float(beta_c[-1, 0])
             prev = beta_c[0] if self._beta_c_prev is None else self._beta_c_prev
             beta_c_dot = np.diff(np.vstack([prev[None], beta_c]), axis=0) / sc.dt
             self._beta_c_prev = beta_c[-1]
-            beta, beta_dot = self.crane_servo.run(self.beta_d, beta_c, beta_c_dot, sc.dt)
+            beta, beta_dot = self._crane_run(beta_c, beta_c_dot, ease)
         elif np.any(crane.beta != self.beta_d) or np.any(crane.beta_dot != 0):
             # after cooperative mode: the crane drives back to the configuration of eq. (60)
-            beta, beta_dot = crane.run(self.beta_d, np.broadcast_to(self.beta_d, (n, 3)), np.zeros((n, 3)), sc.dt)
+            beta, beta_dot = self._crane_run(np.broadcast_to(self.beta_d, (n, 3)), np.zeros((n, 3)), ease)
             if np.allclose(crane.beta, self.beta_d, atol=1e-6) and np.allclose(crane.beta_dot, 0, atol=1e-6):
                 crane.beta, crane.beta_dot = self.beta_d.copy(), np.zeros(3)
         else:
@@ -424,17 +478,25 @@ class TacSimulator:
             beta_dot = np.zeros((n, 3))
         # head
         ref = sys_.head_reference(meas.eta, meas.nu, beta, beta_dot, self.p_d_n)
+        alpha_ref, p_ref_t = ref.alpha_ref, ref.p_ref_t
         if frozen:  # E-STOP: the arms locked where they are
             alpha = np.broadcast_to(self.head_servo.alpha, (n, 3)).copy()
             u = alpha.copy()
             saturated = np.zeros(n, dtype=bool)
         elif sc.mode == "off":  # the servo holds the head at p_d^t
-            alpha, u = self.head_servo.run(np.broadcast_to(self._hold(n), (n, 3)), np.zeros((n, 3)), sc.dt)
+            hold, hold_dot = np.broadcast_to(self._hold(n), (n, 3)), np.zeros((n, 3))
+            if ease is not None and fade[1]:  # H108: released, from the compensating reference to the hold
+                hold, hold_dot = self._eased(ref.alpha_ref, ref.alpha_dot_ref, hold, hold_dot, ease)
+            elif ease is not None:  # H108: seen from α_f
+                hold, hold_dot = self._eased(fade[2], 0.0, hold, hold_dot, ease)
+            alpha, u = self.head_servo.run(hold, hold_dot, sc.dt)
             saturated = np.zeros(n, dtype=bool)
         else:
-            alpha, u = self.head_servo.run(ref.alpha_ref, ref.alpha_dot_ref, sc.dt)
+            alpha_dot_ref = ref.alpha_dot_ref
+            if ease is not None:  # H108: seen from α_f
+                alpha_ref, alpha_dot_ref = self._eased(fade[2], 0.0, alpha_ref, alpha_dot_ref, ease)
+            alpha, u = self.head_servo.run(alpha_ref, alpha_dot_ref, sc.dt)
             saturated = ref.saturated
-        alpha_ref, p_ref_t = ref.alpha_ref, ref.p_ref_t
         p_c_t = sys_.head.fk(alpha)
         p_c_n = sys_.tcp_n(true.eta, beta, p_c_t)
         # the uncompensated TCP: crane in its nominal configuration, head locked at p_d^t
@@ -442,7 +504,34 @@ class TacSimulator:
         e_c = np.linalg.norm(self.p_d_n - p_c_n, axis=1)  # eq. (61)
         e_s = np.linalg.norm(self.p_d_n - p_s_n, axis=1)
         self.k += n
+        self._fade_on(n)
         return TacChunk(t, true.eta, beta, p_ref_t, p_c_t, alpha_ref, alpha, u, p_c_n, p_s_n, e_c, e_s, saturated)
+
+    @staticmethod
+    def _eased(a, a_dot, b, b_dot, ease: tuple) -> tuple[NDArray, NDArray]:
+        """From the references a to b while a fade eases in (H108): a + s (b − a), its rate (1 − s) ȧ + s ḃ + ṡ (b −
+        a) (the compiled chunk's order of operations); b on the steps after it ended.  (n, 3) or (3,) each."""
+        s, s_dot, on = (x[:, None] for x in ease)
+        a, b = np.broadcast_to(a, np.shape(b)), np.asarray(b)
+        d = b - a
+        rate = (1.0 - s) * a_dot + s * b_dot + s_dot * d if np.any(a_dot) else s * b_dot + s_dot * d
+        return np.where(on, a + s * d, b), np.where(on, rate, b_dot)
+
+    def _crane_run(self, beta_c: NDArray, beta_c_dot: NDArray, ease: tuple | None) -> tuple[NDArray, NDArray]:
+        """The crane servo on β_d and β_c (n, 3); while a fade eases in, their references from β_f (a
+        resumption) or from the cooperative law's to β_d (a release)."""
+        crane, dt = self.crane_servo, self.scenario.dt
+        if ease is None:
+            return crane.run(self.beta_d, beta_c, beta_c_dot, dt)
+        n, f = beta_c.shape[0], self._fade
+        if f[1]:  # released: from the cooperative law's references to β_d
+            b_d = np.broadcast_to(self.beta_d, (n, 3))
+            b_c, b_c_dot = self._eased(beta_c, beta_c_dot, b_d, 0.0, ease)
+        else:  # resumed: from β_f
+            b_c, b_c_dot = self._eased(f[3], 0.0, beta_c, beta_c_dot, ease)
+            b_d, _ = self._eased(f[3], 0.0, np.broadcast_to(self.beta_d, (n, 3)), 0.0, ease)
+        out = [crane.run(b_d[k], b_c[k : k + 1], b_c_dot[k : k + 1], dt) for k in range(n)]
+        return np.vstack([b for b, _ in out]), np.vstack([v for _, v in out])
 
     def _hold(self, n: int) -> NDArray[np.float64]:
         """The head's hold reference in ``off`` for the next ``n`` steps: α_d, approached at :data:`HOLD_RATE`
@@ -473,7 +562,7 @@ class TacSimulator:
         if frozen:
             crane.beta_dot = np.zeros(3)
             crane_mode, beta_hold = tk.CRANE_HOLD, crane.beta
-        elif sc.mode == "cooperative":
+        elif sc.mode == "cooperative" or self._releasing_crane:
             crane_mode = tk.CRANE_COOPERATIVE
         elif np.any(crane.beta != self.beta_d) or np.any(crane.beta_dot != 0):
             crane_mode = tk.CRANE_RETURN  # after cooperative mode: back to the configuration of eq. (60)
@@ -489,7 +578,11 @@ class TacSimulator:
         f = c_array
         x = ((beta, beta_dot, beta_c_prev, self._beta0_hint, has_prev), (alpha, integral, u))
         inputs = (f(true.eta), f(meas.eta), f(meas.nu), meas is not true)
-        setpoints = (f(beta_hold), f(alpha_lock), self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t)
+        r = self._fade
+        fade = (
+            (0.0, 0.0, False, self._alpha_d, self.beta_d) if r is None else (r[0], RESUME_TIME, r[1], f(r[2]), f(r[3]))
+        )
+        setpoints = (f(beta_hold), f(alpha_lock), self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t, fade)
         kinematics = (sys_.crane.kernel_record, sys_.head.kernel_args, sys_.kernel_hull, sys_.kernel_elbow)
         p = ((crane_mode, head_mode, *setpoints), *kinematics, self._crane_args, *self._servo_args)
         out = tk.tac_chunk(x, inputs, p, float(sc.dt))

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from app.control.antisway import SWING_CONTROL, AntiSwing, AntiSwingDesign, SwingEkf
 from app.control.tac import CRANE_AHC
 from app.models.pendulum import G
+from app.scenes.tac_kernels import ease_in
 from app.sim.load import LOAD, LoadSpec, hanging, no_deck
 from app.sim.motionlab import WINCH_DRUM
 
@@ -48,6 +49,7 @@ class WinchSpec:
     speed: float = 1.5  # m/s
     accel: float = 2.0  # m/s²
     tau: float = 0.05  # s: the drum's servo
+    ahc_ease: float = 5.0  # s: heave compensation switched on under a hanging load eases in over this (H108; assumed)
 
 
 @dataclass
@@ -63,6 +65,7 @@ class CraneLoad:
     spec: WinchSpec = field(default_factory=WinchSpec)
     load_spec: LoadSpec = field(default_factory=LoadSpec)
     ahc: bool = True
+    stopped: bool = False  # an E-STOP: the heave compensation stops at once (no fade) and the drum brakes
     speed_command: float = 0.0
     use_kernels: bool | None = None
 
@@ -73,7 +76,10 @@ class CraneLoad:
         self._load_p = self.load_spec.record(G)
         self.state: tuple | None = None  # (r, v) of the load in {n}, from the first step on
         self.deck = no_deck()
-        self.law = (0.0, False)  # the hook's height target in {n}, whether set
+        self.law = (0.0, False, 0.0)  # the hook's height target in {n}, whether set, the length riding the TCP
+        #: the heave compensation's fade (H108): ((time since it was switched, the gain it goes to, the gain it started
+        #: from) or None, the gain of the last step: 1 tracking, 0 not)
+        self._ahc: tuple[tuple | None, float] = (None, 1.0 if self.ahc else 0.0)
         self._tcp: list[NDArray[np.float64]] = []  # the last three TCP positions
         self.tcp_v = np.zeros(3)
         self.tcp_a = np.zeros(3)
@@ -118,6 +124,32 @@ class CraneLoad:
     def static_tension(self) -> float:
         return self.load_spec.mass * G
 
+    def _ahc_gain(self, dt: float, first: bool) -> tuple[bool, tuple[float, float]]:
+        """Whether the heave compensation tracks this step, and its gain (g, ġ) (H108).  Switched on while the load
+        hangs (not at the first step) it eases in, g from where it was to 1 over ``spec.ahc_ease``
+        (:func:`app.scenes.tac_kernels.ease_in`); switched off it eases out the same way, from holding the hook in
+        the world to riding the TCP, and then stops tracking.  ``stopped`` (an E-STOP) ends it at once."""
+        T, (fade, g_last) = self.spec.ahc_ease, self._ahc
+        want = 1.0 if self.ahc and not self.stopped else 0.0
+        if self.stopped or T <= 0 or first:  # at once: a stop, no fade, or the first step (nothing swings yet)
+            self._ahc = (None, want)
+            return want == 1.0, (1.0, 0.0)
+        if want != g_last and (fade is None or fade[1] != want):
+            fade = (0.0, want, g_last)
+            if want == 0.0 and self.law[1]:
+                self.law = (self.law[0], True, self.length)  # from here the hook rides the TCP
+        if fade is None:
+            return g_last == 1.0, (1.0, 0.0)
+        t, target, g0 = fade
+        t += dt
+        if t >= T - 1e-9:
+            self._ahc = (None, target)
+            return target == 1.0, (1.0, 0.0)
+        e, e_dot = ease_in(t / T)
+        g = g0 + (target - g0) * float(e)
+        self._ahc = ((t, target, g0), g)
+        return True, (g, (target - g0) * float(e_dot) / T)
+
     def step(self, tcp_n: NDArray[np.float64], dt: float) -> None:
         """One step of ``dt`` with the TCP at ``tcp_n`` (in {n}) at its end: the winch law, the drum, the load."""
         p = np.asarray(tcp_n, dtype=float)
@@ -127,9 +159,11 @@ class CraneLoad:
             self.tcp_v = (self._tcp[-1] - self._tcp[-2]) / dt
         if len(self._tcp) == 3:
             self.tcp_a = (self._tcp[-1] - 2.0 * self._tcp[-2] + self._tcp[-3]) / (dt * dt)
-        if self.state is None:
+        first = self.state is None
+        if first:
             self.state = hanging(p, self.length, self.load_spec, G)
-        u = (self.ahc, self.speed_command, self.length, (float(p[2]), float(self.tcp_v[2])))
+        track, ease = self._ahc_gain(dt, first)
+        u = (track, self.speed_command, self.length, (float(p[2]), float(self.tcp_v[2])), ease)
         self.law, (L_ref, Ld_ref) = CRANE_AHC.step(self.law, u, (self.spec.speed,), dt, use_kernels=False)
         L0 = self.length
         self.drum, _ = WINCH_DRUM.step(

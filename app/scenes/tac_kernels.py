@@ -20,7 +20,9 @@ Records (every array C-contiguous float64; ``chain``, ``head``, ``hull`` and ``e
   angle to unwrap β_c from; whether β_c of the last step is set), servo the head servo's state;
   ``u`` = (η_true, η_meas, ν_meas (n, 6), noisy: whether the measured η differs from the true one);
   ``p`` = (modes, chain, head, hull, elbow, crane, pid, motors), modes = (crane mode, head mode, β_hold,
-  α_lock, α_d, β_d, p_d^n, p_d^t).
+  α_lock, α_d, β_d, p_d^n, p_d^t, fade), fade = (τ₀, T, release, α_f, β_f): a change of references easing in
+  (H108; T ≤ 0: none), τ₀ its time before the chunk's first step; a resumption (``release`` False) from the pose
+  α_f, β_f, a release (compensation switched off) from the compensating references.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ from app.sim.head_kernels import crane_joints, head_motors_block
 __all__ = [
     "ENABLED",
     "crane_servo",
+    "ease_in",
     "head_servo",
     "tac_chunk",
     "warm_up_steps",
@@ -54,6 +57,15 @@ __all__ = [
 
 CRANE_HOLD, CRANE_COOPERATIVE, CRANE_RETURN = 0, 1, 2  # crane modes of tac_chunk
 HEAD_LOCK, HEAD_SERVO, HEAD_HOLD = 0, 1, 2  # head modes of tac_chunk
+
+
+# ----------------------------------------------------------------------------- resumption (H108)
+@_jit
+def ease_in(tau):
+    """The resumption's gain s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ and ds/dτ = 30τ²(1 − τ)² for τ in [0, 1] (a quintic: from
+    rest to rest with no step in acceleration either)."""
+    t = min(max(tau, 0.0), 1.0)
+    return t * t * t * (10.0 + t * (6.0 * t - 15.0)), 30.0 * (t * (1.0 - t)) ** 2
 
 
 # ----------------------------------------------------------------------------- crane servo
@@ -127,12 +139,20 @@ def tac_chunk(x, u, p, dt):
     holding α_lock (HEAD_HOLD: compensation off) or the arms locked at α_lock (HEAD_LOCK: E-STOP); p_c^t by
     eqs. (17)–(25); e_c and e_s of eq. (61).  The crane (β, β̇, β_c of the last step) and head servo (α, ∫α̃,
     u) states are updated in place.
-    Returns (β, p_ref^t, p_c^t, α_ref, α, u, p_c^n, p_s^n (n, 3), e_c, e_s (n,), saturated (n,)).
+    While a resumption eases in (H108: after an E-STOP, or compensation chosen in ``off``), the servos run on
+    their references seen from the pose it starts from, r ← r_f + s (r − r_f) with s of :func:`ease_in`: the
+    head's α_ref (and its rate, + ṡ (α_ref − α_f)) or hold, and the crane law's β_d and β_c (β̇_c likewise).
+    While a release eases in (compensation switched off: HEAD_HOLD, and CRANE_COOPERATIVE from cooperative),
+    they run from the compensating references to the hold: α ← α_ref + s (α_lock − α_ref), β_c ← β_c + s (β_d −
+    β_c).
+    Returns (β, p_ref^t, p_c^t, α_ref (the one followed), α, u, p_c^n, p_s^n (n, 3), e_c, e_s (n,),
+    saturated (n,)).
     """
     (beta, beta_dot, beta_c_prev, beta0_hint, has_prev), servo = x
     eta_true, eta_meas, nu_meas, noisy = u
     modes, chain, head, hull, elbow, crane, pid, motors = p
-    crane_mode, head_mode, beta_hold, alpha_lock, alpha_d, beta_d, p_d_n, p_d_t = modes
+    crane_mode, head_mode, beta_hold, alpha_lock, alpha_d, beta_d, p_d_n, p_d_t, fade = modes
+    r_t0, r_T, release, alpha_f, beta_f = fade
     alpha = servo[0]
     n = eta_true.shape[0]
     out_beta, p_ref_t, p_c_t = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
@@ -145,7 +165,14 @@ def tac_chunk(x, u, p, dt):
     c, d = np.empty((3, 3)), np.empty((3, 3))
     o_t_n, p_cmd, v_ref_t, alpha_dot_ref = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     target, beta_c, beta_c_dot, zero, cmd = np.empty(3), np.empty(3), np.zeros(3), np.zeros(3), np.empty(3)
-    p_tcp = np.empty(3)
+    p_tcp, b_d, b_c, b_c_dot, a_ref, a_dot = (
+        np.empty(3),
+        np.empty(3),
+        np.empty(3),
+        np.empty(3),
+        np.empty(3),
+        np.empty(3),
+    )
     geometry, tip, work, servo_p = (head, hull), (o, R, v, w), (c, d), (pid, motors)
     # the uncompensated TCP in {b}: crane at β_d, head locked at p_d^t
     o_s, R_s = np.empty(3), np.empty((3, 3))
@@ -163,6 +190,13 @@ def tac_chunk(x, u, p, dt):
     for k in range(n):
         em, et = eta_meas[k], eta_true[k]
         _rot_zyx(em[3], em[4], em[5], R_n_b)  # R_b^n of the measured η
+        easing, s, s_dot = False, 1.0, 0.0
+        if r_T > 0.0:
+            tau = (r_t0 + (k + 1) * dt) / r_T
+            if tau < 1.0:
+                easing = True
+                s, s_dot = ease_in(tau)
+                s_dot /= r_T
         # crane
         if crane_mode == CRANE_HOLD:
             out_beta[k] = beta_hold
@@ -181,6 +215,22 @@ def tac_chunk(x, u, p, dt):
                 for j in range(3):
                     beta_c_dot[j] = (beta_c[j] - beta_c_prev[j]) / dt
                 beta_c_prev[:] = beta_c
+            else:
+                beta_c[:] = beta_d
+                beta_c_dot[:] = 0.0
+            if easing and release:  # from the cooperative law's references to β_d
+                for j in range(3):
+                    b_d[j] = beta_d[j]
+                    b_c[j] = beta_c[j] + s * (beta_d[j] - beta_c[j])
+                    b_c_dot[j] = (1.0 - s) * beta_c_dot[j] + s_dot * (beta_d[j] - beta_c[j])
+                _crane_step((beta, beta_dot), (b_d, b_c, b_c_dot), crane, dt, cmd)
+            elif easing:  # the law's references seen from β_f
+                for j in range(3):
+                    b_d[j] = beta_f[j] + s * (beta_d[j] - beta_f[j])
+                    b_c[j] = beta_f[j] + s * (beta_c[j] - beta_f[j])
+                    b_c_dot[j] = s * beta_c_dot[j] + s_dot * (beta_c[j] - beta_f[j])
+                _crane_step((beta, beta_dot), (b_d, b_c, b_c_dot), crane, dt, cmd)
+            elif crane_mode == CRANE_COOPERATIVE:
                 _crane_step((beta, beta_dot), (beta_d, beta_c, beta_c_dot), crane, dt, cmd)
             else:
                 _crane_step((beta, beta_dot), (beta_d, beta_d, zero), crane, dt, cmd)
@@ -194,8 +244,25 @@ def tac_chunk(x, u, p, dt):
             out_alpha[k], out_u[k] = alpha_lock, alpha_lock
         else:
             if head_mode == HEAD_SERVO:
-                _servo_step(servo, (alpha_ref[k], alpha_dot_ref), servo_p, dt)
+                if easing:  # the reference seen from α_f
+                    for j in range(3):
+                        a_ref[j] = alpha_f[j] + s * (alpha_ref[k, j] - alpha_f[j])
+                        a_dot[j] = s * alpha_dot_ref[j] + s_dot * (alpha_ref[k, j] - alpha_f[j])
+                    alpha_ref[k] = a_ref
+                    _servo_step(servo, (a_ref, a_dot), servo_p, dt)
+                else:
+                    _servo_step(servo, (alpha_ref[k], alpha_dot_ref), servo_p, dt)
                 saturated[k] = limited
+            elif easing and release:  # HEAD_HOLD, released: from the compensating reference to the hold
+                for j in range(3):
+                    a_ref[j] = alpha_ref[k, j] + s * (alpha_lock[j] - alpha_ref[k, j])
+                    a_dot[j] = (1.0 - s) * alpha_dot_ref[j] + s_dot * (alpha_lock[j] - alpha_ref[k, j])
+                _servo_step(servo, (a_ref, a_dot), servo_p, dt)
+            elif easing:  # HEAD_HOLD, easing in: the hold seen from α_f
+                for j in range(3):
+                    a_ref[j] = alpha_f[j] + s * (alpha_lock[j] - alpha_f[j])
+                    a_dot[j] = s_dot * (alpha_lock[j] - alpha_f[j])
+                _servo_step(servo, (a_ref, a_dot), servo_p, dt)
             else:  # HEAD_HOLD: the servo holds α_lock
                 _servo_step(servo, (alpha_lock, zero), servo_p, dt)
             out_alpha[k], out_u[k] = alpha, servo[2]
@@ -237,7 +304,7 @@ def warm_up_steps() -> list:
 
     def chunk(crane_mode: int, head_mode: int) -> None:
         x = ((z3.copy(), z3.copy(), z3.copy(), 0.0, False), servo())
-        modes = (crane_mode, head_mode, z3, z3, z3, z3, o3, o3)
+        modes = (crane_mode, head_mode, z3, z3, z3, z3, o3, o3, (0.0, 0.0, False, z3, z3))
         tac_chunk(x, (rows6, rows6, rows6, False), (modes, chain, head, hull, elbow, crane, *servo_p), 0.01)
 
     return [
