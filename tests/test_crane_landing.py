@@ -91,8 +91,8 @@ def test_the_snapshot_draws_the_platform():
 def test_compensation_switched_off_returns_the_head_slowly_and_does_not_snatch_the_load():
     """H103: switched off, the head's arms went back to α_d at their motors' full speed (a step of metres per
     second at the TCP; with the load on its elastic wire a snap load: 2.3× in calm water, 4.9× at Hs 1 m, 10.8× in
-    the scripted session at Hs 3 m).  Now they return at HOLD_RATE: 1.13× in calm water.  What is left at the
-    switch is the vessel's own velocity, which the TCP takes up at once (1.95× at Hs 1 m; the alarm says so)."""
+    the scripted session at Hs 3 m).  Now they return at HOLD_RATE: 1.13× in calm water.  The vessel's own velocity,
+    which the TCP took up at once (1.95× at Hs 1 m), fades in since H108 (tests/test_crane_target.py)."""
     from app.scenarios.tac import HOLD_RATE
 
     ses = TacSession(scenario=TacScenario(duration=1e5, hs=0.01, mode="tac"))
