@@ -1,4 +1,5 @@
-"""``bosun sim tac|tac-sweep|vvmc|antisway|transfer``: the papers' simulations and the compensated lift."""
+"""``bosun sim tac|tac-sweep|vvmc|antisway|transfer|predict``: the papers' simulations, the compensated lift and
+the motion prediction."""
 
 from __future__ import annotations
 
@@ -252,6 +253,42 @@ def cmd_sim_transfer(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_sim_predict(args: argparse.Namespace) -> int:
+    """The crane tip's motion predicted from the MRU's signal alone (issue 31, item 1)."""
+    import time
+
+    from app.analysis.predict_report import save_predict
+    from app.scenarios.predict import HORIZONS, PredictScenario, PredictScenarioError, simulate_predict
+
+    with _as_usage_error(PredictScenarioError):
+        sc = PredictScenario(**_fields(args, "hs", "tp", "heading", "spectrum", "seed", "duration", "rao"))
+    out = _make_out(args, f"predict_{sc.spectrum}_hs{sc.hs:g}_seed{sc.seed}")
+    bar = _progress_bar("sim predict", unit="s")
+    t0 = time.perf_counter()
+    res = simulate_predict(sc, progress=lambda t, n: bar(t, n))
+    wall = time.perf_counter() - t0
+    doc = _write_run(args, out, lambda tmp: save_predict(res, tmp, wall))
+    if args.json:
+        return 0
+    print(
+        f"crane tip predicted from the MRU ({sc.spectrum}, Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
+        f"seed {sc.seed}; scored {sc.duration - sc.warmup:g} s after a {sc.warmup:g} s warm-up)"
+    )
+    rms = doc["rms_true_m"]
+
+    def cell(h: float, a: str) -> str:
+        nr = doc["nrmse"][f"{h:g}"][a]
+        return "still" if nr is None else f"{nr:.3f} / {doc['coverage'][f'{h:g}'][a]:.0%}"
+
+    rows = [[f"{h:g} s", *(cell(h, a) for a in ("x", "y", "z"))] for h in HORIZONS]
+    head = ["horizon", *(f"{a} ({rms[a]:.3g} m rms)" for a in ("x", "y", "z"))]
+    print("  nrmse / ±2σ band coverage")
+    for line in _table(head, rows).splitlines():
+        print("  " + line)
+    print(f"  files in {out}")
+    return 0
+
+
 def _print_transfer(sc, doc: dict, out) -> None:
     where = "EM1500 (Motion-Lab)" if sc.scene == "lab" else f"the {sc.target}"
 
@@ -419,6 +456,18 @@ def register(sub) -> None:
         b.add_argument("--landings", type=int, default=None, metavar="N", help="also N seeded landings (statistics)")
         add_json(b)
         add_out(b, "transfer_TARGET_MODE_hsHS_seedSEED")
+    predict_help = "the crane tip's motion predicted 1-20 s ahead from the MRU alone (issue 31)"
+    with command(sims, "predict", cmd_sim_predict, help=predict_help) as b:
+        add_hs(b, 3.0)
+        add_tp(b, 9.0)
+        b.add_argument("--heading", type=_finite_float, default=90.0, help="wave heading [deg] (default 90: beam)")
+        add_spectrum(b)
+        add_wave_seed(b)
+        b.add_argument(
+            "--duration", type=_positive_float, default=1200.0, help="simulated time [s] (1200; scored after 300)"
+        )
+        add_vessel(b, "the vessel: supply (default), supply-closed-form, or an RAO file")
+        add_out(b, "predict_SPECTRUM_hsHS_seedSEED")
     antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"
     with command(sims, "antisway", cmd_sim_antisway, help=antisway_help) as b:
         add_hs(b, 2.0)

@@ -1,0 +1,162 @@
+"""``bosun sim predict`` (issue 31, item 1): the crane tip's motion predicted from the motion sensor's signal alone.
+
+The crane-head scene's vessel in its sea (:class:`app.scenarios.tac.TacSimulator`'s vessel and MRU: the RAOs
+make the truth, nothing of them goes into the prediction); the crane tip is the uncompensated TCP (the crane at
+eq. 60's configuration, the head locked at p_d^t), a point fixed in {b}.  Its position in {n} computed from the
+MRU's measured η (rigid-body kinematics, what a real system does with its MRU) is fed every ``spec.dt`` to
+:class:`app.control.predict.MotionPredictor`; each prediction at the horizons is scored against the true
+position that far ahead.
+
+Figures, per axis of {n} (x north, y east, z down) and horizon τ:
+
+* ``nrmse`` = rms(ŷ(t + τ | t) − y(t + τ)) / rms(y − mean y), over the scored span (from ``warmup`` on);
+* ``coverage``: the share of those predictions whose error lies within the ±2σ band given with them;
+
+both None for an axis that moves less than :data:`STILL` (a beam sea moves the tip along x by tenths of a
+millimetre: the ratio would be the MRU's noise over nothing).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from app.control.predict import MotionPredictor, PredictorSpec
+from app.errors import BosunError
+from app.geometry import euler_zyx_to_matrix
+from app.marine.waves import SPECTRA, check_sea
+from app.scenarios.tac import TacScenario, TacSimulator
+
+__all__ = ["HORIZONS", "PredictResult", "PredictScenario", "simulate_predict", "tip_in_body"]
+
+HORIZONS = (1.0, 2.0, 5.0, 10.0, 20.0)  # s: the issue's
+AXES = ("x", "y", "z")
+STILL = 0.01  # m rms: an axis moving less is reported as still (no nrmse): beam seas barely move the tip along x
+
+
+class PredictScenarioError(BosunError):
+    """A bad ``sim predict`` setting."""
+
+
+@dataclass(frozen=True)
+class PredictScenario:
+    hs: float = 3.0
+    tp: float = 9.0
+    heading: float = 90.0  # deg: 90 beam
+    spectrum: str = "jonswap"
+    seed: int = 1
+    duration: float = 1200.0  # s
+    warmup: float = 300.0  # s: scored from here on (the first fit at 150 s, the window full at 300 s)
+    rao: str | None = None  # the vessel (None: the default)
+    mru_noise: float = 1.0  # the MRU's noise scale (1 = 2 cm, 0.05°)
+    spec: PredictorSpec = field(default_factory=PredictorSpec)
+
+    def __post_init__(self) -> None:
+        try:
+            check_sea(self.hs, self.tp)
+        except BosunError as exc:
+            raise PredictScenarioError(str(exc)) from None
+        checks = [
+            (self.spectrum in SPECTRA, f"spectrum must be one of {', '.join(SPECTRA)}, got '{self.spectrum}'"),
+            (math.isfinite(self.heading), "heading must be a number"),
+            (math.isfinite(self.warmup) and self.warmup >= 0, f"warm-up must not be negative, got {self.warmup}"),
+            (
+                math.isfinite(self.duration) and self.duration >= self.warmup + 2 * max(HORIZONS),
+                f"duration must be at least the warm-up + 40 s ({self.warmup + 40:g} s), got {self.duration}",
+            ),
+            (self.duration <= 86400.0, f"duration must be at most a day, got {self.duration}"),
+            (math.isfinite(self.mru_noise) and self.mru_noise >= 0, "MRU noise scale must not be negative"),
+        ]
+        for ok, text in checks:
+            if not ok:
+                raise PredictScenarioError(text)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class PredictResult:
+    scenario: PredictScenario
+    t: NDArray[np.float64]  # (n,) s
+    true: NDArray[np.float64]  # (n, 3) the tip in {n}
+    measured: NDArray[np.float64]  # (n, 3) from the MRU
+    predicted: NDArray[np.float64]  # (n, len(HORIZONS), 3): made at t for t + τ (NaN before the first fit)
+    sigma: NDArray[np.float64]  # likewise, the band's σ given with each
+    summary: dict = field(default_factory=dict)
+
+
+def tip_in_body(sim: TacSimulator) -> NDArray[np.float64]:
+    """The crane tip in {b}: the uncompensated TCP, the crane at eq. (60), the head at p_d^t."""
+    o_t_b, R_b_t = sim.system.crane_pose(sim.beta_d)
+    return o_t_b + R_b_t @ sim.system.p_d_t
+
+
+def simulate_predict(
+    sc: PredictScenario,
+    progress: Callable[[float, float], None] | None = None,
+    cancel: Callable[[], bool] | None = None,
+) -> PredictResult:
+    """Run the predictor over the scenario (module text)."""
+    sp = sc.spec
+    tac = TacScenario(
+        hs=sc.hs, tp=sc.tp, heading=sc.heading, spectrum=sc.spectrum, seed=sc.seed, duration=sc.duration + 60.0,
+        rao=sc.rao, mru_noise=sc.mru_noise,
+    )  # fmt: skip
+    sim = TacSimulator(tac)
+    r_b = tip_in_body(sim)
+    n = round(sc.duration / sp.dt)
+    t = (1 + np.arange(n)) * sp.dt
+    true_state = sim.vessel.state(t)
+    meas_state = sim.mru.measure(true_state) if sim.mru is not None else true_state
+
+    def tip(eta: NDArray[np.float64]) -> NDArray[np.float64]:
+        return eta[:, :3] + np.einsum("nij,j->ni", euler_zyx_to_matrix(eta[:, 3:6]), r_b)
+
+    true, measured = tip(true_state.eta), tip(meas_state.eta)
+    pred = MotionPredictor(sp, channels=3)
+    h = np.asarray(HORIZONS)
+    P = np.full((n, h.size, 3), np.nan)
+    S = np.full((n, h.size, 3), np.nan)
+    for k in range(n):
+        if cancel is not None and cancel():
+            break
+        pred.update(measured[k])
+        P[k], S[k] = pred.predict(h)
+        if progress is not None and k % 1000 == 0:
+            progress(float(t[k]), sc.duration)
+    res = PredictResult(sc, t, true, measured, P, S)
+    res.summary = summarise(res)
+    return res
+
+
+def summarise(res: PredictResult) -> dict:
+    """The figures of the module text, per horizon and axis."""
+    sc, dt = res.scenario, res.scenario.spec.dt
+    n = res.t.size
+    k0 = round(sc.warmup / dt)
+    out: dict = {"horizons_s": list(HORIZONS), "nrmse": {}, "coverage": {}, "scored_s": {}}
+    for i, tau in enumerate(HORIZONS):
+        lag = round(tau / dt)
+        made = np.arange(k0, n - lag)
+        err = res.predicted[made, i] - res.true[made + lag]
+        ok = np.all(np.isfinite(err), axis=1)
+        e = err[ok]
+        ref = res.true[k0:] - res.true[k0:].mean(axis=0)
+        rms_true = np.sqrt(np.mean(ref**2, axis=0))
+        nr = np.sqrt(np.mean(e**2, axis=0)) / np.where(rms_true > 0, rms_true, np.nan)
+        sig = res.sigma[made, i][ok]
+        banded = np.isfinite(sig)
+        inside = (np.abs(e) <= 2 * sig) & banded
+        cov = inside.sum(axis=0) / np.maximum(banded.sum(axis=0), 1)
+        key = f"{tau:g}"
+        moves = rms_true >= STILL  # an axis that barely moves: its error is the sensor's noise, no ratio is meaningful
+        out["nrmse"][key] = {a: round(float(v), 4) if m else None for a, v, m in zip(AXES, nr, moves, strict=True)}
+        out["coverage"][key] = {a: round(float(v), 4) if m else None for a, v, m in zip(AXES, cov, moves, strict=True)}
+        out["scored_s"][key] = round(float(ok.sum() * dt), 1)
+    out["rms_true_m"] = {a: round(float(v), 4) for a, v in zip(AXES, np.sqrt(np.mean(ref**2, axis=0)), strict=True)}
+    return out
