@@ -33,7 +33,7 @@ from app.errors import BosunError
 # the options of sim tac and tac-sweep that are TacScenario's fields by the same name (hs and mode aside)
 _TAC_FIELDS = (
     "tp", "heading", "spectrum", "spreading", "duration", "dt", "seed", "rao", "roll_damping", "crane_share",
-    "crane_kp", "mru_noise",
+    "crane_kp", "mru_noise", "delay", "predict",
 )  # fmt: skip
 # those of sim vvmc, VvmcScenario's fields
 _VVMC_FIELDS = (
@@ -170,7 +170,8 @@ def cmd_sim_tac(args: argparse.Namespace) -> int:
         return 0
     print(
         f"TAC {sc.mode}: Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, {sc.duration:g} s "
-        f"(vessel {vessel_label(sc.rao)})"
+        + (f"(delay {sc.delay:g} s{', predicted' if sc.predict else ''}) " if sc.delay or sc.predict else "")
+        + f"(vessel {vessel_label(sc.rao)})"
     )
     print(
         f"  e_c rms {doc['rms_e_c_m']:.3f} m (max {doc['max_e_c_m']:.3f})   e_s rms {doc['rms_e_s_m']:.3f} m "
@@ -261,8 +262,12 @@ def cmd_sim_predict(args: argparse.Namespace) -> int:
     from app.scenarios.predict import HORIZONS, PredictScenario, PredictScenarioError, simulate_predict
 
     with _as_usage_error(PredictScenarioError):
-        sc = PredictScenario(**_fields(args, "hs", "tp", "heading", "spectrum", "seed", "duration", "rao"))
-    out = _make_out(args, f"predict_{sc.spectrum}_hs{sc.hs:g}_seed{sc.seed}")
+        sc = PredictScenario(
+            **_fields(args, "hs", "tp", "heading", "spectrum", "seed", "duration", "rao", "target", "target_heading"),
+            target_rao=args.target_vessel,
+        )
+    rel = "_relative" if sc.target == "vessel" else ""
+    out = _make_out(args, f"predict{rel}_{sc.spectrum}_hs{sc.hs:g}_seed{sc.seed}")
     bar = _progress_bar("sim predict", unit="s")
     t0 = time.perf_counter()
     res = simulate_predict(sc, progress=lambda t, n: bar(t, n))
@@ -270,8 +275,9 @@ def cmd_sim_predict(args: argparse.Namespace) -> int:
     doc = _write_run(args, out, lambda tmp: save_predict(res, tmp, wall))
     if args.json:
         return 0
+    what = "crane tip over the second vessel's deck" if sc.target == "vessel" else "crane tip"
     print(
-        f"crane tip predicted from the MRU ({sc.spectrum}, Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
+        f"{what} predicted from the MRU ({sc.spectrum}, Hs {sc.hs:g} m, Tp {sc.tp:g} s, heading {sc.heading:g}°, "
         f"seed {sc.seed}; scored {sc.duration - sc.warmup:g} s after a {sc.warmup:g} s warm-up)"
     )
     rms = doc["rms_true_m"]
@@ -363,6 +369,18 @@ def register(sub) -> None:
         )
         p.add_argument(
             "--mru-noise", type=_finite_float, default=0.0, help="MRU noise scale, 1 = 2 cm / 0.05° (default 0: none)"
+        )
+        p.add_argument(
+            "--delay",
+            type=_finite_float,
+            default=0.0,
+            metavar="S",
+            help="measurement-to-actuation delay [s]: the controller sees the MRU's η, ν this old (default 0)",
+        )
+        p.add_argument(
+            "--predict",
+            action="store_true",
+            help="feed the motion predicted --delay ahead from the MRU (an online AR model, issue 31) instead",
         )
 
     # the crane head's two take the sea's options, then --json, then --out
@@ -467,7 +485,19 @@ def register(sub) -> None:
             "--duration", type=_positive_float, default=1200.0, help="simulated time [s] (1200; scored after 300)"
         )
         add_vessel(b, "the vessel: supply (default), supply-closed-form, or an RAO file")
-        add_out(b, "predict_SPECTRUM_hsHS_seedSEED")
+        b.add_argument(
+            "--target",
+            choices=["none", "vessel"],
+            default="none",
+            help="vessel: the tip's motion relative to a second vessel's landing spot (default none: the tip's own)",
+        )
+        b.add_argument(
+            "--target-vessel", default=None, metavar="NAME|FILE", help="--target vessel: its RAOs (default: --vessel's)"
+        )
+        b.add_argument(
+            "--target-heading", type=_finite_float, default=60.0, help="wave heading to the second vessel [deg] (60)"
+        )
+        add_out(b, "predict[_relative]_SPECTRUM_hsHS_seedSEED")
     antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"
     with command(sims, "antisway", cmd_sim_antisway, help=antisway_help) as b:
         add_hs(b, 2.0)

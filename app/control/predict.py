@@ -29,7 +29,6 @@ The AR(30) at 2 Hz gave 0.46 at 5 s and 0.14 at 1 s on the same record.
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +53,7 @@ class PredictorSpec:
     window: float = 300.0  # s: the fit's window
     refit: float = 10.0  # s: fitted again this often
     max_horizon: float = 20.0  # s
+    ridge: float = 1e-6  # the fit's Tikhonov term, a share of the regressors' mean square (ar_fit)
 
     def __post_init__(self) -> None:
         checks = [
@@ -77,12 +77,18 @@ class PredictorSpec:
         return self.dt * self.decimate
 
 
-def ar_fit(y: NDArray[np.float64], p: int) -> tuple[NDArray[np.float64], float]:
-    """AR(p) coefficients a (p,) by least squares on the de-meaned ``y`` (covariance method), and σ_e² (the
-    residuals' mean square)."""
+def ar_fit(y: NDArray[np.float64], p: int, ridge: float = 0.0) -> tuple[NDArray[np.float64], float]:
+    """AR(p) coefficients a (p,) by least squares on the de-meaned ``y`` (covariance method), with a ridge λ =
+    ``ridge`` × mean(diag XᵀX) (Tikhonov: a smooth, noiseless record makes XᵀX nearly singular and the plain fit's
+    coefficients huge), and σ_e² (the residuals' mean square)."""
     n = y.size
     X = np.lib.stride_tricks.sliding_window_view(y, p)[:-1, ::-1]  # rows (y_{k−1}, …, y_{k−p}) for k = p … n−1
-    a, *_ = np.linalg.lstsq(X, y[p:], rcond=None)
+    X = np.ascontiguousarray(X)
+    A = X.T @ X
+    lam = ridge * float(np.trace(A)) / p
+    # the normal equations, made definite by the ridge; without one the minimum-norm least squares (a record of a
+    # few pure tones is rank-deficient)
+    a = np.linalg.solve(A + lam * np.eye(p), X.T @ y[p:]) if lam > 0 else np.linalg.lstsq(X, y[p:], rcond=None)[0]
     e = y[p:] - X @ a
     return a, float(e @ e) / max(1, n - 2 * p)
 
@@ -114,14 +120,18 @@ class MotionPredictor:
     def __init__(self, spec: PredictorSpec | None = None, channels: int = 1) -> None:
         self.spec = sp = spec or PredictorSpec()
         self.m = int(channels)
-        self._buf: deque = deque(maxlen=round(sp.window / sp.dt))  # the samples, averaged over Δ
-        self._raw: deque = deque(maxlen=sp.decimate)  # the last Δ's samples
+        self._L = round(sp.window / sp.dt)
+        self._ring = np.zeros((self._L, self.m))  # the samples averaged over Δ, the newest at _ring[k % L]
+        self._raw = np.zeros((sp.decimate, self.m))  # the last Δ's samples, likewise
         self.delay = 0.5 * (sp.decimate - 1) * sp.dt  # the average's delay (a linear-phase FIR's: exact)
         self.k = 0
         self._h = math.ceil(sp.max_horizon / sp.step) + 1  # model steps predicted
         self._next_fit = 0.5 * sp.window
-        self._fits: list[tuple | None] = [None] * self.m  # (μ, G, σ(h) on the grid) per channel
-        self.coefficients: list[NDArray[np.float64] | None] = [None] * self.m
+        # per channel, stacked: μ (m,), G (m, H, p), σ on the grid (m, H); None before the first fit
+        self._fit_rec: tuple | None = None
+        self.coefficients: NDArray[np.float64] | None = None  # (m, p)
+        self._grid = np.arange(-1, self._h + 1) * sp.step  # −Δ, 0, Δ, … on which the cubic runs
+        self._lags = np.arange(sp.order + 2) * sp.decimate  # the history's ages in samples: newest first
 
     @property
     def t(self) -> float:
@@ -129,30 +139,41 @@ class MotionPredictor:
 
     @property
     def ready(self) -> bool:
-        return all(f is not None for f in self._fits)
+        return self._fit_rec is not None
 
     def update(self, y: ArrayLike) -> None:
         """Take the next sample (``channels`` values, ``spec.dt`` after the last)."""
         y = np.asarray(y, dtype=float).reshape(self.m)
         if not np.all(np.isfinite(y)):
             raise PredictError("predictor: a sample is not finite")
+        sp = self.spec
         self.k += 1
-        self._raw.append(y)
-        self._buf.append(np.mean(self._raw, axis=0))
+        self._raw[self.k % sp.decimate] = y
+        n = min(self.k, sp.decimate)
+        self._ring[self.k % self._L] = self._raw.sum(axis=0) / n if n == sp.decimate else self._mean_raw(n)
         if self.t >= self._next_fit - 1e-9:
-            self._next_fit += self.spec.refit
+            self._next_fit += sp.refit
             self._fit()
+
+    def _mean_raw(self, n: int) -> NDArray[np.float64]:
+        """The average of the first ``n`` < decimate samples (the start)."""
+        return self._raw[[(self.k - i) % self.spec.decimate for i in range(n)]].mean(axis=0)
 
     def _fit(self) -> None:
         sp = self.spec
-        Y = np.array(self._buf)[::-1][:: sp.decimate][::-1]  # the grid ending at the newest sample
+        n = min(self.k, self._L)
+        ages = np.arange(0, n, sp.decimate)[::-1]  # the grid ending at the newest sample, oldest first
+        Y = self._ring[(self.k - ages) % self._L]
+        mu = Y.mean(axis=0)
+        G = np.empty((self.m, self._h, sp.order))
+        sigma = np.empty((self.m, self._h))
+        coef = np.empty((self.m, sp.order))
         for j in range(self.m):
-            mu = float(Y[:, j].mean())
-            a, var_e = ar_fit(Y[:, j] - mu, sp.order)
-            G, psi = ar_rows(a, self._h)
-            sigma = np.sqrt(var_e * np.cumsum(psi**2))  # σ(h) for h = 1 … H model steps (Box et al. eq. 5.1.16)
-            self._fits[j] = (mu, G, sigma)
-            self.coefficients[j] = a
+            a, var_e = ar_fit(Y[:, j] - mu[j], sp.order, sp.ridge)
+            G[j], psi = ar_rows(a, self._h)
+            sigma[j] = np.sqrt(var_e * np.cumsum(psi**2))  # σ(h), h = 1 … H model steps (Box et al. eq. 5.1.16)
+            coef[j] = a
+        self._fit_rec, self.coefficients = (mu, G, np.hstack([np.zeros((self.m, 1)), sigma])), coef
 
     def predict(self, horizons: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The prediction at ``horizons`` [s] ahead of the last sample, (len, channels), and its σ (same shape).
@@ -162,28 +183,32 @@ class MotionPredictor:
         if np.any(h < 0) or np.any(h > sp.max_horizon + 1e-9):
             raise PredictError(f"predictor: horizons must be in [0, {sp.max_horizon:g}] s")
         h = h + self.delay  # the averaged signal lags the signal by the delay
-        out, sig = np.full((h.size, self.m), np.nan), np.full((h.size, self.m), np.nan)
-        if not self.ready:
-            return out, sig
-        d, p = sp.decimate, sp.order
-        buf = self._buf
-        n = len(buf)
-        idx = [n - 1 - i * d for i in range(p + 2)]  # newest first: y_k, y_{k−Δ}, …
-        hist = np.array([buf[i] for i in idx])  # (p + 2, m)
-        grid = np.arange(-1, self._h + 1) * sp.step  # −Δ, 0, Δ, … on which the cubic runs
-        for j, (mu, G, sigma) in enumerate(self._fits):
-            x = hist[:p, j] - mu
-            path = np.r_[hist[1, j], hist[0, j], mu + G @ x]
-            out[:, j] = _cubic(grid, path, h)
-            sig[:, j] = np.interp(h, grid[1:], np.r_[0.0, sigma])
+        if self._fit_rec is None:
+            out = np.full((h.size, self.m), np.nan)
+            return out, out.copy()
+        mu, G, sigma = self._fit_rec
+        hist = self._ring[(self.k - self._lags) % self._L]  # (p + 2, m), newest first
+        x = hist[: sp.order] - mu
+        path = np.empty((self._grid.size, self.m))
+        path[0], path[1] = hist[1], hist[0]
+        path[2:] = mu + np.einsum("mhp,pm->hm", G, x)
+        out = _cubic(self._grid, path, h)
+        step = self._grid[1] - self._grid[0]
+        s = np.clip(h / step, 0.0, self._h)
+        i = np.minimum(np.floor(s).astype(int), self._h - 1)
+        u = (s - i)[:, None]
+        sig = (1 - u) * sigma[:, i].T + u * sigma[:, i + 1].T  # linear between the grid's σ
         return out, sig
 
 
 def _cubic(grid: NDArray[np.float64], y: NDArray[np.float64], h: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Catmull–Rom cubic through the evenly spaced points (grid, y), at h (within grid[1] … grid[-2])."""
+    """Catmull–Rom cubic through the evenly spaced points (grid, y), at h (within grid[1] … grid[-2]); y (len(grid),)
+    or (len(grid), m) for m curves at once."""
     step = grid[1] - grid[0]
     s = (h - grid[0]) / step
     i = np.clip(np.floor(s).astype(int), 1, grid.size - 3)
     u = s - i
+    if y.ndim == 2:
+        u = u[:, None]
     p0, p1, p2, p3 = y[i - 1], y[i], y[i + 1], y[i + 2]
     return p1 + 0.5 * u * (p2 - p0 + u * (2 * p0 - 5 * p1 + 4 * p2 - p3 + u * (3 * (p1 - p2) + p3 - p0)))

@@ -10,6 +10,10 @@ position that far ahead.
 Figures, per axis of {n} (x north, y east, z down) and horizon τ:
 
 * ``nrmse`` = rms(ŷ(t + τ | t) − y(t + τ)) / rms(y − mean y), over the scored span (from ``warmup`` on);
+With ``target = "vessel"`` the signal is the tip's position relative to a second vessel's landing spot (its own RAOs
+and heading in the same sea, :class:`app.scenes.target_deck.TargetVessel`): what a lift onto a moving deck must
+foresee.  Its own motion is taken as measured without noise (a second MRU's link is issue 30's H105).
+
 * ``coverage``: the share of those predictions whose error lies within the ±2σ band given with them;
 
 both None for an axis that moves less than :data:`STILL` (a beam sea moves the tip along x by tenths of a
@@ -35,6 +39,9 @@ __all__ = ["HORIZONS", "PredictResult", "PredictScenario", "simulate_predict", "
 
 HORIZONS = (1.0, 2.0, 5.0, 10.0, 20.0)  # s: the issue's
 AXES = ("x", "y", "z")
+#: the second vessel's landing spot from the tip in calm water (m, {n}): sim transfer's, 10 m across and 12 m
+#: below (the hook 10 m down, 2 m above the deck)
+TARGET_OFFSET = np.array([10.0, 0.0, 12.0])
 STILL = 0.01  # m rms: an axis moving less is reported as still (no nrmse): beam seas barely move the tip along x
 
 
@@ -53,6 +60,9 @@ class PredictScenario:
     warmup: float = 300.0  # s: scored from here on (the first fit at 150 s, the window full at 300 s)
     rao: str | None = None  # the vessel (None: the default)
     mru_noise: float = 1.0  # the MRU's noise scale (1 = 2 cm, 0.05°)
+    target: str = "none"  # "vessel": predict the tip's motion relative to a second vessel's landing spot
+    target_rao: str | None = None  # the second vessel (None: the crane's vessel's RAOs)
+    target_heading: float = 60.0  # deg: the waves' heading to the second vessel (sim transfer's default)
     spec: PredictorSpec = field(default_factory=PredictorSpec)
 
     def __post_init__(self) -> None:
@@ -70,6 +80,8 @@ class PredictScenario:
             ),
             (self.duration <= 86400.0, f"duration must be at most a day, got {self.duration}"),
             (math.isfinite(self.mru_noise) and self.mru_noise >= 0, "MRU noise scale must not be negative"),
+            (self.target in ("none", "vessel"), f"target must be none or vessel, got '{self.target}'"),
+            (math.isfinite(self.target_heading), "target heading must be a number"),
         ]
         for ok, text in checks:
             if not ok:
@@ -118,6 +130,12 @@ def simulate_predict(
         return eta[:, :3] + np.einsum("nij,j->ni", euler_zyx_to_matrix(eta[:, 3:6]), r_b)
 
     true, measured = tip(true_state.eta), tip(meas_state.eta)
+    if sc.target == "vessel":  # the relative motion: the tip over the second vessel's landing spot
+        from app.scenes.target_deck import TargetVessel
+
+        place = tip(np.zeros((1, 6)))[0] + TARGET_OFFSET
+        spots = TargetVessel(sc.target_rao, sc.target_heading, sim.vessel.sea, sc.heading, place).spots(t)
+        true, measured = true - spots, measured - spots  # its own motion sensor's noise aside
     pred = MotionPredictor(sp, channels=3)
     h = np.asarray(HORIZONS)
     P = np.full((n, h.size, 3), np.nan)

@@ -52,6 +52,7 @@ HOLD_RATE = 0.25  # rad/s: the head's arms return to α_d at this rate when the 
 #: hanging load (16x its weight resuming after a stop, 2.9x switching off at Hs 3 m).  Assumed: about a wave
 #: period, so the TCP's velocity changes by the vessel's over seconds, not at once.
 RESUME_TIME = 5.0
+PREDICT_DT = 0.1  # s: the motion predictor's sample time (app.control.predict.PredictorSpec.dt)
 SEA_BLEND_PERIODS = 2.0  # a live sea or vessel change fades the motions over this many peak periods
 
 
@@ -77,6 +78,8 @@ class TacScenario:
     crane_share: float = 0.3  # chosen from a share × k_p sweep at Hs 4.5–5 m (README)
     crane_kp: float = 1.0
     mru_noise: float = 0.0  # scale of the MRU noise (1 = 2 cm, 0.05°, 2 cm/s, 0.1°/s)
+    delay: float = 0.0  # s: the measurement-to-actuation delay (issue 31, item 2): the controller sees η, ν this old
+    predict: bool = False  # feed the motion predicted ``delay`` ahead (app.control.predict) instead of the delayed
     n_freq: int = 200
     crane: str = "offshore_crane"
     head: str = "tac_delta_head"
@@ -96,6 +99,11 @@ class TacScenario:
             (0.0 <= self.crane_share <= 1.0, f"crane share must be in [0, 1], got {self.crane_share}"),
             (self.crane_kp >= 0, "crane k_p must not be negative"),
             (self.mru_noise >= 0, "MRU noise scale must not be negative"),
+            (math.isfinite(self.delay) and 0.0 <= self.delay <= 2.0, f"delay must be in [0, 2] s, got {self.delay}"),
+            (
+                not self.predict or abs(round(PREDICT_DT / self.dt) * self.dt - PREDICT_DT) < 1e-9,
+                f"--predict needs a time step that divides {PREDICT_DT:g} s, got {self.dt}",
+            ),
             (self.n_freq >= 1, "n_freq must be at least 1"),
         ]
         for ok, msg in checks:
@@ -314,6 +322,8 @@ class TacSimulator:
         #: a resumption eases in from the pose α_f, β_f, a release from the compensating references; None: none
         self._fade: list | None = None
         self._was_frozen = False
+        self._predictor = None  # the motion predictor, with scenario.predict (issue 31, item 2)
+        self._foresight: tuple | None = None  # (the step it was made at, its prediction for the next steps)
 
     def continue_from(self, old: TacSimulator, blend: float) -> None:
         """Take over from ``old``, live (a sea or vessel change in the engine): its clock continues (this
@@ -337,6 +347,7 @@ class TacSimulator:
         self._was_frozen = old._was_frozen
         self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
         self.use_kernels = old.use_kernels
+        self._predictor, self._foresight = old._predictor, old._foresight  # the motion predictor runs on
 
     def move_target(self, dp_n: NDArray[np.float64], limit: NDArray[np.float64]) -> bool:
         """Move the TCP's target p_d^n by ``dp_n`` in {n} (the operator's stick, issue 30, item 2), its offset from
@@ -441,7 +452,7 @@ class TacSimulator:
         if isinstance(self.vessel, SeaTransition) and n:
             self.vessel = self.vessel.settled(float(t[0]))
         true = self._vessel_state(t)
-        meas = self.mru.measure(true) if self.mru is not None else true
+        meas = self._measure(t, true)
         if not self._started and n:
             first = self.vessel.state(np.array([self.k * sc.dt]))
             self._start(first)
@@ -540,6 +551,50 @@ class TacSimulator:
         d = self.system.alpha_d - self._hold_ref
         self._hold_ref = self._hold_ref + np.clip(d, -step, step)
         return self._hold_ref
+
+    def _measure(self, t: NDArray[np.float64], true: VesselState) -> VesselState:
+        """What the controller sees at the times ``t``: the MRU's η, ν of ``scenario.delay`` ago (issue 31, item 2:
+        the sensor-to-actuation delay of real equipment), or with ``predict`` the motion predicted that far ahead
+        from them (:class:`app.control.predict.MotionPredictor`, fed every :data:`PREDICT_DT` with η and ν)."""
+        sc = self.scenario
+        if sc.delay <= 0 and not sc.predict:
+            return self.mru.measure(true) if self.mru is not None else true
+        seen = self.vessel.state(t - sc.delay) if sc.delay > 0 else true
+        meas = self.mru.measure(seen) if self.mru is not None else seen
+        meas = VesselState(t, meas.eta, meas.nu, meas.nu_dot)
+        return self._foresee(meas) if sc.predict else meas
+
+    def _foresee(self, meas: VesselState) -> VesselState:
+        """The delayed measurement ``meas`` (at this chunk's steps) replaced by the motion predicted ``delay`` ahead:
+        each sample on the predictor's grid is fed, and the steps until the next one use the prediction at delay +
+        their age.  The predictor has run on the sensor's last 300 s when the run starts (a real one runs all the
+        time; its own noise draws, so the run's MRU noise is the same as without prediction)."""
+        sc = self.scenario
+        every = round(PREDICT_DT / sc.dt)
+        if self._predictor is None:
+            from app.control.predict import MotionPredictor, PredictorSpec
+
+            spec = PredictorSpec(dt=PREDICT_DT)
+            self._predictor = MotionPredictor(spec, channels=12)
+            th = (np.arange(-round(spec.window / PREDICT_DT), 0) * PREDICT_DT) + self.k * sc.dt
+            past = self.vessel.state(th - sc.delay)
+            if self.mru is not None:
+                m = self.mru
+                past = MRU(np.random.default_rng(sc.seed + 2), m.noise_eta, m.noise_nu, m.noise_nu_dot).measure(past)
+            for row in np.hstack([past.eta, past.nu]):
+                self._predictor.update(row)
+            self._foresight = None
+        pred = self._predictor
+        eta, nu = meas.eta.copy(), meas.nu.copy()
+        for i in range(meas.t.size):
+            k = self.k + 1 + i  # the step's number
+            if k % every == 0:
+                pred.update(np.r_[meas.eta[i], meas.nu[i]])
+                self._foresight = (k, pred.predict(sc.delay + np.arange(every) * sc.dt)[0]) if pred.ready else None
+            f = self._foresight
+            if f is not None and 0 <= k - f[0] < every:
+                eta[i], nu[i] = f[1][k - f[0], :6], f[1][k - f[0], 6:]
+        return VesselState(meas.t, eta, nu, meas.nu_dot)
 
     def _vessel_state(self, t: NDArray[np.float64]) -> VesselState:
         """The vessel's motion at the next steps ``t``: computed now, or cut from the look-ahead block."""

@@ -77,6 +77,12 @@ class TargetVessel:
         cache[t] = out
         return out
 
+    def spots(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The landing spot in the world at the times ``t`` (n,), (n, 3): :meth:`pose`'s point, vectorised."""
+        eta = self.motion.state(np.asarray(t, dtype=float)).eta
+        R = self.R_n_b_yaw @ euler_zyx_to_matrix(eta[:, 3:6])
+        return self.origin + eta[:, :3] @ self.R_n_b_yaw.T + R @ self.deck_b
+
     def _eta(self, t: float) -> NDArray[np.float64]:
         """The vessel's motion at t (a VesselMotion's, or a sea transition's: anything with eta_derivatives)."""
         at = getattr(self.motion, "at", None)
