@@ -14,6 +14,7 @@ mode, frame) are refused with a clear message.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
@@ -261,6 +262,25 @@ class TacSession(Scene):
         TCP's target while the head (and crane) compensate; off, the offset returns to zero along the law."""
         self.antisway = bool(on)
         self.note("info", f"load anti-swing {'on' if on else 'off'}")
+
+    @command
+    def set_tac_delay(self, delay: float, predict: bool = False) -> None:
+        """The measurement-to-actuation delay (issue 31, item 2): the controller sees the MRU's η, ν ``delay`` s late,
+        or with ``predict`` the motion predicted that far ahead from them (the predictor starts on the sensor's last
+        300 s).  The delay is the equipment's: it is set while the compensation is off (the references would
+        change at once under a compensating head and crane; switched on again, they fade in from where the machine
+        is, H108)."""
+        delay = float(delay)
+        if not (math.isfinite(delay) and 0.0 <= delay <= 2.0):
+            raise CommandError(f"delay must be in [0, 2] s, got {delay}")
+        if self.mode != "off":
+            raise CommandError("the delay is set while the compensation is off: choose off first, then the mode again")
+        sim = self.sim
+        sim.scenario = replace(sim.scenario, delay=delay, predict=bool(predict))
+        self.scenario = sim.scenario
+        if not predict:
+            sim._predictor = sim._foresight = None  # a later prediction starts again on the sensor's past
+        self.note("info", f"delay {delay:g} s" + (", the motion predicted that far ahead" if predict else ""))
 
     @command
     def set_frame(self, frame: str) -> None:
@@ -630,6 +650,8 @@ class TacSession(Scene):
             frame=self.frame,
             target_age=round(self._target_age(), 3) if self.vessel_deck is not None else None,
             target_lost=self.target_lost,
+            delay=self.scenario.delay,
+            predict=self.scenario.predict,
             sample=TacSample(**self.last) if self.last else None,
             scene=self._scene() if self.last else None,
         )

@@ -290,6 +290,15 @@ class SetCraneAntisway(Message):
     on: bool = spec("bool")
 
 
+@scene_command("set_tac_delay")
+class SetTacDelay(Message):
+    """Crane-head scene (issue 31): the measurement-to-actuation delay [s] (the controller sees the MRU this late),
+    and whether the motion predicted that far ahead from the MRU is fed instead."""
+
+    delay: float = spec("float", 2.0)
+    predict: bool = spec("bool")
+
+
 @scene_command("set_crane_target")
 class SetCraneTarget(Message):
     """Crane-head scene (issue 30): the deck the load is landed on, the fixed platform or a second vessel's."""

@@ -267,6 +267,8 @@ class TacSnapshot(Snapshot):
     frame: str = "world"  # the stick's frame: world, or target (following the target deck)
     target_age: float | None = None  # the second vessel's motion data age [s] (None: a fixed platform)
     target_lost: bool = False  # its data older than the engine's limit: the TCP holds in the world
+    delay: float = 0.0  # s: the measurement-to-actuation delay (issue 31: set_tac_delay)
+    predict: bool = False  # the motion predicted ``delay`` ahead fed instead of the late measurement
     sample: TacSample | None = None
     scene: TacScenePoints | None = None
 

@@ -322,6 +322,7 @@ class TacSimulator:
         #: a resumption eases in from the pose α_f, β_f, a release from the compensating references; None: none
         self._fade: list | None = None
         self._was_frozen = False
+        self._alpha_rate = np.zeros(3)  # the arms' rate at the end of the last chunk (a resumption starts from it)
         self._predictor = None  # the motion predictor, with scenario.predict (issue 31, item 2)
         self._foresight: tuple | None = None  # (the step it was made at, its prediction for the next steps)
 
@@ -344,6 +345,7 @@ class TacSimulator:
         self._started = old._started
         self._hold_ref = np.array(old._hold_ref, dtype=float)
         self._fade = None if old._fade is None else list(old._fade)
+        self._alpha_rate = old._alpha_rate.copy()
         self._was_frozen = old._was_frozen
         self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
         self.use_kernels = old.use_kernels
@@ -397,7 +399,15 @@ class TacSimulator:
         crane's too)."""
         if self._started:
             pose = (np.array(self.head_servo.alpha, dtype=float), np.array(self.crane_servo.beta, dtype=float))
-            self._fade = [0.0, release, *pose, cooperative]
+            self._fade = [0.0, release, *pose, cooperative, self._alpha_rate.copy()]
+
+    def _resume_from(self, n: int) -> tuple[NDArray, NDArray]:
+        """Where the resumption starts from at the next ``n`` steps, and its rate (n, 3) each: the pose α_f going on
+        at the arms' rate when it began, dying away (:func:`app.scenes.tac_kernels.resume_start`)."""
+        f, tk = self._fade, tac_kernels
+        t = f[0] + (1 + np.arange(n)) * self.scenario.dt
+        e = np.exp(-t / tk.RESUME_DRIFT)[:, None]
+        return f[2] + f[5] * tk.RESUME_DRIFT * (1.0 - e), f[5] * e
 
     def _fade_gains(self, n: int) -> tuple[NDArray, NDArray, NDArray] | None:
         """The ease-in's s and ṡ for the next ``n`` steps, and whether each still eases (None: no fade)."""
@@ -462,10 +472,13 @@ class TacSimulator:
             self._was_frozen = False
             self._begin_fade()  # H108: out of an E-STOP, from the frozen pose
         if self._use_kernels:
+            before = np.array(self.head_servo.alpha, dtype=float)
             chunk = self._advance_compiled(t, true, meas, frozen)
             self._fade_on(n)
+            self._note_rate(chunk.alpha, before)
             return chunk
         ease, fade = self._fade_gains(n), self._fade
+        alpha_before = np.array(self.head_servo.alpha, dtype=float)
         # crane
         crane = self.crane_servo
         if frozen:
@@ -499,13 +512,13 @@ class TacSimulator:
             if ease is not None and fade[1]:  # H108: released, from the compensating reference to the hold
                 hold, hold_dot = self._eased(ref.alpha_ref, ref.alpha_dot_ref, hold, hold_dot, ease)
             elif ease is not None:  # H108: seen from α_f
-                hold, hold_dot = self._eased(fade[2], 0.0, hold, hold_dot, ease)
+                hold, hold_dot = self._eased(*self._resume_from(n), hold, hold_dot, ease)
             alpha, u = self.head_servo.run(hold, hold_dot, sc.dt)
             saturated = np.zeros(n, dtype=bool)
         else:
             alpha_dot_ref = ref.alpha_dot_ref
-            if ease is not None:  # H108: seen from α_f
-                alpha_ref, alpha_dot_ref = self._eased(fade[2], 0.0, alpha_ref, alpha_dot_ref, ease)
+            if ease is not None and not fade[1]:  # H108: seen from α_f
+                alpha_ref, alpha_dot_ref = self._eased(*self._resume_from(n), alpha_ref, alpha_dot_ref, ease)
             alpha, u = self.head_servo.run(alpha_ref, alpha_dot_ref, sc.dt)
             saturated = ref.saturated
         p_c_t = sys_.head.fk(alpha)
@@ -516,7 +529,14 @@ class TacSimulator:
         e_s = np.linalg.norm(self.p_d_n - p_s_n, axis=1)
         self.k += n
         self._fade_on(n)
+        self._note_rate(alpha, alpha_before)
         return TacChunk(t, true.eta, beta, p_ref_t, p_c_t, alpha_ref, alpha, u, p_c_n, p_s_n, e_c, e_s, saturated)
+
+    def _note_rate(self, alpha: NDArray, before: NDArray) -> None:
+        """The arms' rate at the end of a chunk (α (n, 3) after its steps, ``before`` them)."""
+        if alpha.shape[0]:
+            prev = alpha[-2] if alpha.shape[0] >= 2 else before
+            self._alpha_rate = (alpha[-1] - prev) / self.scenario.dt
 
     @staticmethod
     def _eased(a, a_dot, b, b_dot, ease: tuple) -> tuple[NDArray, NDArray]:
@@ -576,7 +596,8 @@ class TacSimulator:
 
             spec = PredictorSpec(dt=PREDICT_DT)
             self._predictor = MotionPredictor(spec, channels=12)
-            th = (np.arange(-round(spec.window / PREDICT_DT), 0) * PREDICT_DT) + self.k * sc.dt
+            last = (self.k // every) * every * sc.dt  # the last grid point: the feed goes on from the next one
+            th = last + np.arange(1 - round(spec.window / PREDICT_DT), 1) * PREDICT_DT
             past = self.vessel.state(th - sc.delay)
             if self.mru is not None:
                 m = self.mru
@@ -635,7 +656,9 @@ class TacSimulator:
         inputs = (f(true.eta), f(meas.eta), f(meas.nu), meas is not true)
         r = self._fade
         fade = (
-            (0.0, 0.0, False, self._alpha_d, self.beta_d) if r is None else (r[0], RESUME_TIME, r[1], f(r[2]), f(r[3]))
+            (0.0, 0.0, False, self._alpha_d, self.beta_d, self._alpha_d)
+            if r is None
+            else (r[0], RESUME_TIME, r[1], f(r[2]), f(r[3]), f(r[5]))
         )
         setpoints = (f(beta_hold), f(alpha_lock), self._alpha_d, self.beta_d, self.p_d_n, self._p_d_t, fade)
         kinematics = (sys_.crane.kernel_record, sys_.head.kernel_args, sys_.kernel_hull, sys_.kernel_elbow)

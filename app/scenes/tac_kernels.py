@@ -20,9 +20,10 @@ Records (every array C-contiguous float64; ``chain``, ``head``, ``hull`` and ``e
   angle to unwrap β_c from; whether β_c of the last step is set), servo the head servo's state;
   ``u`` = (η_true, η_meas, ν_meas (n, 6), noisy: whether the measured η differs from the true one);
   ``p`` = (modes, chain, head, hull, elbow, crane, pid, motors), modes = (crane mode, head mode, β_hold,
-  α_lock, α_d, β_d, p_d^n, p_d^t, fade), fade = (τ₀, T, release, α_f, β_f): a change of references easing in
-  (H108; T ≤ 0: none), τ₀ its time before the chunk's first step; a resumption (``release`` False) from the pose
-  α_f, β_f, a release (compensation switched off) from the compensating references.
+  α_lock, α_d, β_d, p_d^n, p_d^t, fade), fade = (τ₀, T, release, α_f, β_f, α̇_f): a change of references easing
+  in (H108; T ≤ 0: none), τ₀ its time before the chunk's first step; a resumption (``release`` False) from the
+  pose α_f, β_f and the arms' rate α̇_f (:func:`resume_start`), a release (compensation switched off) from the
+  compensating references.
 """
 
 from __future__ import annotations
@@ -66,6 +67,22 @@ def ease_in(tau):
     rest to rest with no step in acceleration either)."""
     t = min(max(tau, 0.0), 1.0)
     return t * t * t * (10.0 + t * (6.0 * t - 15.0)), 30.0 * (t * (1.0 - t)) ** 2
+
+
+#: s: a resumption that begins while the arms move (a fade interrupted: off chosen and the mode again within
+#: RESUME_TIME) starts from them going on at their rate, which dies away over this time (H108)
+RESUME_DRIFT = 0.5
+
+
+@_jit
+def resume_start(alpha_f, alpha_f_dot, t, out, out_dot):
+    """Where a resumption starts from ``t`` s after it began, into ``out`` and its rate into ``out_dot``: the pose
+    α_f going on at its rate α̇_f, which dies away, α_f + α̇_f τ (1 − e^{−t/τ}), τ = :data:`RESUME_DRIFT` (the
+    arms' velocity is continuous at the start; from rest, simply α_f)."""
+    e = math.exp(-t / RESUME_DRIFT)
+    for j in range(3):
+        out[j] = alpha_f[j] + alpha_f_dot[j] * RESUME_DRIFT * (1.0 - e)
+        out_dot[j] = alpha_f_dot[j] * e
 
 
 # ----------------------------------------------------------------------------- crane servo
@@ -152,7 +169,8 @@ def tac_chunk(x, u, p, dt):
     eta_true, eta_meas, nu_meas, noisy = u
     modes, chain, head, hull, elbow, crane, pid, motors = p
     crane_mode, head_mode, beta_hold, alpha_lock, alpha_d, beta_d, p_d_n, p_d_t, fade = modes
-    r_t0, r_T, release, alpha_f, beta_f = fade
+    r_t0, r_T, release, alpha_f, beta_f, alpha_f_dot = fade
+    a_f, a_f_dot = np.empty(3), np.empty(3)
     alpha = servo[0]
     n = eta_true.shape[0]
     out_beta, p_ref_t, p_c_t = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
@@ -197,6 +215,8 @@ def tac_chunk(x, u, p, dt):
                 easing = True
                 s, s_dot = ease_in(tau)
                 s_dot /= r_T
+                if not release:
+                    resume_start(alpha_f, alpha_f_dot, r_t0 + (k + 1) * dt, a_f, a_f_dot)
         # crane
         if crane_mode == CRANE_HOLD:
             out_beta[k] = beta_hold
@@ -244,10 +264,10 @@ def tac_chunk(x, u, p, dt):
             out_alpha[k], out_u[k] = alpha_lock, alpha_lock
         else:
             if head_mode == HEAD_SERVO:
-                if easing:  # the reference seen from α_f
+                if easing and not release:  # the reference seen from α_f
                     for j in range(3):
-                        a_ref[j] = alpha_f[j] + s * (alpha_ref[k, j] - alpha_f[j])
-                        a_dot[j] = s * alpha_dot_ref[j] + s_dot * (alpha_ref[k, j] - alpha_f[j])
+                        a_ref[j] = a_f[j] + s * (alpha_ref[k, j] - a_f[j])
+                        a_dot[j] = (1.0 - s) * a_f_dot[j] + s * alpha_dot_ref[j] + s_dot * (alpha_ref[k, j] - a_f[j])
                     alpha_ref[k] = a_ref
                     _servo_step(servo, (a_ref, a_dot), servo_p, dt)
                 else:
@@ -260,8 +280,8 @@ def tac_chunk(x, u, p, dt):
                 _servo_step(servo, (a_ref, a_dot), servo_p, dt)
             elif easing:  # HEAD_HOLD, easing in: the hold seen from α_f
                 for j in range(3):
-                    a_ref[j] = alpha_f[j] + s * (alpha_lock[j] - alpha_f[j])
-                    a_dot[j] = s_dot * (alpha_lock[j] - alpha_f[j])
+                    a_ref[j] = a_f[j] + s * (alpha_lock[j] - a_f[j])
+                    a_dot[j] = (1.0 - s) * a_f_dot[j] + s_dot * (alpha_lock[j] - a_f[j])
                 _servo_step(servo, (a_ref, a_dot), servo_p, dt)
             else:  # HEAD_HOLD: the servo holds α_lock
                 _servo_step(servo, (alpha_lock, zero), servo_p, dt)
@@ -304,7 +324,7 @@ def warm_up_steps() -> list:
 
     def chunk(crane_mode: int, head_mode: int) -> None:
         x = ((z3.copy(), z3.copy(), z3.copy(), 0.0, False), servo())
-        modes = (crane_mode, head_mode, z3, z3, z3, z3, o3, o3, (0.0, 0.0, False, z3, z3))
+        modes = (crane_mode, head_mode, z3, z3, z3, z3, o3, o3, (0.0, 0.0, False, z3, z3, z3))
         tac_chunk(x, (rows6, rows6, rows6, False), (modes, chain, head, hull, elbow, crane, *servo_p), 0.01)
 
     return [
