@@ -28,9 +28,9 @@ law stepped onto it); ``engine_tac`` and ``engine_tac_neutral`` got ``snap.targe
 H105; their 153 other arrays unchanged).  Both were recorded again on 2026-11-29 (safety H108): the switch to off
 at 8.2 s now fades the head's, crane's and winch's references from the compensating ones to the hold over 5 s,
 so from the sample at 8.4 s the head's, crane's and load's arrays differ and are the record's before it, and the
-slack-wire and snap-load alarms that switch raised are gone (their arrays with them).  And once more (issue 31): the snapshot
-carries the delay and whether the prediction is fed (``snap.delay``, ``snap.predict``: two arrays added, nothing
-else changed).
+slack-wire and snap-load alarms that switch raised are gone (their arrays with them).  And once more (issue
+31): the snapshot carries the delay and whether the prediction is fed (``snap.delay``, ``snap.predict``: two
+arrays added, nothing else changed).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):
