@@ -193,3 +193,21 @@ def test_the_crane_head_engine_takes_a_delay_and_the_prediction():
     assert max(tension) < 1.5, max(tension)
     with pytest.raises(CommandError, match=r"delay must be in \[0, 2\] s"):
         rig.s.set_tac_delay(5.0)
+
+
+def test_the_compiled_path_is_the_prediction_and_priming_is_feeding():
+    """``path`` (compiled, the engines' per-tick call) equals ``predict``'s first output; ``prime`` (the past at
+    once, one fit at its end) predicts as feeding the same samples one by one and fitting at the same instant."""
+    rng = np.random.default_rng(31_3)
+    t = np.arange(1, 3501) * 0.1
+    Y = np.column_stack([np.sin(0.7 * t), np.cos(0.9 * t + 1.0)]) + 0.01 * rng.standard_normal((t.size, 2))
+    a = MotionPredictor(PredictorSpec(), channels=2)
+    for y in Y:
+        a.update(y)
+    h = np.array([0.0, 0.2, 0.27, 1.0, 5.0, 19.9])
+    np.testing.assert_allclose(a.path(h), a.predict(h)[0], rtol=0, atol=1e-12)
+    b = MotionPredictor(PredictorSpec(), channels=2)
+    b.prime(Y)
+    a._fit()  # the fed one fitted at its last sample too
+    np.testing.assert_allclose(b.predict(h)[0], a.predict(h)[0], rtol=0, atol=1e-12)
+    assert b._next_fit > b.t

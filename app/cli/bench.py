@@ -90,23 +90,35 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_bench_sim(args: argparse.Namespace) -> int:
     from app.bench.sim_speed import engine_speed
 
-    cases = [(k, m) for k in args.kinds for m in ((False, True) if k == "lab" else (False,))]
-    rows = [engine_speed(kind, seconds=args.seconds, motion=motion) for kind, motion in cases]
+    cases = [(k, m, False) for k in args.kinds for m in ((False, True) if k == "lab" else (False,))]
+    cases += [("tac", False, True)] if "tac" in args.kinds else []
+    rows = [engine_speed(kind, seconds=args.seconds, motion=motion, predict=pr) for kind, motion, pr in cases]
     if args.json:
         _print_bench_json("sim", {"results": rows})
         return 0
     print(f"bosun bench sim: engine plants ticked back to back at their default rate, {args.seconds:g} s simulated")
     print(_machine_line())
-    labels = {("lab", False): "lab (as it starts)", ("lab", True): "lab (VVMC in waves)", ("tac", False): "crane head"}
+    labels = {
+        ("lab", False, False): "lab (as it starts)",
+        ("lab", True, False): "lab (VVMC in waves)",
+        ("tac", False, False): "crane head",
+        ("tac", False, True): "crane head, 0.2 s delay predicted",
+    }
+
+    def predictor(r: dict) -> str:
+        c = r.get("predictor_ms")
+        return "-" if c is None else f"{c['p50']:.3f} / {c['p99']:.3f} / {c['max']:.1f}"
+
     print(
         _table(
-            ["engine", "ticks", "wall [s]", "× real time"],
+            ["engine", "ticks", "wall [s]", "× real time", "predictor per tick p50 / p99 / max [ms]"],
             [
                 [
-                    labels[(r["kind"], r["motion"])],
+                    labels[(r["kind"], r["motion"], r["predict"])],
                     str(r["ticks"]),
                     f"{r['wall_s']:.2f}",
                     f"{r['speed_x_realtime']:.0f}",
+                    predictor(r),
                 ]
                 for r in rows
             ],

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.control import predict_kernels
 from app.errors import BosunError
 
 __all__ = ["MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows"]
@@ -155,6 +156,22 @@ class MotionPredictor:
             self._next_fit += sp.refit
             self._fit()
 
+    def prime(self, samples: ArrayLike) -> None:
+        """Take a run of past samples (n, channels) at once and fit once at its end (a predictor started on the
+        sensor's recent past: one fit instead of one every ``refit`` seconds of it)."""
+        Y = np.asarray(samples, dtype=float).reshape(-1, self.m)
+        if not np.all(np.isfinite(Y)):
+            raise PredictError("predictor: a sample is not finite")
+        fit_at = self._next_fit
+        self._next_fit = math.inf
+        for y in Y:
+            self.update(y)
+        if self.t >= fit_at - 1e-9:
+            self._fit()
+            self._next_fit = fit_at + self.spec.refit * math.ceil((self.t - fit_at + 1e-9) / self.spec.refit)
+        else:
+            self._next_fit = fit_at
+
     def _mean_raw(self, n: int) -> NDArray[np.float64]:
         """The average of the first ``n`` < decimate samples (the start)."""
         return self._raw[[(self.k - i) % self.spec.decimate for i in range(n)]].mean(axis=0)
@@ -174,6 +191,18 @@ class MotionPredictor:
             sigma[j] = np.sqrt(var_e * np.cumsum(psi**2))  # σ(h), h = 1 … H model steps (Box et al. eq. 5.1.16)
             coef[j] = a
         self._fit_rec, self.coefficients = (mu, G, np.hstack([np.zeros((self.m, 1)), sigma])), coef
+
+    def path(self, horizons: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """The prediction alone at ``horizons`` [s] (n,) → (n, channels), compiled
+        (:func:`app.control.predict_kernels.ar_predict`: the engines' per-tick use); None before the first fit.
+        Equal to :meth:`predict`'s first output (tested)."""
+        if self._fit_rec is None:
+            return None
+        mu, G, _ = self._fit_rec
+        h = np.asarray(horizons, dtype=float) + self.delay
+        out = np.empty((h.size, self.m))
+        predict_kernels.ar_predict(self._ring, self.k, self._lags, mu, G, self.spec.step, h, out)
+        return out
 
     def predict(self, horizons: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The prediction at ``horizons`` [s] ahead of the last sample, (len, channels), and its σ (same shape).

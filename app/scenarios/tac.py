@@ -602,8 +602,7 @@ class TacSimulator:
             if self.mru is not None:
                 m = self.mru
                 past = MRU(np.random.default_rng(sc.seed + 2), m.noise_eta, m.noise_nu, m.noise_nu_dot).measure(past)
-            for row in np.hstack([past.eta, past.nu]):
-                self._predictor.update(row)
+            self._predictor.prime(np.hstack([past.eta, past.nu]))
             self._foresight = None
         pred = self._predictor
         eta, nu = meas.eta.copy(), meas.nu.copy()
@@ -611,7 +610,7 @@ class TacSimulator:
             k = self.k + 1 + i  # the step's number
             if k % every == 0:
                 pred.update(np.r_[meas.eta[i], meas.nu[i]])
-                self._foresight = (k, pred.predict(sc.delay + np.arange(every) * sc.dt)[0]) if pred.ready else None
+                self._foresight = (k, pred.path(sc.delay + np.arange(every) * sc.dt)) if pred.ready else None
             f = self._foresight
             if f is not None and 0 <= k - f[0] < every:
                 eta[i], nu[i] = f[1][k - f[0], :6], f[1][k - f[0], 6:]
