@@ -302,3 +302,27 @@ def test_the_target_and_frame_selectors_reach_the_engine_and_the_refusal_is_show
     tab._send("set_frame", frame="tool")  # what no selector offers: the engine's refusal reaches the operator
     qtbot.waitUntil(lambda: any("set_frame refused" in n for n in notices), timeout=GUI_WAIT)
     assert tab.frame.currentText() == "world"
+
+
+def test_the_delay_and_prediction_reach_the_engine_and_a_refusal_is_shown(qtbot, window):
+    """Issue 31, item 2: the mode row's delay and *predict* reach the engine with the compensation off (the snapshot
+    then says so); while compensating the engine refuses them with the reason, the operator is told, and the
+    controls show what the engine has."""
+    win, _ = window
+    tab = win.crane_head
+    notices = []
+    tab.notice.connect(lambda level, text: notices.append(text))
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.delay.isEnabled(), timeout=GUI_WAIT)
+    tab.delay.setValue(0.3)
+    tab.predict.click()  # in tac: refused
+    qtbot.waitUntil(lambda: any("set_tac_delay refused" in n for n in notices), timeout=GUI_WAIT)
+    assert "compensation is off" in notices[-1]
+    qtbot.waitUntil(lambda: not tab.predict.isChecked() and tab.delay.value() == 0.0, timeout=GUI_WAIT)
+    _choose(tab.mode, "off")
+    qtbot.waitUntil(lambda: tab.state.tac_mode == "off", timeout=GUI_WAIT)
+    tab.delay.setValue(0.3)
+    tab.predict.click()
+    qtbot.waitUntil(lambda: tab.state.delay == 0.3 and tab.state.predict, timeout=GUI_WAIT)
+    _choose(tab.mode, "tac")
+    qtbot.waitUntil(lambda: tab.state.tac_mode == "tac" and tab.predict.isChecked(), timeout=GUI_WAIT)

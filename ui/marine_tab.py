@@ -268,11 +268,25 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             "(and crane) compensate; off, their offset returns to zero"
         )
         self.antisway.clicked.connect(lambda on: self._send("set_crane_antisway", on=bool(on)))
+        # issue 31: the measurement-to-actuation delay and the motion predicted that far ahead (set in off)
+        self.delay = QDoubleSpinBox(decimals=2, minimum=0.0, maximum=2.0, singleStep=0.1, value=0.0, suffix=" s")
+        self.delay.setToolTip(
+            "the controller sees the motion sensor this late (real equipment's delay); set with the compensation off"
+        )
+        self.predict = QCheckBox("predict")
+        self.predict.setToolTip("feed the motion predicted the delay ahead from the motion sensor (an online AR model)")
+        self.delay.editingFinished.connect(self.send_delay)
+        self.predict.clicked.connect(lambda _on: self.send_delay())
         mode_row = QHBoxLayout()  # one row: the 1280 × 800 page has no height to spare
         mode_row.setContentsMargins(0, 0, 0, 0)
         mode_row.addWidget(self.mode, 1)
         mode_row.addWidget(self.antisway)
         form.addRow("mode", mode_row)
+        delay_row = QHBoxLayout()
+        delay_row.setContentsMargins(0, 0, 0, 0)
+        delay_row.addWidget(self.delay, 1)
+        delay_row.addWidget(self.predict, 1)
+        form.addRow("delay", delay_row)
         # the landing target, the stick's frame and the camera (issue 30, items 1, 5 and 7)
         self.target = QComboBox()
         self.target.addItems(["platform", "vessel"])
@@ -457,10 +471,16 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             heading=float(self.heading.value()),
         )
 
+    def send_delay(self) -> None:
+        self._send("set_tac_delay", delay=float(self.delay.value()), predict=bool(self.predict.isChecked()))
+
     def on_reply(self, re: str, ok: bool, error: str) -> None:
         if not ok and "no longer the operator" in error:
             self.notice.emit("error", f"crane head: operator role lost: {error}")
-        refusable = ("set_sea", "set_tac_mode", "set_vessel", "set_crane_antisway", "set_crane_target", "set_frame")
+        refusable = (
+            "set_sea", "set_tac_mode", "set_vessel", "set_crane_antisway", "set_crane_target", "set_frame",
+            "set_tac_delay",
+        )  # fmt: skip
         if not ok and re in (*refusable, "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
 
@@ -514,6 +534,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.landing.show_load(load)
         if load is not None and self.antisway.isChecked() != load.antisway:
             self.antisway.setChecked(load.antisway)  # the engine's (another console may switch it)
+        if not self.delay.hasFocus() and abs(self.delay.value() - getattr(state, "delay", 0.0)) > 1e-9:
+            self.delay.setValue(getattr(state, "delay", 0.0))  # what the engine has (a refusal leaves it)
+        if self.predict.isChecked() != bool(getattr(state, "predict", False)):
+            self.predict.setChecked(bool(getattr(state, "predict", False)))
         self.ref_dot.setData([s.p_ref_t[0]], [s.p_ref_t[2]])
         self.pc_dot.setData([s.p_c_t[0]], [s.p_c_t[2]])
         if self.isVisible():  # a hidden tab draws when shown again (_shown)
