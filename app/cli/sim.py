@@ -37,7 +37,8 @@ _TAC_FIELDS = (
 )  # fmt: skip
 # those of sim vvmc, VvmcScenario's fields
 _VVMC_FIELDS = (
-    "hs", "tp", "spectrum", "heading1", "heading2", "duration", "dt", "seed", "rao", "sensors", "antisway",
+    "hs", "tp", "spectrum", "heading1", "heading2", "duration", "dt", "seed", "rao", "sensors", "antisway", "delay",
+    "predict",
 )  # fmt: skip
 
 
@@ -62,12 +63,12 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     with _as_usage_error(VvmcError):
         sc = VvmcScenario(**_fields(args, *_VVMC_FIELDS))
     out = _make_out(args, f"vvmc_hs{sc.hs:g}_seed{sc.seed}_{sc.sensors}" + ("_antisway" if sc.antisway else ""))
-    n = round(sc.duration / sc.dt)
+    n = round((sc.duration + sc.lead_in) / sc.dt)
     bar = _progress_bar("sim vvmc", unit="step")
     t0 = time.perf_counter()
     on = simulate(sc, True, progress=lambda k: bar(k, 2 * n))
     off = simulate(sc, False, progress=lambda k: bar(n + k, 2 * n))
-    speed = 2 * sc.duration / (time.perf_counter() - t0)
+    speed = 2 * (sc.duration + sc.lead_in) / (time.perf_counter() - t0)
     doc = _write_run(args, out, lambda tmp: save_runs(sc, on, off, tmp, speed))
     if args.json:
         return 0
@@ -77,6 +78,7 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
         f"{sc.duration:g} s, seed {sc.seed} (vessel {vessel_label(sc.rao)}); "
         f"the controllers see the platforms through: {_SENSOR_NAMES[sc.sensors]}"
         + ("; anti-swing on" if sc.antisway else "")
+        + (f"; {sc.delay:g} s late" + (", predicted" if sc.predict else "") if sc.delay or sc.predict else "")
     )
     print(
         f"  tool point rel. EM1500, rms: {1000 * u['rms_tool_error_m']:.1f} mm without, "
@@ -422,6 +424,18 @@ def register(sub) -> None:
             help="what the controllers see of the platforms: the true states, an MRU H on each, or a laser tracker",
         )
         b.add_argument("--antisway", action="store_true", help="add the load-swing estimator and anti-swing law")
+        b.add_argument(
+            "--delay",
+            type=_finite_float,
+            default=0.0,
+            metavar="S",
+            help="the controllers see the platforms this late [s] (default 0; a 160 s lead-in is run, not counted)",
+        )
+        b.add_argument(
+            "--predict",
+            action="store_true",
+            help="feed the platforms' motion predicted --delay ahead (an online AR model, issue 31) instead",
+        )
         add_out(b, "vvmc_hsHS_seedSEED_SENSORS")
     transfer_help = "the compensated lift: an operator lands a load on a platform or a vessel (CSV, PNG, JSON)"
     with command(sims, "transfer", cmd_sim_transfer, json=False, help=transfer_help) as b:

@@ -34,6 +34,44 @@ from app.scenarios.swing import SwingControl
 from app.scenes.lab import MotionLab
 from app.sim.stewart import WaveSimulation
 
+PREDICT_DT = 0.1  # s: the predictor's sample time
+PREDICT_LEAD_IN = 160.0  # s: the predictor fits first at 150 s (half its 300 s window)
+
+
+class LateView:
+    """What the lab's controllers see of one platform ``delay`` s late (issue 31, item 2), or with ``predict`` the
+    motion predicted that far ahead from those late samples (:class:`app.control.predict.MotionPredictor` on η, η̇
+    and η̈, fed every :data:`PREDICT_DT`; the steps between use the prediction at delay + their age).  ``inner``:
+    the platform's sensor, or None for the true states.  Duck-types a :class:`~app.marine.sensors.MotionSensor`
+    (``measure`` once per step) for :meth:`app.scenes.lab.MotionLab.set_sensors`."""
+
+    def __init__(self, inner: MotionSensor | None, delay: float, dt: float, predict: bool) -> None:
+        from collections import deque
+
+        from app.control.predict import MotionPredictor, PredictorSpec
+
+        self.inner, self.delay, self.dt = inner, float(delay), float(dt)
+        self._late: deque = deque(maxlen=round(delay / dt) + 1)
+        self.every = round(PREDICT_DT / dt)
+        self.predictor = MotionPredictor(PredictorSpec(dt=PREDICT_DT), channels=18) if predict else None
+        self.k = 0
+        self._ahead: tuple[int, NDArray[np.float64]] | None = None
+
+    def measure(self, eta, eta_dot, eta_ddot) -> tuple[NDArray, NDArray, NDArray]:
+        seen = self.inner.measure(eta, eta_dot, eta_ddot) if self.inner is not None else (eta, eta_dot, eta_ddot)
+        self._late.append(np.concatenate([np.asarray(x, dtype=float) for x in seen]))
+        late = self._late[0]  # delay ago (at the start, the oldest there is)
+        self.k += 1
+        pred = self.predictor
+        if pred is not None:
+            if self.k % self.every == 0:
+                pred.update(late)
+                path = pred.path(self.delay + np.arange(self.every) * self.dt)
+                self._ahead = None if path is None else (self.k, path)
+            if self._ahead is not None and 0 <= self.k - self._ahead[0] < self.every:
+                late = self._ahead[1][self.k - self._ahead[0]]
+        return late[:6], late[6:12], late[12:]
+
 
 class VvmcError(BosunError):
     """A VVMC scenario that cannot run (one line)."""
@@ -59,6 +97,8 @@ class VvmcScenario:
     sensors: str = "true"  # what the controllers see of the platforms: true | mru | tracker
     antisway: bool = False  # the load-swing estimator and anti-swing law on the Comau's command
     swing_measurement: str = "angles"  # the estimator's measurement: angles (wire sensor) | payload (tracker)
+    delay: float = 0.0  # s: the controllers see the platforms this late (issue 31, item 2)
+    predict: bool = False  # ... or the motion predicted that far ahead from the late samples (app.control.predict)
 
     def __post_init__(self) -> None:
         if self.spectrum not in SPECTRA:
@@ -79,6 +119,17 @@ class VvmcScenario:
             raise VvmcError(f"--sensors must be one of true, {', '.join(SENSORS)}; got {self.sensors!r}")
         if self.swing_measurement not in ("angles", "payload"):
             raise VvmcError(f"the swing measurement must be angles or payload, got {self.swing_measurement!r}")
+        if not (math.isfinite(self.delay) and 0.0 <= self.delay <= 2.0):
+            raise VvmcError(f"--delay must be in [0, 2] s, got {self.delay}")
+        every = PREDICT_DT / self.dt
+        if self.predict and abs(every - round(every)) > 1e-9:
+            raise VvmcError(f"--predict needs a time step that divides {PREDICT_DT:g} s, got {self.dt:g}")
+
+    @property
+    def lead_in(self) -> float:
+        """Seconds run before the ramp and settle with a delay or prediction (not counted: the predictor's first fit
+        needs its window's half, and the runs with and without prediction are scored over the same span)."""
+        return PREDICT_LEAD_IN if (self.delay > 0 or self.predict) else 0.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -123,12 +174,14 @@ def _sources(sc: VvmcScenario, lab: MotionLab) -> list[NDArray[np.float64]]:
 
 
 def _sensors(sc: VvmcScenario, lab: MotionLab, rms: list[NDArray[np.float64]]) -> None:
+    late = sc.delay > 0 or sc.predict
     if sc.sensors == "true":
-        lab.set_sensors(None)
+        lab.set_sensors(tuple(LateView(None, sc.delay, sc.dt, sc.predict) for _ in rms) if late else None)
         return
     spec = SENSORS[sc.sensors]
     rng = np.random.default_rng([sc.seed, 16_3])  # its own stream: the seas are the same as without
-    lab.set_sensors(tuple(MotionSensor(spec, rng, sc.dt) for _ in rms))
+    sensors = tuple(MotionSensor(spec, rng, sc.dt) for _ in rms)
+    lab.set_sensors(tuple(LateView(s, sc.delay, sc.dt, sc.predict) for s in sensors) if late else sensors)
 
 
 def simulate(
@@ -150,7 +203,7 @@ def simulate(
     swing_ctl = None
     if sc.antisway and compensate:
         swing_ctl = SwingControl(lab, np.random.default_rng([sc.seed, 16_4]), measurement=sc.swing_measurement)
-    n = round(sc.duration / sc.dt)
+    n = round((sc.duration + sc.lead_in) / sc.dt)
     t, L, Ld, h = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     eta1, eta2, q, qd, e, swing = (np.empty((n, k)) for k in (6, 6, 3, 3, 3, 2))
     off_b2, est = np.zeros((n, 3)), np.zeros((n, 2))
@@ -192,7 +245,7 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
     lower = robot.lower if prof.lower is None else prof.lower
     upper = robot.upper if prof.upper is None else prof.upper
     speed = robot.speed if prof.speed is None else prof.speed
-    t0 = sc.ramp + sc.settle
+    t0 = sc.ramp + sc.settle + sc.lead_in
 
     def stats(run: VvmcRun) -> dict:
         m = run.t >= t0
@@ -229,6 +282,8 @@ def summarize(sc: VvmcScenario, on: VvmcRun, off: VvmcRun) -> dict:
     return {
         "sensors": sc.sensors,
         "antisway": sc.antisway,
+        "delay_s": sc.delay,
+        "predict": sc.predict,
         "measured_from_s": t0,
         "compensated": s_on,
         "uncompensated": s_off,
