@@ -30,7 +30,9 @@ at 8.2 s now fades the head's, crane's and winch's references from the compensat
 so from the sample at 8.4 s the head's, crane's and load's arrays differ and are the record's before it, and the
 slack-wire and snap-load alarms that switch raised are gone (their arrays with them).  And once more (issue
 31): the snapshot carries the delay and whether the prediction is fed (``snap.delay``, ``snap.predict``: two
-arrays added, nothing else changed).
+arrays added, nothing else changed).  The ``sim vvmc`` cases and ``sim antisway`` were recorded again the same
+day for the same reason: their summaries carry ``delay_s`` and ``predict`` (the scenario's ``delay`` and
+``predict``), two arrays added each, nothing else changed (checked array by array).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -230,3 +230,24 @@ def test_the_lab_s_vvmc_late_and_predicted():
     assert VvmcScenario().lead_in == 0.0 and VvmcScenario(predict=True).lead_in == PREDICT_LEAD_IN
     with pytest.raises(VvmcError, match="--delay must be in"):
         VvmcScenario(delay=-0.1)
+
+
+def test_lift_windows_are_scored_as_announced():
+    """Issue 31, item 3's figures on a made-up record: the heave is quiet (within the threshold) from 400 to 430 s
+    and from 500 to 505 s (too short for a 10 s window); the predictor said open at 405 s (right: quiet to 415 s
+    and beyond) and at 600 s (wrong), and again at 407 s (inside the announced window: not a new one).  Precision
+    1/2, recall 1/1 (the short quiet spell is no window), two announced."""
+    from app.scenarios.predict import PredictResult, lift_windows
+
+    sc = PredictScenario(duration=800.0, warmup=300.0)
+    t = np.arange(1, 8001) * 0.1
+    z = 2.0 * np.sin(0.7 * t)
+    quiet = ((t >= 400) & (t < 430)) | ((t >= 500) & (t < 505))
+    z[quiet] = 0.1
+    true = np.column_stack([np.zeros_like(t), np.zeros_like(t), z])
+    flags = np.zeros(t.size, dtype=bool)
+    for at in (405.0, 407.0, 600.0):
+        flags[round(at / 0.1) - 1] = True
+    res = PredictResult(sc, t, true, true, np.zeros((t.size, 5, 3)), np.zeros((t.size, 5, 3)), predicted_open=flags)
+    w = lift_windows(res)
+    assert w["n"] == 2 and w["precision"] == 0.5 and w["n_actual"] == 1 and w["recall"] == 1.0, w

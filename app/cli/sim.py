@@ -266,6 +266,7 @@ def cmd_sim_predict(args: argparse.Namespace) -> int:
     with _as_usage_error(PredictScenarioError):
         sc = PredictScenario(
             **_fields(args, "hs", "tp", "heading", "spectrum", "seed", "duration", "rao", "target", "target_heading"),
+            window_threshold=args.window_threshold,
             target_rao=args.target_vessel,
         )
     rel = "_relative" if sc.target == "vessel" else ""
@@ -293,6 +294,14 @@ def cmd_sim_predict(args: argparse.Namespace) -> int:
     print("  nrmse / ±2σ band coverage")
     for line in _table(head, rows).splitlines():
         print("  " + line)
+    w = doc.get("windows")
+    if w:
+        prec = "—" if w["precision"] is None else f"{w['precision']:.0%}"
+        rec = "—" if w["recall"] is None else f"{w['recall']:.0%}"
+        print(
+            f"  lift windows (heave within ±{w['threshold_m']:g} m for {w['length_s']:g} s): {w['n']} announced, "
+            f"precision {prec}; {w['n_actual']} there were, recall {rec}"
+        )
     print(f"  files in {out}")
     return 0
 
@@ -510,6 +519,13 @@ def register(sub) -> None:
         )
         b.add_argument(
             "--target-heading", type=_finite_float, default=60.0, help="wave heading to the second vessel [deg] (60)"
+        )
+        b.add_argument(
+            "--window-threshold",
+            type=_finite_float,
+            default=1.0,
+            metavar="M",
+            help="a lift window: the heave within ±M m of its mean for 10 s (default 1)",
         )
         add_out(b, "predict[_relative]_SPECTRUM_hsHS_seedSEED")
     antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"

@@ -142,6 +142,11 @@ class MotionPredictor:
     def ready(self) -> bool:
         return self._fit_rec is not None
 
+    @property
+    def mean(self) -> NDArray[np.float64]:
+        """The fit's mean μ per channel (NaN before the first fit)."""
+        return np.full(self.m, np.nan) if self._fit_rec is None else self._fit_rec[0]
+
     def update(self, y: ArrayLike) -> None:
         """Take the next sample (``channels`` values, ``spec.dt`` after the last)."""
         y = np.asarray(y, dtype=float).reshape(self.m)

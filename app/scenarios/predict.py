@@ -35,7 +35,7 @@ from app.geometry import euler_zyx_to_matrix
 from app.marine.waves import SPECTRA, check_sea
 from app.scenarios.tac import TacScenario, TacSimulator
 
-__all__ = ["HORIZONS", "PredictResult", "PredictScenario", "simulate_predict", "tip_in_body"]
+__all__ = ["HORIZONS", "PredictResult", "PredictScenario", "lift_windows", "simulate_predict", "tip_in_body"]
 
 HORIZONS = (1.0, 2.0, 5.0, 10.0, 20.0)  # s: the issue's
 AXES = ("x", "y", "z")
@@ -63,6 +63,9 @@ class PredictScenario:
     target: str = "none"  # "vessel": predict the tip's motion relative to a second vessel's landing spot
     target_rao: str | None = None  # the second vessel (None: the crane's vessel's RAOs)
     target_heading: float = 60.0  # deg: the waves' heading to the second vessel (sim transfer's default)
+    window_threshold: float = 1.0  # m: a lift window is open while the heave stays within this of its mean
+    window_length: float = 10.0  # s: ... for at least this long (issue 31, item 3)
+    window_margin: float = 1.0  # σ: predicted open while the prediction ± this many σ stays within the threshold
     spec: PredictorSpec = field(default_factory=PredictorSpec)
 
     def __post_init__(self) -> None:
@@ -82,6 +85,14 @@ class PredictScenario:
             (math.isfinite(self.mru_noise) and self.mru_noise >= 0, "MRU noise scale must not be negative"),
             (self.target in ("none", "vessel"), f"target must be none or vessel, got '{self.target}'"),
             (math.isfinite(self.target_heading), "target heading must be a number"),
+            (
+                math.isfinite(self.window_threshold) and self.window_threshold > 0,
+                f"window threshold must be positive, got {self.window_threshold}",
+            ),
+            (
+                math.isfinite(self.window_length) and 1.0 <= self.window_length <= 20.0,
+                f"window length must be in [1, 20] s (the prediction's reach), got {self.window_length}",
+            ),
         ]
         for ok, text in checks:
             if not ok:
@@ -99,6 +110,7 @@ class PredictResult:
     measured: NDArray[np.float64]  # (n, 3) from the MRU
     predicted: NDArray[np.float64]  # (n, len(HORIZONS), 3): made at t for t + τ (NaN before the first fit)
     sigma: NDArray[np.float64]  # likewise, the band's σ given with each
+    predicted_open: NDArray[np.bool_] | None = None  # (n,): a lift window predicted open from this sample on
     summary: dict = field(default_factory=dict)
 
 
@@ -140,14 +152,21 @@ def simulate_predict(
     h = np.asarray(HORIZONS)
     P = np.full((n, h.size, 3), np.nan)
     S = np.full((n, h.size, 3), np.nan)
+    ahead = np.arange(0, round(sc.window_length / sp.dt) + 1) * sp.dt  # the window's span, for the lift windows
+    opens = np.zeros(n, dtype=bool)
     for k in range(n):
         if cancel is not None and cancel():
             break
         pred.update(measured[k])
         P[k], S[k] = pred.predict(h)
+        if pred.ready:  # open: the predicted heave and its band stay within the threshold of its mean
+            zp, zs = pred.predict(ahead)
+            opens[k] = bool(
+                np.all(np.abs(zp[:, 2] - pred.mean[2]) + sc.window_margin * zs[:, 2] <= sc.window_threshold)
+            )
         if progress is not None and k % 1000 == 0:
             progress(float(t[k]), sc.duration)
-    res = PredictResult(sc, t, true, measured, P, S)
+    res = PredictResult(sc, t, true, measured, P, S, predicted_open=opens)
     res.summary = summarise(res)
     return res
 
@@ -177,4 +196,61 @@ def summarise(res: PredictResult) -> dict:
         out["coverage"][key] = {a: round(float(v), 4) if m else None for a, v, m in zip(AXES, cov, moves, strict=True)}
         out["scored_s"][key] = round(float(ok.sum() * dt), 1)
     out["rms_true_m"] = {a: round(float(v), 4) for a, v in zip(AXES, np.sqrt(np.mean(ref**2, axis=0)), strict=True)}
+    if res.predicted_open is not None:
+        out["windows"] = lift_windows(res)
     return out
+
+
+def _runs(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """The maximal runs of True in ``flags``: (first, last + 1) each."""
+    d = np.diff(np.r_[0, flags.astype(np.int8), 0])
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist(), strict=True))
+
+
+def _announced(flags: NDArray[np.bool_], span: int) -> list[int]:
+    """The samples at which a window is announced: the first predicted-open sample, then the first after the
+    announced window's end (an operator told "open for the next 10 s" is not told again within them)."""
+    out: list[int] = []
+    nxt = 0
+    for k in np.flatnonzero(flags).tolist():
+        if k >= nxt:
+            out.append(k)
+            nxt = k + span
+    return out
+
+
+def lift_windows(res: PredictResult) -> dict:
+    """The lift windows (issue 31, item 3) over the scored span: a window is *open* at a sample when the heave (z)
+    stays within ``window_threshold`` of its mean for the next ``window_length`` seconds; *predicted open* when
+    the predicted heave ± ``window_margin`` σ does (decided at that sample from what the predictor knew then).
+
+    A predicted window is announced at the first predicted-open sample (and again only after the announced one's
+    end): it is right when the heave was open from there (precision = right / announced).  An actual window is a
+    run of open samples: it is found when a window was announced inside it (recall = found / actual).  ``n``
+    counts the announced windows."""
+    sc, dt = res.scenario, res.scenario.spec.dt
+    k0, n = round(sc.warmup / dt), res.t.size
+    span = round(sc.window_length / dt)
+    z = res.true[:, 2]
+    dev = np.abs(z - z[k0:].mean()) <= sc.window_threshold
+    # open at k: every sample k … k + span within the threshold (a running count of the samples outside it)
+    outside = np.r_[0, np.cumsum(~dev)]
+    last = n - span
+    actual = np.zeros(n, dtype=bool)
+    actual[:last] = (outside[span + 1 : n + 1] - outside[:last]) == 0
+    predicted = res.predicted_open.copy()
+    predicted[:k0] = False
+    predicted[last:] = False
+    actual[:k0] = False
+    pw, aw = _announced(predicted, span), _runs(actual)
+    right = sum(bool(actual[a]) for a in pw)
+    found = sum(any(a <= p < b for p in pw) for a, b in aw)
+    return {
+        "threshold_m": sc.window_threshold,
+        "length_s": sc.window_length,
+        "n": len(pw),
+        "precision": round(right / len(pw), 4) if pw else None,
+        "n_actual": len(aw),
+        "recall": round(found / len(aw), 4) if aw else None,
+        "open_share_actual": round(float(actual[k0:last].mean()), 4) if last > k0 else None,
+    }
