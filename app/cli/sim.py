@@ -100,6 +100,16 @@ def cmd_sim_vvmc(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_delay(p: argparse.ArgumentParser, seen: str, source: str) -> None:
+    """``--delay S`` and ``--predict`` (issue 31, item 2): what the controllers see late, and from what."""
+    p.add_argument("--delay", type=_finite_float, default=0.0, metavar="S", help=f"{seen} [s] (default 0)")
+    p.add_argument(
+        "--predict",
+        action="store_true",
+        help=f"feed the motion predicted --delay ahead from {source} (an online AR model, issue 31) instead",
+    )
+
+
 _SENSOR_NAMES = {
     "true": "the simulation's true states",
     "mru": "an MRU H on each platform",
@@ -381,18 +391,7 @@ def register(sub) -> None:
         p.add_argument(
             "--mru-noise", type=_finite_float, default=0.0, help="MRU noise scale, 1 = 2 cm / 0.05° (default 0: none)"
         )
-        p.add_argument(
-            "--delay",
-            type=_finite_float,
-            default=0.0,
-            metavar="S",
-            help="measurement-to-actuation delay [s]: the controller sees the MRU's η, ν this old (default 0)",
-        )
-        p.add_argument(
-            "--predict",
-            action="store_true",
-            help="feed the motion predicted --delay ahead from the MRU (an online AR model, issue 31) instead",
-        )
+        _add_delay(p, "the controller sees the MRU's η, ν this old", "the MRU")
 
     # the crane head's two take the sea's options, then --json, then --out
     tac_help = "one run: vessel in waves, crane and Delta head (CSV, Figs. 8–12, JSON)"
@@ -433,18 +432,7 @@ def register(sub) -> None:
             help="what the controllers see of the platforms: the true states, an MRU H on each, or a laser tracker",
         )
         b.add_argument("--antisway", action="store_true", help="add the load-swing estimator and anti-swing law")
-        b.add_argument(
-            "--delay",
-            type=_finite_float,
-            default=0.0,
-            metavar="S",
-            help="the controllers see the platforms this late [s] (default 0; a 160 s lead-in is run, not counted)",
-        )
-        b.add_argument(
-            "--predict",
-            action="store_true",
-            help="feed the platforms' motion predicted --delay ahead (an online AR model, issue 31) instead",
-        )
+        _add_delay(b, "the controllers see the platforms this late (a 160 s lead-in, not counted)", "the platforms")
         add_out(b, "vvmc_hsHS_seedSEED_SENSORS")
     transfer_help = "the compensated lift: an operator lands a load on a platform or a vessel (CSV, PNG, JSON)"
     with command(sims, "transfer", cmd_sim_transfer, json=False, help=transfer_help) as b:
