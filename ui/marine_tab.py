@@ -71,6 +71,16 @@ SCENE_TIP = (
 )
 
 
+def _row(*items) -> QHBoxLayout:
+    """A form row of widgets side by side, no margins; an item is a widget or (widget, stretch)."""
+    row = QHBoxLayout()
+    row.setContentsMargins(0, 0, 0, 0)
+    for item in items:
+        widget, stretch = item if isinstance(item, tuple) else (item, 0)
+        row.addWidget(widget, stretch)
+    return row
+
+
 class TacDrawing:
     """The crane-head scene's solids from the engine's description (robot files, ship, waves) and a sample."""
 
@@ -248,17 +258,9 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.start = QPushButton("Start crane-head engine")
         self.start.clicked.connect(self.connect_engine)
         form.addRow("spectrum", self.spectrum)
-        sea_row = QHBoxLayout()  # Hs and Tp side by side, heading beside Apply: the target row needs the height
-        sea_row.setContentsMargins(0, 0, 0, 0)
-        sea_row.addWidget(self.hs, 1)
-        sea_row.addWidget(QLabel("Tp"))
-        sea_row.addWidget(self.tp, 1)
-        form.addRow("Hs", sea_row)
-        heading_row = QHBoxLayout()
-        heading_row.setContentsMargins(0, 0, 0, 0)
-        heading_row.addWidget(self.heading, 1)
-        heading_row.addWidget(self.apply_sea, 1)
-        form.addRow("heading", heading_row)
+        # Hs and Tp side by side, heading beside Apply: the target and delay rows need the height
+        form.addRow("Hs", _row((self.hs, 1), QLabel("Tp"), (self.tp, 1)))
+        form.addRow("heading", _row((self.heading, 1), (self.apply_sea, 1)))
         self.vessel = VesselRow(lambda **f: self._send("set_vessel", **f))  # issue 17, item 2
         self.vessel.error.connect(lambda text: self.notice.emit("error", f"crane head: RAO file not sent: {text}"))
         form.addRow("vessel", self.vessel)
@@ -277,16 +279,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.predict.setToolTip("feed the motion predicted the delay ahead from the motion sensor (an online AR model)")
         self.delay.editingFinished.connect(self.send_delay)
         self.predict.clicked.connect(lambda _on: self.send_delay())
-        mode_row = QHBoxLayout()  # one row: the 1280 × 800 page has no height to spare
-        mode_row.setContentsMargins(0, 0, 0, 0)
-        mode_row.addWidget(self.mode, 1)
-        mode_row.addWidget(self.antisway)
-        form.addRow("mode", mode_row)
-        delay_row = QHBoxLayout()
-        delay_row.setContentsMargins(0, 0, 0, 0)
-        delay_row.addWidget(self.delay, 1)
-        delay_row.addWidget(self.predict, 1)
-        form.addRow("delay", delay_row)
+        form.addRow("mode", _row((self.mode, 1), self.antisway))  # one row: the 1280 × 800 page has no height to spare
+        form.addRow("delay", _row((self.delay, 1), (self.predict, 1)))
         # the landing target, the stick's frame and the camera (issue 30, items 1, 5 and 7)
         self.target = QComboBox()
         self.target.addItems(["platform", "vessel"])
@@ -306,12 +300,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.ride = QCheckBox("ride")
         self.ride.setToolTip("ride deck: the 3D camera rides with the target deck (looks at it wherever it moves)")
         self.ride.toggled.connect(lambda on: getattr(self.scene, "set_ride", lambda _on: None)(on))
-        target_row = QHBoxLayout()
-        target_row.setContentsMargins(0, 0, 0, 0)
-        target_row.addWidget(self.target, 1)
-        target_row.addWidget(self.frame, 1)
-        target_row.addWidget(self.ride)
-        form.addRow("target", target_row)
+        form.addRow("target", _row((self.target, 1), (self.frame, 1), self.ride))
         self.readout = QLabel("not connected")
         self.readout.setTextFormat(Qt.RichText)
         self.readout.setWordWrap(True)  # long lines wrap, never cut at the column's edge
