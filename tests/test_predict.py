@@ -251,3 +251,19 @@ def test_lift_windows_are_scored_as_announced():
     res = PredictResult(sc, t, true, true, np.zeros((t.size, 5, 3)), np.zeros((t.size, 5, 3)), predicted_open=flags)
     w = lift_windows(res)
     assert w["n"] == 2 and w["precision"] == 0.5 and w["n_actual"] == 1 and w["recall"] == 1.0, w
+
+
+def test_the_late_sensor_reuses_the_states_already_computed():
+    """With a delay of whole steps the simulator takes the late states from those it computed (the engine's tick:
+    no second evaluation of the sea), equal to evaluating the sea at t − delay, across chunks smaller and larger
+    than the delay."""
+    from app.scenarios.tac import TacScenario, TacSimulator
+
+    sim = TacSimulator(TacScenario(duration=60.0, delay=0.2))
+    for n in (2, 2, 37, 5, 400, 1):
+        t = (sim.k + 1 + np.arange(n)) * sim.scenario.dt
+        got = sim._delayed(t, sim.vessel.state(t))
+        want = sim.vessel.state(t - 0.2)
+        np.testing.assert_allclose(got.eta, want.eta, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(got.nu, want.nu, rtol=0, atol=1e-9)
+        sim.k += n

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from app.control import predict_kernels
 from app.errors import BosunError
 
-__all__ = ["MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows"]
+__all__ = ["Foresight", "MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows"]
 
 
 class PredictError(BosunError):
@@ -233,6 +233,31 @@ class MotionPredictor:
         u = (s - i)[:, None]
         sig = (1 - u) * sigma[:, i].T + u * sigma[:, i + 1].T  # linear between the grid's σ
         return out, sig
+
+
+class Foresight:
+    """A delay hidden by prediction (issue 31, item 2): fed, once per simulation step ``dt``, the sample that arrives
+    ``delay`` late, it returns the motion predicted ``delay`` ahead instead.  Every ``spec.dt`` (the steps whose
+    number is a multiple of it) the late sample goes to the predictor; the steps until the next use the prediction
+    at delay + their age.  Before the predictor's first fit the late sample itself.  Used by the crane head's
+    simulator (η, ν) and the lab's late view of its platforms (η, η̇, η̈)."""
+
+    def __init__(self, channels: int, delay: float, dt: float, spec: PredictorSpec | None = None) -> None:
+        self.predictor = MotionPredictor(spec or PredictorSpec(), channels)
+        self.delay, self.dt = float(delay), float(dt)
+        self.every = round(self.predictor.spec.dt / dt)
+        self._ahead: tuple[int, NDArray[np.float64]] | None = None
+
+    def step(self, k: int, late: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Simulation step number ``k``'s view: ``late`` (channels,) replaced by the prediction when there is one."""
+        if k % self.every == 0:
+            self.predictor.update(late)
+            path = self.predictor.path(self.delay + np.arange(self.every) * self.dt)
+            self._ahead = None if path is None else (k, path)
+        a = self._ahead
+        if a is not None and 0 <= k - a[0] < self.every:
+            return a[1][k - a[0]]
+        return late
 
 
 def _cubic(grid: NDArray[np.float64], y: NDArray[np.float64], h: NDArray[np.float64]) -> NDArray[np.float64]:

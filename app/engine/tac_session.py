@@ -279,7 +279,7 @@ class TacSession(Scene):
         sim.scenario = replace(sim.scenario, delay=delay, predict=bool(predict))
         self.scenario = sim.scenario
         if not predict:
-            sim._predictor = sim._foresight = None  # a later prediction starts again on the sensor's past
+            sim._foresight = None  # a later prediction starts again on the sensor's past
         self.note("info", f"delay {delay:g} s" + (", the motion predicted that far ahead" if predict else ""))
 
     @command

@@ -154,13 +154,15 @@ def simulate_predict(
     S = np.full((n, h.size, 3), np.nan)
     ahead = np.arange(0, round(sc.window_length / sp.dt) + 1) * sp.dt  # the window's span, for the lift windows
     opens = np.zeros(n, dtype=bool)
+    both = np.r_[h, ahead]
     for k in range(n):
         if cancel is not None and cancel():
             break
         pred.update(measured[k])
-        P[k], S[k] = pred.predict(h)
+        y, sig = pred.predict(both)  # the scored horizons and the window's span in one call
+        P[k], S[k] = y[: h.size], sig[: h.size]
         if pred.ready:  # open: the predicted heave and its band stay within the threshold of its mean
-            zp, zs = pred.predict(ahead)
+            zp, zs = y[h.size :], sig[h.size :]
             opens[k] = bool(
                 np.all(np.abs(zp[:, 2] - pred.mean[2]) + sc.window_margin * zs[:, 2] <= sc.window_threshold)
             )

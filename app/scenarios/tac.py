@@ -323,8 +323,8 @@ class TacSimulator:
         self._fade: list | None = None
         self._was_frozen = False
         self._alpha_rate = np.zeros(3)  # the arms' rate at the end of the last chunk (a resumption starts from it)
-        self._predictor = None  # the motion predictor, with scenario.predict (issue 31, item 2)
-        self._foresight: tuple | None = None  # (the step it was made at, its prediction for the next steps)
+        self._foresight = None  # the motion predictor hiding the delay, with scenario.predict (issue 31, item 2)
+        self._past: VesselState | None = None  # the last ``delay`` of true states, with scenario.delay
 
     def continue_from(self, old: TacSimulator, blend: float) -> None:
         """Take over from ``old``, live (a sea or vessel change in the engine): its clock continues (this
@@ -349,7 +349,7 @@ class TacSimulator:
         self._was_frozen = old._was_frozen
         self.vessel = SeaTransition(old.vessel, self.vessel, old.k * self.scenario.dt, blend)
         self.use_kernels = old.use_kernels
-        self._predictor, self._foresight = old._predictor, old._foresight  # the motion predictor runs on
+        self._foresight, self._past = old._foresight, old._past  # the motion predictor runs on
 
     def move_target(self, dp_n: NDArray[np.float64], limit: NDArray[np.float64]) -> bool:
         """Move the TCP's target p_d^n by ``dp_n`` in {n} (the operator's stick, issue 30, item 2), its offset from
@@ -579,41 +579,50 @@ class TacSimulator:
         sc = self.scenario
         if sc.delay <= 0 and not sc.predict:
             return self.mru.measure(true) if self.mru is not None else true
-        seen = self.vessel.state(t - sc.delay) if sc.delay > 0 else true
+        seen = self._delayed(t, true) if sc.delay > 0 else true
         meas = self.mru.measure(seen) if self.mru is not None else seen
         meas = VesselState(t, meas.eta, meas.nu, meas.nu_dot)
         return self._foresee(meas) if sc.predict else meas
 
-    def _foresee(self, meas: VesselState) -> VesselState:
-        """The delayed measurement ``meas`` (at this chunk's steps) replaced by the motion predicted ``delay`` ahead:
-        each sample on the predictor's grid is fed, and the steps until the next one use the prediction at delay +
-        their age.  The predictor has run on the sensor's last 300 s when the run starts (a real one runs all the
-        time; its own noise draws, so the run's MRU noise is the same as without prediction)."""
+    def _delayed(self, t: NDArray[np.float64], true: VesselState) -> VesselState:
+        """The true motion ``scenario.delay`` before the times ``t``: when the delay is whole steps, the states this
+        simulator already computed (the last steps' kept, then this chunk's ``true``: no second evaluation of the
+        sea on the engine's tick), else evaluated again."""
         sc = self.scenario
-        every = round(PREDICT_DT / sc.dt)
-        if self._predictor is None:
-            from app.control.predict import MotionPredictor, PredictorSpec
+        m = round(sc.delay / sc.dt)
+        if m == 0 or abs(m * sc.dt - sc.delay) > 1e-9:
+            return self.vessel.state(t - sc.delay)
+        past = self._past
+        if past is None or past.t.size != m or abs(past.t[-1] - (t[0] - sc.dt)) > 1e-9:
+            past = self.vessel.state(t[0] - (m - np.arange(m)) * sc.dt)  # the start, or the delay changed
+        rows = [np.vstack([a, b]) for a, b in ((past.eta, true.eta), (past.nu, true.nu), (past.nu_dot, true.nu_dot))]
+        both_t = np.r_[past.t, true.t]
+        n = t.size
+        self._past = VesselState(both_t[-m:], *(r[-m:] for r in rows))
+        return VesselState(both_t[:n], *(r[:n] for r in rows))
+
+    def _foresee(self, meas: VesselState) -> VesselState:
+        """The delayed measurement ``meas`` (at this chunk's steps) replaced by the motion predicted ``delay`` ahead
+        (:class:`app.control.predict.Foresight` on η and ν).  The predictor has run on the sensor's last 300 s when
+        the run starts (a real one runs all the time; its own noise draws, so the run's MRU noise is the same as
+        without prediction)."""
+        sc = self.scenario
+        if self._foresight is None:
+            from app.control.predict import Foresight, PredictorSpec
 
             spec = PredictorSpec(dt=PREDICT_DT)
-            self._predictor = MotionPredictor(spec, channels=12)
-            last = (self.k // every) * every * sc.dt  # the last grid point: the feed goes on from the next one
+            self._foresight = fs = Foresight(12, sc.delay, sc.dt, spec)
+            last = (self.k // fs.every) * fs.every * sc.dt  # the last grid point: the feed goes on from the next one
             th = last + np.arange(1 - round(spec.window / PREDICT_DT), 1) * PREDICT_DT
             past = self.vessel.state(th - sc.delay)
             if self.mru is not None:
                 m = self.mru
                 past = MRU(np.random.default_rng(sc.seed + 2), m.noise_eta, m.noise_nu, m.noise_nu_dot).measure(past)
-            self._predictor.prime(np.hstack([past.eta, past.nu]))
-            self._foresight = None
-        pred = self._predictor
-        eta, nu = meas.eta.copy(), meas.nu.copy()
+            fs.predictor.prime(np.hstack([past.eta, past.nu]))
+        seen = np.hstack([meas.eta, meas.nu])
         for i in range(meas.t.size):
-            k = self.k + 1 + i  # the step's number
-            if k % every == 0:
-                pred.update(np.r_[meas.eta[i], meas.nu[i]])
-                self._foresight = (k, pred.path(sc.delay + np.arange(every) * sc.dt)) if pred.ready else None
-            f = self._foresight
-            if f is not None and 0 <= k - f[0] < every:
-                eta[i], nu[i] = f[1][k - f[0], :6], f[1][k - f[0], 6:]
+            seen[i] = self._foresight.step(self.k + 1 + i, seen[i])
+        eta, nu = seen[:, :6], seen[:, 6:]
         return VesselState(meas.t, eta, nu, meas.nu_dot)
 
     def _vessel_state(self, t: NDArray[np.float64]) -> VesselState:

@@ -48,28 +48,20 @@ class LateView:
     def __init__(self, inner: MotionSensor | None, delay: float, dt: float, predict: bool) -> None:
         from collections import deque
 
-        from app.control.predict import MotionPredictor, PredictorSpec
+        from app.control.predict import Foresight, PredictorSpec
 
-        self.inner, self.delay, self.dt = inner, float(delay), float(dt)
+        self.inner = inner
         self._late: deque = deque(maxlen=round(delay / dt) + 1)
-        self.every = round(PREDICT_DT / dt)
-        self.predictor = MotionPredictor(PredictorSpec(dt=PREDICT_DT), channels=18) if predict else None
+        self.foresight = Foresight(18, delay, dt, PredictorSpec(dt=PREDICT_DT)) if predict else None
         self.k = 0
-        self._ahead: tuple[int, NDArray[np.float64]] | None = None
 
     def measure(self, eta, eta_dot, eta_ddot) -> tuple[NDArray, NDArray, NDArray]:
         seen = self.inner.measure(eta, eta_dot, eta_ddot) if self.inner is not None else (eta, eta_dot, eta_ddot)
         self._late.append(np.concatenate([np.asarray(x, dtype=float) for x in seen]))
         late = self._late[0]  # delay ago (at the start, the oldest there is)
         self.k += 1
-        pred = self.predictor
-        if pred is not None:
-            if self.k % self.every == 0:
-                pred.update(late)
-                path = pred.path(self.delay + np.arange(self.every) * self.dt)
-                self._ahead = None if path is None else (self.k, path)
-            if self._ahead is not None and 0 <= self.k - self._ahead[0] < self.every:
-                late = self._ahead[1][self.k - self._ahead[0]]
+        if self.foresight is not None:
+            late = self.foresight.step(self.k, late)
         return late[:6], late[6:12], late[12:]
 
 
