@@ -244,6 +244,7 @@ def cmd_sim_transfer(args: argparse.Namespace) -> int:
             ),
             target_rao=args.target_vessel,
             target_heading=args.target_heading,
+            lead=not args.no_lead,
         )
         if sc.operator != "scripted":
             from app.scenarios.transfer import StickFile
@@ -481,6 +482,12 @@ def register(sub) -> None:
             metavar="A",
             help="the scripted operator's speed ramps [m/s²] (default 0.25; lab 0.1); 0.079 lasts one period of the "
             "crane's 10 m pendulum, a move that leaves no swing",
+        )
+        b.add_argument(
+            "--no-lead",
+            action="store_true",
+            help="without the load lead: the tip follows a moving target's spot, not where the load needs it, and "
+            "anti-swing does not lead the operator's move (docs/transfer.md)",
         )
         b.add_argument("--landings", type=int, default=None, metavar="N", help="also N seeded landings (statistics)")
         add_json(b)

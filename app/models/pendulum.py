@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 G = 9.81
 
-__all__ = ["G", "swing_derivative", "swing_direction", "swing_rk4"]
+__all__ = ["G", "suspension_lead", "swing_derivative", "swing_direction", "swing_rk4"]
 
 
 def swing_derivative(
@@ -58,3 +58,20 @@ def swing_direction(alpha: float, beta: float) -> NDArray[np.float64]:
     """Unit wire vector from the tool to the load in {d}: (−sα, cα sβ, cα cβ), eq. (23)."""
     sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
     return np.array([-sa, ca * sb, ca * cb])
+
+
+def suspension_lead(accel: NDArray[np.float64], length: float, cap: float = math.inf) -> NDArray[np.float64]:
+    """Where the point a load hangs from must be, relative to the load, for the load to move with the horizontal
+    acceleration of ``accel`` (3,) [m/s²] in a z-down frame (the load lead of issue 30's compensated lift).
+
+    The linearised swing above (eqs. 29–30 with the tool's vertical acceleration kept, L α̈ = ẍ_t − (g − z̈) α and
+    the load at x_L = x_t − L α) carries the load with the point only when x_t = x_L + L / (g − z̈) · ẍ_L: a load
+    that is to move with a deck accelerating at ẍ must hang that far behind the point.  Returns (f_x, f_y, 0),
+    its horizontal length capped at ``cap`` [m]; g − z̈ is kept above g / 2 (a point falling at half g or more
+    gives no lead worth having)."""
+    g_e = max(G - float(accel[2]), 0.5 * G)
+    f = np.array([accel[0], accel[1], 0.0]) * (length / g_e)
+    n = math.hypot(f[0], f[1])
+    if n > cap:
+        f *= cap / n
+    return f

@@ -70,6 +70,8 @@ def _lab(sc: TransferScenario) -> tuple[MotionLab, VvmcScenario]:
         lab.set_winch_mode("remote")
     else:
         lab.set_work_frame("level", _landing_spot(sc, lab))
+        lab.load_lead = sc.lead
+        lab.lead_shape = sc.lead and sc.mode == "antisway"
         lab.set_vvmc(True)
     try:
         lab.place_work_point(PICKUP_SHIFT_B2)

@@ -85,8 +85,17 @@ class SwingControl:
         lab, pd = self.lab, self.lab.pendulum
         L, Ld = lab.winch.length, lab.winch.speed
         a_d = R_G_D.T @ lab.a_t_g + self.rng.normal(0.0, self.sigma_accel, 3)
+        ref = lab.lead_ref_d if lab.comau_mode == "motion_comp" else None
+        if ref is not None:  # the tool leads the load (app.scenes.load_lead): the swing about that plan
+            a_d = a_d - ref[1]
         if self.measurement == "angles":
-            z = np.array([pd.alpha, pd.beta]) + self.rng.normal(0.0, self.sigma_angle, 2)
+            if ref is None:
+                alpha, beta = pd.alpha, pd.beta
+            else:
+                e = L * pd.direction() + ref[0]
+                ell = float(np.sqrt(e @ e))
+                alpha, beta = -math.asin(min(1.0, max(-1.0, e[0] / ell))), math.atan2(e[1], e[2])
+            z = np.array([alpha, beta]) + self.rng.normal(0.0, self.sigma_angle, 2)
         else:
             z = L * pd.direction() + self.rng.normal(0.0, self.sigma_pos, 3)
         ekf, law = self.ekf, self.law

@@ -42,6 +42,7 @@ from app.errors import BosunError
 from app.marine.waves import SPECTRA
 from app.scenarios.tac import TacScenario, TacSimulator
 from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, CraneSwingControl, LandingWatch
+from app.scenes.load_lead import LoadLead
 from app.scenes.target_deck import TargetVessel
 
 __all__ = [
@@ -63,6 +64,9 @@ TCP_SPEED = 0.5  # m/s at full stick, horizontally (app.engine.tac_session: the 
 WINCH_SPEED = 1.0  # m/s at full stick on w
 CHUNK = 2  # steps the crane and head advance with the TCP's target held (the crane-head engine's 50 Hz tick)
 T_MAX = 1800.0  # s: a run ends by then whatever the operator does
+#: the load lead (:class:`app.scenes.load_lead.LoadLead`): at most this far [m] (assumed: within the head's reach
+#: around the crane's tip), faded in over the first LEAD_FADE s (the quintic of H108)
+LEAD_MAX, LEAD_FADE = 1.0, 5.0
 
 
 class TransferError(BosunError):
@@ -96,6 +100,7 @@ class TransferScenario:
     slack: float = 0.5  # paid out after touchdown [m]
     wait: float = 10.0  # s before the lift, after the move, and after the set-down
     sensor_noise: bool = True  # the anti-swing sees the TCP's acceleration and the wire's angles with noise
+    lead: bool = True  # compensation leads the target's motion so the hanging load follows it (the load lead)
 
     @classmethod
     def for_scene(cls, scene: str = "crane", **values) -> TransferScenario:
@@ -312,6 +317,12 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     rng = np.random.default_rng(sc.seed + 30_000)
     swing = CraneSwingControl(load, dt, rng, noise=sc.sensor_noise) if sc.mode == "antisway" else None
     offset = np.zeros(3)
+    # the load lead (app.scenes.load_lead): compensating, the TCP leads a vessel target's spot; anti-swing, the
+    # operator's move too
+    lead = None
+    if sc.lead and (sc.mode == "antisway" or (sc.mode == "compensated" and vessel2 is not None)):
+        lead = LoadLead(dt, LEAD_MAX, LEAD_FADE, shape=sc.mode == "antisway")
+    lead_tcp, lead_ref, v_prev, zero = np.zeros(3), None, np.zeros(3), np.zeros(3)
     beta_hint, calm_prev = float(sim.beta_d[0]), None
     rows, phases = [], []
     watch = LandingWatch()
@@ -329,6 +340,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             beta_hint, calm_prev = float(sim.beta_d[0]), calm_n
         if sc.mode != "off":
             hook_cmd_n = d + R_deck @ cmd
+            hook_cmd_n = hook_cmd_n + lead_tcp  # the load lead (zero without one)
             sim.p_d_n = np.array([hook_cmd_n[0] + offset[0], hook_cmd_n[1] + offset[1], p0[2]])
         c = sim.advance(CHUNK)
         tcps = c.p_s_n if sc.mode == "off" else c.p_c_n
@@ -340,6 +352,11 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
                 d, n_up, R_deck = vessel2.deck(t)
             deck_v = (d - d_prev) / dt
             d_prev = d
+            if lead is not None:  # the deck's spot and the operator's commanded point accelerate
+                a_cmd = R_deck @ np.array([(v_cmd[0] - v_prev[0]) / dt, (v_cmd[1] - v_prev[1]) / dt, 0.0])
+                a_spot = vessel2.spot_acceleration(t) if vessel2 is not None else zero
+                lead_tcp, lead_ref = lead.step(a_spot, a_cmd, load.length)
+                v_prev = v_cmd
             # the winch: compensating, it holds the hook's commanded height (its rate: the operator's and the
             # deck's); off, it pays out what the operator asks
             load.speed_command = float(v_cmd[2]) if sc.mode == "off" else float((R_deck @ v_cmd)[2] + deck_v[2])
@@ -353,7 +370,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             ell = math.sqrt(float(e @ e))
             swing_deg = math.degrees(math.acos(min(1.0, max(-1.0, e[2] / ell))))
             if swing is not None:  # on the deck, or slack, the wire's angle is no swing
-                offset = swing.step(e, ell, not touched and not watch.slack)
+                offset = swing.step(e, ell, not touched and not watch.slack, lead_ref)
             load_t = r - d if vessel2 is None else R_deck.T @ (r - d)
             err = load_t - cmd
             row = (

@@ -297,14 +297,23 @@ class CraneSwingControl:
         x = (ekf.x, ekf.P, np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), float(ld.length))
         return x, (ekf.record(), law.record(), G, 0.2)
 
-    def step(self, e: NDArray[np.float64], ell: float, in_play: bool) -> NDArray[np.float64]:
+    def step(self, e: NDArray[np.float64], ell: float, in_play: bool, lead: tuple | None = None) -> NDArray[np.float64]:
         """One step with the wire ``e`` = load − TCP (of length ``ell``); ``in_play`` False (landed, slack) rests
-        the law.  Returns the TCP target's offset in {n} (3,)."""
+        the law.  Returns the TCP target's offset in {n} (3,).
+
+        ``lead``: (f, ẍ_ref) when the TCP leads a moving target by f so the load follows it (the load lead,
+        :func:`app.models.pendulum.suspension_lead`), ẍ_ref the TCP's planned acceleration.  The swing about that
+        planned motion obeys the same pendulum (L δ̈ = (ẍ_t − ẍ_ref) − g δ, linearised), so the estimator and law
+        see the wire less the lead and the TCP's acceleration less the planned one: they damp the swing, not the
+        lead."""
         ld = self.load
         if not self._noise:  # the sensors' noise, drawn a block at a time
             self._noise = list(self.rng.normal(0.0, 1.0, (1000, 5)) * NOISE) if self.noise else [np.zeros(5)] * 1000
         w = self._noise.pop()
         a_d = ld.tcp_a + w[:3]
+        if lead is not None:
+            e = e + lead[0]
+            a_d = a_d - lead[1]
         z = np.array([-math.asin(min(1.0, max(-1.0, e[0] / ell))), math.atan2(e[1], e[2])]) + w[3:]
         u = (np.ascontiguousarray(a_d), z, float(ld.length), float(ld.length_rate), self.active and in_play)
         self.x, (p_d, _, _, _, _) = SWING_CONTROL.step(self.x, u, self.record, self.dt)

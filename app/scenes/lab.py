@@ -28,6 +28,7 @@ from app.models.lab import LabLayout
 from app.models.registry import load_robot
 from app.models.stewart import StewartPlatform
 from app.scenes import lab_kernels
+from app.scenes.load_lead import LoadLead
 from app.sim import kernels as sim_kernels
 from app.sim.motionlab import COMAU_DRIVES, R_G_D, WINCH_DRUM, Pendulum, Winch
 from app.sim.stewart import MotionFilter, Platform
@@ -52,6 +53,10 @@ WORK_FRAMES = ("deck", "level", "world")
 #: lasting at least ENGAGE_TIME and long enough that its offset's own rate stays about ENGAGE_SPEED (assumed values;
 #: stepping onto the point jerked the load on its wire to 1.6–1.9× its weight and slack between, at Hs 2.5 m)
 ENGAGE_TIME, ENGAGE_SPEED = 3.0, 0.1
+#: the load lead of the level work frame (issue 30, :meth:`MotionLab._lead_step`): at most this far [m] (within
+#: WORK_REACH_MARGIN, which the reach check keeps around the operator's point), faded in over LEAD_FADE [s] from
+#: the frame's capture (the quintic of H108: no step in the tool's target when VVMC engages)
+LEAD_MAX, LEAD_FADE = 0.10, 2.0
 
 
 class LabError(BosunError):
@@ -143,6 +148,12 @@ class MotionLab:
         self._level_load, self._level_pay = None, 0.0
         self._engage: tuple | None = None  # VVMC's engagement: (e₀, ė₀ in {b2}, its duration, time since it began)
         self.level_spot, self.level_offset = np.zeros(3), np.zeros(3)
+        # the level frame leads the spot so the load hanging below follows the deck (issue 30: _lead_step)
+        self.load_lead = False
+        self.lead_shape = False  # the operator's move led too (the anti-swing's shaping)
+        self._lead: LoadLead | None = None
+        self._c_dot = np.zeros(3)
+        self.lead_ref_d: tuple | None = None  # the lead and the tool's planned acceleration in {d}, for the swing law
         self.winch = Winch(layout.winch)
         self.pendulum = Pendulum(damping=layout.payload_damping)
         self.T_n1_g = np.linalg.inv(layout.T_world_n1)
@@ -361,6 +372,7 @@ class MotionLab:
         world frame's: the point itself, fixed in {n2}'s coordinates (the lab's world), and no offset."""
         w = self.layout.work_point_b2 + self.work_shift
         self._level_load, self._level_pay = None, 0.0  # the winch's target in the level frame, from its capture
+        self._lead, self.lead_ref_d = None, None  # the load lead fades in again from here
         eta = self._seen_state(1)[0]
         R = StewartPlatform.rotation_rates(*self._seen_state(1))[0]
         if self.work_frame == "world":
@@ -494,7 +506,7 @@ class MotionLab:
         EM1500's rotation R and its rate Ṙ as the controllers see them (eqs. 33, 47), so the tool point is at
         s + c in {n2}'s axes: it follows the spot's heave, surge and sway, not the deck's tilt."""
         w0 = self.layout.work_point_b2
-        R, Rd = self._tilt(1)
+        R, Rd, Rdd = self._tilt(1)
         if self.work_frame == "world":  # the spot fixed in {n2}: seen from EM1500 it moves, d/dt Rᵀ(P − η)
             eta, eta_dot = self._seen_state(1)[:2]
             r = self.level_spot - eta[:3]
@@ -514,8 +526,13 @@ class MotionLab:
             else:
                 self.level_offset = self.level_offset + c_dot * dt
         c = self.level_offset
-        self.work_shift = spot - w0 + R.T @ c
-        self.work_shift_rate = spot_dot + Rd.T @ c + R.T @ c_dot
+        if self.load_lead and self.work_frame == "level":
+            f, f_dot = self._lead_step(dt, spot, Rdd, c_dot)
+            self.work_shift = spot - w0 + R.T @ (c + f)
+            self.work_shift_rate = spot_dot + Rd.T @ (c + f) + R.T @ (c_dot + f_dot)
+        else:
+            self.work_shift = spot - w0 + R.T @ c
+            self.work_shift_rate = spot_dot + Rd.T @ c + R.T @ c_dot
         if self.payload_target_b2 is not None and self.winch.mode == "motion_comp":
             # the winch's target in the level frame too: under the tool, at its height above the spot in {n2} (the
             # operator's lowering, which the law adds along {b2}'s z within the step, carried over step by step)
@@ -530,16 +547,35 @@ class MotionLab:
         else:
             self._level_load = None
 
-    def _tilt(self, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Platform k's R and Ṙ (eqs. 33, 47) as the controllers see it (compiled with the lab's kernels)."""
+    def _lead_step(
+        self, dt: float, spot: NDArray, Rdd: NDArray, c_dot: NDArray
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The load lead f (in {n2}) and its rate: the tool held at spot + c + f so that the load hanging L below it
+        follows the spot + c, not the tool (:class:`app.scenes.load_lead.LoadLead`), with the spot's acceleration
+        ẍ_spot = η̈₁₋₃ + R̈ s (eq. 51's R̈, the spot s in {b2}) and, with ``lead_shape``, the operator's (ċ's
+        difference).  Without it the 2 m pendulum (2.8 s) driven by the deck's 8 s motion overshoots the spot by
+        ω²/(ω₀² − ω²), 8 % of the deck's sway (the path error VVMC left, docs/transfer.md).  Capped at LEAD_MAX and
+        faded in over LEAD_FADE from the frame's capture."""
+        if self._lead is None:
+            self._lead = LoadLead(dt, LEAD_MAX, LEAD_FADE, shape=self.lead_shape)
+            self._c_dot = c_dot
+        a = self._seen_state(1)[2][:3] + Rdd @ spot
+        f, (_, a_ref) = self._lead.step(a, (c_dot - self._c_dot) / dt, float(self.winch.length))
+        self._c_dot = c_dot
+        R_d_n2 = R_G_D.T @ self.layout.T_world_n2[:3, :3]
+        self.lead_ref_d = (R_d_n2 @ f, R_d_n2 @ a_ref)
+        return f, self._lead.rate
+
+    def _tilt(self, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Platform k's R, Ṙ and R̈ (eqs. 33, 47, 51) as the controllers see it (compiled with the lab's kernels)."""
         eta, eta_dot, eta_ddot = self._seen_state(k)
         if self._use_kernels:
-            R, Rd, _ = model_kernels.stewart_rates(
+            R, Rd, Rdd = model_kernels.stewart_rates(
                 *(np.ascontiguousarray(a, dtype=float) for a in (eta, eta_dot, eta_ddot))
             )
-            return R, Rd
-        R, Rd, _ = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
-        return R, Rd
+        else:
+            R, Rd, Rdd = StewartPlatform.rotation_rates(eta, eta_dot, eta_ddot)
+        return R, Rd, Rdd
 
     def _reachable_near(self, shift: NDArray[np.float64]) -> bool:
         """:meth:`_reachable`, checked again once the shift has moved 10 mm from the last shift found reachable (the

@@ -62,6 +62,13 @@ class TargetVessel:
         d = self.origin + self.R_n_b_yaw @ eta[:3] + R @ self.deck_b
         return d, -R[:, 2], np.eye(3)
 
+    def spot_acceleration(self, t: float) -> NDArray[np.float64]:
+        """The landing spot's acceleration in the world at time t [m/s²]: the rigid body's point d̈ = η̈₁₋₃ + ϑ̈ × r
+        in linear seakeeping (the RAOs' own small-angle theory: the ω² terms of the rotation are second order),
+        r the spot in the vessel's frame, turned by its yaw into the world (what its MRU gives the crane)."""
+        eta_ddot = self.motion.eta_derivatives(np.array([t]))[2][0]
+        return self.R_n_b_yaw @ (eta_ddot[:3] + np.cross(eta_ddot[3:6], self.deck_b))
+
     def pose(self, t: float) -> tuple[NDArray, NDArray]:
         """The landing spot in the world and the deck's rotation (its body in the world) at time t.  The last two
         are kept: a load step asks for t and t − dt, the next for t + dt and t again (the vessel's motion is a sum
