@@ -51,6 +51,7 @@ from app.scenes.crane_load import (
     LandingWatch,
     Platform,
 )
+from app.scenes.load_lead import CRANE_LEAD_MAX, LoadLead
 from app.scenes.target_deck import TargetVessel, VesselDeck
 from app.teleop.pipeline import InputPipeline
 
@@ -124,6 +125,8 @@ class TacSession(Scene):
         # following a deck (or the vessel): where the point was when it began, what has been applied, for how long
         self._follow: dict | None = None
         self._follow_gain = (0.0, 0.0, 0.0)  # (s, ṡ, D_z) of the ramp, for the winch's heave rate
+        self._lead: LoadLead | None = None  # the load lead on a vessel target, and the anti-swing's reference
+        self._lead_ref: tuple | None = None
         self._now = 0.0
         self._p_b: np.ndarray | None = None  # base frame: the followed point in the vessel's body frame {b}
         # the load's anti-swing (the lab's estimator and law, reused): off until the operator switches it on
@@ -427,7 +430,7 @@ class TacSession(Scene):
             ld.step(p, step)
             watch.step(ld, deck_v, n_up)
             e = ld.state[0] - p
-            self.swing.step(e, float(np.sqrt(e @ e)), not watch.touched and not watch.slack)
+            self.swing.step(e, float(np.sqrt(e @ e)), not watch.touched and not watch.slack, self._lead_ref)
             for i, ev in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
                 events[i] = events[i] or ev
         self._saturated.extend(c.saturated.tolist())
@@ -499,7 +502,18 @@ class TacSession(Scene):
         if self.frame != "target":  # the base frame follows its own point (_follow_base)
             return False
         following = not lost and self.mode != "off" and not frozen
-        return self._follow_point(following, lambda: self.vessel_deck.vessel.pose(self._t())[0], dt)
+        return self._follow_point(following, lambda: self.vessel_deck.vessel.pose(self._t())[0], dt, self._lead_step)
+
+    def _lead_step(self, dt: float) -> np.ndarray:
+        """The load lead on the vessel target (:class:`app.scenes.load_lead.LoadLead`): the TCP leads the deck's
+        spot by L/(g − z̈)·ẍ so the load below moves with the deck, not behind and beyond it; eased in with the
+        following (its ramp), capped at CRANE_LEAD_MAX.  The anti-swing gets the plan as its reference."""
+        if self._lead is None:
+            self._lead = LoadLead(dt, CRANE_LEAD_MAX, 1e-9)
+        t = self._t()
+        f, ref = self._lead.step(self.vessel_deck.vessel.spot_acceleration(t), np.zeros(3), self.load.length, dt)
+        self._lead_ref = ref
+        return f
 
     def _base_point(self, eta: np.ndarray) -> np.ndarray:
         """The base frame's followed point in {n} for the vessel at η (its body point ``_p_b``)."""
@@ -516,13 +530,14 @@ class TacSession(Scene):
             self._p_b = None
         return self._follow_point(following, lambda: self._base_point(np.asarray(self.last["eta"])), dt)
 
-    def _follow_point(self, following: bool, point, dt: float) -> bool:
+    def _follow_point(self, following: bool, point, dt: float, lead=None) -> bool:
         """Move the TCP's target with the followed point's horizontal displacement D since following began, eased
         in: A = s(τ) D, s = 3τ² − 2τ³, τ = t / FOLLOW_RAMP (the TCP starts from rest and ends on the point with no
         lag: a step to the deck's velocity rang the load's wire from 0.63 to 1.43× its weight); within the mode's
         range (its alarm).  The winch's heave rate is eased the same way (``_follow_gain``: s, ṡ and D_z)."""
         if not following:
             self._follow, self._follow_gain = None, (0.0, 0.0, 0.0)
+            self._lead, self._lead_ref = None, None
             return False
         spot = np.asarray(point(), dtype=float)
         f = self._follow
@@ -534,6 +549,10 @@ class TacSession(Scene):
         s, s_dot = tau * tau * (3.0 - 2.0 * tau), 6.0 * tau * (1.0 - tau) / FOLLOW_RAMP
         D = spot - f["spot0"]
         A = s * D
+        if lead is not None:  # the load lead (the vessel target): eased in with the following
+            f_lead = lead(dt)
+            A[:2] += s * f_lead[:2]
+            self._lead_ref = (s * self._lead_ref[0], s * self._lead_ref[1])
         dp = A - f["applied"]
         dp[2] = 0.0  # the heave is the winch's
         f["applied"] = A

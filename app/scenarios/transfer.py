@@ -42,7 +42,7 @@ from app.errors import BosunError
 from app.marine.waves import SPECTRA
 from app.scenarios.tac import TacScenario, TacSimulator
 from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, CraneSwingControl, LandingWatch
-from app.scenes.load_lead import LoadLead
+from app.scenes.load_lead import CRANE_LEAD_MAX, LoadLead
 from app.scenes.target_deck import TargetVessel
 
 __all__ = [
@@ -64,9 +64,9 @@ TCP_SPEED = 0.5  # m/s at full stick, horizontally (app.engine.tac_session: the 
 WINCH_SPEED = 1.0  # m/s at full stick on w
 CHUNK = 2  # steps the crane and head advance with the TCP's target held (the crane-head engine's 50 Hz tick)
 T_MAX = 1800.0  # s: a run ends by then whatever the operator does
-#: the load lead (:class:`app.scenes.load_lead.LoadLead`): at most this far [m] (assumed: within the head's reach
-#: around the crane's tip), faded in over the first LEAD_FADE s (the quintic of H108)
-LEAD_MAX, LEAD_FADE = 1.0, 5.0
+#: the load lead (:class:`app.scenes.load_lead.LoadLead`): at most CRANE_LEAD_MAX, faded in over the first
+#: LEAD_FADE s (the quintic of H108)
+LEAD_FADE = 5.0
 
 
 class TransferError(BosunError):
@@ -321,7 +321,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     # operator's move too
     lead = None
     if sc.lead and (sc.mode == "antisway" or (sc.mode == "compensated" and vessel2 is not None)):
-        lead = LoadLead(dt, LEAD_MAX, LEAD_FADE, shape=sc.mode == "antisway")
+        lead = LoadLead(dt, CRANE_LEAD_MAX, LEAD_FADE, shape=sc.mode == "antisway")
     lead_tcp, lead_ref, v_prev, zero = np.zeros(3), None, np.zeros(3), np.zeros(3)
     beta_hint, calm_prev = float(sim.beta_d[0]), None
     rows, phases = [], []

@@ -29,7 +29,11 @@ from numpy.typing import NDArray
 from app.models.pendulum import suspension_lead
 from app.scenes.tac_kernels import ease_in
 
-__all__ = ["SHAPE_TAU", "LoadLead"]
+__all__ = ["CRANE_LEAD_MAX", "SHAPE_TAU", "LoadLead"]
+
+#: m: the crane's lead at most (assumed: within the crane head's reach around the crane's tip; the 10 m wire under a
+#: deck accelerating 1 m/s² asks for 1.02 m)
+CRANE_LEAD_MAX = 1.0
 
 #: s: the operator's acceleration smoothed by this lag before it leads the tip (a sweep of 0.1–1.0 s on the crane's
 #: platform transfer, Hs 3 m, seeds 1–2: anti-swing path error 0.063, 0.035, 0.030, 0.030, 0.034 m for 0.1, 0.2,
@@ -54,10 +58,13 @@ class LoadLead:
     _f: list = field(default_factory=lambda: [np.zeros(3)] * 3)
 
     def step(
-        self, a_target: NDArray[np.float64], a_cmd: NDArray[np.float64], length: float
+        self, a_target: NDArray[np.float64], a_cmd: NDArray[np.float64], length: float, dt: float | None = None
     ) -> tuple[NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.float64]]]:
         """One step: the target's acceleration ``a_target`` and the operator's commanded acceleration ``a_cmd``
-        (3 each, m/s²; ``a_cmd`` ignored unless ``shape``), the wire's length [m].  Returns (f, (f, ẍ_ref))."""
+        (3 each, m/s²; ``a_cmd`` ignored unless ``shape``), the wire's length [m]; ``dt`` this step's length when
+        it is not ``self.dt`` (an engine's tick).  Returns (f, (f, ẍ_ref))."""
+        if dt is not None:
+            self.dt = dt
         self.t += self.dt
         a = np.asarray(a_target, dtype=float)
         if self.shape:
