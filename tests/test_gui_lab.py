@@ -372,3 +372,23 @@ def test_a_held_jog_stops_when_its_page_or_the_tab_is_left(qtbot, window):
         win.tabs.setCurrentWidget(tab)
         qtbot.waitUntil(lambda: tab.state.comau_jog.joint == 0 and tab.state.comau.qd == [0, 0, 0], timeout=GUI_WAIT)
     tab.stick.key(Qt.Key_Shift, False)
+
+
+def test_the_lab_s_delay_and_prediction_reach_the_engine_and_are_held_under_vvmc(qtbot, lab_alone):
+    """Issue 31, item 2 (the lab's engine): the Comau page's delay and *predict* reach the engine with VVMC off (the
+    snapshot then says so); with VVMC on they are disabled and show what the engine has; a refusal (sent anyway) is
+    told to the operator."""
+    ses, _, _, tab, notices = lab_alone
+    page = tab.comau
+    tab.tabs.setCurrentWidget(page)
+    qtbot.waitUntil(lambda: page.delay.isEnabled(), timeout=GUI_WAIT)
+    page.delay.setValue(0.3)
+    page.predict.click()
+    qtbot.waitUntil(lambda: tab.state.delay == 0.3 and tab.state.predict, timeout=GUI_WAIT)
+    assert ses.delay == 0.3 and ses.predict
+    page.vvmc.click()
+    qtbot.waitUntil(lambda: tab.state.vvmc and not page.delay.isEnabled(), timeout=GUI_WAIT)
+    tab._send("set_lab_delay", delay=0.0, predict=False)  # what the disabled controls would not send
+    qtbot.waitUntil(lambda: any("set_lab_delay refused" in n for n in notices), timeout=GUI_WAIT)
+    assert "while VVMC is off" in notices[-1]
+    assert page.delay.value() == 0.3 and page.predict.isChecked() and ses.delay == 0.3

@@ -158,7 +158,7 @@ class MotionLabTab(SceneEngineMixin, QWidget):
             self.notice.emit("error", f"Motion-Lab: operator role lost: {error}")
         if not ok and re == "lab_comau_jog" and not self.comau.jog_refused():  # resent while held: said once
             return
-        if not ok and (re.startswith("lab_") or re in ("reset", "set_vessel")):
+        if not ok and (re.startswith("lab_") or re in ("reset", "set_vessel", "set_lab_delay", "set_frame")):
             self.notice.emit("error", f"Motion-Lab: {re} refused: {error}")
 
     # ------------------------------------------------------------------ state

@@ -3,7 +3,8 @@
 Each tick advances :class:`~app.scenes.lab.MotionLab` in steps of 0.01 s.  Commands (protocol
 messages, see docs/protocol.md): ``lab_platform`` (neutral / settle / engage / disengage),
 ``lab_source`` (simulation, generator, remote, timeseries with their parameters), ``lab_remote_pose``,
-``lab_comau_mode``, ``lab_winch`` (mode and / or spring-return speed), ``lab_vvmc`` (on/off), plus
+``lab_comau_mode``, ``lab_winch`` (mode and / or spring-return speed), ``lab_vvmc`` (on/off),
+``set_lab_delay`` (the simulated lab's measurement-to-actuation delay and its prediction, issue 31), plus
 ``estop`` / ``reset``.  Input (a joystick or the GUI's stick, through the one
 :class:`~app.teleop.pipeline.InputPipeline`: profile, deadzone, deadman, arming, stale halt) drives the
 Comau tool point in REMOTE (s_x, s_y, s_z; 0.25 m/s at full stick, in the robot base frame) and the
@@ -62,6 +63,7 @@ from app.plant.base import GENERATOR_DEFAULT, LabBackend
 from app.plant.simulated import SimulatedLab
 from app.plc.symbols import GENERATOR_FREQUENCY_HZ, GENERATOR_PHASE_DEG
 from app.scenarios.swing import SwingControl
+from app.scenarios.vvmc import LateView
 from app.scenes.crane_load import SNAP_FACTOR, LandingWatch
 from app.scenes.lab import REMOTE_TOOL_SPEED, MotionLab
 from app.scenes.lab_load import LabLoad
@@ -111,6 +113,7 @@ class LabSession(Scene):
         self.sources: list[dict[str, Any]] = [{"source": "generator"} for _ in self.names]
         self.spectra: list[tuple[str, float, float] | None] = [None for _ in self.names]  # the last simulated sea
         self.vvmc = False
+        self.delay, self.predict = 0.0, False  # the simulated measurement-to-actuation delay (set_lab_delay)
         self.vessel = VesselChoice()  # the wave simulator's vessel (set_vessel, issue 17)
         self._jog: tuple[int, float, float] | None = None  # Comau jog: joint (1-3), speed fraction, time received
         self._jog_reason = ""
@@ -196,6 +199,29 @@ class LabSession(Scene):
         self._plant(self.plant.set_vessel_rao, self.vessel.rao())
         self.changed()
         self.note("info", f"wave simulator vessel: {self.vessel.label} (from the next SIMULATION source on)")
+
+    @command
+    def set_lab_delay(self, delay: float, predict: bool = False) -> None:
+        """The measurement-to-actuation delay (issue 31, item 2): the Comau's and the winch's laws see both platforms'
+        motion ``delay`` s late, or with ``predict`` the motion predicted that far ahead from those late samples
+        (:class:`app.scenarios.vvmc.LateView`: an AR model that fits first 150 s after the delay is set, having no
+        past before, and is blended in over PREDICT_BLEND).  Simulated lab only (the real lab's delay is its own);
+        set while VVMC is off (the laws' input would jump under the machine; VVMC then engages from where the tool
+        is, H106)."""
+        delay = float(delay)
+        if not (math.isfinite(delay) and 0.0 <= delay <= 2.0):
+            raise CommandError(f"delay must be in [0, 2] s, got {delay}")
+        if self.plc is not None:
+            raise CommandError("a delay is simulated on the simulated lab only: the real lab's is its own")
+        if self.vvmc:
+            raise CommandError("the delay is set while VVMC is off: turn VVMC off first, then on again")
+        views = None
+        if delay > 0.0 or predict:
+            views = tuple(LateView(None, delay, STEP, bool(predict)) for _ in self.names)
+        self.lab.set_sensors(views)
+        self.delay, self.predict = delay, bool(predict) and views is not None
+        more = ", the motion predicted that far ahead (fitted 150 s from now)" if self.predict else ""
+        self.note("info", f"delay {delay:g} s{more}")
 
     @command
     def lab_remote_pose(self, platform: str, eta: list[float]) -> None:
@@ -670,6 +696,8 @@ class LabSession(Scene):
             ),
             pendulum=PendulumState(alpha=float(s.swing[0]), beta=float(s.swing[1]), swing=float(lab.pendulum.swing)),
             vvmc=self.vvmc,
+            delay=self.delay,
+            predict=self.predict,
             frame=self._frame(),
             tool_error_b2=s.e_t_b2.tolist(),
             payload_height_error=float(s.payload_height_error),

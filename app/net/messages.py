@@ -290,6 +290,15 @@ class SetCraneAntisway(Message):
     on: bool = spec("bool")
 
 
+@scene_command("set_lab_delay")
+class SetLabDelay(Message):
+    """Motion-Lab scene, simulated (issue 31): the delay [s] with which the Comau's and winch's laws see the
+    platforms' motion, and whether the motion predicted that far ahead is fed instead."""
+
+    delay: float = spec("float", 2.0)
+    predict: bool = spec("bool")
+
+
 @scene_command("set_tac_delay")
 class SetTacDelay(Message):
     """Crane-head scene (issue 31): the measurement-to-actuation delay [s] (the controller sees the MRU this late),

@@ -466,6 +466,8 @@ class LabSnapshot(Snapshot):
     winch: WinchState | None = None
     pendulum: PendulumState | None = None
     vvmc: bool = False
+    delay: float = 0.0  # s: the simulated measurement-to-actuation delay (issue 31: set_lab_delay)
+    predict: bool = False  # the motion predicted over that delay is fed instead
     frame: str = "base"  # the stick's frame: base (REMOTE), target or world (VVMC on)
     tool_error_b2: list[float] = field(default_factory=list)  # tool − work point in EM1500's body frame [m]
     payload_height_error: float = 0.0  # [m]

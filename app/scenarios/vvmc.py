@@ -32,10 +32,15 @@ from app.models.lab import load_lab
 from app.models.registry import load_robot
 from app.scenarios.swing import SwingControl
 from app.scenes.lab import MotionLab
+from app.scenes.tac_kernels import ease_in
 from app.sim.stewart import WaveSimulation
 
 PREDICT_DT = 0.1  # s: the predictor's sample time
 PREDICT_LEAD_IN = 160.0  # s: the predictor fits first at 150 s (half its 300 s window)
+#: s: a late view goes over to the prediction along the quintic of H108 once the predictor has fitted (a lab
+#: engine's delay is set with no past: the first fit comes 150 s later, perhaps under VVMC, and the view must not
+#: step by the motion of a delay's length)
+PREDICT_BLEND = 2.0
 
 
 class LateView:
@@ -51,9 +56,11 @@ class LateView:
         from app.control.predict import Foresight, PredictorSpec
 
         self.inner = inner
+        self.dt = float(dt)
         self._late: deque = deque(maxlen=round(delay / dt) + 1)
         self.foresight = Foresight(18, delay, dt, PredictorSpec(dt=PREDICT_DT)) if predict else None
         self.k = 0
+        self._predicted_for = 0.0  # s the prediction has been in use: it blends in over PREDICT_BLEND
 
     def measure(self, eta, eta_dot, eta_ddot) -> tuple[NDArray, NDArray, NDArray]:
         seen = self.inner.measure(eta, eta_dot, eta_ddot) if self.inner is not None else (eta, eta_dot, eta_ddot)
@@ -61,7 +68,11 @@ class LateView:
         late = self._late[0]  # delay ago (at the start, the oldest there is)
         self.k += 1
         if self.foresight is not None:
-            late = self.foresight.step(self.k, late)
+            ahead = self.foresight.step(self.k, late)
+            if ahead is not late:  # the predictor has fitted: from the late view to the prediction, eased (H108)
+                self._predicted_for += self.dt
+                w = ease_in(self._predicted_for / PREDICT_BLEND)[0]
+                late = ahead if w >= 1.0 else late + w * (ahead - late)
         return late[:6], late[6:12], late[12:]
 
 

@@ -11,7 +11,9 @@ import pyqtgraph as pg
 from PyQt5.QtCore import Qt, QTimer
 from PyQt5.QtWidgets import (
     QApplication,
+    QCheckBox,
     QComboBox,
+    QDoubleSpinBox,
     QFormLayout,
     QGridLayout,
     QGroupBox,
@@ -170,6 +172,25 @@ class ComauWinchPage(QWidget):
         vrow.addWidget(QLabel("frame"))
         vrow.addWidget(self.frame, 1)
         left.addLayout(vrow)
+        # the simulated lab's measurement-to-actuation delay and its prediction (issue 31, item 2): set with VVMC off
+        self.delay = QDoubleSpinBox(decimals=2, minimum=0.0, maximum=2.0, singleStep=0.1, value=0.0, suffix=" s")
+        self.delay.setToolTip(
+            "the delay with which the Comau's and winch's laws see both platforms (simulated lab only; set with "
+            "VVMC off)"
+        )
+        self.predict = QCheckBox("predict")
+        self.predict.setToolTip(
+            "feed the platforms' motion predicted the delay ahead (an online AR model; it fits 150 s after the "
+            "delay is set)"
+        )
+        self.delay.editingFinished.connect(self._send_delay)
+        self.predict.clicked.connect(lambda _on: self._send_delay())
+        drow = QHBoxLayout()
+        drow.setContentsMargins(0, 0, 0, 0)
+        drow.addWidget(QLabel("delay"))
+        drow.addWidget(self.delay, 1)
+        drow.addWidget(self.predict, 1)
+        left.addLayout(drow)
         left.addWidget(self.readout)
         left.addStretch(1)
         lw = QWidget()
@@ -209,6 +230,9 @@ class ComauWinchPage(QWidget):
         grid.setColumnStretch(1, 1)
 
     # ------------------------------------------------------------------ Comau joint jog (issue 16, item 5)
+    def _send_delay(self) -> None:
+        self._send("set_lab_delay", delay=float(self.delay.value()), predict=bool(self.predict.isChecked()))
+
     def _jog_buttons(self, k: int) -> QWidget:
         """Joint ``k``'s (0-2) jog buttons: press and hold to move it, let go to stop."""
         row = QWidget()
@@ -359,6 +383,14 @@ class ComauWinchPage(QWidget):
         if self.drive_box.title() != title:
             self.drive_box.setTitle(title)
         self.frame.setEnabled(free and bool(state.vvmc))
+        simulated = getattr(getattr(state, "plant", None), "backend", "simulated") != "plc"
+        for widget in (self.delay, self.predict):  # set with VVMC off, on the simulated lab (the engine refuses else)
+            widget.setEnabled(free and simulated and not state.vvmc)
+        delay, predict = float(getattr(state, "delay", 0.0)), bool(getattr(state, "predict", False))
+        if not self.delay.hasFocus() and abs(self.delay.value() - delay) > 1e-9:
+            self.delay.setValue(delay)  # what the engine has (a refusal leaves it)
+        if self.predict.isChecked() != predict:
+            self.predict.setChecked(predict)
         frame = getattr(state, "frame", "base")
         if frame in ("target", "world") and self.frame.currentText() != frame and not self.frame.view().isVisible():
             self.frame.setCurrentText(frame)  # the engine's (a VVMC starts in target)
