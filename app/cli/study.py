@@ -1,4 +1,5 @@
-"""``bosun study operability``: crane-head compensation over a wave scatter diagram (Dask)."""
+"""``bosun study operability``: crane-head compensation over a wave scatter diagram (Dask); ``bosun plan``: a
+forecast looked up in such a study's cells (issue 31, item 5)."""
 
 from __future__ import annotations
 
@@ -78,6 +79,41 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- plan (issue 31, item 5)
+def cmd_plan(args: argparse.Namespace) -> int:
+    """Hour by hour, whether a forecast's seas are workable by a study's cached cells, and why not."""
+    import time
+
+    from app.analysis.plan import PlanError, load_forecast, load_study, make_plan, save_plan
+
+    t0 = time.perf_counter()
+    with _as_usage_error(PlanError):
+        cache = load_study(args.study, args.criterion)
+        forecast = load_forecast(args.forecast)
+        rows = make_plan(forecast, cache)
+        out = Path(args.out) if args.out else Path("out") / "plan"
+        if out.exists() and not out.is_dir():
+            raise BosunError(f"output folder {out} is a file")
+        doc = save_plan(rows, forecast, cache, out)
+    wall = time.perf_counter() - t0
+    if args.json:
+        _print_json({**doc, "out": str(out), "wall_s": wall})
+        return 0
+    st = cache.study
+    print(
+        f"plan: {forecast.source} against {cache.out} ({st.mode}, rms(e_c) ≤ {st.criterion:g} m): "
+        f"{doc['workable_hours']:g} of {doc['hours']:g} h workable ({100 * doc['workable_share']:.0f} %)"
+    )
+    for r in rows:
+        period = f"{forecast.kind.capitalize()} {r[forecast.kind]:g} s"
+        verdict = "workable" if r["workable"] else f"NOT workable: {r['why_not']}"
+        print(f"  {r['time']}  Hs {r['hs']:g} m, {period}, {r['heading']:g}°  {verdict}")
+    for w in doc["windows"]:
+        print(f"  window: {w['start']} for {w['hours']:g} h")
+    print(f"wrote {out}/plan.csv, plan.json, plan.png ({wall:.1f} s)")
+    return 0
+
+
 # app.analysis.operability's MAX_RUNS and RUNS_CEILING (tests/test_cli.py keeps them equal): constants here, so
 # that building the parser does not import the study (NumPy, Dask's set-up) at every start
 MAX_STUDY_RUNS = 10_000
@@ -133,3 +169,21 @@ def register(sub) -> None:
             help="local cluster's worker processes, 1–64 (default: cores)",
         )
         b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")
+    with command(
+        sub,
+        "plan",
+        cmd_plan,
+        help="a forecast plan: hour by hour, is the lift workable by an operability study's cached cells, and why "
+        "not (issue 31)",
+    ) as b:
+        b.add_argument(
+            "--forecast", required=True, metavar="FILE.csv",
+            help="CSV: time,hs,tp,heading (or tz): ISO 8601 times, Hs [m], period [s], wave heading to the vessel "
+            "[deg]",
+        )  # fmt: skip
+        b.add_argument("--study", required=True, metavar="DIR", help="an operability study's --out folder")
+        b.add_argument(
+            "--criterion", type=_positive_float, default=None, metavar="M",
+            help="workable: rms(e_c) ≤ this [m] (default: the study's)",
+        )  # fmt: skip
+        b.add_argument("--out", default=None, help="output folder (default out/plan)")
