@@ -326,3 +326,24 @@ def test_the_delay_and_prediction_reach_the_engine_and_a_refusal_is_shown(qtbot,
     qtbot.waitUntil(lambda: tab.state.delay == 0.3 and tab.state.predict, timeout=GUI_WAIT)
     _choose(tab.mode, "tac")
     qtbot.waitUntil(lambda: tab.state.tac_mode == "tac" and tab.predict.isChecked(), timeout=GUI_WAIT)
+
+
+def test_the_lift_window_strip_shows_the_prediction_and_the_operator_s_threshold(qtbot, window):
+    """Issue 31, item 3: the strip under the plots draws the tip's heave predicted over the next 20 s with its
+    band (the predictor starts on the sensor's past: no 150 s wait); the *lift window* threshold reaches the engine;
+    a threshold the sea keeps within opens the window (the green span, the verdict), a tight one closes it."""
+    win, _ = window
+    tab = win.crane_head
+    win.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.state.lift is not None and bool(tab.state.lift.mean),
+                    timeout=GUI_WAIT)  # fmt: skip
+    qtbot.waitUntil(lambda: tab.lift_mean.getData()[0] is not None and len(tab.lift_mean.getData()[0]) == 41,
+                    timeout=GUI_WAIT)  # fmt: skip
+    assert tab.lift_mean.getData()[0][-1] == pytest.approx(20.0)
+    for threshold, opened in ((8.0, True), (0.1, False)):
+        tab.lift_threshold.setValue(threshold)
+        tab.lift_threshold.editingFinished.emit()
+        qtbot.waitUntil(lambda t=threshold: tab.state.lift.threshold == t, timeout=GUI_WAIT)
+        qtbot.waitUntil(lambda o=opened: tab.state.lift.open == o and tab.lift_open.isVisible() == o, timeout=GUI_WAIT)
+        assert ("OPEN" in tab.lift_verdict.text()) == opened
+        assert tab.lift_lines[0].value() == pytest.approx(threshold)

@@ -45,6 +45,7 @@ def test_round_trip_every_client_message():
         "set_crane_antisway": {"on": True},
         "set_tac_delay": {"delay": 0.2, "predict": True},
         "set_lab_delay": {"delay": 0.2, "predict": True},
+        "set_lift_window": {"threshold": 1.5},
         "set_crane_target": {"target": "vessel"},
         "tac_target_link": {"up": False},
         "lab_platform": {"platform": "em8000", "action": "engage"},

@@ -281,6 +281,19 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.predict.clicked.connect(lambda _on: self.send_delay())
         form.addRow("mode", _row((self.mode, 1), self.antisway))  # one row: the 1280 × 800 page has no height to spare
         form.addRow("delay", _row((self.delay, 1), (self.predict, 1)))
+        # issue 31, item 3: the lift window's threshold (the strip under the plots shows the prediction and verdict)
+        self.lift_threshold = QDoubleSpinBox(decimals=2, minimum=0.05, maximum=10.0, singleStep=0.1, value=1.0)
+        self.lift_threshold.setPrefix("± ")
+        self.lift_threshold.setSuffix(" m")
+        self.lift_threshold.setToolTip(
+            "a lift window is open while the tip's heave (over the target deck with a vessel target) is predicted, "
+            "with probability 0.9 or more, to stay within ± this of its mean for the next 10 s"
+        )
+        self.lift_threshold.editingFinished.connect(
+            lambda: self._send("set_lift_window", threshold=float(self.lift_threshold.value()))
+        )
+        self.lift_verdict = QLabel("–")
+        form.addRow("lift window", _row((self.lift_threshold, 1), (self.lift_verdict, 1)))
         # the landing target, the stick's frame and the camera (issue 30, items 1, 5 and 7)
         self.target = QComboBox()
         self.target.addItems(["platform", "vessel"])
@@ -333,6 +346,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.p_tcp = plots.addPlot(row=0, col=1, title="Fig. 9 head TCP in {t}")
         self.p_err = plots.addPlot(row=1, col=0, title="Fig. 11 compensation error")
         self.p_ang = plots.addPlot(row=1, col=1, title="Fig. 12 Delta arm angles")
+        self.p_lift = plots.addPlot(row=2, col=0, colspan=2, title="lift window: the heave predicted")
+        self._lift_items()
         colors = [(230, 90, 70), (90, 170, 230), (120, 210, 120)]
         for p in (self.p_eta, self.p_tcp, self.p_err, self.p_ang):
             p.showGrid(x=True, y=True, alpha=0.3)
@@ -460,6 +475,62 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             heading=float(self.heading.value()),
         )
 
+    def _lift_items(self) -> None:
+        """The lift-window strip (issue 31, item 3): the next 20 s of the tip's heave predicted, its ±2σ band, the
+        threshold's lines, and the next 10 s shaded green when the window is open."""
+        p = self.p_lift
+        p.setMaximumHeight(150)
+        p.showGrid(x=True, y=True, alpha=0.3)
+        axis_label(p, "bottom", "ahead", "s")
+        axis_label(p, "left", "heave", "m")
+        p.getAxis("left").setWidth(54)
+        p.setXRange(0.0, 20.0, padding=0.0)
+        p.setMouseEnabled(x=False, y=False)
+        self.lift_open = pg.LinearRegionItem((0.0, 10.0), movable=False, brush=pg.mkBrush(60, 170, 80, 70))
+        self.lift_open.setZValue(-10)
+        self.lift_open.hide()
+        p.addItem(self.lift_open)
+        band = pg.mkPen((90, 170, 230, 90))
+        self.lift_hi, self.lift_lo = p.plot(pen=band), p.plot(pen=band)
+        p.addItem(pg.FillBetweenItem(self.lift_hi, self.lift_lo, brush=pg.mkBrush(90, 170, 230, 60)))
+        self.lift_mean = p.plot(pen=pg.mkPen((90, 170, 230), width=1.8))
+        dash = pg.mkPen((230, 90, 70), width=1, style=Qt.DashLine)
+        self.lift_lines = [pg.InfiniteLine(angle=0, pen=dash) for _ in range(2)]
+        for line in self.lift_lines:
+            p.addItem(line)
+        p.setToolTip(
+            "the tip's heave (over the target deck with a vessel target) predicted over the next 20 s from the motion "
+            "alone (an online AR model), its ±2σ band and the threshold; green: a lift window open for the next 10 s "
+            "(the model gives it probability 0.9 or more)"
+        )
+
+    def _show_lift(self, lift) -> None:
+        if lift is None:
+            return
+        for line, sign in zip(self.lift_lines, (1, -1), strict=True):
+            line.setValue(sign * lift.threshold)
+        what = f"{lift.signal} ±{lift.threshold:g} m for {lift.length:g} s"
+        if not lift.mean:
+            verdict = f"learning ({lift.learning_s:.0f} s)"
+            for c in (self.lift_mean, self.lift_hi, self.lift_lo):
+                c.setData([], [])
+            self.lift_open.hide()
+        else:
+            x = np.arange(len(lift.mean)) * lift.step
+            m, s = np.asarray(lift.mean), np.asarray(lift.sigma)
+            self.lift_mean.setData(x, m)
+            self.lift_hi.setData(x, m + 2 * s)
+            self.lift_lo.setData(x, m - 2 * s)
+            self.lift_open.setRegion((0.0, lift.length))
+            self.lift_open.setVisible(lift.open)
+            verdict = f"{'OPEN' if lift.open else 'closed'} (P {lift.probability:.2f})"
+        title = f"lift window ({what}): {verdict}"
+        if self.p_lift.titleLabel.text != title:
+            self.p_lift.setTitle(title)
+        self.lift_verdict.setText(f"<b style='color:#2f8f3f'>{verdict}</b>" if lift.open else verdict)
+        if not self.lift_threshold.hasFocus() and abs(self.lift_threshold.value() - lift.threshold) > 1e-9:
+            self.lift_threshold.setValue(lift.threshold)
+
     def send_delay(self) -> None:
         self._send("set_tac_delay", delay=float(self.delay.value()), predict=bool(self.predict.isChecked()))
 
@@ -468,7 +539,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             self.notice.emit("error", f"crane head: operator role lost: {error}")
         refusable = (
             "set_sea", "set_tac_mode", "set_vessel", "set_crane_antisway", "set_crane_target", "set_frame",
-            "set_tac_delay",
+            "set_tac_delay", "set_lift_window",
         )  # fmt: skip
         if not ok and re in (*refusable, "reset"):
             self.notice.emit("error", f"crane head: {re} refused: {error}")
@@ -521,6 +592,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             self.scene.update_scene(state.scene, state.p_d_n, s)
         load = getattr(state, "load", None)
         self.landing.show_load(load)
+        self._show_lift(getattr(state, "lift", None))
         if load is not None and self.antisway.isChecked() != load.antisway:
             self.antisway.setChecked(load.antisway)  # the engine's (another console may switch it)
         if not self.delay.hasFocus() and abs(self.delay.value() - getattr(state, "delay", 0.0)) > 1e-9:

@@ -278,6 +278,7 @@ def cmd_sim_predict(args: argparse.Namespace) -> int:
         sc = PredictScenario(
             **_fields(args, "hs", "tp", "heading", "spectrum", "seed", "duration", "rao", "target", "target_heading"),
             window_threshold=args.window_threshold,
+            window_probability=args.window_probability,
             target_rao=args.target_vessel,
         )
     rel = "_relative" if sc.target == "vessel" else ""
@@ -521,6 +522,13 @@ def register(sub) -> None:
             default=1.0,
             metavar="M",
             help="a lift window: the heave within ±M m of its mean for 10 s (default 1)",
+        )
+        b.add_argument(
+            "--window-probability",
+            type=_finite_float,
+            default=0.9,
+            metavar="P",
+            help="a window is announced when the model gives it this probability or more (0.5–1, default 0.9)",
         )
         add_out(b, "predict[_relative]_SPECTRUM_hsHS_seedSEED")
     antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from app.control import predict_kernels
 from app.errors import BosunError
 
-__all__ = ["Foresight", "MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows"]
+__all__ = ["Foresight", "LiftWindow", "MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows"]
 
 
 class PredictError(BosunError):
@@ -190,12 +190,47 @@ class MotionPredictor:
         G = np.empty((self.m, self._h, sp.order))
         sigma = np.empty((self.m, self._h))
         coef = np.empty((self.m, sp.order))
+        psis: list[tuple[NDArray[np.float64], float]] = []
         for j in range(self.m):
             a, var_e = ar_fit(Y[:, j] - mu[j], sp.order, sp.ridge)
             G[j], psi = ar_rows(a, self._h)
             sigma[j] = np.sqrt(var_e * np.cumsum(psi**2))  # σ(h), h = 1 … H model steps (Box et al. eq. 5.1.16)
             coef[j] = a
+            psis.append((psi, var_e))
         self._fit_rec, self.coefficients = (mu, G, np.hstack([np.zeros((self.m, 1)), sigma])), coef
+        self._psi = psis
+
+    def window_probability(self, channel: int, half_width: float, length: float, draws: int = 2000) -> float:
+        """The probability that ``channel`` stays within ±``half_width`` of its mean for the next ``length`` s, by
+        the model: its predicted path on the model's grid and the joint distribution of its errors there,
+        Cov(e_i, e_j) = σ_e² Σ_{l<min(i,j)} ψ_l ψ_{l+|i−j|} (Box et al. §5.2: the errors of one origin's forecasts
+        at several lead times are correlated through the impulse response ψ), integrated by Monte Carlo over
+        ``draws`` fixed standard normal draws (the same each call: a decision does not flicker with the dice).
+        NaN before the first fit.  The model runs on the signal averaged over Δ: the window's points are its grid
+        points from the one that covers now (the average's delay) to the one past ``length``."""
+        if self._fit_rec is None:
+            return math.nan
+        sp = self.spec
+        mu, G, _ = self._fit_rec
+        J = min(self._h, math.ceil((length + self.delay) / sp.step) + 1)
+        hist = self._ring[(self.k - self._lags) % self._L]
+        x = hist[: sp.order, channel] - mu[channel]
+        path = G[channel, :J] @ x  # deviations from the mean at grid steps 1 … J
+        psi, var_e = self._psi[channel]
+        i = np.arange(J)
+        d = np.abs(i[:, None] - i[None, :])
+        lo = np.minimum(i[:, None], i[None, :]) + 1  # Σ over l < min(i, j) + 1 (steps counted from 1)
+        # Σ_{l<n} ψ_l ψ_{l+d}: built per lag d from the products (J ≤ 60: a small loop)
+        cov = np.empty((J, J))
+        for lag in range(J):
+            prod = np.concatenate([[0.0], np.cumsum(psi[: J - lag] * psi[lag:J])])
+            mask = d == lag
+            cov[mask] = prod[lo[mask]]
+        cov *= var_e
+        z = _normal_draws(draws, J)
+        L = np.linalg.cholesky(cov + 1e-12 * np.eye(J) * max(1.0, float(np.trace(cov)) / J))
+        paths = path + z @ L.T
+        return float(np.mean(np.all(np.abs(paths) <= half_width, axis=1)))
 
     def path(self, horizons: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """The prediction alone at ``horizons`` [s] (n,) → (n, channels), compiled
@@ -260,6 +295,17 @@ class Foresight:
         return late
 
 
+_DRAWS: dict[tuple[int, int], NDArray[np.float64]] = {}
+
+
+def _normal_draws(n: int, m: int) -> NDArray[np.float64]:
+    """n × m standard normal draws, the same for every call (seeded; kept)."""
+    z = _DRAWS.get((n, m))
+    if z is None:
+        z = _DRAWS[(n, m)] = np.random.default_rng(31_3).standard_normal((n, m))
+    return z
+
+
 def _cubic(grid: NDArray[np.float64], y: NDArray[np.float64], h: NDArray[np.float64]) -> NDArray[np.float64]:
     """Catmull–Rom cubic through the evenly spaced points (grid, y), at h (within grid[1] … grid[-2]); y (len(grid),)
     or (len(grid), m) for m curves at once."""
@@ -271,3 +317,61 @@ def _cubic(grid: NDArray[np.float64], y: NDArray[np.float64], h: NDArray[np.floa
         u = u[:, None]
     p0, p1, p2, p3 = y[i - 1], y[i], y[i + 1], y[i + 2]
     return p1 + 0.5 * u * (p2 - p0 + u * (2 * p0 - 5 * p1 + 4 * p2 - p3 + u * (3 * (p1 - p2) + p3 - p0)))
+
+
+class LiftWindow:
+    """The lift-window indicator an engine runs (issue 31, item 3): a :class:`MotionPredictor` on one signal (the
+    crane tip's heave, or the tip's heave over a target deck) fed the engine's samples every ``dt`` s, and at each
+    model sample (2 Hz) the prediction over the next ``ahead`` s with its σ and the probability that the signal
+    stays within ±``threshold`` of its mean for the next ``length`` s (:meth:`MotionPredictor.window_probability`);
+    *open* when that is at least ``probability``.  :meth:`state` is what the GUI's strip draws."""
+
+    STEP = 0.5  # s between the strip's points
+
+    def __init__(
+        self, dt: float, threshold: float = 1.0, length: float = 10.0, probability: float = 0.9, ahead: float = 20.0
+    ) -> None:
+        self.predictor = MotionPredictor(PredictorSpec(), 1)
+        self.every = max(1, round(self.predictor.spec.dt / dt))
+        self.threshold, self.length, self.probability_min, self.ahead = threshold, length, probability, ahead
+        self._n = 0
+        self._h = np.arange(0.0, ahead + 1e-9, self.STEP)
+        self.mean: NDArray[np.float64] | None = None  # the predicted deviation from the mean at _h
+        self.sigma: NDArray[np.float64] | None = None
+        self.probability = math.nan
+        self.primed = False
+
+    def feed(self, z: NDArray[np.float64]) -> None:
+        """The signal's samples since the last call, ``dt`` apart (any number, also none)."""
+        p = self.predictor
+        for v in np.asarray(z, dtype=float).ravel():
+            self._n += 1
+            if self._n % self.every:
+                continue
+            p.update((v,))
+            if p.ready and p.k % p.spec.decimate == 0:
+                self._refresh()
+
+    def prime(self, past: NDArray[np.float64]) -> None:
+        """Start on the signal's past (oldest first, ``spec.dt`` apart, ending now): a real sensor has run all along
+        (:meth:`MotionPredictor.prime`)."""
+        self.predictor.prime(np.asarray(past, dtype=float).reshape(-1, 1))
+        self.primed = True
+        if self.predictor.ready:
+            self._refresh()
+
+    def _refresh(self) -> None:
+        p = self.predictor
+        y, s = p.predict(self._h)
+        self.mean, self.sigma = y[:, 0] - p.mean[0], s[:, 0]
+        self.probability = p.window_probability(0, self.threshold, self.length)
+
+    @property
+    def open(self) -> bool:
+        return bool(self.probability >= self.probability_min)  # NaN (learning): never open
+
+    @property
+    def learning_s(self) -> float:
+        """Seconds until the first fit (0 once fitted)."""
+        p = self.predictor
+        return 0.0 if p.ready else max(0.0, 0.5 * p.spec.window - p.t)

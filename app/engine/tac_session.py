@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from app.control.predict import LiftWindow
 from app.engine.alarms import AlarmList
 from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene, command
@@ -35,6 +36,7 @@ from app.models.xml import read_robot_file
 from app.net.snapshots import (
     CraneLoadState,
     Hull,
+    LiftWindowState,
     SeaState,
     ShipBox,
     TacDescription,
@@ -127,6 +129,8 @@ class TacSession(Scene):
         self._follow_gain = (0.0, 0.0, 0.0)  # (s, ṡ, D_z) of the ramp, for the winch's heave rate
         self._lead: LoadLead | None = None  # the load lead on a vessel target, and the anti-swing's reference
         self._lead_ref: tuple | None = None
+        # the lift-window indicator (issue 31, item 3): the tip's heave (over a vessel target's deck) predicted
+        self.lift = LiftWindow(self.scenario.dt)
         self._now = 0.0
         self._p_b: np.ndarray | None = None  # base frame: the followed point in the vessel's body frame {b}
         # the load's anti-swing (the lab's estimator and law, reused): off until the operator switches it on
@@ -326,6 +330,7 @@ class TacSession(Scene):
             raise CommandError(f"the target stays while the load {self._where()}: lift it clear and move it off first")
         self.target = target
         self.vessel_deck = self._vessel_deck() if target == "vessel" else None
+        self.lift = LiftWindow(self.scenario.dt, self.lift.threshold)  # another signal: learnt afresh
         self._target_seen, self.target_lost, self._follow = None, False, None
         self.watch = LandingWatch(relift=True)
         self.input.disarm("landing target changed")
@@ -346,6 +351,54 @@ class TacSession(Scene):
             raise CommandError("the target link is the second vessel's: select target vessel first")
         self.target_link = bool(up)
         self.note("warning" if not up else "info", f"second vessel's motion link {'up' if up else 'down'}")
+
+    @command
+    def set_lift_window(self, threshold: float) -> None:
+        """The lift window's threshold (issue 31, item 3): a window is open while the tip's heave — over the target
+        deck with a vessel target — is predicted, with the model's probability 0.9 or more, to stay within
+        ± ``threshold`` m of its mean for the next 10 s.  The prediction goes on (only the verdict changes)."""
+        threshold = float(threshold)
+        if not (math.isfinite(threshold) and 0.05 <= threshold <= 10.0):
+            raise CommandError(f"lift window threshold must be in [0.05, 10] m, got {threshold}")
+        self.lift.threshold = threshold
+        self.note("info", f"lift window: the heave within ±{threshold:g} m for {self.lift.length:g} s")
+
+    def _feed_lift(self, c: TacChunk) -> None:
+        """The lift window's signal over the chunk: the crane tip riding the vessel (its heave as the MRU gives it,
+        the sensor's noise aside), less the target deck's with a vessel target."""
+        if not c.t.size:
+            return
+        if not self.lift.primed:  # its sensor has run all along: the predictor starts on the last 300 s
+            self._prime_lift(c)
+        z = c.p_s_n[:, 2]
+        if self.vessel_deck is not None:
+            z = z - self.vessel_deck.vessel.spots(c.t)[:, 2]
+        self.lift.feed(-z)  # NED: up positive, as the strip shows it
+
+    def _prime_lift(self, c: TacChunk) -> None:
+        """The lift window's signal over the 300 s before this chunk: the vessel's motion then (the sea's) carrying
+        the crane tip where it is on the vessel now (its nominal configuration), less the target deck's."""
+        w = self.lift
+        sp = w.predictor.spec
+        th = c.t[0] - np.arange(round(sp.window / sp.dt), 0, -1) * sp.dt
+        th = th[th >= 0.0] if isinstance(self.sim.vessel, SeaTransition) else th
+        eta0 = c.eta[0]
+        r_b = euler_zyx_to_matrix(eta0[3:6]).T @ (c.p_s_n[0] - eta0[:3])  # the tip in the vessel's frame
+        eta = self.sim.vessel.state(th).eta
+        z = eta[:, 2] + np.einsum("nj,j->n", euler_zyx_to_matrix(eta[:, 3:6])[:, 2, :], r_b)
+        if self.vessel_deck is not None:
+            z = z - self.vessel_deck.vessel.spots(th)[:, 2]
+        w.prime(-z)
+
+    def _lift_state(self) -> LiftWindowState:
+        w = self.lift
+        ready = w.mean is not None
+        return LiftWindowState(
+            signal="relative heave" if self.vessel_deck is not None else "heave",
+            threshold=w.threshold, length=w.length, probability_min=w.probability_min, step=w.STEP,
+            mean=w.mean.tolist() if ready else [], sigma=w.sigma.tolist() if ready else [],
+            probability=float(w.probability) if ready else None, open=w.open, learning_s=w.learning_s,
+        )  # fmt: skip
 
     def _vessel_deck(self) -> VesselDeck:
         vessel = TargetVessel(
@@ -433,6 +486,7 @@ class TacSession(Scene):
             self.swing.step(e, float(np.sqrt(e @ e)), not watch.touched and not watch.slack, self._lead_ref)
             for i, ev in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
                 events[i] = events[i] or ev
+        self._feed_lift(c)
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms
@@ -671,6 +725,7 @@ class TacSession(Scene):
             target_lost=self.target_lost,
             delay=self.scenario.delay,
             predict=self.scenario.predict,
+            lift=self._lift_state(),
             sample=TacSample(**self.last) if self.last else None,
             scene=self._scene() if self.last else None,
         )

@@ -290,6 +290,14 @@ class SetCraneAntisway(Message):
     on: bool = spec("bool")
 
 
+@scene_command("set_lift_window")
+class SetLiftWindow(Message):
+    """Crane-head scene (issue 31): the lift window's threshold [m] — a window is open while the tip's heave (over
+    the target deck with a vessel target) is predicted to stay within ± this of its mean for 10 s."""
+
+    threshold: float = spec("float", 10.0)
+
+
 @scene_command("set_lab_delay")
 class SetLabDelay(Message):
     """Motion-Lab scene, simulated (issue 31): the delay [s] with which the Comau's and winch's laws see the

@@ -253,6 +253,24 @@ class CraneLoadState:
 
 
 @dataclass(kw_only=True, slots=True)
+class LiftWindowState:
+    """The lift-window indicator (issue 31, item 3): the crane tip's heave (over the target deck when the target
+    is a vessel) predicted over the next ``step`` × (len − 1) s from the motion alone, as deviations from its mean
+    [m] with σ, and the model's probability that it stays within ±``threshold`` for the next ``length`` s."""
+
+    signal: str  # "heave" (the tip's) or "relative heave" (the tip's over the target deck)
+    threshold: float  # [m], the operator's
+    length: float  # [s]
+    probability_min: float  # open when the probability is at least this
+    step: float  # [s] between the points
+    mean: list[float] = field(default_factory=list)  # empty while the predictor learns
+    sigma: list[float] = field(default_factory=list)
+    probability: float | None = None  # None while learning
+    open: bool = False
+    learning_s: float = 0.0  # seconds until the first fit
+
+
+@dataclass(kw_only=True, slots=True)
 class TacSnapshot(Snapshot):
     """Vessel, offshore crane and Delta crane head (``bosun server --plant tac``)."""
 
@@ -269,6 +287,7 @@ class TacSnapshot(Snapshot):
     target_lost: bool = False  # its data older than the engine's limit: the TCP holds in the world
     delay: float = 0.0  # s: the measurement-to-actuation delay (issue 31: set_tac_delay)
     predict: bool = False  # the motion predicted ``delay`` ahead fed instead of the late measurement
+    lift: LiftWindowState | None = None  # the lift-window indicator (issue 31, item 3)
     sample: TacSample | None = None
     scene: TacScenePoints | None = None
 

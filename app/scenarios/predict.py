@@ -65,7 +65,7 @@ class PredictScenario:
     target_heading: float = 60.0  # deg: the waves' heading to the second vessel (sim transfer's default)
     window_threshold: float = 1.0  # m: a lift window is open while the heave stays within this of its mean
     window_length: float = 10.0  # s: ... for at least this long (issue 31, item 3)
-    window_margin: float = 1.0  # σ: predicted open while the prediction ± this many σ stays within the threshold
+    window_probability: float = 0.9  # predicted open when the model gives the window this probability or more
     spec: PredictorSpec = field(default_factory=PredictorSpec)
 
     def __post_init__(self) -> None:
@@ -88,6 +88,10 @@ class PredictScenario:
             (
                 math.isfinite(self.window_threshold) and self.window_threshold > 0,
                 f"window threshold must be positive, got {self.window_threshold}",
+            ),
+            (
+                math.isfinite(self.window_probability) and 0.5 <= self.window_probability < 1.0,
+                f"window probability must be in [0.5, 1), got {self.window_probability}",
             ),
             (
                 math.isfinite(self.window_length) and 1.0 <= self.window_length <= 20.0,
@@ -152,20 +156,17 @@ def simulate_predict(
     h = np.asarray(HORIZONS)
     P = np.full((n, h.size, 3), np.nan)
     S = np.full((n, h.size, 3), np.nan)
-    ahead = np.arange(0, round(sc.window_length / sp.dt) + 1) * sp.dt  # the window's span, for the lift windows
     opens = np.zeros(n, dtype=bool)
-    both = np.r_[h, ahead]
     for k in range(n):
         if cancel is not None and cancel():
             break
         pred.update(measured[k])
-        y, sig = pred.predict(both)  # the scored horizons and the window's span in one call
-        P[k], S[k] = y[: h.size], sig[: h.size]
-        if pred.ready:  # open: the predicted heave and its band stay within the threshold of its mean
-            zp, zs = y[h.size :], sig[h.size :]
-            opens[k] = bool(
-                np.all(np.abs(zp[:, 2] - pred.mean[2]) + sc.window_margin * zs[:, 2] <= sc.window_threshold)
-            )
+        P[k], S[k] = pred.predict(h)
+        if pred.ready and k % sp.decimate == 0:  # open: the model's probability that the heave stays within
+            # the threshold of its mean for the whole window (a decision on each model sample, 2 Hz)
+            opens[k] = pred.window_probability(2, sc.window_threshold, sc.window_length) >= sc.window_probability
+        elif pred.ready:
+            opens[k] = opens[k - 1]
         if progress is not None and k % 1000 == 0:
             progress(float(t[k]), sc.duration)
     res = PredictResult(sc, t, true, measured, P, S, predicted_open=opens)
@@ -224,7 +225,8 @@ def _announced(flags: NDArray[np.bool_], span: int) -> list[int]:
 def lift_windows(res: PredictResult) -> dict:
     """The lift windows (issue 31, item 3) over the scored span: a window is *open* at a sample when the heave (z)
     stays within ``window_threshold`` of its mean for the next ``window_length`` seconds; *predicted open* when
-    the predicted heave ± ``window_margin`` σ does (decided at that sample from what the predictor knew then).
+    the model gives that at least ``window_probability`` (:meth:`MotionPredictor.window_probability`: the joint
+    distribution of its errors over the window; decided at that sample from what the predictor knew then).
 
     A predicted window is announced at the first predicted-open sample (and again only after the announced one's
     end): it is right when the heave was open from there (precision = right / announced).  An actual window is a
