@@ -199,6 +199,7 @@ class MotionPredictor:
             psis.append((psi, var_e))
         self._fit_rec, self.coefficients = (mu, G, np.hstack([np.zeros((self.m, 1)), sigma])), coef
         self._psi = psis
+        self._errors: dict[tuple[int, int, int], NDArray[np.float64]] = {}  # window_probability's, this fit's
 
     def window_probability(self, channel: int, half_width: float, length: float, draws: int = 2000) -> float:
         """The probability that ``channel`` stays within ±``half_width`` of its mean for the next ``length`` s, by
@@ -216,6 +217,13 @@ class MotionPredictor:
         hist = self._ring[(self.k - self._lags) % self._L]
         x = hist[: sp.order, channel] - mu[channel]
         path = G[channel, :J] @ x  # deviations from the mean at grid steps 1 … J
+        errors = self._errors.get((channel, J, draws))
+        if errors is None:  # the errors' draws depend on the fit alone: made once a fit
+            errors = self._errors[(channel, J, draws)] = self._error_draws(channel, J, draws)
+        return float(np.mean(np.all(np.abs(path + errors) <= half_width, axis=1)))
+
+    def _error_draws(self, channel: int, J: int, draws: int) -> NDArray[np.float64]:
+        """``draws`` samples of the model's forecast errors at grid steps 1 … J (rows), jointly Gaussian."""
         psi, var_e = self._psi[channel]
         i = np.arange(J)
         d = np.abs(i[:, None] - i[None, :])
@@ -227,10 +235,8 @@ class MotionPredictor:
             mask = d == lag
             cov[mask] = prod[lo[mask]]
         cov *= var_e
-        z = _normal_draws(draws, J)
         L = np.linalg.cholesky(cov + 1e-12 * np.eye(J) * max(1.0, float(np.trace(cov)) / J))
-        paths = path + z @ L.T
-        return float(np.mean(np.all(np.abs(paths) <= half_width, axis=1)))
+        return _normal_draws(draws, J) @ L.T
 
     def path(self, horizons: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """The prediction alone at ``horizons`` [s] (n,) → (n, channels), compiled
