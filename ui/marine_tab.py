@@ -282,12 +282,12 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         form.addRow("mode", _row((self.mode, 1), self.antisway))  # one row: the 1280 × 800 page has no height to spare
         form.addRow("delay", _row((self.delay, 1), (self.predict, 1)))
         # issue 31, item 3: the lift window's threshold (the strip under the plots shows the prediction and verdict)
-        self.lift_threshold = QDoubleSpinBox(decimals=2, minimum=0.05, maximum=10.0, singleStep=0.1, value=1.0)
+        self.lift_threshold = QDoubleSpinBox(decimals=2, minimum=0.05, maximum=10.0, singleStep=0.1, value=1.5)
         self.lift_threshold.setPrefix("± ")
         self.lift_threshold.setSuffix(" m")
         self.lift_threshold.setToolTip(
             "a lift window is open while the tip's heave (over the target deck with a vessel target) is predicted, "
-            "with probability 0.9 or more, to stay within ± this of its mean for the next 10 s"
+            "with probability 0.95 or more, to stay within ± this of its mean for the next 10 s"
         )
         self.lift_threshold.editingFinished.connect(
             lambda: self._send("set_lift_window", threshold=float(self.lift_threshold.value()))
@@ -501,7 +501,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         p.setToolTip(
             "the tip's heave (over the target deck with a vessel target) predicted over the next 20 s from the motion "
             "alone (an online AR model), its ±2σ band and the threshold; green: a lift window open for the next 10 s "
-            "(the model gives it probability 0.9 or more)"
+            "(the model gives it probability 0.95 or more)"
         )
 
     def _show_lift(self, lift) -> None:

@@ -526,9 +526,9 @@ def register(sub) -> None:
         b.add_argument(
             "--window-probability",
             type=_finite_float,
-            default=0.9,
+            default=0.95,
             metavar="P",
-            help="a window is announced when the model gives it this probability or more (0.5–1, default 0.9)",
+            help="a window is announced when the model gives it this probability or more (0.5–1, default 0.95)",
         )
         add_out(b, "predict[_relative]_SPECTRUM_hsHS_seedSEED")
     antisway_help = "load-swing estimator and anti-swing in the Motion-Lab (PNG, JSON)"

@@ -335,7 +335,7 @@ class LiftWindow:
     STEP = 0.5  # s between the strip's points
 
     def __init__(
-        self, dt: float, threshold: float = 1.0, length: float = 10.0, probability: float = 0.9, ahead: float = 20.0
+        self, dt: float, threshold: float = 1.5, length: float = 10.0, probability: float = 0.95, ahead: float = 20.0
     ) -> None:
         self.predictor = MotionPredictor(PredictorSpec(), 1)
         self.every = max(1, round(self.predictor.spec.dt / dt))

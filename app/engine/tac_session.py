@@ -355,7 +355,7 @@ class TacSession(Scene):
     @command
     def set_lift_window(self, threshold: float) -> None:
         """The lift window's threshold (issue 31, item 3): a window is open while the tip's heave — over the target
-        deck with a vessel target — is predicted, with the model's probability 0.9 or more, to stay within
+        deck with a vessel target — is predicted, with the model's probability 0.95 or more, to stay within
         ± ``threshold`` m of its mean for the next 10 s.  The prediction goes on (only the verdict changes)."""
         threshold = float(threshold)
         if not (math.isfinite(threshold) and 0.05 <= threshold <= 10.0):

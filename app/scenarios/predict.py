@@ -65,7 +65,7 @@ class PredictScenario:
     target_heading: float = 60.0  # deg: the waves' heading to the second vessel (sim transfer's default)
     window_threshold: float = 1.0  # m: a lift window is open while the heave stays within this of its mean
     window_length: float = 10.0  # s: ... for at least this long (issue 31, item 3)
-    window_probability: float = 0.9  # predicted open when the model gives the window this probability or more
+    window_probability: float = 0.95  # predicted open when the model gives the window this probability or more
     spec: PredictorSpec = field(default_factory=PredictorSpec)
 
     def __post_init__(self) -> None:

@@ -67,6 +67,7 @@ T_MAX = 1800.0  # s: a run ends by then whatever the operator does
 #: the load lead (:class:`app.scenes.load_lead.LoadLead`): at most CRANE_LEAD_MAX, faded in over the first
 #: LEAD_FADE s (the quintic of H108)
 LEAD_FADE = 5.0
+LEAD_BLOCK = 1000  # steps of the deck's accelerations evaluated at once
 
 
 class TransferError(BosunError):
@@ -323,6 +324,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     if sc.lead and (sc.mode == "antisway" or (sc.mode == "compensated" and vessel2 is not None)):
         lead = LoadLead(dt, CRANE_LEAD_MAX, LEAD_FADE, shape=sc.mode == "antisway")
     lead_tcp, lead_ref, v_prev, zero = np.zeros(3), None, np.zeros(3), np.zeros(3)
+    acc: list | None = None  # the deck spot's accelerations ahead: [t of the first, (LEAD_BLOCK, 3), next index]
     beta_hint, calm_prev = float(sim.beta_d[0]), None
     rows, phases = [], []
     watch = LandingWatch()
@@ -354,7 +356,12 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             d_prev = d
             if lead is not None:  # the deck's spot and the operator's commanded point accelerate
                 a_cmd = R_deck @ np.array([(v_cmd[0] - v_prev[0]) / dt, (v_cmd[1] - v_prev[1]) / dt, 0.0])
-                a_spot = vessel2.spot_acceleration(t) if vessel2 is not None else zero
+                a_spot = zero
+                if vessel2 is not None:  # the deck's accelerations a block of steps at a time (one sea evaluation)
+                    if acc is None or acc[2] >= acc[1].shape[0]:
+                        acc = [t, vessel2.spot_accelerations(t + dt * np.arange(LEAD_BLOCK)), 0]
+                    a_spot = acc[1][acc[2]]
+                    acc[2] += 1
                 lead_tcp, lead_ref = lead.step(a_spot, a_cmd, load.length)
                 v_prev = v_cmd
             # the winch: compensating, it holds the hook's commanded height (its rate: the operator's and the

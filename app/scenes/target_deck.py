@@ -66,8 +66,12 @@ class TargetVessel:
         """The landing spot's acceleration in the world at time t [m/s²]: the rigid body's point d̈ = η̈₁₋₃ + ϑ̈ × r
         in linear seakeeping (the RAOs' own small-angle theory: the ω² terms of the rotation are second order),
         r the spot in the vessel's frame, turned by its yaw into the world (what its MRU gives the crane)."""
-        eta_ddot = self.motion.eta_derivatives(np.array([t]))[2][0]
-        return self.R_n_b_yaw @ (eta_ddot[:3] + np.cross(eta_ddot[3:6], self.deck_b))
+        return self.spot_accelerations(np.array([t]))[0]
+
+    def spot_accelerations(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:meth:`spot_acceleration` at the times ``t`` (n,), (n, 3): one evaluation of the sea for all."""
+        eta_ddot = self.motion.eta_derivatives(np.asarray(t, dtype=float))[2]
+        return (eta_ddot[:, :3] + np.cross(eta_ddot[:, 3:6], self.deck_b)) @ self.R_n_b_yaw.T
 
     def pose(self, t: float) -> tuple[NDArray, NDArray]:
         """The landing spot in the world and the deck's rotation (its body in the world) at time t.  The last two
