@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 G = 9.81
 
-__all__ = ["G", "suspension_lead", "swing_derivative", "swing_direction", "swing_rk4"]
+__all__ = ["G", "suspension_lead", "suspension_lead_xy", "swing_derivative", "swing_direction", "swing_rk4"]
 
 
 def swing_derivative(
@@ -69,9 +69,15 @@ def suspension_lead(accel: NDArray[np.float64], length: float, cap: float = math
     that is to move with a deck accelerating at ẍ must hang that far behind the point.  Returns (f_x, f_y, 0),
     its horizontal length capped at ``cap`` [m]; g − z̈ is kept above g / 2 (a point falling at half g or more
     gives no lead worth having)."""
-    g_e = max(G - float(accel[2]), 0.5 * G)
-    f = np.array([accel[0], accel[1], 0.0]) * (length / g_e)
-    n = math.hypot(f[0], f[1])
+    fx, fy = suspension_lead_xy(float(accel[0]), float(accel[1]), float(accel[2]), length, cap)
+    return np.array([fx, fy, 0.0])
+
+
+def suspension_lead_xy(ax: float, ay: float, az: float, length: float, cap: float = math.inf) -> tuple[float, float]:
+    """:func:`suspension_lead` in plain numbers (a step's hot path): (f_x, f_y)."""
+    k = length / max(G - az, 0.5 * G)
+    fx, fy = ax * k, ay * k
+    n = math.hypot(fx, fy)
     if n > cap:
-        f *= cap / n
-    return f
+        fx, fy = fx * cap / n, fy * cap / n
+    return fx, fy

@@ -355,9 +355,10 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             deck_v = (d - d_prev) / dt
             d_prev = d
             if lead is not None:  # the deck's spot and the operator's commanded point accelerate
-                a_cmd = R_deck @ np.array([(v_cmd[0] - v_prev[0]) / dt, (v_cmd[1] - v_prev[1]) / dt, 0.0])
+                a_cmd = ((v_cmd[0] - v_prev[0]) / dt, (v_cmd[1] - v_prev[1]) / dt, 0.0)  # the target frame's
                 a_spot = zero
                 if vessel2 is not None:  # the deck's accelerations a block of steps at a time (one sea evaluation)
+                    a_cmd = R_deck @ np.array(a_cmd)  # in the world
                     if acc is None or acc[2] >= acc[1].shape[0]:
                         acc = [t, vessel2.spot_accelerations(t + dt * np.arange(LEAD_BLOCK)), 0]
                     a_spot = acc[1][acc[2]]

@@ -21,12 +21,12 @@ as a reference, (f, ẍ_ref): the swing about it obeys the same pendulum (L δ̈
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from app.models.pendulum import suspension_lead
+from app.models.pendulum import suspension_lead_xy
 from app.scenes.tac_kernels import ease_in
 
 __all__ = ["CRANE_LEAD_MAX", "SHAPE_TAU", "LoadLead"]
@@ -54,8 +54,8 @@ class LoadLead:
     shape: bool = False
     tau: float = SHAPE_TAU
     t: float = 0.0
-    _a_cmd: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
-    _f: list = field(default_factory=lambda: [np.zeros(3)] * 3)
+    _a_cmd: tuple = (0.0, 0.0, 0.0)  # the operator's acceleration through the lag
+    _f: tuple = ((0.0, 0.0), (0.0, 0.0))  # f (x, y) a step ago and now
 
     def step(
         self, a_target: NDArray[np.float64], a_cmd: NDArray[np.float64], length: float, dt: float | None = None
@@ -65,18 +65,31 @@ class LoadLead:
         it is not ``self.dt`` (an engine's tick).  Returns (f, (f, ẍ_ref))."""
         if dt is not None:
             self.dt = dt
-        self.t += self.dt
-        a = np.asarray(a_target, dtype=float)
-        if self.shape:
-            self._a_cmd = self._a_cmd + (np.asarray(a_cmd, dtype=float) - self._a_cmd) * min(1.0, self.dt / self.tau)
-            a = a + self._a_cmd
-        f = suspension_lead(a, length, self.cap) * ease_in(self.t / self.fade)[0]
-        self._f = [self._f[1], self._f[2], f]  # f at the last three steps: f̈ their second difference
-        f2, f1, _ = self._f
-        a_ref = a + (f - 2.0 * f1 + f2) / (self.dt * self.dt)
-        return f, (f, np.array([a_ref[0], a_ref[1], 0.0]))
+        dt = self.dt
+        self.t += dt
+        ax, ay, az = float(a_target[0]), float(a_target[1]), float(a_target[2])
+        if self.shape:  # plain numbers: this runs every step of a transfer
+            k = min(1.0, dt / self.tau)
+            cx, cy, cz = self._a_cmd
+            cx, cy, cz = (
+                cx + (float(a_cmd[0]) - cx) * k,
+                cy + (float(a_cmd[1]) - cy) * k,
+                cz + (float(a_cmd[2]) - cz) * k,
+            )
+            self._a_cmd = (cx, cy, cz)
+            ax, ay, az = ax + cx, ay + cy, az + cz
+        fx, fy = suspension_lead_xy(ax, ay, az, length, self.cap)
+        if self.t < self.fade:
+            gain = ease_in(self.t / self.fade)[0]
+            fx, fy = fx * gain, fy * gain
+        (x2, y2), (x1, y1) = self._f  # f two steps and one step ago: f̈ the second difference
+        self._f = ((x1, y1), (fx, fy))
+        f = np.array((fx, fy, 0.0))
+        a_ref = np.array((ax + (fx - 2.0 * x1 + x2) / (dt * dt), ay + (fy - 2.0 * y1 + y2) / (dt * dt), 0.0))
+        return f, (f, a_ref)
 
     @property
     def rate(self) -> NDArray[np.float64]:
         """ḟ over the last step (the tip's feed-forward rate)."""
-        return (self._f[2] - self._f[1]) / self.dt
+        (x1, y1), (x0, y0) = self._f
+        return np.array(((x0 - x1) / self.dt, (y0 - y1) / self.dt, 0.0))
