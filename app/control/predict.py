@@ -169,13 +169,30 @@ class MotionPredictor:
             raise PredictError("predictor: a sample is not finite")
         fit_at = self._next_fit
         self._next_fit = math.inf
-        for y in Y:
-            self.update(y)
+        if self.k == 0 and Y.shape[0] >= self.spec.decimate:
+            self._fill(Y)  # a fresh predictor: its ring filled at once
+        else:
+            for y in Y:
+                self.update(y)
         if self.t >= fit_at - 1e-9:
             self._fit()
             self._next_fit = fit_at + self.spec.refit * math.ceil((self.t - fit_at + 1e-9) / self.spec.refit)
         else:
             self._next_fit = fit_at
+
+    def _fill(self, Y: NDArray[np.float64]) -> None:
+        """:meth:`update` with every row of ``Y`` in turn, on a fresh predictor, vectorised (the same ring, raw
+        samples and count; the averages summed in another order: equal to rounding)."""
+        sp = self.spec
+        n, dec = Y.shape[0], sp.decimate
+        k = np.arange(1, n + 1)
+        keep = k[-self._L :]  # the samples whose averages stay in the ring
+        cs = np.vstack([np.zeros((1, self.m)), np.cumsum(Y, axis=0)])
+        lo = np.maximum(keep - dec, 0)
+        self._ring[keep % self._L] = (cs[keep] - cs[lo]) / np.minimum(keep, dec)[:, None]
+        last = k[-dec:]
+        self._raw[last % dec] = Y[last - 1]
+        self.k = n
 
     def _mean_raw(self, n: int) -> NDArray[np.float64]:
         """The average of the first ``n`` < decimate samples (the start)."""
@@ -350,10 +367,10 @@ class LiftWindow:
     def feed(self, z: NDArray[np.float64]) -> None:
         """The signal's samples since the last call, ``dt`` apart (any number, also none)."""
         p = self.predictor
-        for v in np.asarray(z, dtype=float).ravel():
-            self._n += 1
-            if self._n % self.every:
-                continue
+        z = np.asarray(z, dtype=float).ravel()
+        first = (-self._n - 1) % self.every  # the first of these samples on the predictor's grid
+        self._n += z.size
+        for v in z[first :: self.every]:
             p.update((v,))
             if p.ready and p.k % p.spec.decimate == 0:
                 self._refresh()
