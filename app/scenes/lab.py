@@ -154,6 +154,7 @@ class MotionLab:
         self._lead: LoadLead | None = None
         self._c_dot = np.zeros(3)
         self.lead_ref_d: tuple | None = None  # the lead and the tool's planned acceleration in {d}, for the swing law
+        self._R_d_n2 = R_G_D.T @ layout.T_world_n2[:3, :3]
         self.winch = Winch(layout.winch)
         self.pendulum = Pendulum(damping=layout.payload_damping)
         self.T_n1_g = np.linalg.inv(layout.T_world_n1)
@@ -562,7 +563,7 @@ class MotionLab:
         a = self._seen_state(1)[2][:3] + Rdd @ spot
         f, (_, a_ref) = self._lead.step(a, (c_dot - self._c_dot) / dt, float(self.winch.length))
         self._c_dot = c_dot
-        R_d_n2 = R_G_D.T @ self.layout.T_world_n2[:3, :3]
+        R_d_n2 = self._R_d_n2
         self.lead_ref_d = (R_d_n2 @ f, R_d_n2 @ a_ref)
         return f, self._lead.rate
 
