@@ -32,7 +32,10 @@ slack-wire and snap-load alarms that switch raised are gone (their arrays with t
 31): the snapshot carries the delay and whether the prediction is fed (``snap.delay``, ``snap.predict``: two
 arrays added, nothing else changed).  The ``sim vvmc`` cases and ``sim antisway`` were recorded again the same
 day for the same reason: their summaries carry ``delay_s`` and ``predict`` (the scenario's ``delay`` and
-``predict``), two arrays added each, nothing else changed (checked array by array).
+``predict``), two arrays added each, nothing else changed (checked array by array).  Session 23 (issue 31, items
+2 and 3): ``engine_tac`` and ``engine_tac_neutral`` recorded again with the lift window in the snapshot
+(``snap.lift.*``: nine arrays added), ``engine_lab`` with the lab's delay (``snap.delay``, ``snap.predict``: two
+added); every array recorded before equal (checked array by array).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

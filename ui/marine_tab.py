@@ -23,6 +23,7 @@ from PyQt5.QtWidgets import (
     QLabel,
     QPushButton,
     QSplitter,
+    QVBoxLayout,
     QWidget,
 )
 
@@ -280,7 +281,6 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.delay.editingFinished.connect(self.send_delay)
         self.predict.clicked.connect(lambda _on: self.send_delay())
         form.addRow("mode", _row((self.mode, 1), self.antisway))  # one row: the 1280 × 800 page has no height to spare
-        form.addRow("delay", _row((self.delay, 1), (self.predict, 1)))
         # issue 31, item 3: the lift window's threshold (the strip under the plots shows the prediction and verdict)
         self.lift_threshold = QDoubleSpinBox(decimals=2, minimum=0.05, maximum=10.0, singleStep=0.1, value=1.5)
         self.lift_threshold.setPrefix("± ")
@@ -292,8 +292,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.lift_threshold.editingFinished.connect(
             lambda: self._send("set_lift_window", threshold=float(self.lift_threshold.value()))
         )
-        self.lift_verdict = QLabel("–")
-        form.addRow("lift window", _row((self.lift_threshold, 1), (self.lift_verdict, 1)))
+        form.addRow("delay", _row((self.delay, 1), (self.predict, 1)))
         # the landing target, the stick's frame and the camera (issue 30, items 1, 5 and 7)
         self.target = QComboBox()
         self.target.addItems(["platform", "vessel"])
@@ -346,7 +345,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.p_tcp = plots.addPlot(row=0, col=1, title="Fig. 9 head TCP in {t}")
         self.p_err = plots.addPlot(row=1, col=0, title="Fig. 11 compensation error")
         self.p_ang = plots.addPlot(row=1, col=1, title="Fig. 12 Delta arm angles")
-        self.p_lift = plots.addPlot(row=2, col=0, colspan=2, title="lift window: the heave predicted")
+        # the lift-window strip under them, a plot widget of its own (in the grid, spanning both columns, it widened
+        # the layout past a narrow panel)
+        self.lift_plot = pg.PlotWidget(title="lift window")
+        self.p_lift = self.lift_plot.getPlotItem()
         self._lift_items()
         colors = [(230, 90, 70), (90, 170, 230), (120, 210, 120)]
         for p in (self.p_eta, self.p_tcp, self.p_err, self.p_ang):
@@ -428,10 +430,24 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         main = QSplitter(Qt.Horizontal)
         main.addWidget(left)
         main.addWidget(middle)
-        main.addWidget(plots)
+        right = QWidget()
+        rl = QVBoxLayout(right)
+        rl.setContentsMargins(0, 0, 0, 0)
+        rl.setSpacing(0)
+        rl.addWidget(plots, 1)
+        # the strip's threshold beside it (the controls' column has no width to spare at 1280 × 800)
+        lift_row = QHBoxLayout()
+        lift_row.setContentsMargins(6, 2, 6, 0)
+        lift_row.addWidget(QLabel("lift window: heave within"))
+        lift_row.addWidget(self.lift_threshold)
+        lift_row.addWidget(QLabel("for 10 s, predicted with probability ≥ 0.95"))
+        lift_row.addStretch(1)
+        rl.addLayout(lift_row)
+        rl.addWidget(self.lift_plot)
+        main.addWidget(right)
         main.setChildrenCollapsible(False)
         self.scene.setMinimumWidth(240)
-        plots.setMinimumWidth(420)
+        right.setMinimumWidth(420)
         main.setStretchFactor(1, 2)
         main.setStretchFactor(2, 3)
         main.setSizes([320, 400, 560])
@@ -479,7 +495,8 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         """The lift-window strip (issue 31, item 3): the next 20 s of the tip's heave predicted, its ±2σ band, the
         threshold's lines, and the next 10 s shaded green when the window is open."""
         p = self.p_lift
-        p.setMaximumHeight(150)
+        self.lift_plot.setMaximumHeight(150)
+        self.lift_plot.setMinimumHeight(110)
         p.showGrid(x=True, y=True, alpha=0.3)
         axis_label(p, "bottom", "ahead", "s")
         axis_label(p, "left", "heave", "m")
@@ -493,11 +510,13 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         band = pg.mkPen((90, 170, 230, 90))
         self.lift_hi, self.lift_lo = p.plot(pen=band), p.plot(pen=band)
         p.addItem(pg.FillBetweenItem(self.lift_hi, self.lift_lo, brush=pg.mkBrush(90, 170, 230, 60)))
-        self.lift_mean = p.plot(pen=pg.mkPen((90, 170, 230), width=1.8))
+        self.lift_mean = p.plot(pen=pg.mkPen((90, 170, 230), width=1.8), name="predicted")
         dash = pg.mkPen((230, 90, 70), width=1, style=Qt.DashLine)
         self.lift_lines = [pg.InfiniteLine(angle=0, pen=dash) for _ in range(2)]
         for line in self.lift_lines:
             p.addItem(line)
+        legend(p, cols=2)
+        p.legend.addItem(self.lift_hi, "±2σ")
         p.setToolTip(
             "the tip's heave (over the target deck with a vessel target) predicted over the next 20 s from the motion "
             "alone (an online AR model), its ±2σ band and the threshold; green: a lift window open for the next 10 s "
@@ -509,7 +528,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             return
         for line, sign in zip(self.lift_lines, (1, -1), strict=True):
             line.setValue(sign * lift.threshold)
-        what = f"{lift.signal} ±{lift.threshold:g} m for {lift.length:g} s"
+        what = f"{'relative ' if lift.signal != 'heave' else ''}±{lift.threshold:g} m, {lift.length:g} s"
         if not lift.mean:
             verdict = f"learning ({lift.learning_s:.0f} s)"
             for c in (self.lift_mean, self.lift_hi, self.lift_lo):
@@ -524,10 +543,9 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             self.lift_open.setRegion((0.0, lift.length))
             self.lift_open.setVisible(lift.open)
             verdict = f"{'OPEN' if lift.open else 'closed'} (P {lift.probability:.2f})"
-        title = f"lift window ({what}): {verdict}"
+        title = f"lift window {what}: {verdict}"
         if self.p_lift.titleLabel.text != title:
             self.p_lift.setTitle(title)
-        self.lift_verdict.setText(f"<b style='color:#2f8f3f'>{verdict}</b>" if lift.open else verdict)
         if not self.lift_threshold.hasFocus() and abs(self.lift_threshold.value() - lift.threshold) > 1e-9:
             self.lift_threshold.setValue(lift.threshold)
 
