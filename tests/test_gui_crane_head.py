@@ -345,5 +345,5 @@ def test_the_lift_window_strip_shows_the_prediction_and_the_operator_s_threshold
         tab.lift_threshold.editingFinished.emit()
         qtbot.waitUntil(lambda t=threshold: tab.state.lift.threshold == t, timeout=GUI_WAIT)
         qtbot.waitUntil(lambda o=opened: tab.state.lift.open == o and tab.lift_open.isVisible() == o, timeout=GUI_WAIT)
-        assert ("OPEN" in tab.p_lift.titleLabel.text) == opened
+        assert ("OPEN" in tab.lift_verdict.text()) == opened
         assert tab.lift_lines[0].value() == pytest.approx(threshold)

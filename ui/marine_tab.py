@@ -283,7 +283,6 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         form.addRow("mode", _row((self.mode, 1), self.antisway))  # one row: the 1280 × 800 page has no height to spare
         # issue 31, item 3: the lift window's threshold (the strip under the plots shows the prediction and verdict)
         self.lift_threshold = QDoubleSpinBox(decimals=2, minimum=0.05, maximum=10.0, singleStep=0.1, value=1.5)
-        self.lift_threshold.setPrefix("± ")
         self.lift_threshold.setSuffix(" m")
         self.lift_threshold.setToolTip(
             "a lift window is open while the tip's heave (over the target deck with a vessel target) is predicted, "
@@ -438,10 +437,12 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         # the strip's threshold beside it (the controls' column has no width to spare at 1280 × 800)
         lift_row = QHBoxLayout()
         lift_row.setContentsMargins(6, 2, 6, 0)
-        lift_row.addWidget(QLabel("lift window: heave within"))
+        lift_row.addWidget(QLabel("lift window ±"))
         lift_row.addWidget(self.lift_threshold)
-        lift_row.addWidget(QLabel("for 10 s, predicted with probability ≥ 0.95"))
-        lift_row.addStretch(1)
+        lift_row.addWidget(QLabel("for 10 s — "))
+        self.lift_verdict = QLabel("–")
+        self.lift_verdict.setToolTip("open: the model gives the heave within the threshold for the next 10 s P ≥ 0.95")
+        lift_row.addWidget(self.lift_verdict, 1)
         rl.addLayout(lift_row)
         rl.addWidget(self.lift_plot)
         main.addWidget(right)
@@ -503,6 +504,7 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         p.getAxis("left").setWidth(54)
         p.setXRange(0.0, 20.0, padding=0.0)
         p.setMouseEnabled(x=False, y=False)
+        legend(p, cols=2, title="the heave predicted, the next 20 s")  # before the curves: they join it
         self.lift_open = pg.LinearRegionItem((0.0, 10.0), movable=False, brush=pg.mkBrush(60, 170, 80, 70))
         self.lift_open.setZValue(-10)
         self.lift_open.hide()
@@ -515,7 +517,6 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
         self.lift_lines = [pg.InfiniteLine(angle=0, pen=dash) for _ in range(2)]
         for line in self.lift_lines:
             p.addItem(line)
-        legend(p, cols=2)
         p.legend.addItem(self.lift_hi, "±2σ")
         p.setToolTip(
             "the tip's heave (over the target deck with a vessel target) predicted over the next 20 s from the motion "
@@ -528,7 +529,6 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             return
         for line, sign in zip(self.lift_lines, (1, -1), strict=True):
             line.setValue(sign * lift.threshold)
-        what = f"{'relative ' if lift.signal != 'heave' else ''}±{lift.threshold:g} m, {lift.length:g} s"
         if not lift.mean:
             verdict = f"learning ({lift.learning_s:.0f} s)"
             for c in (self.lift_mean, self.lift_hi, self.lift_lo):
@@ -543,9 +543,10 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             self.lift_open.setRegion((0.0, lift.length))
             self.lift_open.setVisible(lift.open)
             verdict = f"{'OPEN' if lift.open else 'closed'} (P {lift.probability:.2f})"
-        title = f"lift window {what}: {verdict}"
-        if self.p_lift.titleLabel.text != title:
-            self.p_lift.setTitle(title)
+        what = "over the target deck, " if lift.signal != "heave" else ""
+        text = f"{what}<b style='color:#2f8f3f'>{verdict}</b>" if lift.open else f"{what}{verdict}"
+        if self.lift_verdict.text() != text:
+            self.lift_verdict.setText(text)
         if not self.lift_threshold.hasFocus() and abs(self.lift_threshold.value() - lift.threshold) > 1e-9:
             self.lift_threshold.setValue(lift.threshold)
 
