@@ -484,8 +484,10 @@ def _run_cells(
     scheduler: str | None,
     workers: int | None,
     progress: Callable[[int, int], None] | None,
+    task: Callable[..., dict[str, Any]] = run_cell,
 ) -> tuple[int, str]:
-    """Run ``todo`` on a cluster, each result appended to ``done`` and written to ``cache`` as it arrives;
+    """Run ``todo`` on a cluster (``task(params, vessel=study.vessel)`` a cell: :func:`run_cell`, or the load
+    chart's), each result appended to ``done`` and written to ``cache`` as it arrives;
     (workers, scheduler address).  The cluster holds a few tasks a worker at a time (memory stays bounded
     whatever the study's size).  On failure or interrupt the local workers end at once and the folders made
     here are removed unless a finished cell is in them."""
@@ -509,7 +511,7 @@ def _run_cells(
 
         def submit(k: int) -> None:
             for key, p in itertools.islice(pending, k):
-                fut = client.submit(run_cell, p, vessel=study.vessel, pure=False)
+                fut = client.submit(task, p, vessel=study.vessel, pure=False)
                 keys[fut.key] = key
                 running.add(fut)
 

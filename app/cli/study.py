@@ -79,6 +79,85 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- load chart (issue 31, item 4)
+def cmd_study_loadchart(args: argparse.Namespace) -> int:
+    """SWL(radius, Hs) = the crane's rated capacity / the simulated dynamic factor, per mode and payload (Dask)."""
+    import contextlib
+    import logging
+
+    from app.analysis.loadchart import (
+        LoadChartError,
+        LoadChartStudy,
+        check_study,
+        parse_list,
+        run_study,
+        save,
+        scatter_seas,
+    )
+    from app.analysis.operability import check_scheduler, load_scatter
+
+    with contextlib.suppress(ImportError):  # without Dask, run_study says how to install it
+        import distributed  # noqa: F401
+    for name in ("distributed", "distributed.client", "distributed.gc"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+    with _as_usage_error(LoadChartError):
+        scheduler = check_scheduler(args.scheduler) if args.scheduler else None
+        radii = parse_list(args.radii, "--radii")
+        payloads = parse_list(args.payloads, "--payloads")
+        modes = tuple(m.strip() for m in args.modes.split(","))
+        if (args.hs is None) == (args.scatter is None):
+            raise LoadChartError("give the seas as --hs H1,H2,… (at --tp) or as --scatter NAME|FILE, one of the two")
+        if args.scatter is not None:
+            scatter = load_scatter(args.scatter)
+            spectrum = args.spectrum or ("pm" if scatter.period == "tz" else "jonswap")
+            seas, broken = scatter_seas(scatter, spectrum)
+            source = scatter.source + (f" ({100 * broken:.2f} % breaking seas left out)" if broken else "")
+        else:
+            spectrum = args.spectrum or "jonswap"
+            seas = [(h, args.tp) for h in parse_list(args.hs, "--hs", zero=True)]
+            source = f"Tp {args.tp:g} s"
+        study = LoadChartStudy(
+            radii=radii, payloads=payloads, modes=modes, heading=args.heading, seeds=args.seeds,
+            duration=args.duration, vessel=args.vessel, spectrum=spectrum,
+        )  # fmt: skip
+        check_study(study, seas, args.max_runs)
+        out = Path(args.out)
+        if out.exists() and not out.is_dir():
+            raise BosunError(f"output folder {out} is a file")
+        result = run_study(
+            study, seas, out, source=source, scheduler=scheduler, workers=args.workers,
+            progress=_progress_bar("study loadchart", unit="sim"), max_runs=args.max_runs,
+        )  # fmt: skip
+        doc = save(result, out)
+    if args.json:
+        _print_json({**doc, "out": str(out)})
+        return 0
+    where = f"{result.computed} run on {result.workers} workers at {result.scheduler}, " if result.computed else ""
+    print(
+        f"load chart, {source}, heading {study.heading:g}°: {len(result.cells)} simulations ({where}{result.cached} "
+        f"from the cache), {result.wall_s:.0f} s"
+    )
+    hs_all = sorted({r["hs"] for r in result.table})
+    cell = {(r["mode"], r["payload_t"], r["radius_m"], r["hs"]): r for r in result.table}
+    print("  SWL [t] (ψ); * the payload is over its SWL")
+    for mode in study.modes:
+        for payload in study.payloads:
+            head = f"{mode}, {payload:g} t"
+            print(f"  {head:16s}" + "".join(f"{'Hs ' + format(h, 'g') + ' m':>16s}" for h in hs_all))
+            for radius in study.radii:
+                rows = [cell[(mode, payload, radius, h)] for h in hs_all]
+                text = "".join(f"{r['swl_t']:9.1f}{'*' if not r['fits'] else ' '}({r['psi']:.2f})" for r in rows)
+                print(f"  {radius:14g} m" + text)
+    ch = result.checks
+    falls = "yes" if ch["falls_with_hs"] else "no: " + "; ".join(ch["rises"])
+    print(f"  each payload's chart falls as Hs grows: {falls}")
+    if ch["compensated_above_off"] is not None:
+        verdict = "yes" if ch["compensated_above_off"] else "no: " + "; ".join(ch["below_off"])
+        print(f"  compensated on or above off: {verdict}")
+    print(f"wrote {out}/loadchart.csv, summary.json, loadchart.png (cells cached in {out}/cells)")
+    return 0
+
+
 # ----------------------------------------------------------------------------- plan (issue 31, item 5)
 def cmd_plan(args: argparse.Namespace) -> int:
     """Hour by hour, whether a forecast's seas are workable by a study's cached cells, and why not."""
@@ -123,7 +202,11 @@ STUDY_RUNS_CEILING = 100_000
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
     stu = group(
-        sub, "study", "studies on a Dask cluster: study operability (scatter diagram × headings × seeds)", "study_cmd"
+        sub,
+        "study",
+        "studies on a Dask cluster: study operability (scatter diagram × headings × seeds), study loadchart (SWL "
+        "per radius and sea)",
+        "study_cmd",
     )
     with command(
         stu,
@@ -169,6 +252,42 @@ def register(sub) -> None:
             help="local cluster's worker processes, 1–64 (default: cores)",
         )
         b.add_argument("--out", default="out/operability", help="output folder; its cells/ are the resume cache")
+    with command(
+        stu,
+        "loadchart",
+        cmd_study_loadchart,
+        help="a load chart derated by the sea: SWL(radius, Hs) = rated capacity / simulated dynamic factor (Dask)",
+    ) as b:
+        b.add_argument("--radii", default="20,25,30", metavar="R1,R2,…", help="crane radii [m] (default 20,25,30)")
+        b.add_argument("--payloads", default="2,5,10", metavar="M1,M2,…", help="payloads [t] (default 2,5,10)")
+        b.add_argument("--hs", default=None, metavar="H1,H2,…", help="sea heights Hs [m] at --tp (0: flat)")
+        b.add_argument("--tp", type=_positive_float, default=9.0, help="peak period with --hs [s] (default 9)")
+        b.add_argument(
+            "--scatter", default=None, metavar="NAME|FILE",
+            help="instead of --hs: a scatter diagram's cells (north-atlantic or a CSV as study operability's); the "
+            "chart at an Hs takes its worst period",
+        )  # fmt: skip
+        b.add_argument("--heading", type=_finite_float, default=90.0, help="wave heading [deg] (default 90, beam)")
+        b.add_argument(
+            "--modes", default="off,compensated,antisway", metavar="M1,M2,…",
+            help="off, compensated, antisway (default all three)",
+        )  # fmt: skip
+        b.add_argument("--seeds", type=_positive_int, default=2, help="wave seeds per cell (2); ψ: their largest")
+        b.add_argument(
+            "--duration", type=_positive_float, default=600.0,
+            help="simulated time per run after a 60 s lead-in [s], ≤ 10800 (default 600)",
+        )  # fmt: skip
+        b.add_argument("--vessel", default=None, metavar="NAME|FILE", help="vessel (default supply); bosun vessel list")
+        b.add_argument("--spectrum", choices=list(SPECTRA), default=None, help="default jonswap (pm for a Tz diagram)")
+        b.add_argument(
+            "--max-runs", type=_positive_int, default=MAX_STUDY_RUNS, metavar="N",
+            help=f"the largest study run (default {MAX_STUDY_RUNS}; at most {STUDY_RUNS_CEILING})",
+        )  # fmt: skip
+        b.add_argument(
+            "--scheduler", default=None, metavar="tcp://HOST:8786", help="a Dask scheduler (default: a local cluster)"
+        )
+        b.add_argument("--workers", type=_positive_int, default=None, help="local cluster's workers, 1–64 (cores)")
+        b.add_argument("--out", default="out/loadchart", help="output folder; its cells/ are the resume cache")
     with command(
         sub,
         "plan",

@@ -143,6 +143,44 @@ class CraneHead:
         beta1 = np.arctan2(z - e.L0, r) - np.arctan2(e.L2 * np.sin(beta2), e.L1 + e.L2 * np.cos(beta2))
         return np.column_stack([beta0, beta1, beta2])
 
+    def radius(self, beta: ArrayLike) -> float:
+        """The crane's radius at β: the TCP's (x_d beyond the jib tip) horizontal distance from the slewing axis,
+        r of eq. (43) (issue 31, item 4: the load chart's radius)."""
+        o, R = self.crane_pose(np.asarray(beta, dtype=float))
+        p_b = o + R @ self.p_d_t
+        p1 = np.linalg.solve(self.elbow_tcp.T_world_1, np.r_[p_b, 1.0])[:3]
+        return float(math.hypot(p1[0], p1[1]))
+
+    def at_radius(self, radius: float, beta: ArrayLike) -> NDArray[np.float64]:
+        """β with the TCP at ``radius`` from the slewing axis, at the slew angle and TCP height of ``beta`` (eqs.
+        (42)–(44), elbow up); a radius the crane cannot reach there within its joint limits raises ValueError."""
+        beta = np.asarray(beta, dtype=float)
+        o, R = self.crane_pose(beta)
+        T1 = self.elbow_tcp.T_world_1
+        p1 = np.linalg.solve(T1, np.r_[o + R @ self.p_d_t, 1.0])[:3]
+        phi = math.atan2(p1[1], p1[0])
+        q1 = np.array([radius * math.cos(phi), radius * math.sin(phi), p1[2], 1.0])
+        target = (T1 @ q1)[:3]
+        new = self.crane_ik_tcp(target, float(beta[0]))[0]
+        o2, R2 = self.crane_pose(new)
+        lo, hi = self.crane.lower, self.crane.upper
+        if np.linalg.norm(o2 + R2 @ self.p_d_t - target) > 1e-6 or np.any(new < lo - 1e-9) or np.any(new > hi + 1e-9):
+            raise ValueError(f"radius {radius:g} m is out of the crane's reach at this height")
+        return new
+
+    def reach(self, beta: ArrayLike, step: float = 0.1) -> tuple[float, float]:
+        """The radii [m] the crane reaches at the slew angle and TCP height of ``beta`` (on a ``step`` grid)."""
+        ok = []
+        for r in np.arange(step, self.elbow_tcp.L1 + self.elbow_tcp.L2 + step, step):
+            try:
+                self.at_radius(float(r), beta)
+                ok.append(float(r))
+            except ValueError:
+                pass
+        if not ok:
+            raise ValueError("the crane reaches no radius at this height")
+        return ok[0], ok[-1]
+
     def tcp_n(self, eta: ArrayLike, beta: ArrayLike, p_t: ArrayLike) -> NDArray[np.float64]:
         """A head point p^t expressed in {n}: o_t^n + R_b^n R_t^b p^t."""
         eta = np.asarray(eta, dtype=float)

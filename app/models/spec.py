@@ -6,6 +6,7 @@ the parallel mechanisms, their own modules) built from a spec.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -162,6 +163,25 @@ class StewartSpec:
 
 
 @dataclass(frozen=True, eq=False)
+class RatedCapacity:
+    """A crane's rated capacity per radius in calm water (its static load chart, issue 31 item 4): ``radius``
+    [m] increasing, ``capacity`` [kg] not rising with it, and where the numbers come from.  Between two ratings
+    the capacity is the lower of the two (a load chart is read at the next radius out, as on a crane's own
+    chart: never an interpolated figure above the one printed); outside them the crane is not rated (None)."""
+
+    radius: NDArray[np.float64]
+    capacity: NDArray[np.float64]
+    source: str
+
+    def at(self, r: float) -> float | None:
+        """The rated capacity [kg] at radius ``r`` [m], or None outside the rated radii."""
+        if not (math.isfinite(r) and self.radius[0] - 1e-9 <= r <= self.radius[-1] + 1e-9):
+            return None
+        k = int(np.searchsorted(self.radius, r - 1e-9, side="left"))
+        return float(self.capacity[min(k, self.capacity.size - 1)])
+
+
+@dataclass(frozen=True, eq=False)
 class RobotSpec:
     """Everything a robot file says: identity, provenance and one mechanism."""
 
@@ -174,6 +194,7 @@ class RobotSpec:
     serial: SerialSpec | None = None
     delta: DeltaSpec | None = None
     stewart: StewartSpec | None = None
+    rated_capacity: RatedCapacity | None = None  # a crane's load chart (<rated_capacity>), if the file gives one
 
     @property
     def dof(self) -> int:

@@ -26,6 +26,7 @@ from app.models.spec import (
     DeltaSpec,
     JointSpec,
     LinkSpec,
+    RatedCapacity,
     RobotSpec,
     SerialSpec,
     StewartSpec,
@@ -52,6 +53,7 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
     "time": (1e-4, 1000.0, "s"),  # motor time constant
     "gain": (0.0, 1e6, ""),  # PID gains
     "ratio": (1e-6, 1e6, ""),  # motor gain
+    "capacity": (1e-3, 1e5, "t"),  # a crane's rated capacity (in tonnes, as load charts give it)
 }
 
 #: seeded joint-space samples at which a serial chain's FK and Jacobian must be finite
@@ -355,6 +357,7 @@ class _Reader:
             source=" ".join((root.findtext("source") or "").split()),
             assumptions=" ".join((root.findtext("assumptions") or "").split()),
             path=self.path,
+            rated_capacity=self.rated_capacity(root.find("rated_capacity")),
         )
         if kind == "serial":
             spec = RobotSpec(**common, serial=self.serial(mech))
@@ -364,6 +367,30 @@ class _Reader:
             spec = RobotSpec(**common, stewart=self.stewart(mech))
         self.check_model(spec, mech)
         return spec
+
+    def rated_capacity(self, el: etree._Element | None) -> RatedCapacity | None:
+        """``<rated_capacity source="…">`` with ``<rating radius="m" capacity="t"/>`` rows: radii increasing,
+        capacities in tonnes not rising with the radius (a crane's load chart falls outwards)."""
+        if el is None:
+            return None
+        rows = el.findall("rating")
+        radius = [self.num(r, "radius", bound="size") for r in rows]
+        tonnes = [self.num(r, "capacity", bound="capacity") for r in rows]
+        for k in range(1, len(rows)):
+            if radius[k] <= radius[k - 1]:
+                raise self.fail(
+                    rows[k], f"<rating> radius {radius[k]:g} m must be more than the row before's ({radius[k - 1]:g} m)"
+                )
+            if tonnes[k] > tonnes[k - 1]:
+                raise self.fail(
+                    rows[k],
+                    f"<rating> capacity {tonnes[k]:g} t at {radius[k]:g} m is more than {tonnes[k - 1]:g} t at "
+                    f"{radius[k - 1]:g} m: a load chart does not rise outwards",
+                )
+        source = " ".join((el.get("source") or "").split())
+        if not source:
+            raise self.fail(el, "<rated_capacity> needs a source: where the ratings come from, or 'assumed' and why")
+        return RatedCapacity(np.array(radius), 1000.0 * np.array(tonnes), source)
 
     # ------------------------------------------------------------------ the model as physics
     def check_model(self, spec: RobotSpec, mech: etree._Element) -> None:
