@@ -65,7 +65,7 @@ def test_the_crane_s_rated_capacity_is_read_from_its_robot_file_conservatively()
 @pytest.mark.parametrize(
     ("rows", "message"),
     [
-        ('<rating radius="10" capacity="5"/><rating radius="12" capacity="6"/>', r":\d+: .*6 t at 12 m is more than 5 t"),
+        ('<rating radius="10" capacity="5"/><rating radius="12" capacity="6"/>', r":\d+: .*6 t at 12 m is more"),
         ('<rating radius="10" capacity="5"/><rating radius="10" capacity="4"/>', r":\d+: .*radius 10 m must be more"),
         ('<rating radius="10" capacity="5"/><rating radius="12" capacity="nan"/>', r":\d+: "),
         ('<rating radius="10" capacity="5"/>', r":\d+: "),
@@ -103,19 +103,77 @@ def test_the_radius_of_a_configuration_round_trips():
         assert np.all(beta >= system.crane.lower) and np.all(beta <= system.crane.upper)
 
 
+# ----------------------------------------------------------------------------- the live indicator
+def test_the_watch_keeps_the_window_s_peak_and_gives_the_share_of_swl():
+    from app.scenes.crane_load import LoadChartWatch
+
+    w = LoadChartWatch(CRANE.rated_capacity, window=10.0)
+    assert w.report(5000.0, 29.7, 0.0)["swl_percent"] is None  # nothing seen yet: no figure, not 50 %
+    for t, f in ((0.0, 1.0), (1.0, 1.6), (2.0, 1.1), (9.0, 1.2)):
+        w.step(t, f)
+    r = w.report(5000.0, 29.7, 9.0)
+    assert r["psi"] == 1.6 and r["capacity_t"] == 10.0 and r["swl_percent"] == pytest.approx(80.0)
+    w.step(11.5, 0.9)  # the 1.6 at 1 s has left the 10 s window: the 1.2 at 9 s is the peak
+    assert w.report(5000.0, 29.7, 11.5)["psi"] == 1.2
+    w.step(30.0, 0.2)  # a landed load: ψ is at least 1 (lifted, it weighs its weight)
+    assert w.report(5000.0, 29.7, 30.0)["psi"] == 1.0
+    assert w.report(5000.0, 40.0, 30.0)["swl_percent"] is None  # outside the chart: no share
+
+
+def test_the_crane_engine_shows_this_load_in_this_sea_as_a_share_of_its_swl_and_alarms_over_it():
+    """The crane-head engine, off, Hs 3 m: the snapshot's share is 100 · m ψ / C(r) with ψ at least every tension
+    factor it published in the window; a 9.5 t load at 29.7 m (C 10 t) in that sea is over its SWL: the overload
+    alarm (critical) is raised.  Compensating, the same load in the same sea stays under it."""
+    from app.engine.tac_session import TacSession
+    from app.scenarios.tac import TacScenario
+    from app.scenes.crane_load import CraneLoad
+    from app.sim.load import LoadSpec
+    from tests.test_crane_stick import run
+
+    results = {}
+    for mode in ("off", "tac"):
+        ses = TacSession(scenario=TacScenario(duration=1e5, hs=3.0, mode=mode))
+        ses.load = CraneLoad(load_spec=LoadSpec(mass=9500.0))
+        t, seen = 0.0, []
+        for _ in range(30):
+            t = run(ses, 1.0, None, t)
+            ld = ses.snapshot().load
+            seen.append(ld.tension_factor)
+        assert ld.payload_t == 9.5 and ld.capacity_t == 10.0 and abs(ld.radius - 29.684) < 0.05
+        assert ld.psi >= max(seen) - 1e-4 and ld.psi_window == pytest.approx(30.0, abs=1.0)
+        assert ld.swl_percent == pytest.approx(100 * 9.5 * ld.psi / 10.0, rel=1e-3)
+        results[mode] = (ld.swl_percent, ses.alarms.active("overload"))
+    assert results["off"][0] >= 100.0 and results["off"][1], results
+    assert results["tac"][0] < 100.0 and not results["tac"][1], results
+
+
 # ----------------------------------------------------------------------------- the study
 pytest.importorskip("distributed")
 
 
-def test_the_load_chart_study_falls_with_hs_lies_above_off_compensated_and_resumes(tmp_path):
-    from app.analysis.loadchart import LoadChartStudy, run_cell, run_study, save
+STUDY_SEAS = [(0.0, 9.0), (1.0, 9.0), (2.0, 9.0)]
 
-    study = LoadChartStudy(radii=(20.0, 30.0), payloads=(5.0,), modes=("off", "compensated"), seeds=1, duration=30.0)
-    seas = [(0.0, 9.0), (1.0, 9.0), (2.0, 9.0)]
-    res = run_study(study, seas, tmp_path / "lc", workers=2)
-    doc = save(res, tmp_path / "lc")
-    assert res.computed == 12 and doc["checks"]["falls_with_hs"] and doc["checks"]["compensated_above_off"]
-    by = {(r["mode"], r["radius_m"], r["hs"]): r for r in res.table}
+
+@pytest.fixture(scope="module")
+def chart(tmp_path_factory):
+    """A small load chart: 2 modes × 5 and 9 t × 20 and 30 m × Hs 0, 1, 2 m at Tp 9 s, one seed of 30 s."""
+    from app.analysis.loadchart import LoadChartStudy, run_study, save
+
+    study = LoadChartStudy(
+        radii=(20.0, 30.0), payloads=(5.0, 9.0), modes=("off", "compensated"), seeds=1, duration=30.0
+    )
+    out = tmp_path_factory.mktemp("chart") / "lc"
+    res = run_study(study, STUDY_SEAS, out, workers=2)
+    return study, out, res, save(res, out)
+
+
+def test_the_load_chart_study_falls_with_hs_lies_above_off_compensated_and_resumes(chart):
+    from app.analysis.loadchart import run_cell, run_study
+
+    study, out, res, doc = chart
+    seas = STUDY_SEAS
+    assert res.computed == 24 and doc["checks"]["falls_with_hs"] and doc["checks"]["compensated_above_off"]
+    by = {(r["mode"], r["radius_m"], r["hs"]): r for r in res.table if r["payload_t"] == 5.0}
     for radius, cap in ((20.0, 15.0), (30.0, 10.0)):
         calm = by[("off", radius, 0.0)]
         assert calm["capacity_t"] == cap and abs(calm["swl_t"] - cap) < 1e-3 * cap  # ψ = 1: the rated chart
@@ -129,11 +187,77 @@ def test_the_load_chart_study_falls_with_hs_lies_above_off_compensated_and_resum
     params = {k: cell[k] for k in ("v", "kind", "mode", "payload", "radius", "hs", "tp", "heading", "seed",
                                    "duration", "dt", "spectrum", "wire", "vessel")}  # fmt: skip
     assert run_cell(params)["psi"] == cell["psi"]
-    again = run_study(study, seas, tmp_path / "lc", workers=1)
-    assert again.computed == 0 and again.cached == 12 and again.table == res.table
-    assert (tmp_path / "lc" / "loadchart.png").stat().st_size > 10_000
-    summary = json.loads((tmp_path / "lc" / "summary.json").read_text(encoding="utf-8"))
+    again = run_study(study, seas, out, workers=1)
+    assert again.computed == 0 and again.cached == 24 and again.table == res.table
+    assert (out / "loadchart.png").stat().st_size > 10_000
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["rated_capacity"]["capacity_t"][0] == 25.0
+
+
+def _forecast(tmp_path, rows: str):
+    path = tmp_path / "forecast.csv"
+    path.write_text("time,hs,tp,heading\n" + rows, encoding="utf-8")
+    return path
+
+
+def test_the_plan_reads_a_load_chart_study_as_its_chart_conservatively(chart, tmp_path):
+    """A lift of 5 t at 25 m: each forecast hour is the study's rougher Hs row at the next radius out (30 m), its
+    SWL the table's; a payload over it is not workable and says so; a forecast or lift outside the study is refused
+    in one line."""
+    from app.analysis.plan import PlanError, load_forecast, load_study, make_plan
+
+    _, out, res, _ = chart
+    table = {(r["mode"], r["radius_m"], r["hs"]): r for r in res.table if r["payload_t"] == 5.0}
+    f = load_forecast(_forecast(tmp_path, "2026-12-01T00:00,0.6,9.2,80\n2026-12-01T01:00,1.5,8.8,95\n"))
+    for mode in ("off", "compensated"):
+        rows = make_plan(f, load_study(out, payload=5.0, radius=25.0, mode=mode))
+        for row, h in zip(rows, (1.0, 2.0), strict=True):
+            want = table[(mode, 30.0, h)]
+            assert (row["cell_hs"], row["cell_radius"]) == (h, 30.0)
+            assert row["swl_t"] == pytest.approx(want["swl_t"], rel=1e-12) and row["psi"] == want["psi"]
+            assert row["workable"] == (want["swl_t"] >= 5.0)
+    assert load_study(out, payload=5.0, radius=25.0).mode == "compensated"  # the default where studied
+    light = make_plan(f, load_study(out, payload=4.0, radius=19.0, mode="off"))  # read as 5 t at 20 m
+    assert all(r["cell_radius"] == 20.0 and r["cell_payload"] == 5.0 for r in light)
+    for rows, message in (
+        ("2026-12-01T00:00,2.5,9,90\n", "Hs 2.5 m is above the study's largest (2 m)"),
+        ("2026-12-01T00:00,1,10,90\n", "Tp 10 s is outside the study's periods at Hs 1 m (9 ± 0.5 s)"),
+        ("2026-12-01T00:00,1,9,0\n", "heading 0° is more than 22.5° from the study's (90°)"),
+    ):
+        fc = load_forecast(_forecast(tmp_path, rows))
+        with pytest.raises(PlanError, match=re.escape(message)):
+            make_plan(fc, load_study(out, payload=5.0, radius=25.0))
+    for kw, message in (
+        (dict(), "give its --payload T and --radius M"),
+        (dict(payload=9.5, radius=25.0), "payload 9.5 t is above the study's largest (9 t)"),
+        (dict(payload=5.0, radius=31.0), "radius 31 m is beyond the study's largest (30 m)"),
+        (dict(payload=5.0, radius=25.0, mode="antisway"), "mode antisway is not in the study"),
+        (dict(payload=5.0, radius=25.0, criterion=0.1), "--criterion is an operability study's"),
+    ):
+        with pytest.raises(PlanError, match=re.escape(message)):
+            load_study(out, **kw)
+
+
+def test_bosun_plan_with_a_load_chart_study_prints_the_lift_and_its_verdicts(chart, tmp_path):
+    """9 t at 30 m (rated 10 t) uncompensated: over its SWL wherever the sea's ψ passes 10/9 (Hs 1 m gives about
+    1.2), and the command's verdicts are the table's, hour by hour."""
+    _, out, res, _ = chart
+    swl = {r["hs"]: r["swl_t"] for r in res.table if (r["mode"], r["radius_m"], r["payload_t"]) == ("off", 30.0, 9.0)}
+    fits = [swl[h] >= 9.0 for h in (1.0, 2.0)]
+    assert not all(fits), swl  # the chart derates 9 t below its weight in these seas: the refusal is exercised
+    fc = _forecast(tmp_path, "2026-12-01T00:00,1,9,90\n2026-12-01T01:00,2,9,90\n")
+    plan = tmp_path / "plan"
+    res2 = subprocess.run(
+        [sys.executable, "-m", "app", "plan", "--forecast", str(fc), "--study", str(out), "--payload", "9",
+         "--radius", "30", "--mode", "off", "--out", str(plan)],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert res2.returncode == 0, res2.stderr
+    assert "off, 9 t at 30 m ≤ its SWL" in res2.stdout and f"{sum(fits)} of 2 h workable" in res2.stdout
+    assert f"NOT workable: over its SWL: 9 t > {min(swl[1.0], swl[2.0]):.2f} t" in res2.stdout
+    doc = json.loads((plan / "plan.json").read_text(encoding="utf-8"))
+    assert doc["lift"] == {"payload_t": 9.0, "radius_m": 30.0} and (plan / "plan.png").is_file()
+    assert [r["workable"] for r in doc["rows"]] == fits
 
 
 @pytest.mark.parametrize(

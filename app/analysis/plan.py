@@ -22,6 +22,17 @@ The lookup (conservative where it must choose):
 
 A forecast outside the study (Hs above its largest, a period or heading beyond its reach, a cell it did not
 simulate, a cell missing from its cache) is refused in one line naming the forecast's line.
+
+A **load-chart study** (:mod:`app.analysis.loadchart`, issue 31, item 4) plans a lift of ``payload`` tonnes at
+``radius`` metres in one of its modes: a forecast time is workable when the payload is at most its SWL there,
+SWL = C(r) / ψ, read as the chart is (conservative at every choice):
+
+* **Hs**: the study's smallest Hs at or above the forecast's; **radius**: the study's smallest at or above the
+  lift's (the next radius out; a lift inside the smallest radius reads the smallest); **payload**: the study's
+  smallest at or above the lift's;
+* **period**: ψ is the largest over the study's periods at that Hs (and all seeds), as in its chart; the forecast's
+  period must lie among them (within half their smallest step beyond the first and last; a study of one period
+  answers within :data:`PERIOD_TOLERANCE` of it); **heading**: within :data:`HEADING_TOLERANCE` of the study's.
 """
 
 from __future__ import annotations
@@ -44,6 +55,8 @@ MAX_FORECAST_ROWS = 10_000  # 14 months of hourly forecast
 MAX_FORECAST_BYTES = 2_000_000
 #: deg: a forecast heading within this of one of the study's (half the 45° spacing of the usual 8 headings)
 HEADING_TOLERANCE = 22.5
+#: s: a load-chart study of one period answers a forecast period this close to it
+PERIOD_TOLERANCE = 0.5
 
 
 class PlanError(BosunError):
@@ -130,10 +143,75 @@ class StudyCells:
     vessel_id: str | None
 
 
-def load_study(out: str | Path, criterion: float | None = None) -> StudyCells:
+@dataclass
+class ChartCells:
+    """A load-chart study's settings, seas and cell cache, and the planned lift (:func:`load_study`)."""
+
+    out: Path
+    study: Any  # LoadChartStudy
+    seas: list[tuple[float, float]]
+    payload: float  # t
+    radius: float  # m
+    mode: str
+    vessel_id: str | None
+
+
+def load_study(
+    out: str | Path,
+    criterion: float | None = None,
+    payload: float | None = None,
+    radius: float | None = None,
+    mode: str | None = None,
+) -> StudyCells | ChartCells:
     """The study in ``out``: its ``summary.json`` (the settings and the scatter it was run over) and its cells'
-    cache; refused in one line when it is not a finished operability study.  ``criterion``: the lift's own
-    rms(e_c) limit [m] instead of the study's (the cells hold the rms, not the verdict)."""
+    cache; refused in one line when it is not a finished operability or load-chart study.  ``criterion``: the
+    lift's own rms(e_c) limit [m] instead of the operability study's (the cells hold the rms, not the verdict);
+    ``payload`` [t], ``radius`` [m] and ``mode``: a load-chart study's planned lift (module text)."""
+    out = Path(out)
+    summary = out / "summary.json"
+    if summary.is_file():
+        try:
+            kind = "loadchart" if "rated_capacity" in json.loads(summary.read_text(encoding="utf-8")) else "operability"
+        except (OSError, ValueError):
+            kind = "operability"  # refused below with its reason
+        if kind == "loadchart":
+            if criterion is not None:
+                raise PlanError(f"{out}: a load-chart study plans by SWL: --criterion is an operability study's")
+            return _load_chart(out, summary, payload, radius, mode)
+    if payload is not None or radius is not None or mode is not None:
+        raise PlanError(f"{out}: --payload, --radius and --mode plan a lift with a load-chart study's cells "
+                        "(bosun study loadchart); this is not one")  # fmt: skip
+    return _load_operability(out, summary, criterion)
+
+
+def _load_chart(out: Path, summary: Path, payload: float | None, radius: float | None, mode: str | None) -> ChartCells:
+    from app.analysis.loadchart import LoadChartStudy
+    from app.analysis.operability import OperabilityError, vessel_id
+
+    if payload is None or radius is None:
+        raise PlanError(f"{out}: a load-chart study plans a lift: give its --payload T and --radius M")
+    try:
+        doc = json.loads(summary.read_text(encoding="utf-8"))
+        st = dict(doc["study"])
+        for k in ("radii", "payloads", "modes"):
+            st[k] = tuple(st[k])
+        study = LoadChartStudy(**st)
+        seas = [(float(h), float(t)) for h, t in doc["seas"]]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise PlanError(f"{summary}: not a load-chart study's summary ({one_reason(err)})") from None
+    except OperabilityError as err:
+        raise PlanError(f"{summary}: {err}") from None
+    mode = mode or ("compensated" if "compensated" in study.modes else study.modes[0])
+    if mode not in study.modes:
+        raise PlanError(f"{out}: mode {mode} is not in the study (its modes: {', '.join(study.modes)})")
+    if not payload > 0 or payload > max(study.payloads):
+        raise PlanError(f"{out}: payload {payload:g} t is above the study's largest ({max(study.payloads):g} t)")
+    if not radius > 0 or radius > max(study.radii):
+        raise PlanError(f"{out}: radius {radius:g} m is beyond the study's largest ({max(study.radii):g} m)")
+    return ChartCells(out, study, seas, float(payload), float(radius), mode, vessel_id(study.vessel))
+
+
+def _load_operability(out: Path, summary: Path, criterion: float | None) -> StudyCells:
     from app.analysis.operability import (
         OperabilityError,
         OperabilityStudy,
@@ -142,8 +220,6 @@ def load_study(out: str | Path, criterion: float | None = None) -> StudyCells:
         vessel_id,
     )
 
-    out = Path(out)
-    summary = out / "summary.json"
     if not summary.is_file():
         raise PlanError(f"{out}: not a study's folder (no summary.json: bosun study operability … --out {out})")
     try:
@@ -168,6 +244,53 @@ def one_reason(err: BaseException) -> str:
 
 def _angle(a: float, b: float) -> float:
     return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def lookup_chart(cache: ChartCells, hs: float, period: float, kind: str, heading: float, where: str) -> dict:
+    """A load-chart study's answer for one forecast sea and the planned lift (module text): the cells it reads,
+    ψ, the SWL and whether the payload fits."""
+    from app.analysis.loadchart import cell_key, cell_params, crane_rating
+    from app.marine.waves import SeaStateError, tp_from_tz
+
+    st = cache.study
+    hs_rows = sorted({h for h, _ in cache.seas})
+    above = [h for h in hs_rows if h >= hs - 1e-9]
+    if not above:
+        raise PlanError(f"{where}: Hs {hs:g} m is above the study's largest ({hs_rows[-1]:g} m)")
+    h_row = above[0]
+    tps = sorted(t for h, t in cache.seas if h == h_row)
+    p = period
+    if kind == "tz":
+        try:
+            p = tp_from_tz(st.spectrum, h_row, period)
+        except (SeaStateError, ValueError) as err:
+            raise PlanError(f"{where}: Tz {period:g} s: {err}") from None
+    half = 0.5 * float(np.min(np.diff(tps))) if len(tps) > 1 else PERIOD_TOLERANCE
+    if p < tps[0] - half or p > tps[-1] + half:
+        span = f"{tps[0]:g}–{tps[-1]:g} s" if len(tps) > 1 else f"{tps[0]:g} ± {PERIOD_TOLERANCE:g} s"
+        raise PlanError(f"{where}: Tp {p:.3g} s is outside the study's periods at Hs {h_row:g} m ({span})")
+    if _angle(heading, st.heading) > HEADING_TOLERANCE:
+        raise PlanError(f"{where}: heading {heading:g}° is more than {HEADING_TOLERANCE:g}° from the study's "
+                        f"({st.heading:g}°)")  # fmt: skip
+    r_row = min(r for r in st.radii if r >= cache.radius - 1e-9)
+    m_row = min(m for m in st.payloads if m >= cache.payload - 1e-9)
+    psi = 0.0
+    for tp in tps:
+        for seed in range(1, st.seeds + 1):
+            key = cell_key(cell_params(st, cache.mode, m_row, r_row, h_row, tp, seed, cache.vessel_id))
+            try:
+                psi = max(psi, float(json.loads((cache.out / "cells" / f"{key}.json").read_text("utf-8"))["psi"]))
+            except (OSError, ValueError, KeyError):
+                raise PlanError(
+                    f"{where}: the study's cell {cache.mode}, {m_row:g} t, {r_row:g} m, Hs {h_row:g} m, Tp {tp:g} s "
+                    f"(seed {seed}) is not in {cache.out}/cells: run the study again to finish it"
+                ) from None
+    swl = crane_rating().at(r_row) / 1000.0 / psi
+    fits = cache.payload <= swl
+    return {
+        "cell_hs": h_row, "cell_radius": r_row, "cell_payload": m_row, "psi": psi, "swl_t": swl,
+        "workable": fits, "why_not": "" if fits else f"over its SWL: {cache.payload:g} t > {swl:.2f} t (ψ {psi:.2f})",
+    }  # fmt: skip
 
 
 def lookup(cache: StudyCells, hs: float, period: float, kind: str, heading: float, where: str) -> dict[str, Any]:
@@ -234,14 +357,15 @@ def lookup(cache: StudyCells, hs: float, period: float, kind: str, heading: floa
     return cell
 
 
-def make_plan(forecast: Forecast, cache: StudyCells) -> list[dict[str, Any]]:
+def make_plan(forecast: Forecast, cache: StudyCells | ChartCells) -> list[dict[str, Any]]:
     """One row per forecast time: the forecast, the study's cell it falls in, workable and why not."""
+    look = lookup_chart if isinstance(cache, ChartCells) else lookup
     steps = [(b - a).total_seconds() / 3600.0 for a, b in zip(forecast.times, forecast.times[1:], strict=False)]
     last = float(np.median(steps)) if steps else 1.0
     rows = []
     for r in range(len(forecast.times)):
         where = f"{forecast.source}:{forecast.lines[r]}"
-        cell = lookup(cache, float(forecast.hs[r]), float(forecast.period[r]), forecast.kind,
+        cell = look(cache, float(forecast.hs[r]), float(forecast.period[r]), forecast.kind,
                       float(forecast.heading[r]), where)  # fmt: skip
         rows.append({
             "time": forecast.times[r].isoformat(), "hours": steps[r] if r < len(steps) else last,
@@ -251,7 +375,9 @@ def make_plan(forecast: Forecast, cache: StudyCells) -> list[dict[str, Any]]:
     return rows
 
 
-def save_plan(rows: list[dict[str, Any]], forecast: Forecast, cache: StudyCells, out: str | Path) -> dict[str, Any]:
+def save_plan(
+    rows: list[dict[str, Any]], forecast: Forecast, cache: StudyCells | ChartCells, out: str | Path
+) -> dict[str, Any]:
     """plan.csv, plan.json and plan.png (a Gantt-style chart: workable hours green, the others red with their
     reason, the forecast's Hs below)."""
     from app.analysis.figures import pyplot, save_figure
@@ -271,8 +397,14 @@ def save_plan(rows: list[dict[str, Any]], forecast: Forecast, cache: StudyCells,
     hours = sum(r["hours"] for r in rows)
     good = sum(r["hours"] for r in rows if r["workable"])
     st = cache.study
+    chart = isinstance(cache, ChartCells)
+    crit = (
+        {"lift": {"payload_t": cache.payload, "radius_m": cache.radius}, "criterion": "payload ≤ SWL"}
+        if chart
+        else {"criterion_rms_e_c_m": st.criterion}
+    )
     doc = {
-        "forecast": forecast.source, "study": str(cache.out), "mode": st.mode, "criterion_rms_e_c_m": st.criterion,
+        "forecast": forecast.source, "study": str(cache.out), "mode": cache.mode if chart else st.mode, **crit,
         "hours": hours, "workable_hours": good, "workable_share": good / hours if hours else 0.0,
         "windows": _windows(rows), "rows": rows,
     }  # fmt: skip
@@ -282,6 +414,7 @@ def save_plan(rows: list[dict[str, Any]], forecast: Forecast, cache: StudyCells,
     t0 = forecast.times[0]
     x = [(t - t0).total_seconds() / 3600.0 for t in forecast.times]
     reasons = sorted({r["why_not"].split(" (")[0].split(" ")[0] for r in rows if not r["workable"]})
+    reasons = ["over its SWL" if r == "over" else r for r in reasons]
     span = x[-1] + rows[-1]["hours"]
     runs: list[list] = []  # consecutive times with the same verdict (and the same failing criterion): one bar
     for r, xi in zip(rows, x, strict=True):
@@ -293,14 +426,20 @@ def save_plan(rows: list[dict[str, Any]], forecast: Forecast, cache: StudyCells,
     for what, xi, h in runs:
         ax.broken_barh([(xi, h)], (0, 1), color="tab:green" if what == "workable" else "tab:red", lw=0)
         if h >= 0.06 * span:  # the verdict on its bar where it fits
-            label = {"workable": "workable", "rms(e_c)": f"rms(e_c) > {st.criterion:g} m"}.get(what, "breaking sea")
+            label = {"workable": "workable", "over": "over its SWL"}.get(what) or (
+                f"rms(e_c) > {st.criterion:g} m" if what == "rms(e_c)" else "breaking sea"
+            )
             label = f"{label}\n{h:g} h"
             ax.text(xi + h / 2, 0.5, label, ha="center", va="center", fontsize=8, color="white")
     ax.set_yticks([0.5], ["lift"])
     ax.set_ylim(0, 1)
+    rule = (
+        f"{cache.mode}, {cache.payload:g} t at {cache.radius:g} m ≤ its SWL"
+        if chart
+        else f"{st.mode}, rms(e_c) ≤ {st.criterion:g} m"
+    )
     ax.set_title(
-        f"workable ({st.mode}, rms(e_c) ≤ {st.criterion:g} m): {good:g} of {hours:g} h green; red: "
-        + (", ".join(reasons) if reasons else "none"),
+        f"workable ({rule}): {good:g} of {hours:g} h green; red: " + (", ".join(reasons) if reasons else "none"),
         fontsize=9,
     )
     ax2.step(x + [x[-1] + rows[-1]["hours"]], list(forecast.hs) + [forecast.hs[-1]], where="post", color="tab:blue")

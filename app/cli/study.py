@@ -167,7 +167,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     with _as_usage_error(PlanError):
-        cache = load_study(args.study, args.criterion)
+        cache = load_study(args.study, args.criterion, args.payload, args.radius, args.mode)
         forecast = load_forecast(args.forecast)
         rows = make_plan(forecast, cache)
         out = Path(args.out) if args.out else Path("out") / "plan"
@@ -179,8 +179,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
         _print_json({**doc, "out": str(out), "wall_s": wall})
         return 0
     st = cache.study
+    rule = (
+        f"{cache.mode}, {cache.payload:g} t at {cache.radius:g} m ≤ its SWL"
+        if "lift" in doc
+        else f"{st.mode}, rms(e_c) ≤ {st.criterion:g} m"
+    )
     print(
-        f"plan: {forecast.source} against {cache.out} ({st.mode}, rms(e_c) ≤ {st.criterion:g} m): "
+        f"plan: {forecast.source} against {cache.out} ({rule}): "
         f"{doc['workable_hours']:g} of {doc['hours']:g} h workable ({100 * doc['workable_share']:.0f} %)"
     )
     for r in rows:
@@ -292,17 +297,25 @@ def register(sub) -> None:
         sub,
         "plan",
         cmd_plan,
-        help="a forecast plan: hour by hour, is the lift workable by an operability study's cached cells, and why "
-        "not (issue 31)",
+        help="a forecast plan: hour by hour, is the lift workable by an operability or load-chart study's cached "
+        "cells, and why not (issue 31)",
     ) as b:
         b.add_argument(
             "--forecast", required=True, metavar="FILE.csv",
             help="CSV: time,hs,tp,heading (or tz): ISO 8601 times, Hs [m], period [s], wave heading to the vessel "
             "[deg]",
         )  # fmt: skip
-        b.add_argument("--study", required=True, metavar="DIR", help="an operability study's --out folder")
+        b.add_argument(
+            "--study", required=True, metavar="DIR", help="an operability or load-chart study's --out folder"
+        )
         b.add_argument(
             "--criterion", type=_positive_float, default=None, metavar="M",
-            help="workable: rms(e_c) ≤ this [m] (default: the study's)",
+            help="workable: rms(e_c) ≤ this [m] (default: the study's; an operability study's)",
         )  # fmt: skip
+        b.add_argument("--payload", type=_positive_float, default=None, metavar="T",
+                       help="a load-chart study's lift: the load [t]")  # fmt: skip
+        b.add_argument("--radius", type=_positive_float, default=None, metavar="M",
+                       help="a load-chart study's lift: the crane's radius [m]")  # fmt: skip
+        b.add_argument("--mode", choices=["off", "compensated", "antisway"], default=None,
+                       help="a load-chart study's lift: its mode (default compensated when studied)")  # fmt: skip
         b.add_argument("--out", default=None, help="output folder (default out/plan)")

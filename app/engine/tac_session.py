@@ -31,7 +31,7 @@ from app.geometry import euler_zyx_to_matrix
 from app.marine.vessel import RAOTable
 from app.marine.vessels import VESSELS
 from app.marine.waves import SPECTRA
-from app.models.registry import resolve
+from app.models.registry import load_spec, resolve
 from app.models.xml import read_robot_file
 from app.net.snapshots import (
     CraneLoadState,
@@ -51,6 +51,7 @@ from app.scenes.crane_load import (
     CraneLoad,
     CraneSwingControl,
     LandingWatch,
+    LoadChartWatch,
     Platform,
 )
 from app.scenes.load_lead import CRANE_LEAD_MAX, LoadLead
@@ -118,6 +119,9 @@ class TacSession(Scene):
             centre = self.load.hook(self.sim.p_d_n0) + PLATFORM_OFFSET
             self.platform = Platform(tuple(float(v) for v in centre), PLATFORM_HALF)
         self.watch = LandingWatch(relift=True)  # the landing on it (issue 30, item 5)
+        # this load in this sea against its SWL (issue 31, item 4): the crane file's rated capacity, ψ seen live
+        self.chart = LoadChartWatch(load_spec(self.scenario.crane).rated_capacity)
+        self._chart = self.chart.report(self.load.load_spec.mass, self.system.radius(self.sim.beta_d), 0.0)
         # the target: the platform or a second vessel's deck; the stick's frame; the second vessel's motion link
         self.target, self.frame = "platform", "world"
         self.vessel_deck: VesselDeck | None = None
@@ -466,6 +470,7 @@ class TacSession(Scene):
         ld, watch, events = self.load, self.watch, [False] * 4
         step, base, zero = self.scenario.dt, ld.speed_command, np.zeros(3)
         ride_z = self._base_point(np.asarray(self.last["eta"]))[2] if riding else 0.0
+        peak = 0.0  # the wire's peak tension over the tick (the load chart's ψ)
         for k, (p, tk) in enumerate(zip(c.p_c_n, c.t, strict=True)):  # the load: one step per simulation step
             if riding:  # the base frame: the winch holds the hook's height over the vessel's point (its heave rate)
                 z = self._base_point(c.eta[k])[2]
@@ -481,12 +486,16 @@ class TacSession(Scene):
                 ld.deck = self.platform.deck(ld.hook(p))
                 deck_v, n_up = zero, UP
             ld.step(p, step)
+            peak = max(peak, ld.tension)
             watch.step(ld, deck_v, n_up)
             e = ld.state[0] - p
             self.swing.step(e, float(np.sqrt(e @ e)), not watch.touched and not watch.slack, self._lead_ref)
             for i, ev in enumerate((watch.slack, watch.snap, watch.rehit, watch.sideways)):
                 events[i] = events[i] or ev
         self._feed_lift(c)
+        self.chart.step(now, peak / ld.static_tension())
+        chart = self.chart.report(ld.load_spec.mass, self.system.radius(c.beta[-1]), now)
+        self._chart = chart
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
         al = self.alarms
@@ -509,6 +518,13 @@ class TacSession(Scene):
         al.set("snap_load", snap, text=f"Snap load: the wire pulled over {SNAP_FACTOR:g}× the load's weight")
         al.set("rehit", rehit, text=f"Re-hit: the load struck the deck again ({watch.contacts - 1} since touchdown)")
         al.set("sideways_contact", sideways, text="The load touched the deck while sliding sideways")
+        pct = chart["swl_percent"]
+        al.set(
+            "overload",
+            pct is not None and pct >= 100.0,
+            text=f"Overload: the load with the sea's dynamic factor ψ {chart['psi'] or 0:.2f} is {pct or 0:.0f} % of "
+            f"its SWL at {chart['radius']:.1f} m",
+        )
         al.set(  # holding after a reset is a status (the plant light), not an alarm: nothing is wrong
             "saturation",
             value=0.0 if frozen else 100.0 * share,
@@ -654,6 +670,7 @@ class TacSession(Scene):
             **self.watch.report(),
             antisway=self.antisway,
             antisway_offset=np.round(self._offset[:2], 4).tolist(),
+            **self._chart,
         )
 
     def _scene(self) -> TacScenePoints:

@@ -250,6 +250,13 @@ class CraneLoadState:
     snap_factor: float = 1.5  # tension over this × static: a snap load
     antisway: bool = False  # the load's anti-swing law on (set_crane_antisway)
     antisway_offset: list[float] = field(default_factory=lambda: [0.0, 0.0])  # its offset of the TCP's target [m]
+    # the load chart (issue 31, item 4; the crane's): this load in this sea against its SWL = rated capacity / ψ
+    payload_t: float = 0.0  # the load's mass [t]
+    radius: float | None = None  # the crane's radius [m]
+    capacity_t: float | None = None  # the rated capacity there [t]; None: outside the crane's chart (or none)
+    psi: float | None = None  # the dynamic factor seen: the wire's peak tension / weight over psi_window s
+    psi_window: float = 0.0  # [s] of the window seen so far (up to the watch's window)
+    swl_percent: float | None = None  # 100 · payload · ψ / capacity
 
 
 @dataclass(kw_only=True, slots=True)

@@ -30,7 +30,9 @@ from app.scenes.tac_kernels import ease_in
 from app.sim.load import LOAD, LoadSpec, hanging, no_deck
 from app.sim.motionlab import WINCH_DRUM
 
-__all__ = ["CRANE_ANTISWAY", "CraneLoad", "CraneSwingControl", "LandingWatch", "Platform", "WinchSpec"]
+__all__ = [
+    "CRANE_ANTISWAY", "CraneLoad", "CraneSwingControl", "LandingWatch", "LoadChartWatch", "Platform", "WinchSpec",
+]  # fmt: skip
 
 SLACK_FACTOR = 0.1  # a wire pulling under 10 % of the load's weight while no deck carries the load is slack
 SNAP_FACTOR = 1.5  # tension over 1.5 × static is a snap load (issue 30, item 5)
@@ -250,6 +252,49 @@ class LandingWatch:
             self.sideways = math.sqrt(float(v_t @ v_t)) > SIDEWAYS_SPEED
         else:
             self.sideways = False
+
+
+@dataclass
+class LoadChartWatch:
+    """This load in this sea as a share of its SWL (issue 31, item 4): SWL = C(r) / ψ, with C(r) the crane's rated
+    capacity at its radius (the robot file's, :class:`app.models.spec.RatedCapacity`) and ψ the dynamic factor seen
+    live: the wire's peak tension over the load's weight in the last ``window`` seconds (at least 1: a landed load
+    weighs its weight when lifted).  ``percent`` = 100 · m ψ / C(r), what a crane's load-moment indicator shows
+    with the sea's dynamic load in it.  The peak is a running maximum over the window (a monotonic queue: O(1) a
+    tick)."""
+
+    rating: object | None  # RatedCapacity, or None: the crane has no load chart
+    window: float = 120.0  # s: about thirteen 9 s waves
+    _peaks: list = field(default_factory=list)  # (time, factor), factors falling
+    _start: float | None = None
+
+    def step(self, t: float, factor: float) -> None:
+        """The tick at time ``t`` with its peak tension factor ``factor``."""
+        q = self._peaks
+        while q and q[-1][1] <= factor:
+            q.pop()
+        q.append((t, factor))
+        while q[0][0] < t - self.window:
+            q.pop(0)
+        if self._start is None:
+            self._start = t
+
+    def reset(self) -> None:
+        self._peaks.clear()
+        self._start = None
+
+    def report(self, mass: float, radius: float, t: float) -> dict:
+        """The snapshot's fields (``app.net.snapshots.CraneLoadState``)."""
+        cap = None if self.rating is None else self.rating.at(radius)
+        psi = max(1.0, self._peaks[0][1]) if self._peaks else None
+        seen = 0.0 if self._start is None else min(self.window, t - self._start)
+        pct = None if cap is None or psi is None else 100.0 * mass * psi / cap
+        return {
+            "payload_t": round(mass / 1000.0, 3), "radius": round(radius, 3),
+            "capacity_t": None if cap is None else round(cap / 1000.0, 3),
+            "psi": None if psi is None else round(psi, 4), "psi_window": round(seen, 1),
+            "swl_percent": None if pct is None else round(pct, 2),
+        }  # fmt: skip
 
 
 #: the anti-swing law's design for the crane's load at L = 10 m: five times the lab's weight on the swing, a tenth on

@@ -10,6 +10,7 @@ from PyQt5.QtWidgets import QGridLayout, QLabel, QSizePolicy, QWidget
 from ui.widgets.status import LIGHT
 
 GREY = QColor(110, 110, 120)
+SWL_WARN = 90.0  # % of SWL shown amber (a load-moment indicator's pre-warning; the overload alarm is at 100 %)
 
 
 class LimitBar(QWidget):
@@ -112,4 +113,13 @@ class LandingPanel(QWidget):
         if load.rehits:
             parts.append(f"<span style='color:{LIGHT['warn']}'><b>{load.rehits} re-hit(s)</b></span>")
         parts.append(self.ahc_words[0] if load.ahc else self.ahc_words[1])
+        pct = getattr(load, "swl_percent", None)  # the load chart (issue 31, item 4): the crane's
+        if pct is not None:
+            state = "error" if pct >= 100.0 else "warn" if pct >= SWL_WARN else "ok"
+            parts.append(f"<span style='color:{LIGHT[state]}'><b>{pct:.0f} % of SWL</b></span>")
+            self.status.setToolTip(
+                f"this load in this sea against its safe working load: {load.payload_t:g} t × ψ {load.psi:.2f} (the "
+                f"wire's peak tension over its weight in the last {load.psi_window:.0f} s) against the rated "
+                f"{load.capacity_t:g} t at {load.radius:.1f} m; amber from {SWL_WARN:g} %, the overload alarm at 100 %"
+            )
         self.status.setText(" · ".join(parts))
