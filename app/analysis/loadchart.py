@@ -48,9 +48,10 @@ from app.errors import BosunError
 CELL_VERSION = 1  # bump when a cell's simulation changes: older cached cells are not used
 MAX_AXIS = 50  # radii, payloads or Hs values a study takes
 CRANE = "offshore_crane"
-#: two charts are compared to this share (0.1 %): the anti-swing's noisy sensors move the TCP by millimetres even in
-#: flat water (ψ 1.0001), which is no chart's difference
-PSI_TOLERANCE = 1e-3  # the crane of the crane-head scene (app.scenarios.tac.TacScenario.crane)
+#: two charts are compared to this share (0.5 %: 0.05 t of a 10 t rating, under the 0.1 t a chart is printed to): the
+#: anti-swing's noisy sensors move the TCP by millimetres even in flat water (ψ 1.001 over 600 s), no chart's
+#: difference
+PSI_TOLERANCE = 5e-3  # the crane of the crane-head scene (app.scenarios.tac.TacScenario.crane)
 
 
 class LoadChartError(OperabilityError):
