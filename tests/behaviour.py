@@ -35,7 +35,10 @@ day for the same reason: their summaries carry ``delay_s`` and ``predict`` (the 
 ``predict``), two arrays added each, nothing else changed (checked array by array).  Session 23 (issue 31, items
 2 and 3): ``engine_tac`` and ``engine_tac_neutral`` recorded again with the lift window in the snapshot
 (``snap.lift.*``: nine arrays added), ``engine_lab`` with the lab's delay (``snap.delay``, ``snap.predict``: two
-added); every array recorded before equal (checked array by array).
+added); every array recorded before equal (checked array by array).  Session 24 (issue 31, item 4): the load's
+state carries the load chart (``snap.load.payload_t``, ``radius``, ``capacity_t``, ``psi``, ``psi_window``,
+``swl_percent``: six arrays added to ``engine_tac`` and ``engine_tac_neutral``, two to ``engine_lab``, whose
+crane-only fields are None); every array recorded before equal (checked array by array).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -351,7 +351,8 @@ def test_the_lift_window_strip_shows_the_prediction_and_the_operator_s_threshold
 
 def test_the_landing_panel_shows_the_load_as_a_share_of_its_swl_as_the_engine_reports_it(qtbot, window):
     """Issue 31, item 4: the crane tab's landing status line carries the engine's "X % of SWL" (this load, its
-    dynamic factor seen, the rated capacity at the crane's radius), green under 90 %, amber to 100 %, red over it;
+    dynamic factor seen, the rated capacity at the crane's radius) as "SWL X %", green under 90 %, amber to 100 %,
+    red over it;
     its tooltip says what the figure is made of."""
     from ui.widgets.landing import LandingPanel
     from ui.widgets.status import LIGHT
@@ -362,11 +363,11 @@ def test_the_landing_panel_shows_the_load_as_a_share_of_its_swl_as_the_engine_re
     qtbot.waitUntil(lambda: tab.state is not None and tab.state.load is not None
                     and tab.state.load.swl_percent is not None, timeout=GUI_WAIT)  # fmt: skip
     ld = tab.state.load
-    qtbot.waitUntil(lambda: "% of SWL" in tab.landing.status.text(), timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: "SWL " in tab.landing.status.text(), timeout=GUI_WAIT)
     assert LIGHT["ok"] in tab.landing.status.text()  # 5 t at 29.7 m: about half its SWL
     assert f"rated {ld.capacity_t:g} t" in tab.landing.status.toolTip()
     panel = LandingPanel()
     qtbot.addWidget(panel)
     for pct, look in ((95.0, "warn"), (104.0, "error")):
         panel.show_load(type(ld)(**{**{k: getattr(ld, k) for k in ld.__slots__}, "swl_percent": pct}))
-        assert f"{pct:.0f} % of SWL" in panel.status.text() and LIGHT[look] in panel.status.text()
+        assert f"SWL {pct:.0f} %" in panel.status.text() and LIGHT[look] in panel.status.text()

@@ -279,7 +279,8 @@ def lookup_chart(cache: ChartCells, hs: float, period: float, kind: str, heading
         for seed in range(1, st.seeds + 1):
             key = cell_key(cell_params(st, cache.mode, m_row, r_row, h_row, tp, seed, cache.vessel_id))
             try:
-                psi = max(psi, float(json.loads((cache.out / "cells" / f"{key}.json").read_text("utf-8"))["psi"]))
+                text = (cache.out / "cells" / f"{key}.json").read_text(encoding="utf-8")
+                psi = max(psi, float(json.loads(text)["psi"]))
             except (OSError, ValueError, KeyError):
                 raise PlanError(
                     f"{where}: the study's cell {cache.mode}, {m_row:g} t, {r_row:g} m, Hs {h_row:g} m, Tp {tp:g} s "

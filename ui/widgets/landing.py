@@ -83,6 +83,9 @@ class LandingPanel(QWidget):
             grid.addWidget(bar, i, 1)
         self.status = QLabel("—")
         self.status.setTextFormat(Qt.RichText)
+        # its text asks no width of the page (a longer line widened the stick's box and pushed the plots past their
+        # panel): what does not fit is cut at the right, where the least urgent words are
+        self.status.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
         grid.addWidget(self.status, len(rows), 0, 1, 2)
         grid.setColumnStretch(1, 1)
 
@@ -116,7 +119,7 @@ class LandingPanel(QWidget):
         pct = getattr(load, "swl_percent", None)  # the load chart (issue 31, item 4): the crane's
         if pct is not None:
             state = "error" if pct >= 100.0 else "warn" if pct >= SWL_WARN else "ok"
-            parts.append(f"<span style='color:{LIGHT[state]}'><b>{pct:.0f} % of SWL</b></span>")
+            parts.insert(0, f"<span style='color:{LIGHT[state]}'><b>SWL {pct:.0f} %</b></span>")  # first: seen
             self.status.setToolTip(
                 f"this load in this sea against its safe working load: {load.payload_t:g} t × ψ {load.psi:.2f} (the "
                 f"wire's peak tension over its weight in the last {load.psi_window:.0f} s) against the rated "
