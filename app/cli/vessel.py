@@ -38,8 +38,15 @@ def cmd_vessel_rao(args: argparse.Namespace) -> int:
     with _as_usage_error(BemError, HullError, VesselError):
         name = args.name or ("MSS supply vessel" if not given else "monohull")
         vessel = VesselParticulars(**given, name=name)
-        bem = ("cwp", "roll_damping", "nx", "nz", "w_min", "w_max", "n_w", "heading_step")
-        inputs = BemInputs(vessel=vessel, **_fields(args, *bem))
+        bem = ("cwp", "nx", "nz", "w_min", "w_max", "n_w", "heading_step")
+        viscous = "ikeda" if args.roll_damping == "ikeda" else "zeta"
+        extra = {"viscous": viscous}
+        if viscous == "zeta":
+            try:
+                extra["roll_damping"] = float(args.roll_damping)
+            except ValueError:
+                raise BemError(f"--roll-damping {args.roll_damping!r}: a ratio of critical (0.15) or 'ikeda'") from None
+        inputs = BemInputs(vessel=vessel, **_fields(args, *bem), **extra)
         out = Path(args.out)
         if out.is_dir():
             raise BosunError(f"--out {out} is a folder; give a .csv file")
@@ -78,7 +85,17 @@ def cmd_vessel_rao(args: argparse.Namespace) -> int:
         f"  roll: ω4 {info['roll_natural_frequency_rad_s']:.3f} rad/s, radiation damping {ratio:.2f} % of critical,",
         end="",
     )
-    print(f" viscous added to {100 * inputs.roll_damping:g} %")
+    if inputs.viscous == "zeta":
+        print(f" viscous added to {100 * inputs.roll_damping:g} %")
+    else:
+        ik = info["ikeda"]
+        sea = ik["linearise_sea"]
+        print(
+            f" Ikeda's viscous damping {100 * info['roll_viscous_damping_ratio']:.2f} % at ω4 (linearised at "
+            f"{ik['roll_amplitude_deg']:.1f}° in Hs {sea['hs']:g} m, Tp {sea['tp']:g} s, {sea['heading']:g}°)"
+        )
+        if ik["outside_the_method_s_range"]:
+            print(f"  outside Ikeda's simplified method's range: {', '.join(ik['outside_the_method_s_range'])}")
     print(f"wrote {out}")
     return 0
 
@@ -107,7 +124,11 @@ def register(sub) -> None:
             "--cwp", type=_positive_float, default=None, help="waterplane coefficient (default: from GM_L − GM_T)"
         )
         b.add_argument(
-            "--roll-damping", type=_positive_float, default=0.15, help="total ζ44 at the roll natural frequency (0.15)"
+            "--roll-damping",
+            default="0.15",
+            metavar="ZETA|ikeda",
+            help="total ζ44 at the roll natural frequency (0.15), or ikeda: Ikeda's components with the supply "
+            "vessel's assumed bilge keels, linearised in Hs 3 m, Tp 9 s, beam",
         )
         b.add_argument("--nx", type=int, default=40, help="panels along the half hull, 4–200 (default 40)")
         b.add_argument("--nz", type=int, default=8, help="panels down its girth, 2–50; nx × nz ≤ 2000 (default 8)")

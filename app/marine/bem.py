@@ -20,6 +20,13 @@ Fossen 2021 §6) — the total roll damping at the roll natural frequency ω₄ 
 a constant added at every frequency (the "extra roll damping to a target percentage of critical" of
 OrcaWave's roll-damping results).  Nothing else is added.
 
+Or (``viscous="ikeda"``, issue 31 item 6) B_v,44(ω) is Ikeda's friction, eddy-making, lift and bilge-keel
+components (:mod:`app.marine.roll_damping`) for this hull (its C_B, its section coefficient C_M = C_B/C_WP, OG =
+−z_G) and its bilge keels, at each frequency, linearised at the roll the vessel makes in a stated sea
+(``linearise_sea``: Hs, Tp, heading of a long-crested JONSWAP sea): the amplitude φ_eq = √(9π/8) σ_φ̇ / ω₄ of the
+stochastic linearisation, σ_φ̇ from the roll response with that damping, iterated to a fixed point on a fine
+frequency grid (the hydrodynamic coefficients interpolated between the solved frequencies).
+
 The RAOs are then moved to Bosun's vessel frame: the origin O at midship on the waterline (translations
 ξ_O = ξ_G + Ω × (O − G)), x forward, y starboard, z down (Capytaine's y to port and z up: sway, heave,
 pitch and yaw change sign), the e^{+iωt} convention of :mod:`app.marine.vessel` (complex conjugate), and
@@ -59,6 +66,13 @@ RHO_RANGE = (990.0, 1050.0)
 #: the total roll damping ratio at the roll natural frequency: the MSS toolbox's offshore supply vessel
 #: model (Fossen, ``osv.m``: ``vessel.zeta4 = 0.15``, relative damping ratio in roll)
 ROLL_DAMPING_DEFAULT = 0.15
+VISCOUS = ("zeta", "ikeda")
+#: the supply vessel's bilge keels for Ikeda's method (assumed: the paper gives none): length 0.2 Lpp and breadth
+#: 0.025 B, the proportions of the base ship of Kawahara, Maekawa & Ikeda (2011), whose formulas these are —
+#: 16.56 m × 0.48 m on the 82.8 m × 19.2 m vessel; chosen before any roll was computed with them
+BILGE_KEELS_DEFAULT = (0.2 * 82.8, 0.025 * 19.2)
+#: the sea the Ikeda damping is linearised in: the TAC paper's test sea (Hs 3 m, Tp 9 s, beam)
+LINEARISE_SEA_DEFAULT = (3.0, 9.0, 90.0)
 #: Capytaine's frame (y port, z up) to Bosun's (y starboard, z down): a half turn about x
 FRAME_SIGN = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
 DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
@@ -83,7 +97,10 @@ class BemInputs:
 
     vessel: VesselParticulars = field(default_factory=VesselParticulars)
     cwp: float | None = None  # waterplane coefficient of the hull form; None: from GM_L − GM_T (app/marine/hull.py)
-    roll_damping: float = ROLL_DAMPING_DEFAULT  # ζ44 at the roll natural frequency
+    roll_damping: float = ROLL_DAMPING_DEFAULT  # ζ44 at the roll natural frequency (viscous "zeta")
+    viscous: str = "zeta"  # "zeta": B_v to ζ44 of critical; "ikeda": Ikeda's components (module text)
+    bilge_keels: tuple[float, float] | None = BILGE_KEELS_DEFAULT  # (length, breadth) [m] for "ikeda"; None: none
+    linearise_sea: tuple[float, float, float] = LINEARISE_SEA_DEFAULT  # (Hs [m], Tp [s], heading [deg])
     nx: int = 40  # panels along the half hull
     nz: int = 8  # panels down its girth
     w_min: float = 0.1  # [rad/s]
@@ -115,6 +132,18 @@ class BemInputs:
             raise BemError(
                 f"heading step must divide 360° and be {MIN_HEADING_STEP:g}° to 180°, got {self.heading_step:g}"
             )
+        if self.viscous not in VISCOUS:
+            raise BemError(f"viscous roll damping must be one of {', '.join(VISCOUS)}, got {self.viscous!r}")
+        if self.viscous == "ikeda":
+            from app.marine.waves import SeaStateError, check_sea
+
+            hs, tp, heading = self.linearise_sea
+            try:
+                check_sea(hs, tp)
+            except SeaStateError as err:
+                raise BemError(f"the Ikeda damping's sea: {err}") from None
+            if not math.isfinite(heading):
+                raise BemError("the Ikeda damping's sea: the heading must be a number")
         if not (0.0 < self.roll_damping < 1.0):
             raise BemError(f"roll damping ratio must be in (0, 1), got {self.roll_damping:g}")
         if self.cwp is not None and not (math.isfinite(self.cwp) and 0.0 < self.cwp < 1.0):
@@ -227,11 +256,17 @@ def compute_raos(inputs: BemInputs | None = None, progress: Callable[[int, int],
     w4 = _natural_frequency(M[3, 3], C[3, 3], omegas, A[:, 3, 3])
     A44, B44 = float(np.interp(w4, omegas, A[:, 3, 3])), float(np.interp(w4, omegas, B[:, 3, 3]))
     crit = 2.0 * math.sqrt((M[3, 3] + A44) * C[3, 3])
-    b_visc = max(0.0, inp.roll_damping * crit - B44)
-    Bv = np.zeros((6, 6))
-    Bv[3, 3] = b_visc
+    ikeda: dict = {}
+    if inp.viscous == "ikeda":
+        b_v, ikeda = _ikeda_damping(inp, form, z_g, omegas, heads, A, B, F, M, C, w4)
+        b_visc = float(np.interp(w4, omegas, b_v))
+    else:
+        b_visc = max(0.0, inp.roll_damping * crit - B44)
+        b_v = np.full(nw, b_visc)
     X = np.zeros((6, nw, nh), dtype=complex)
     for i, w in enumerate(omegas):
+        Bv = np.zeros((6, 6))
+        Bv[3, 3] = b_v[i]
         Z = -(w**2) * (M + A[i]) - 1j * w * (B[i] + Bv) + C
         X[:, i, :] = np.linalg.solve(Z, F[i].T)
     # translations of O (midship, waterline) = those of G + Ω × (O − G), O − G = (0, 0, −z_G)
@@ -240,7 +275,8 @@ def compute_raos(inputs: BemInputs | None = None, progress: Callable[[int, int],
     H = FRAME_SIGN[:, None, None] * np.conj(X)
     src = (
         f"Capytaine {cpt.__version__} BEM, {v.name}: Lpp {v.lpp:g} m, B {v.beam:g} m, T {v.draft:g} m, "
-        f"C_B {v.cb:g}, C_WP {form.cwp:.4g}, GM_T {v.gm_t:g} m, GM_L {v.gm_l:g} m, zeta44 {inp.roll_damping:g}"
+        f"C_B {v.cb:g}, C_WP {form.cwp:.4g}, GM_T {v.gm_t:g} m, GM_L {v.gm_l:g} m, "
+        + (f"zeta44 {inp.roll_damping:g}" if inp.viscous == "zeta" else "Ikeda roll damping")
     )
     table = RAOTable(omegas, np.radians(heads), np.abs(H), np.angle(H), source=src)
     info = {
@@ -258,9 +294,66 @@ def compute_raos(inputs: BemInputs | None = None, progress: Callable[[int, int],
         "roll_radiation_damping": B44,
         "roll_viscous_damping": b_visc,
         "roll_critical_damping": crit,
+        "roll_viscous_damping_ratio": b_visc / crit,
+        **({"ikeda": ikeda} if ikeda else {}),
         "roll_radiation_damping_ratio": B44 / crit,
         "heave_natural_frequency_rad_s": _natural_frequency(M[2, 2], C[2, 2], omegas, A[:, 2, 2]),
         "pitch_natural_frequency_rad_s": _natural_frequency(M[4, 4], C[4, 4], omegas, A[:, 4, 4]),
         "wall_s": time.perf_counter() - t0,
     }
     return BemResult(table, info)
+
+
+def _ikeda_damping(inp, form, z_g, omegas, heads, A, B, F, M, C, w4) -> tuple[NDArray[np.float64], dict]:
+    """B_v,44 at each solved frequency by Ikeda's components, linearised in ``inp.linearise_sea`` (module text),
+    and what it took: the amplitude, the components at ω₄, the iterations, the parameters outside the method's
+    range."""
+    from app.marine.roll_damping import BilgeKeels, IkedaHull, components, out_of_range
+    from app.marine.waves import jonswap
+
+    v = inp.vessel
+    keels = None if inp.bilge_keels is None else BilgeKeels(*inp.bilge_keels)
+    hull = IkedaHull(v.lpp, v.beam, v.draft, v.cb, form.cb / form.cwp, -z_g, keels)
+    hs, tp, heading = inp.linearise_sea
+    j = int(np.argmin(np.abs((heads - heading + 180.0) % 360.0 - 180.0)))  # the solved heading nearest the sea's
+    fine = np.linspace(omegas[0], omegas[-1], 4000)
+    spec = jonswap(fine, hs, tp)
+    # the hydrodynamic coefficients between the solved frequencies (smooth in ω), for the roll peak's width
+    A_f = np.stack([np.interp(fine, omegas, A[:, r, c]) for r in range(6) for c in range(6)], axis=1).reshape(-1, 6, 6)
+    B_f = np.stack([np.interp(fine, omegas, B[:, r, c]) for r in range(6) for c in range(6)], axis=1).reshape(-1, 6, 6)
+    F_f = np.stack([np.interp(fine, omegas, F[:, j, r].real) + 1j * np.interp(fine, omegas, F[:, j, r].imag)
+                    for r in range(6)], axis=1)  # fmt: skip
+
+    def damping(w: NDArray[np.float64], phi: float) -> NDArray[np.float64]:
+        return np.array([sum(components(hull, float(x), phi, inp.rho, G)[k] for k in ("friction", "eddy", "lift",
+                         "bilge_keels")) for x in w])  # fmt: skip
+
+    phi, steps = math.radians(5.0), 0
+    while steps < 100:
+        steps += 1
+        b_fine = np.interp(fine, omegas, damping(omegas, phi))
+        Z = -(fine**2)[:, None, None] * (M + A_f) - 1j * fine[:, None, None] * (B_f + _roll(b_fine)) + C
+        roll = np.linalg.solve(Z, F_f[..., None])[:, 3, 0]
+        sigma_rate = math.sqrt(float(np.trapezoid(fine**2 * np.abs(roll) ** 2 * spec, fine)))
+        new = math.sqrt(9.0 * math.pi / 8.0) * sigma_rate / w4
+        if abs(new - phi) < 1e-6 * max(phi, 1e-6):
+            phi = new
+            break
+        phi = 0.5 * (phi + new)
+    at_w4 = components(hull, w4, phi, inp.rho, G)
+    info = {
+        "bilge_keels_m": list(inp.bilge_keels) if inp.bilge_keels is not None else None,
+        "linearise_sea": {"hs": hs, "tp": tp, "heading": float(heads[j]), "spectrum": "jonswap"},
+        "roll_amplitude_deg": math.degrees(phi), "iterations": steps,
+        "midship_section_coefficient": hull.cm, "og_m": hull.og,
+        "at_roll_natural_frequency": {k: at_w4[k] for k in ("friction", "eddy", "lift", "bilge_keels")},
+        "outside_the_method_s_range": out_of_range(hull, w4),
+    }  # fmt: skip
+    return damping(omegas, phi), info
+
+
+def _roll(b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(n, 6, 6) with ``b`` in the roll-roll place."""
+    out = np.zeros((b.size, 6, 6))
+    out[:, 3, 3] = b
+    return out
