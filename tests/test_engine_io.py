@@ -124,3 +124,19 @@ def test_rate_burst_is_documented_in_the_protocol():
 
     text = (Path(__file__).parents[1] / "docs" / "protocol.md").read_text(encoding="utf-8")
     assert f"bursts of {RATE_BURST}" in text and "dropped" in text
+
+
+@pytest.mark.slow
+def test_bench_loop_runs_the_crane_head_engine_and_times_its_predictors():
+    """Issue 31's cost criterion is measured in the crane-head engine's own loop (``bosun bench loop --plant
+    tac``): the engine runs with the delay predicted and its lift window, the operator's stick and E-STOPs go
+    through, and the two predictors' time per tick is reported (figures are the benchmark's, not asserted)."""
+    from app.bench.loop import bench_loop
+
+    r = bench_loop(rate=50.0, seconds=3.0, plant="tac")
+    assert r["plant"] == "tac" and r["loop"]["ticks"] > 50
+    pm = r["loop"]["predictor_ms"]
+    assert pm["ticks"] > 50 and 0.0 < pm["p50"] <= pm["p99"] <= pm["max"]
+    assert len(r["estop_ticks"]) == r["estops_sent"] == 5 and r["speed_after_estop"] is None
+    with pytest.raises(ValueError, match="plant must be one of teleop, tac"):
+        bench_loop(plant="lab")

@@ -15,9 +15,11 @@ import pytest
 
 from app.errors import RobotXmlError
 from app.models.xml import parse_robot_file, parse_robot_xml
+from app.resources import robot_library
 from app.scenarios.dynamic_factor import DynamicFactorError, DynamicFactorScenario, simulate
 
-CRANE = parse_robot_file("robots/offshore_crane.xml")
+CRANE_FILE = robot_library() / "offshore_crane.xml"  # the installed library's (the hostile lane runs elsewhere)
+CRANE = parse_robot_file(CRANE_FILE)
 
 
 def test_a_load_hanging_still_in_a_calm_sea_gives_psi_one_in_every_mode():
@@ -85,7 +87,7 @@ def test_a_rating_without_a_source_is_refused():
         parse_robot_xml(text, "crane.xml")
 
 
-with open("robots/offshore_crane.xml", encoding="utf-8") as _f:
+with open(CRANE_FILE, encoding="utf-8") as _f:
     CRANE_TEXT = _f.read()
 CRANE_RATINGS = "\n".join(line for line in CRANE_TEXT.splitlines() if "<rating " in line)
 

@@ -349,3 +349,16 @@ def test_the_window_probability_is_the_model_s_own():
         assert abs(model - sim) < 0.01, (half, model, sim)
     with pytest.raises(PredictScenarioError, match=r"window probability must be in \[0.5, 1\)"):
         PredictScenario(window_probability=1.0)
+
+
+def test_the_compiled_window_share_is_the_numpy_reference():
+    """The Monte Carlo reduction of window_probability, compiled (each draw left at its first point outside), gives
+    the reference's share exactly on the same draws."""
+    from app.control import predict_kernels
+
+    rng = np.random.default_rng(4)
+    for J in (1, 5, 22):
+        path, errors = rng.normal(0, 0.7, J), rng.normal(0, 1.0, (2000, J))
+        for half in (0.1, 1.0, 2.5, 10.0):
+            ref = float(np.mean(np.all(np.abs(path + errors) <= half, axis=1)))
+            assert predict_kernels.within_share(path, errors, half) == ref

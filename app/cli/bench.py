@@ -221,9 +221,14 @@ def cmd_bench_plc_soak(args: argparse.Namespace) -> int:
 def cmd_bench_loop(args: argparse.Namespace) -> int:
     from app.bench.loop import bench_loop
 
+    plant = getattr(args, "plant", "teleop")
+    rate = args.rate if args.rate is not None else (50.0 if plant == "tac" else 500.0)
+    if (plant == "tac") != (rate == 50.0):
+        raise BosunError(f"--rate {rate:g}: the crane-head engine (--plant tac) runs at 50 Hz, teleop at 500 or 1000")
     result = bench_loop(
-        rate=args.rate, seconds=args.seconds, robot=args.robot, solver=args.solver, flood=args.flood, burn=args.burn
-    )
+        rate=rate, seconds=args.seconds, robot=args.robot, solver=args.solver, flood=args.flood, burn=args.burn,
+        plant=plant,
+    )  # fmt: skip
     result["machine"] = _machine()
     if args.json:
         _print_json(result)
@@ -231,8 +236,13 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
     extra = (f", {args.flood} junk messages/s from one client" if args.flood else "") + (
         ", one core kept busy by another process" if args.burn else ""
     )
+    what = (
+        "the crane-head engine with a 0.2 s delay predicted and its lift window"
+        if plant == "tac"
+        else f"{args.robot} / {args.solver}"
+    )
     print(
-        f"bosun bench loop: {args.robot} / {args.solver}, {args.rate:g} Hz for {args.seconds:g} s, one viewer and "
+        f"bosun bench loop: {what}, {rate:g} Hz for {args.seconds:g} s, one viewer and "
         f"one input client at 500 Hz over tcp://127.0.0.1{extra}"
     )
     print(f"machine: {result['machine']}")
@@ -257,6 +267,12 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
         f"  E-STOP: {len(result['estop_ticks'])} of {result['estops_sent']} applied, at most "
         f"{result['estop_ticks_max']} tick(s) after receipt; joint speed after: {result['speed_after_estop']}"
     )
+    if "predictor_ms" in lp:
+        pm = lp["predictor_ms"]
+        print(
+            f"  predictors (the delay's and the lift window's) per tick: p50 {pm['p50']:.3f} ms   "
+            f"p99 {pm['p99']:.3f} ms   max {pm['max']:.3f} ms ({pm['ticks']} ticks; the max is a refit)"
+        )
     return 0
 
 
@@ -275,8 +291,13 @@ def register(sub) -> None:
     loop_help = "engine tick period, jitter, missed deadlines and input latency"
     with command(bench, "loop", cmd_bench_loop, help=loop_help) as b:
         b.add_argument(
-            "--rate", type=float, choices=[500.0, 1000.0], default=500.0, help="loop rate [Hz] (500 or 1000)"
-        )
+            "--rate", type=float, choices=[50.0, 500.0, 1000.0], default=None,
+            help="loop rate [Hz]: 500 or 1000 for teleop (default 500), 50 for tac",
+        )  # fmt: skip
+        b.add_argument(
+            "--plant", choices=["teleop", "tac"], default="teleop",
+            help="teleop (a library robot's engine) or tac (the crane-head engine with its predictors, issue 31)",
+        )  # fmt: skip
         b.add_argument("--seconds", type=_positive_float, default=30.0, help="duration [s] (default 30)")
         b.add_argument("--robot", default="comau_smart5_3dof", help="robot (default comau_smart5_3dof)")
         b.add_argument("--solver", default="jacobian", help="solver (default jacobian)")

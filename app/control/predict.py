@@ -237,6 +237,8 @@ class MotionPredictor:
         errors = self._errors.get((channel, J, draws))
         if errors is None:  # the errors' draws depend on the fit alone: made once a fit
             errors = self._errors[(channel, J, draws)] = self._error_draws(channel, J, draws)
+        if predict_kernels.ENABLED:  # compiled: a draw is left at its first point outside (the engine's 2 Hz tick)
+            return float(predict_kernels.within_share(np.ascontiguousarray(path), errors, float(half_width)))
         return float(np.mean(np.all(np.abs(path + errors) <= half_width, axis=1)))
 
     def _error_draws(self, channel: int, J: int, draws: int) -> NDArray[np.float64]:

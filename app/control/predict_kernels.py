@@ -12,7 +12,7 @@ import numpy as np
 
 from app.models.kernels import ENABLED, _jit
 
-__all__ = ["ENABLED", "ar_predict", "warm_up_steps"]
+__all__ = ["ENABLED", "ar_predict", "warm_up_steps", "within_share"]
 
 
 @_jit
@@ -50,7 +50,28 @@ def ar_predict(ring, k, lags, mu, G, step, h, out):
             out[r, c] = p1 + 0.5 * u * (p2 - p0 + u * (2 * p0 - 5 * p1 + 4 * p2 - p3 + u * (3 * (p1 - p2) + p3 - p0)))
 
 
+@_jit
+def within_share(path, errors, half_width):
+    """The share of the rows of ``errors`` (draws, J) for which |path + row| ≤ half_width at every one of the J
+    points: the Monte Carlo of :meth:`app.control.predict.MotionPredictor.window_probability` (its NumPy
+    reference, tested equal), each draw left at its first point outside."""
+    n, J = errors.shape
+    inside = 0
+    for i in range(n):
+        ok = True
+        for j in range(J):
+            if abs(path[j] + errors[i, j]) > half_width:
+                ok = False
+                break
+        if ok:
+            inside += 1
+    return inside / n
+
+
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) this file's kernel with its callers' argument types."""
     ring, lags, mu, G = np.zeros((20, 2)), np.arange(4) * 2, np.zeros(2), np.zeros((2, 6, 2))
-    return [lambda: ar_predict(ring, 7, lags, mu, G, 0.5, np.array([0.2, 1.0]), np.empty((2, 2)))]
+    return [
+        lambda: ar_predict(ring, 7, lags, mu, G, 0.5, np.array([0.2, 1.0]), np.empty((2, 2))),
+        lambda: within_share(np.zeros(3), np.zeros((4, 3)), 1.0),
+    ]
