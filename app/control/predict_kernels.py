@@ -54,7 +54,8 @@ def ar_predict(ring, k, lags, mu, G, step, h, out):
 def within_share(path, errors, half_width):
     """The share of the rows of ``errors`` (draws, J) for which |path + row| ≤ half_width at every one of the J
     points: the Monte Carlo of :meth:`app.control.predict.MotionPredictor.window_probability` (its NumPy
-    reference, tested equal), each draw left at its first point outside."""
+    reference, tested equal), each draw left at its first point outside (looked at in order: from the last point,
+    where the errors are largest, it was slower on most draws, which stay inside: 33 against 19 µs)."""
     n, J = errors.shape
     inside = 0
     for i in range(n):
