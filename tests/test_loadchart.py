@@ -283,3 +283,23 @@ def test_the_cli_refuses_a_bad_load_chart_in_one_line_before_any_work(tmp_path, 
     assert res.returncode == 2, res.stderr
     assert res.stderr.count("\n") == 1 and message in res.stderr, res.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_scatter_diagram_s_hs_row_takes_its_worst_period(tmp_path):
+    """``--scatter``: every cell with a probability is simulated; the chart at one Hs is the worst of its periods
+    (the row names which), and the source says the diagram."""
+    path = tmp_path / "scatter.csv"
+    path.write_text("hs\\tp,6,10\n1.0,3,1\n", encoding="utf-8")
+    out = tmp_path / "lc"
+    res = subprocess.run(
+        [sys.executable, "-m", "app", "study", "loadchart", "--scatter", str(path), "--radii", "30", "--payloads", "5",
+         "--modes", "off", "--seeds", "1", "--duration", "10", "--workers", "1", "--out", str(out), "--json"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["seas"] == [[1.0, 6.0], [1.0, 10.0]] and doc["source"].endswith("scatter.csv")
+    cells = [json.loads(f.read_text(encoding="utf-8")) for f in (out / "cells").glob("*.json")]
+    worst = max(cells, key=lambda c: c["psi"])
+    row = (out / "loadchart.csv").read_text(encoding="utf-8").splitlines()[1].split(",")
+    assert len(cells) == 2 and float(row[4]) == worst["tp"] and float(row[5]) == pytest.approx(worst["psi"], rel=1e-5)
