@@ -38,7 +38,10 @@ day for the same reason: their summaries carry ``delay_s`` and ``predict`` (the 
 added); every array recorded before equal (checked array by array).  Session 24 (issue 31, item 4): the load's
 state carries the load chart (``snap.load.payload_t``, ``radius``, ``capacity_t``, ``psi``, ``psi_window``,
 ``swl_percent``: six arrays added to ``engine_tac`` and ``engine_tac_neutral``, two to ``engine_lab``, whose
-crane-only fields are None); every array recorded before equal (checked array by array).
+crane-only fields are None); every array recorded before equal (checked array by array).  Then again the same
+session after its review: the radius is the TCP's where the head holds it (not the nominal TCP), so
+``snap.load.radius``, ``capacity_t`` and ``swl_percent`` (this session's own fields) differ, and ``snap.load.rated``
+is added (three cases); every other array equal.
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

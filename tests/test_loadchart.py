@@ -61,7 +61,8 @@ def test_the_crane_s_rated_capacity_is_read_from_its_robot_file_conservatively()
     assert rc is not None and "assumed" in rc.source
     assert rc.at(12.0) == 25_000.0 and rc.at(30.0) == 10_000.0
     assert rc.at(29.7) == 10_000.0  # between 28 m (10.7 t) and 30 m: the next radius out's, never more
-    assert rc.at(11.9) is None and rc.at(34.1) is None and rc.at(math.nan) is None
+    assert rc.at(5.0) == 25_000.0  # inside the first rating's radius: that rating's (the next one out)
+    assert rc.at(34.1) is None and rc.at(math.nan) is None and rc.at(-1.0) is None
 
 
 @pytest.mark.parametrize(
@@ -119,13 +120,15 @@ def test_the_watch_keeps_the_window_s_peak_and_gives_the_share_of_swl():
     assert w.report(5000.0, 29.7, 11.5)["psi"] == 1.2
     w.step(30.0, 0.2)  # a landed load: ψ is at least 1 (lifted, it weighs its weight)
     assert w.report(5000.0, 29.7, 30.0)["psi"] == 1.0
-    assert w.report(5000.0, 40.0, 30.0)["swl_percent"] is None  # outside the chart: no share
+    assert w.report(5000.0, 40.0, 30.0)["swl_percent"] is None and w.beyond(40.0)  # past the chart: not rated
+    assert not w.beyond(30.0) and not LoadChartWatch(None).beyond(40.0)  # no chart at all: nothing to be beyond
 
 
 def test_the_crane_engine_shows_this_load_in_this_sea_as_a_share_of_its_swl_and_alarms_over_it():
-    """The crane-head engine, off, Hs 3 m: the snapshot's share is 100 · m ψ / C(r) with ψ at least every tension
-    factor it published in the window; a 9.5 t load at 29.7 m (C 10 t) in that sea is over its SWL: the overload
-    alarm (critical) is raised.  Compensating, the same load in the same sea stays under it."""
+    """The crane-head engine, Hs 3 m: the snapshot's share is 100 · m ψ / C(r) with ψ at least every tension factor
+    it published in the window and C the rating at the TCP's own radius (the head's arms move it about the nominal
+    29.7 m: 10 t inside 30 m, 9.3 t past it); off, a 9 t load in that sea is over its SWL: the overload alarm
+    (critical) is raised.  Compensating, the same load in the same sea stays under it."""
     from app.engine.tac_session import TacSession
     from app.scenarios.tac import TacScenario
     from app.scenes.crane_load import CraneLoad
@@ -135,15 +138,16 @@ def test_the_crane_engine_shows_this_load_in_this_sea_as_a_share_of_its_swl_and_
     results = {}
     for mode in ("off", "tac"):
         ses = TacSession(scenario=TacScenario(duration=1e5, hs=3.0, mode=mode))
-        ses.load = CraneLoad(load_spec=LoadSpec(mass=9500.0))
+        ses.load = CraneLoad(load_spec=LoadSpec(mass=9000.0))
         t, seen = 0.0, []
-        for _ in range(30):
+        for _ in range(40):  # off, the swing grows: ψ 1.1 after 30 s, 1.2 after 40 s
             t = run(ses, 1.0, None, t)
             ld = ses.snapshot().load
             seen.append(ld.tension_factor)
-        assert ld.payload_t == 9.5 and ld.capacity_t == 10.0 and abs(ld.radius - 29.684) < 0.05
-        assert ld.psi >= max(seen) - 1e-4 and ld.psi_window == pytest.approx(30.0, abs=1.0)
-        assert ld.swl_percent == pytest.approx(100 * 9.5 * ld.psi / 10.0, rel=1e-3)
+        assert ld.payload_t == 9.0 and ld.rated and abs(ld.radius - 29.684) < 1.0
+        assert ld.capacity_t == CRANE.rated_capacity.at(ld.radius) / 1000.0
+        assert ld.psi >= max(seen) - 1e-4 and ld.psi_window == pytest.approx(40.0, abs=1.0)
+        assert ld.swl_percent == pytest.approx(100 * 9.0 * ld.psi / ld.capacity_t, rel=1e-3)
         results[mode] = (ld.swl_percent, ses.alarms.active("overload"))
     assert results["off"][0] >= 100.0 and results["off"][1], results
     assert results["tac"][0] < 100.0 and not results["tac"][1], results
@@ -187,7 +191,7 @@ def test_the_load_chart_study_falls_with_hs_lies_above_off_compensated_and_resum
     # a cached cell is the simulation's number: recomputed, it is the same
     cell = next(c for c in res.cells if c["mode"] == "off" and c["hs"] == 2.0 and c["radius"] == 30.0)
     params = {k: cell[k] for k in ("v", "kind", "mode", "payload", "radius", "hs", "tp", "heading", "seed",
-                                   "duration", "dt", "spectrum", "wire", "vessel")}  # fmt: skip
+                                   "duration", "dt", "spectrum", "wire", "vessel", "crane")}  # fmt: skip
     assert run_cell(params)["psi"] == cell["psi"]
     again = run_study(study, seas, out, workers=1)
     assert again.computed == 0 and again.cached == 24 and again.table == res.table
@@ -203,9 +207,9 @@ def _forecast(tmp_path, rows: str):
 
 
 def test_the_plan_reads_a_load_chart_study_as_its_chart_conservatively(chart, tmp_path):
-    """A lift of 5 t at 25 m: each forecast hour is the study's rougher Hs row at the next radius out (30 m), its
-    SWL the table's; a payload over it is not workable and says so; a forecast or lift outside the study is refused
-    in one line."""
+    """A lift of 5 t at 25 m: each forecast hour is the study's rougher Hs row, ψ the larger of the studied radii on
+    either side (20 and 30 m: ψ need not be monotone in the radius), the capacity the rating at 25 m itself (the
+    next rating out, 26 m: 11.5 t); a forecast or lift outside the study is refused in one line."""
     from app.analysis.plan import PlanError, load_forecast, load_study, make_plan
 
     _, out, res, _ = chart
@@ -214,13 +218,13 @@ def test_the_plan_reads_a_load_chart_study_as_its_chart_conservatively(chart, tm
     for mode in ("off", "compensated"):
         rows = make_plan(f, load_study(out, payload=5.0, radius=25.0, mode=mode))
         for row, h in zip(rows, (1.0, 2.0), strict=True):
-            want = table[(mode, 30.0, h)]
-            assert (row["cell_hs"], row["cell_radius"]) == (h, 30.0)
-            assert row["swl_t"] == pytest.approx(want["swl_t"], rel=1e-12) and row["psi"] == want["psi"]
-            assert row["workable"] == (want["swl_t"] >= 5.0)
+            psi = max(table[(mode, 20.0, h)]["psi"], table[(mode, 30.0, h)]["psi"])
+            assert (row["cell_hs"], row["cell_radii"], row["cell_payloads"]) == (h, [20.0, 30.0], [5.0])
+            assert row["psi"] == psi and row["swl_t"] == pytest.approx(11.5 / psi, rel=1e-12)
+            assert row["workable"] == (row["swl_t"] >= 5.0)
     assert load_study(out, payload=5.0, radius=25.0).mode == "compensated"  # the default where studied
-    light = make_plan(f, load_study(out, payload=4.0, radius=19.0, mode="off"))  # read as 5 t at 20 m
-    assert all(r["cell_radius"] == 20.0 and r["cell_payload"] == 5.0 for r in light)
+    between = make_plan(f, load_study(out, payload=7.0, radius=20.0, mode="off"))  # between the 5 and 9 t rows
+    assert all(r["cell_radii"] == [20.0] and r["cell_payloads"] == [5.0, 9.0] for r in between)
     for rows, message in (
         ("2026-12-01T00:00,2.5,9,90\n", "Hs 2.5 m is above the study's largest (2 m)"),
         ("2026-12-01T00:00,1,10,90\n", "Tp 10 s is outside the study's periods at Hs 1 m (9 ± 0.5 s)"),
@@ -231,8 +235,10 @@ def test_the_plan_reads_a_load_chart_study_as_its_chart_conservatively(chart, tm
             make_plan(fc, load_study(out, payload=5.0, radius=25.0))
     for kw, message in (
         (dict(), "give its --payload T and --radius M"),
-        (dict(payload=9.5, radius=25.0), "payload 9.5 t is above the study's largest (9 t)"),
-        (dict(payload=5.0, radius=31.0), "radius 31 m is beyond the study's largest (30 m)"),
+        (dict(payload=9.5, radius=25.0), "payload 9.5 t is outside the study's payloads (5–9 t)"),
+        (dict(payload=4.0, radius=25.0), "payload 4 t is outside the study's payloads (5–9 t)"),
+        (dict(payload=5.0, radius=31.0), "radius 31 m is outside the study's radii (20–30 m)"),
+        (dict(payload=5.0, radius=5.0), "radius 5 m is outside the study's radii (20–30 m)"),
         (dict(payload=5.0, radius=25.0, mode="antisway"), "mode antisway is not in the study"),
         (dict(payload=5.0, radius=25.0, criterion=0.1), "--criterion is an operability study's"),
     ):
@@ -265,11 +271,12 @@ def test_bosun_plan_with_a_load_chart_study_prints_the_lift_and_its_verdicts(cha
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--hs", "1", "--radii", "10"], "radius 10 m: the crane is rated from 12 to 34 m only"),
+        (["--hs", "1", "--radii", "35"], "radius 35 m is beyond the crane's rated chart (its last rating: 34 m)"),
         (["--hs", "1", "--radii", "33"], "radius 33 m is out of the crane's reach"),
         (["--hs", "1", "--scatter", "north-atlantic"], "one of the two"),
         ([], "one of the two"),
         (["--hs", "1,x"], "--hs: 'x' is not a number"),
+        (["--hs", "1,1"], "--hs: a height repeated (1,1)"),
         (["--hs", "1", "--payloads", "-2"], "--payloads: -2 must be a positive number"),
         (["--hs", "1", "--modes", "off,tac"], "mode must be one of off, compensated, antisway"),
         (["--hs", "1", "--max-runs", "3"], "more than the limit of 3"),

@@ -362,3 +362,5 @@ def test_the_compiled_window_share_is_the_numpy_reference():
         for half in (0.1, 1.0, 2.5, 10.0):
             ref = float(np.mean(np.all(np.abs(path + errors) <= half, axis=1)))
             assert predict_kernels.within_share(path, errors, half) == ref
+    path[0] = np.nan  # a NaN point is outside in both
+    assert predict_kernels.within_share(path, errors, 10.0) == 0.0

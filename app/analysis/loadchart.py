@@ -47,11 +47,11 @@ from app.errors import BosunError
 
 CELL_VERSION = 1  # bump when a cell's simulation changes: older cached cells are not used
 MAX_AXIS = 50  # radii, payloads or Hs values a study takes
-CRANE = "offshore_crane"
+CRANE = "offshore_crane"  # the crane of the crane-head scene (app.scenarios.tac.TacScenario.crane)
 #: two charts are compared to this share (0.5 %: 0.05 t of a 10 t rating, under the 0.1 t a chart is printed to): the
 #: anti-swing's noisy sensors move the TCP by millimetres even in flat water (ψ 1.001 over 600 s), no chart's
 #: difference
-PSI_TOLERANCE = 5e-3  # the crane of the crane-head scene (app.scenarios.tac.TacScenario.crane)
+PSI_TOLERANCE = 5e-3
 
 
 class LoadChartError(OperabilityError):
@@ -98,9 +98,19 @@ def crane_rating(crane: str = CRANE):
     return spec.rated_capacity
 
 
+def crane_id(crane: str = CRANE) -> str:
+    """What the cells depend on of the crane: its robot file's content (its hash; an edited crane is a new study)."""
+    import hashlib
+
+    from app.models.registry import resolve
+
+    return hashlib.sha256(resolve(crane).read_bytes()).hexdigest()[:16]
+
+
 def cell_params(study: LoadChartStudy, mode: str, payload: float, radius: float, hs: float, tp: float, seed: int,
-                vessel: str | None) -> dict[str, Any]:  # fmt: skip
+                vessel: str | None, crane: str | None = None) -> dict[str, Any]:  # fmt: skip
     return {
+        "crane": crane,
         "v": CELL_VERSION, "kind": "loadchart", "mode": mode, "payload": float(payload), "radius": float(radius),
         "hs": float(hs), "tp": float(tp), "heading": float(study.heading), "seed": int(seed),
         "duration": float(study.duration), "dt": float(study.dt), "spectrum": study.spectrum, "wire": study.wire,
@@ -135,7 +145,7 @@ def check_study(study: LoadChartStudy, seas: list[tuple[float, float]], max_runs
     for r in study.radii:
         if rating.at(r) is None:
             raise LoadChartError(
-                f"radius {r:g} m: the crane is rated from {rating.radius[0]:g} to {rating.radius[-1]:g} m only"
+                f"radius {r:g} m is beyond the crane's rated chart (its last rating: {rating.radius[-1]:g} m)"
             )
     from app.marine.vessels import vessel_rao
     from app.scenarios.dynamic_factor import DynamicFactorScenario, _setup
@@ -199,14 +209,14 @@ def run_study(
     if out.exists() and not out.is_dir():
         raise LoadChartError(f"output folder {out} is a file")
     cache = out / "cells"
-    vid = vessel_id(study.vessel)
+    vid, cid = vessel_id(study.vessel), crane_id()
     todo, done = [], []
     for mode in study.modes:
         for payload in study.payloads:
             for radius in study.radii:
                 for hs, tp in seas:
                     for seed in range(1, study.seeds + 1):
-                        p = cell_params(study, mode, payload, radius, hs, tp, seed, vid)
+                        p = cell_params(study, mode, payload, radius, hs, tp, seed, vid, cid)
                         key = cell_key(p)
                         f = cache / f"{key}.json"
                         if f.is_file():
@@ -321,7 +331,7 @@ def save(result: LoadChartResult, out: str | Path) -> dict[str, Any]:
     rating = crane_rating()
     doc = {
         "study": asdict(st), "seas": [list(s) for s in result.seas], "source": result.source,
-        "crane": CRANE,
+        "crane": CRANE, "crane_id": crane_id(),
         "rated_capacity": {
             "radius_m": rating.radius.tolist(), "capacity_t": (rating.capacity / 1000).tolist(),
             "source": rating.source,
@@ -347,9 +357,15 @@ def save(result: LoadChartResult, out: str | Path) -> dict[str, Any]:
                     (r for r in result.table if (r["mode"], r["payload_t"], r["hs"]) == (mode, payload, hs)),
                     key=lambda r: r["radius_m"],
                 )
-                # read as the rated chart is, at the next simulated radius out (never above a computed figure)
-                ax.plot([r["radius_m"] for r in rows], [r["swl_t"] for r in rows], "o-", ms=3, lw=1.1,
-                        drawstyle="steps-pre", color=colours[k], label=f"Hs {hs:g} m")  # fmt: skip
+                # between two simulated radii the lower of their SWLs (ψ is not monotone in the radius: no figure
+                # between them is drawn above what either end gives)
+                xs, ys = [r["radius_m"] for r in rows], [r["swl_t"] for r in rows]
+                sx, sy = [xs[0]], [ys[0]]
+                for a, b, ya, yb in zip(xs, xs[1:], ys, ys[1:], strict=False):
+                    sx += [a, b, b]
+                    sy += [min(ya, yb), min(ya, yb), yb]
+                ax.plot(sx, sy, "-", lw=1.1, color=colours[k], label=f"Hs {hs:g} m")
+                ax.plot(xs, ys, "o", ms=3, color=colours[k])
             ax.axhline(payload, color="tab:red", lw=0.9, label=f"payload {payload:g} t")
             ax.set_title(f"{mode}, {payload:g} t", fontsize=9)
             ax.grid(alpha=0.3)

@@ -27,9 +27,10 @@ A **load-chart study** (:mod:`app.analysis.loadchart`, issue 31, item 4) plans a
 ``radius`` metres in one of its modes: a forecast time is workable when the payload is at most its SWL there,
 SWL = C(r) / ψ, read as the chart is (conservative at every choice):
 
-* **Hs**: the study's smallest Hs at or above the forecast's; **radius**: the study's smallest at or above the
-  lift's (the next radius out; a lift inside the smallest radius reads the smallest); **payload**: the study's
-  smallest at or above the lift's;
+* **Hs**: the study's smallest Hs at or above the forecast's; **radius and payload**: ψ the largest of the
+  study's radii and payloads on either side of the lift's (ψ is not monotone in either: off, Hs 3 m, 22 / 16 / 22
+  at 20 / 25 / 30 m), a lift outside the studied radii or payloads refused; the capacity the crane's rating at
+  the lift's own radius (the next rating out), as the study stored it;
 * **period**: ψ is the largest over the study's periods at that Hs (and all seeds), as in its chart; the forecast's
   period must lie among them (within half their smallest step beyond the first and last; a study of one period
   answers within :data:`PERIOD_TOLERANCE` of it); **heading**: within :data:`HEADING_TOLERANCE` of the study's.
@@ -154,6 +155,8 @@ class ChartCells:
     radius: float  # m
     mode: str
     vessel_id: str | None
+    rating: Any = None  # RatedCapacity: the crane's chart as the study stored it
+    crane_id: str | None = None  # the crane file's hash the cells were made with
 
 
 def load_study(
@@ -187,6 +190,7 @@ def load_study(
 def _load_chart(out: Path, summary: Path, payload: float | None, radius: float | None, mode: str | None) -> ChartCells:
     from app.analysis.loadchart import LoadChartStudy
     from app.analysis.operability import OperabilityError, vessel_id
+    from app.models.spec import RatedCapacity
 
     if payload is None or radius is None:
         raise PlanError(f"{out}: a load-chart study plans a lift: give its --payload T and --radius M")
@@ -197,6 +201,10 @@ def _load_chart(out: Path, summary: Path, payload: float | None, radius: float |
             st[k] = tuple(st[k])
         study = LoadChartStudy(**st)
         seas = [(float(h), float(t)) for h, t in doc["seas"]]
+        rc = doc["rated_capacity"]
+        rating = RatedCapacity(
+            np.array(rc["radius_m"], float), 1000.0 * np.array(rc["capacity_t"], float), rc["source"]
+        )
     except (OSError, ValueError, KeyError, TypeError) as err:
         raise PlanError(f"{summary}: not a load-chart study's summary ({one_reason(err)})") from None
     except OperabilityError as err:
@@ -204,11 +212,14 @@ def _load_chart(out: Path, summary: Path, payload: float | None, radius: float |
     mode = mode or ("compensated" if "compensated" in study.modes else study.modes[0])
     if mode not in study.modes:
         raise PlanError(f"{out}: mode {mode} is not in the study (its modes: {', '.join(study.modes)})")
-    if not payload > 0 or payload > max(study.payloads):
-        raise PlanError(f"{out}: payload {payload:g} t is above the study's largest ({max(study.payloads):g} t)")
-    if not radius > 0 or radius > max(study.radii):
-        raise PlanError(f"{out}: radius {radius:g} m is beyond the study's largest ({max(study.radii):g} m)")
-    return ChartCells(out, study, seas, float(payload), float(radius), mode, vessel_id(study.vessel))
+    lo, hi = min(study.payloads), max(study.payloads)
+    if not lo <= payload <= hi:
+        raise PlanError(f"{out}: payload {payload:g} t is outside the study's payloads ({lo:g}–{hi:g} t)")
+    lo, hi = min(study.radii), max(study.radii)
+    if not lo <= radius <= hi:
+        raise PlanError(f"{out}: radius {radius:g} m is outside the study's radii ({lo:g}–{hi:g} m)")
+    cid = doc.get("crane_id")
+    return ChartCells(out, study, seas, float(payload), float(radius), mode, vessel_id(study.vessel), rating, cid)
 
 
 def _load_operability(out: Path, summary: Path, criterion: float | None) -> StudyCells:
@@ -249,7 +260,7 @@ def _angle(a: float, b: float) -> float:
 def lookup_chart(cache: ChartCells, hs: float, period: float, kind: str, heading: float, where: str) -> dict:
     """A load-chart study's answer for one forecast sea and the planned lift (module text): the cells it reads,
     ψ, the SWL and whether the payload fits."""
-    from app.analysis.loadchart import cell_key, cell_params, crane_rating
+    from app.analysis.loadchart import cell_key, cell_params
     from app.marine.waves import SeaStateError, tp_from_tz
 
     st = cache.study
@@ -272,26 +283,36 @@ def lookup_chart(cache: ChartCells, hs: float, period: float, kind: str, heading
     if _angle(heading, st.heading) > HEADING_TOLERANCE:
         raise PlanError(f"{where}: heading {heading:g}° is more than {HEADING_TOLERANCE:g}° from the study's "
                         f"({st.heading:g}°)")  # fmt: skip
-    r_row = min(r for r in st.radii if r >= cache.radius - 1e-9)
-    m_row = min(m for m in st.payloads if m >= cache.payload - 1e-9)
+    radii = _bracket(st.radii, cache.radius)
+    payloads = _bracket(st.payloads, cache.payload)
     psi = 0.0
-    for tp in tps:
-        for seed in range(1, st.seeds + 1):
-            key = cell_key(cell_params(st, cache.mode, m_row, r_row, h_row, tp, seed, cache.vessel_id))
-            try:
-                text = (cache.out / "cells" / f"{key}.json").read_text(encoding="utf-8")
-                psi = max(psi, float(json.loads(text)["psi"]))
-            except (OSError, ValueError, KeyError):
-                raise PlanError(
-                    f"{where}: the study's cell {cache.mode}, {m_row:g} t, {r_row:g} m, Hs {h_row:g} m, Tp {tp:g} s "
-                    f"(seed {seed}) is not in {cache.out}/cells: run the study again to finish it"
-                ) from None
-    swl = crane_rating().at(r_row) / 1000.0 / psi
+    for r_row in radii:
+        for m_row in payloads:
+            for tp in tps:
+                for seed in range(1, st.seeds + 1):
+                    key = cell_key(cell_params(st, cache.mode, m_row, r_row, h_row, tp, seed, cache.vessel_id,
+                                               cache.crane_id))  # fmt: skip
+                    try:
+                        text = (cache.out / "cells" / f"{key}.json").read_text(encoding="utf-8")
+                        psi = max(psi, float(json.loads(text)["psi"]))
+                    except (OSError, ValueError, KeyError):
+                        raise PlanError(
+                            f"{where}: the study's cell {cache.mode}, {m_row:g} t, {r_row:g} m, Hs {h_row:g} m, "
+                            f"Tp {tp:g} s (seed {seed}) is not in {cache.out}/cells: run the study again to finish it"
+                        ) from None
+    swl = cache.rating.at(cache.radius) / 1000.0 / psi
     fits = cache.payload <= swl
     return {
-        "cell_hs": h_row, "cell_radius": r_row, "cell_payload": m_row, "psi": psi, "swl_t": swl,
+        "cell_hs": h_row, "cell_radii": radii, "cell_payloads": payloads, "psi": psi, "swl_t": swl,
         "workable": fits, "why_not": "" if fits else f"over its SWL: {cache.payload:g} t > {swl:.2f} t (ψ {psi:.2f})",
     }  # fmt: skip
+
+
+def _bracket(values, x: float) -> list[float]:
+    """The study's values on either side of ``x`` (one when it is one of them)."""
+    below = max(v for v in values if v <= x + 1e-9)
+    above = min(v for v in values if v >= x - 1e-9)
+    return [float(below)] if below == above else [float(below), float(above)]
 
 
 def lookup(cache: StudyCells, hs: float, period: float, kind: str, heading: float, where: str) -> dict[str, Any]:

@@ -271,7 +271,7 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
         pm = lp["predictor_ms"]
         print(
             f"  predictors (the delay's and the lift window's) per tick: p50 {pm['p50']:.3f} ms   "
-            f"p99 {pm['p99']:.3f} ms   max {pm['max']:.3f} ms ({pm['ticks']} ticks; the max is a refit)"
+            f"p99 {pm['p99']:.3f} ms   max {pm['max']:.3f} ms ({pm['ticks']} ticks; the max: a refit every 10 s)"
         )
     return 0
 

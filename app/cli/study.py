@@ -114,7 +114,10 @@ def cmd_study_loadchart(args: argparse.Namespace) -> int:
             source = scatter.source + (f" ({100 * broken:.2f} % breaking seas left out)" if broken else "")
         else:
             spectrum = args.spectrum or "jonswap"
-            seas = [(h, args.tp) for h in parse_list(args.hs, "--hs", zero=True)]
+            heights = parse_list(args.hs, "--hs", zero=True)
+            if len(set(heights)) != len(heights):
+                raise LoadChartError(f"--hs: a height repeated ({args.hs})")
+            seas = [(h, args.tp) for h in heights]
             source = f"Tp {args.tp:g} s"
         study = LoadChartStudy(
             radii=radii, payloads=payloads, modes=modes, heading=args.heading, seeds=args.seeds,

@@ -61,7 +61,7 @@ def within_share(path, errors, half_width):
     for i in range(n):
         ok = True
         for j in range(J):
-            if abs(path[j] + errors[i, j]) > half_width:
+            if not abs(path[j] + errors[i, j]) <= half_width:  # NaN is outside, as in the reference
                 ok = False
                 break
         if ok:

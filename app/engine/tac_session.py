@@ -494,7 +494,9 @@ class TacSession(Scene):
                 events[i] = events[i] or ev
         self._feed_lift(c)
         self.chart.step(now, peak / ld.static_tension())
-        chart = self.chart.report(ld.load_spec.mass, self.system.radius(c.beta[-1]), now)
+        # the radius of the TCP where the head holds it (its arms' offset and the anti-swing's in it), not the nominal
+        radius = self.system.radius(c.beta[-1], c.p_c_t[-1])
+        chart = self.chart.report(ld.load_spec.mass, radius, now)
         self._chart = chart
         self._saturated.extend(c.saturated.tolist())
         share = sum(self._saturated) / max(1, len(self._saturated))
@@ -518,13 +520,16 @@ class TacSession(Scene):
         al.set("snap_load", snap, text=f"Snap load: the wire pulled over {SNAP_FACTOR:g}× the load's weight")
         al.set("rehit", rehit, text=f"Re-hit: the load struck the deck again ({watch.contacts - 1} since touchdown)")
         al.set("sideways_contact", sideways, text="The load touched the deck while sliding sideways")
-        pct = chart["swl_percent"]
-        al.set(
-            "overload",
-            pct is not None and pct >= 100.0,
-            text=f"Overload: the load with the sea's dynamic factor ψ {chart['psi'] or 0:.2f} is {pct or 0:.0f} % of "
-            f"its SWL at {chart['radius']:.1f} m",
-        )
+        pct, beyond = chart["swl_percent"], self.chart.beyond(radius)
+        if beyond:  # past the chart's last rating: no SWL there, which is no reason to stay quiet
+            last = float(self.chart.rating.radius[-1])
+            text = f"Overload: the load is at {radius:.1f} m, beyond the crane's rated chart ({last:g} m): not rated"
+        elif pct is not None:
+            text = f"Overload: the load with the sea's dynamic factor ψ {chart['psi']:.2f} is {pct:.0f} % of its SWL "
+            text += f"at {radius:.1f} m"
+        else:
+            text = "Overload: the load's share of its SWL is not known yet"
+        al.set("overload", beyond or (pct is not None and pct >= 100.0), text=text)
         al.set(  # holding after a reset is a status (the plant light), not an alarm: nothing is wrong
             "saturation",
             value=0.0 if frozen else 100.0 * share,

@@ -20,12 +20,14 @@ Fossen 2021 §6) — the total roll damping at the roll natural frequency ω₄ 
 a constant added at every frequency (the "extra roll damping to a target percentage of critical" of
 OrcaWave's roll-damping results).  Nothing else is added.
 
-Or (``viscous="ikeda"``, issue 31 item 6) B_v,44(ω) is Ikeda's friction, eddy-making, lift and bilge-keel
+Or (``viscous="ikeda"``, issue 31 item 6) B_v,44 is Ikeda's friction, eddy-making, lift and bilge-keel
 components (:mod:`app.marine.roll_damping`) for this hull (its C_B, its section coefficient C_M = C_B/C_WP, OG =
-−z_G) and its bilge keels, at each frequency, linearised at the roll the vessel makes in a stated sea
+−z_G) and its bilge keels, at the roll natural frequency ω₄ and the roll the vessel makes in a stated sea
 (``linearise_sea``: Hs, Tp, heading of a long-crested JONSWAP sea): the amplitude φ_eq = √(9π/8) σ_φ̇ / ω₄ of the
 stochastic linearisation, σ_φ̇ from the roll response with that damping, iterated to a fixed point on a fine
-frequency grid (the hydrodynamic coefficients interpolated between the solved frequencies).
+frequency grid (the hydrodynamic coefficients interpolated between the solved frequencies); one value at every
+frequency, as the stochastic linearisation's B1 + √(8/π) σ_φ̇ B2 is (no ω in it; a fixed amplitude at every
+frequency would make the quadratic parts grow with ω).  Not settling in 100 iterations is an error.
 
 The RAOs are then moved to Bosun's vessel frame: the origin O at midship on the waterline (translations
 ξ_O = ξ_G + Ω × (O − G)), x forward, y starboard, z down (Capytaine's y to port and z up: sway, heave,
@@ -67,10 +69,10 @@ RHO_RANGE = (990.0, 1050.0)
 #: model (Fossen, ``osv.m``: ``vessel.zeta4 = 0.15``, relative damping ratio in roll)
 ROLL_DAMPING_DEFAULT = 0.15
 VISCOUS = ("zeta", "ikeda")
-#: the supply vessel's bilge keels for Ikeda's method (assumed: the paper gives none): length 0.2 Lpp and breadth
-#: 0.025 B, the proportions of the base ship of Kawahara, Maekawa & Ikeda (2011), whose formulas these are —
-#: 16.56 m × 0.48 m on the 82.8 m × 19.2 m vessel; chosen before any roll was computed with them
-BILGE_KEELS_DEFAULT = (0.2 * 82.8, 0.025 * 19.2)
+#: bilge keels for Ikeda's method when none are given (assumed: the paper gives the supply vessel none): length 0.2
+#: Lpp and breadth 0.025 B, the proportions of the base ship of Kawahara, Maekawa & Ikeda (2011), whose formulas these
+#: are — 16.56 m × 0.48 m on the 82.8 m × 19.2 m supply vessel; chosen before any roll was computed with them
+BILGE_KEELS_PROPORTIONS = (0.2, 0.025)
 #: the sea the Ikeda damping is linearised in: the TAC paper's test sea (Hs 3 m, Tp 9 s, beam)
 LINEARISE_SEA_DEFAULT = (3.0, 9.0, 90.0)
 #: Capytaine's frame (y port, z up) to Bosun's (y starboard, z down): a half turn about x
@@ -99,7 +101,8 @@ class BemInputs:
     cwp: float | None = None  # waterplane coefficient of the hull form; None: from GM_L − GM_T (app/marine/hull.py)
     roll_damping: float = ROLL_DAMPING_DEFAULT  # ζ44 at the roll natural frequency (viscous "zeta")
     viscous: str = "zeta"  # "zeta": B_v to ζ44 of critical; "ikeda": Ikeda's components (module text)
-    bilge_keels: tuple[float, float] | None = BILGE_KEELS_DEFAULT  # (length, breadth) [m] for "ikeda"; None: none
+    #: (length, breadth) [m] for "ikeda"; None: BILGE_KEELS_PROPORTIONS of the vessel; () a naked hull
+    bilge_keels: tuple[float, ...] | None = None
     linearise_sea: tuple[float, float, float] = LINEARISE_SEA_DEFAULT  # (Hs [m], Tp [s], heading [deg])
     nx: int = 40  # panels along the half hull
     nz: int = 8  # panels down its girth
@@ -144,12 +147,34 @@ class BemInputs:
                 raise BemError(f"the Ikeda damping's sea: {err}") from None
             if not math.isfinite(heading):
                 raise BemError("the Ikeda damping's sea: the heading must be a number")
+            from app.marine.roll_damping import RollDampingError
+
+            try:
+                self.ikeda_hull(cm=0.95, og=0.0)  # the keels against the hull, before any solve
+            except RollDampingError as err:
+                raise BemError(str(err)) from None
         if not (0.0 < self.roll_damping < 1.0):
             raise BemError(f"roll damping ratio must be in (0, 1), got {self.roll_damping:g}")
         if self.cwp is not None and not (math.isfinite(self.cwp) and 0.0 < self.cwp < 1.0):
             raise BemError(f"waterplane coefficient must be in (0, 1), got {self.cwp:g}")
         if not RHO_RANGE[0] <= self.rho <= RHO_RANGE[1]:
             raise BemError(f"water density must be {RHO_RANGE[0]:g} to {RHO_RANGE[1]:g} kg/m³, got {self.rho:g}")
+
+    def keels(self):
+        """The bilge keels Ikeda's method is given (module text): the stated ones, the default proportions, or none."""
+        from app.marine.roll_damping import BilgeKeels
+
+        v = self.vessel
+        if self.bilge_keels is None:
+            return BilgeKeels(BILGE_KEELS_PROPORTIONS[0] * v.lpp, BILGE_KEELS_PROPORTIONS[1] * v.beam)
+        return BilgeKeels(*self.bilge_keels) if self.bilge_keels else None
+
+    def ikeda_hull(self, cm: float, og: float):
+        """This vessel as Ikeda's method reads it, with the hull's C_M and OG (down positive)."""
+        from app.marine.roll_damping import IkedaHull
+
+        v = self.vessel
+        return IkedaHull(v.lpp, v.beam, v.draft, v.cb, cm, og, self.keels())
 
     @property
     def omegas(self) -> NDArray[np.float64]:
@@ -308,12 +333,10 @@ def _ikeda_damping(inp, form, z_g, omegas, heads, A, B, F, M, C, w4) -> tuple[ND
     """B_v,44 at each solved frequency by Ikeda's components, linearised in ``inp.linearise_sea`` (module text),
     and what it took: the amplitude, the components at ω₄, the iterations, the parameters outside the method's
     range."""
-    from app.marine.roll_damping import BilgeKeels, IkedaHull, components, out_of_range
+    from app.marine.roll_damping import components, out_of_range
     from app.marine.waves import jonswap
 
-    v = inp.vessel
-    keels = None if inp.bilge_keels is None else BilgeKeels(*inp.bilge_keels)
-    hull = IkedaHull(v.lpp, v.beam, v.draft, v.cb, form.cb / form.cwp, -z_g, keels)
+    hull = inp.ikeda_hull(form.cb / form.cwp, -z_g)
     hs, tp, heading = inp.linearise_sea
     j = int(np.argmin(np.abs((heads - heading + 180.0) % 360.0 - 180.0)))  # the solved heading nearest the sea's
     fine = np.linspace(omegas[0], omegas[-1], 4000)
@@ -324,32 +347,36 @@ def _ikeda_damping(inp, form, z_g, omegas, heads, A, B, F, M, C, w4) -> tuple[ND
     F_f = np.stack([np.interp(fine, omegas, F[:, j, r].real) + 1j * np.interp(fine, omegas, F[:, j, r].imag)
                     for r in range(6)], axis=1)  # fmt: skip
 
-    def damping(w: NDArray[np.float64], phi: float) -> NDArray[np.float64]:
-        return np.array([sum(components(hull, float(x), phi, inp.rho, G)[k] for k in ("friction", "eddy", "lift",
-                         "bilge_keels")) for x in w])  # fmt: skip
+    def damping(phi: float) -> float:
+        """The components at ω₄ and the amplitude φ: the stochastic linearisation's equivalent is one number for
+        every frequency (B_eq = B1 + √(8/π) σ_φ̇ B2: no ω in it), exact where the damping matters, at the peak."""
+        c = components(hull, w4, phi, inp.rho, G)
+        return c["friction"] + c["eddy"] + c["lift"] + c["bilge_keels"]
 
-    phi, steps = math.radians(5.0), 0
+    phi, steps, converged = math.radians(5.0), 0, False
     while steps < 100:
         steps += 1
-        b_fine = np.interp(fine, omegas, damping(omegas, phi))
+        b_fine = np.full(fine.size, damping(phi))
         Z = -(fine**2)[:, None, None] * (M + A_f) - 1j * fine[:, None, None] * (B_f + _roll(b_fine)) + C
         roll = np.linalg.solve(Z, F_f[..., None])[:, 3, 0]
         sigma_rate = math.sqrt(float(np.trapezoid(fine**2 * np.abs(roll) ** 2 * spec, fine)))
         new = math.sqrt(9.0 * math.pi / 8.0) * sigma_rate / w4
         if abs(new - phi) < 1e-6 * max(phi, 1e-6):
-            phi = new
+            phi, converged = new, True
             break
         phi = 0.5 * (phi + new)
+    if not converged:
+        raise BemError(f"Ikeda's roll damping did not settle in {steps} iterations (the roll amplitude {phi:.3g} rad)")
     at_w4 = components(hull, w4, phi, inp.rho, G)
     info = {
-        "bilge_keels_m": list(inp.bilge_keels) if inp.bilge_keels is not None else None,
+        "bilge_keels_m": None if hull.keels is None else [hull.keels.length, hull.keels.breadth],
         "linearise_sea": {"hs": hs, "tp": tp, "heading": float(heads[j]), "spectrum": "jonswap"},
         "roll_amplitude_deg": math.degrees(phi), "iterations": steps,
         "midship_section_coefficient": hull.cm, "og_m": hull.og,
         "at_roll_natural_frequency": {k: at_w4[k] for k in ("friction", "eddy", "lift", "bilge_keels")},
         "outside_the_method_s_range": out_of_range(hull, w4),
     }  # fmt: skip
-    return damping(omegas, phi), info
+    return np.full(omegas.size, damping(phi)), info
 
 
 def _roll(b: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -143,11 +143,11 @@ class CraneHead:
         beta1 = np.arctan2(z - e.L0, r) - np.arctan2(e.L2 * np.sin(beta2), e.L1 + e.L2 * np.cos(beta2))
         return np.column_stack([beta0, beta1, beta2])
 
-    def radius(self, beta: ArrayLike) -> float:
-        """The crane's radius at β: the TCP's (x_d beyond the jib tip) horizontal distance from the slewing axis,
-        r of eq. (43) (issue 31, item 4: the load chart's radius)."""
+    def radius(self, beta: ArrayLike, p_t: ArrayLike | None = None) -> float:
+        """The crane's radius at β: the TCP's (the head point ``p_t`` in {t}, by default x_d beyond the jib tip)
+        horizontal distance from the slewing axis, r of eq. (43) (issue 31, item 4: the load chart's radius)."""
         o, R = self.crane_pose(np.asarray(beta, dtype=float))
-        p_b = o + R @ self.p_d_t
+        p_b = o + R @ (self.p_d_t if p_t is None else np.asarray(p_t, dtype=float))
         p1 = np.linalg.solve(self.elbow_tcp.T_world_1, np.r_[p_b, 1.0])[:3]
         return float(math.hypot(p1[0], p1[1]))
 

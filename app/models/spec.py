@@ -167,15 +167,16 @@ class RatedCapacity:
     """A crane's rated capacity per radius in calm water (its static load chart, issue 31 item 4): ``radius``
     [m] increasing, ``capacity`` [kg] not rising with it, and where the numbers come from.  Between two ratings
     the capacity is the lower of the two (a load chart is read at the next radius out, as on a crane's own
-    chart: never an interpolated figure above the one printed); outside them the crane is not rated (None)."""
+    chart: never an interpolated figure above the one printed); inside the first rating's radius that rating's (the
+    next one out); beyond the last the crane is not rated (None)."""
 
     radius: NDArray[np.float64]
     capacity: NDArray[np.float64]
     source: str
 
     def at(self, r: float) -> float | None:
-        """The rated capacity [kg] at radius ``r`` [m], or None outside the rated radii."""
-        if not (math.isfinite(r) and self.radius[0] - 1e-9 <= r <= self.radius[-1] + 1e-9):
+        """The rated capacity [kg] at radius ``r`` [m] (the next rating out), or None beyond the last rating."""
+        if not (math.isfinite(r) and 0.0 <= r <= self.radius[-1] + 1e-9):
             return None
         k = int(np.searchsorted(self.radius, r - 1e-9, side="left"))
         return float(self.capacity[min(k, self.capacity.size - 1)])

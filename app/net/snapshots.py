@@ -257,6 +257,7 @@ class CraneLoadState:
     psi: float | None = None  # the dynamic factor seen: the wire's peak tension / weight over psi_window s
     psi_window: float = 0.0  # [s] of the window seen so far (up to the watch's window)
     swl_percent: float | None = None  # 100 · payload · ψ / capacity
+    rated: bool = False  # the crane has a load chart (its robot file's <rated_capacity>)
 
 
 @dataclass(kw_only=True, slots=True)

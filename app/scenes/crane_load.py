@@ -18,6 +18,7 @@ wire's EA, the landing) are :class:`app.sim.load.LoadSpec`'s, with their sources
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -265,7 +266,7 @@ class LoadChartWatch:
 
     rating: object | None  # RatedCapacity, or None: the crane has no load chart
     window: float = 120.0  # s: about thirteen 9 s waves
-    _peaks: list = field(default_factory=list)  # (time, factor), factors falling
+    _peaks: deque = field(default_factory=deque)  # (time, factor), factors falling
     _start: float | None = None
 
     def step(self, t: float, factor: float) -> None:
@@ -275,13 +276,13 @@ class LoadChartWatch:
             q.pop()
         q.append((t, factor))
         while q[0][0] < t - self.window:
-            q.pop(0)
+            q.popleft()
         if self._start is None:
             self._start = t
 
-    def reset(self) -> None:
-        self._peaks.clear()
-        self._start = None
+    def beyond(self, radius: float) -> bool:
+        """The crane has a chart and ``radius`` is past its last rating: not rated there (an alarm, not a blank)."""
+        return self.rating is not None and self.rating.at(radius) is None
 
     def report(self, mass: float, radius: float, t: float) -> dict:
         """The snapshot's fields (``app.net.snapshots.CraneLoadState``)."""
@@ -293,7 +294,7 @@ class LoadChartWatch:
             "payload_t": round(mass / 1000.0, 3), "radius": round(radius, 3),
             "capacity_t": None if cap is None else round(cap / 1000.0, 3),
             "psi": None if psi is None else round(psi, 4), "psi_window": round(seen, 1),
-            "swl_percent": None if pct is None else round(pct, 2),
+            "swl_percent": None if pct is None else round(pct, 2), "rated": self.rating is not None,
         }  # fmt: skip
 
 

@@ -117,12 +117,21 @@ class LandingPanel(QWidget):
             parts.append(f"<span style='color:{LIGHT['warn']}'><b>{load.rehits} re-hit(s)</b></span>")
         parts.append(self.ahc_words[0] if load.ahc else self.ahc_words[1])
         pct = getattr(load, "swl_percent", None)  # the load chart (issue 31, item 4): the crane's
+        tip = ""
         if pct is not None:
             state = "error" if pct >= 100.0 else "warn" if pct >= SWL_WARN else "ok"
             parts.insert(0, f"<span style='color:{LIGHT[state]}'><b>SWL {pct:.0f} %</b></span>")  # first: seen
-            self.status.setToolTip(
+            tip = (
                 f"this load in this sea against its safe working load: {load.payload_t:g} t × ψ {load.psi:.2f} (the "
                 f"wire's peak tension over its weight in the last {load.psi_window:.0f} s) against the rated "
                 f"{load.capacity_t:g} t at {load.radius:.1f} m; amber from {SWL_WARN:g} %, the overload alarm at 100 %"
             )
+        elif getattr(load, "radius", None) is not None:  # the crane's, with no share to show: say why
+            if load.rated and load.capacity_t is None:
+                parts.insert(0, f"<span style='color:{LIGHT['error']}'><b>SWL —: beyond the chart</b></span>")
+                tip = f"the load is at {load.radius:.1f} m, past the last rating of the crane's load chart: not rated"
+            elif not load.rated:
+                parts.insert(0, "<span style='color:#8a8aa0'>no load chart</span>")
+                tip = "the crane's robot file has no <rated_capacity>: no share of its SWL can be shown"
+        self.status.setToolTip(tip)
         self.status.setText(" · ".join(parts))
