@@ -216,7 +216,7 @@ class MotionPredictor:
             psis.append((psi, var_e))
         self._fit_rec, self.coefficients = (mu, G, np.hstack([np.zeros((self.m, 1)), sigma])), coef
         self._psi = psis
-        self._errors: dict[tuple[int, int, int], NDArray[np.float64]] = {}  # window_probability's, this fit's
+        self._errors: dict[tuple[int, int, int], tuple] = {}  # window_probability's draws and G rows, this fit's
 
     def window_probability(self, channel: int, half_width: float, length: float, draws: int = 2000) -> float:
         """The probability that ``channel`` stays within ±``half_width`` of its mean for the next ``length`` s, by
@@ -231,14 +231,19 @@ class MotionPredictor:
         sp = self.spec
         mu, G, _ = self._fit_rec
         J = min(self._h, math.ceil((length + self.delay) / sp.step) + 1)
+        made = self._errors.get((channel, J, draws))
+        if made is None:  # the errors' draws and the rows of G they go with depend on the fit alone: once a fit
+            made = self._errors[(channel, J, draws)] = (
+                self._error_draws(channel, J, draws),
+                np.ascontiguousarray(G[channel, :J, : sp.order]),
+            )
+        errors, G_c = made
+        if predict_kernels.ENABLED:  # compiled, one call (the engine's 2 Hz tick): a draw left at its first point out
+            return float(predict_kernels.window_share(self._ring, self.k, self._lags, float(mu[channel]), G_c, channel,
+                                                      errors, float(half_width)))  # fmt: skip
         hist = self._ring[(self.k - self._lags) % self._L]
         x = hist[: sp.order, channel] - mu[channel]
-        path = G[channel, :J] @ x  # deviations from the mean at grid steps 1 … J
-        errors = self._errors.get((channel, J, draws))
-        if errors is None:  # the errors' draws depend on the fit alone: made once a fit
-            errors = self._errors[(channel, J, draws)] = self._error_draws(channel, J, draws)
-        if predict_kernels.ENABLED:  # compiled: a draw is left at its first point outside (the engine's 2 Hz tick)
-            return float(predict_kernels.within_share(np.ascontiguousarray(path), errors, float(half_width)))
+        path = G_c @ x  # deviations from the mean at grid steps 1 … J
         return float(np.mean(np.all(np.abs(path + errors) <= half_width, axis=1)))
 
     def _error_draws(self, channel: int, J: int, draws: int) -> NDArray[np.float64]:

@@ -12,7 +12,7 @@ import numpy as np
 
 from app.models.kernels import ENABLED, _jit
 
-__all__ = ["ENABLED", "ar_predict", "warm_up_steps", "within_share"]
+__all__ = ["ENABLED", "ar_predict", "warm_up_steps", "window_share", "within_share"]
 
 
 @_jit
@@ -69,10 +69,30 @@ def within_share(path, errors, half_width):
     return inside / n
 
 
+@_jit
+def window_share(ring, k, lags, mu_c, G_c, channel, errors, half_width):
+    """:meth:`app.control.predict.MotionPredictor.window_probability` in one call: channel ``channel``'s predicted
+    deviations from its mean μ_c at the J grid steps of ``G_c`` (J, p) from the history in ``ring`` (as
+    :func:`ar_predict`), and the share of the error draws (draws, J) that keep them within ±half_width."""
+    L = ring.shape[0]
+    J, p = G_c.shape
+    x = np.empty(p)
+    for i in range(p):
+        x[i] = ring[(k - lags[i]) % L, channel] - mu_c
+    path = np.empty(J)
+    for j in range(J):
+        acc = 0.0
+        for i in range(p):
+            acc += G_c[j, i] * x[i]
+        path[j] = acc
+    return within_share(path, errors, half_width)
+
+
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) this file's kernel with its callers' argument types."""
     ring, lags, mu, G = np.zeros((20, 2)), np.arange(4) * 2, np.zeros(2), np.zeros((2, 6, 2))
     return [
         lambda: ar_predict(ring, 7, lags, mu, G, 0.5, np.array([0.2, 1.0]), np.empty((2, 2))),
         lambda: within_share(np.zeros(3), np.zeros((4, 3)), 1.0),
+        lambda: window_share(ring, 7, lags, 0.0, np.zeros((3, 2)), 0, np.zeros((4, 3)), 1.0),
     ]
