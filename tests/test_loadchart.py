@@ -310,3 +310,26 @@ def test_a_scatter_diagram_s_hs_row_takes_its_worst_period(tmp_path):
     worst = max(cells, key=lambda c: c["psi"])
     row = (out / "loadchart.csv").read_text(encoding="utf-8").splitlines()[1].split(",")
     assert len(cells) == 2 and float(row[4]) == worst["tp"] and float(row[5]) == pytest.approx(worst["psi"], rel=1e-5)
+
+
+def test_a_study_made_with_a_vessel_file_named_relatively_is_planned_from_anywhere(tmp_path):
+    """The cells' key holds the vessel file's hash; the summary keeps it, so ``bosun plan`` run from another folder
+    finds the cells (it used to hash the file again by the name the study was given, relative to where it ran)."""
+    from app.marine.vessels import shipped_table_path
+
+    here = tmp_path / "made_here"
+    here.mkdir()
+    (here / "v.csv").write_bytes(shipped_table_path().read_bytes())
+    run = [sys.executable, "-m", "app", "study", "loadchart", "--hs", "1", "--radii", "30", "--payloads", "5",
+           "--modes", "off", "--seeds", "1", "--duration", "5", "--workers", "1", "--vessel", "v.csv",
+           "--out", "lc"]  # fmt: skip
+    res = subprocess.run(run, capture_output=True, text=True, timeout=300, cwd=here)
+    assert res.returncode == 0, res.stderr
+    fc = _forecast(tmp_path, "2026-12-01T00:00,0.8,9,90\n")
+    plan = subprocess.run(
+        [sys.executable, "-m", "app", "plan", "--forecast", str(fc), "--study", str(here / "lc"), "--payload", "5",
+         "--radius", "30", "--mode", "off", "--out", str(tmp_path / "plan")],
+        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+    )  # fmt: skip
+    assert plan.returncode == 0, plan.stderr
+    assert "1 of 1 h workable" in plan.stdout or "0 of 1 h workable" in plan.stdout

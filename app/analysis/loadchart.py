@@ -331,7 +331,7 @@ def save(result: LoadChartResult, out: str | Path) -> dict[str, Any]:
     rating = crane_rating()
     doc = {
         "study": asdict(st), "seas": [list(s) for s in result.seas], "source": result.source,
-        "crane": CRANE, "crane_id": crane_id(),
+        "vessel_id": vessel_id(st.vessel), "crane": CRANE, "crane_id": crane_id(),
         "rated_capacity": {
             "radius_m": rating.radius.tolist(), "capacity_t": (rating.capacity / 1000).tolist(),
             "source": rating.source,

@@ -687,7 +687,8 @@ def save(result: StudyResult, out: str | Path) -> dict[str, Any]:
         for row in result.table:
             w.writerow([field_text(row[c]) for c in cols])
     doc = {
-        "study": asdict(st), "scatter": sc.source, "scatter_period": sc.period_label,
+        "study": asdict(st), "vessel_id": vessel_id(st.vessel), "scatter": sc.source,
+        "scatter_period": sc.period_label,
         "criterion_rms_e_c_m": st.criterion,
         "operability": {f"{h:g}": v for h, v in result.operability.items()},
         "unsimulated_probability": result.unsimulated,

@@ -219,7 +219,9 @@ def _load_chart(out: Path, summary: Path, payload: float | None, radius: float |
     if not lo <= radius <= hi:
         raise PlanError(f"{out}: radius {radius:g} m is outside the study's radii ({lo:g}–{hi:g} m)")
     cid = doc.get("crane_id")
-    return ChartCells(out, study, seas, float(payload), float(radius), mode, vessel_id(study.vessel), rating, cid)
+    vid = doc["vessel_id"] if "vessel_id" in doc else vessel_id(study.vessel)  # as the study hashed it (its file
+    # may be named relative to where the study ran)
+    return ChartCells(out, study, seas, float(payload), float(radius), mode, vid, rating, cid)
 
 
 def _load_operability(out: Path, summary: Path, criterion: float | None) -> StudyCells:
@@ -246,7 +248,8 @@ def _load_operability(out: Path, summary: Path, criterion: float | None) -> Stud
         raise PlanError(f"{summary}: not an operability study's summary ({one_reason(err)})") from None
     except OperabilityError as err:
         raise PlanError(f"{summary}: {err}") from None
-    return StudyCells(out, study, scatter, tps, why, vessel_id(study.vessel))
+    vid = doc["vessel_id"] if "vessel_id" in doc else vessel_id(study.vessel)  # as the study hashed it
+    return StudyCells(out, study, scatter, tps, why, vid)
 
 
 def one_reason(err: BaseException) -> str:
