@@ -22,7 +22,6 @@ import csv
 import itertools
 import json
 import math
-import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -37,10 +36,10 @@ from app.analysis.operability import (
     RUNS_CEILING,
     OperabilityError,
     Scatter,
-    _quiet,
-    _run_cells,
     cell_key,
     cell_periods,
+    run_missing,
+    take_cell,
     vessel_id,
 )
 from app.errors import BosunError
@@ -217,40 +216,12 @@ def run_study(
                 for hs, tp in seas:
                     for seed in range(1, study.seeds + 1):
                         p = cell_params(study, mode, payload, radius, hs, tp, seed, vid, cid)
-                        key = cell_key(p)
-                        f = cache / f"{key}.json"
-                        if f.is_file():
-                            try:
-                                done.append(json.loads(f.read_text(encoding="utf-8")))
-                                continue
-                            except (OSError, ValueError):
-                                pass  # a torn file: run the cell again
-                        todo.append((key, p))
-    total, cached = len(todo) + len(done), len(done)
-    t0 = time.perf_counter()
-    n_workers, address = 0, "cache"
-    if todo:
-        import contextlib
-
-        with contextlib.suppress(ImportError):  # Dask's import sets its loggers' levels: quieted after it
-            import distributed  # noqa: F401
-        with _quiet("asyncio", "distributed") if scheduler is None else _quiet("distributed.batched"):
-            n_workers, address = _run_cells(
-                study,
-                todo,
-                done,
-                total,
-                cache,
-                scheduler,
-                workers,
-                progress,
-                task=run_cell,  # type: ignore[arg-type]
-            )
-    elif progress is not None:
-        progress(cached, total)
+                        take_cell(cache, cell_key(p), p, done, todo)
+    cached = len(done)
+    n_workers, address, wall = run_missing(study, todo, done, cache, scheduler, workers, progress, run_cell)
     table = aggregate(study, seas, done)
     return LoadChartResult(
-        study, seas, source, table, chart_checks(study, table), len(todo), cached, time.perf_counter() - t0,
+        study, seas, source, table, chart_checks(study, table), len(todo), cached, wall,
         n_workers, address, done,
     )  # fmt: skip
 

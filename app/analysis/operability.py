@@ -544,6 +544,47 @@ def _run_cells(
     return n_workers, address
 
 
+def take_cell(cache: Path, key: str, params: dict[str, Any], done: list, todo: list) -> None:
+    """A cell's cached result into ``done`` when ``cache/KEY.json`` holds one, else (key, params) into ``todo``."""
+    f = cache / f"{key}.json"
+    if f.is_file():
+        try:
+            done.append(json.loads(f.read_text(encoding="utf-8")))
+            return
+        except (OSError, ValueError):
+            pass  # a torn file: run the cell again
+    todo.append((key, params))
+
+
+def run_missing(
+    study: Any,
+    todo: list[tuple[str, dict[str, Any]]],
+    done: list[dict[str, Any]],
+    cache: Path,
+    scheduler: str | None,
+    workers: int | None,
+    progress: Callable[[int, int], None] | None,
+    task: Callable[..., dict[str, Any]] = run_cell,
+) -> tuple[int, str, float]:
+    """Run a study's missing cells (``todo``) on a cluster, Dask's own log lines quieted; (workers, scheduler
+    address, wall seconds).  With nothing missing, the progress is told so and nothing starts."""
+    total = len(todo) + len(done)
+    t0 = time.perf_counter()
+    n_workers, address = 0, "cache"
+    if todo:
+        # an interrupted cluster start leaves tasks whose failure asyncio reports at garbage collection
+        # ("Task exception was never retrieved", a traceback after "bosun: interrupted"): not a study's news; nor is
+        # the client's batched comm to workers just ended on Ctrl-C ("distributed.batched - INFO - Batched Comm
+        # Closed" with a CommClosedError traceback before "bosun: interrupted": the CI's failure, 2026-11-29)
+        with contextlib.suppress(ImportError):  # Dask's import sets its loggers' levels: quieted after it
+            import distributed  # noqa: F401
+        with _quiet("asyncio", "distributed") if scheduler is None else _quiet("distributed.batched"):
+            n_workers, address = _run_cells(study, todo, done, total, cache, scheduler, workers, progress, task)
+    elif progress is not None:
+        progress(len(done), total)
+    return n_workers, address, time.perf_counter() - t0
+
+
 def run_study(
     study: OperabilityStudy,
     scatter: Scatter,
@@ -581,30 +622,9 @@ def run_study(
                     if key in seen:  # two columns of one Hs that give the same Tp: one simulation
                         continue
                     seen.add(key)
-                    f = cache / f"{key}.json"
-                    if f.is_file():
-                        try:
-                            done.append(json.loads(f.read_text(encoding="utf-8")))
-                            continue
-                        except (OSError, ValueError):
-                            pass  # a torn file: run the cell again
-                    todo.append((key, p))
-    total = len(todo) + len(done)
+                    take_cell(cache, key, p, done, todo)
     cached = len(done)
-    t0 = time.perf_counter()
-    n_workers, address = 0, "cache"
-    if todo:
-        # an interrupted cluster start leaves tasks whose failure asyncio reports at garbage collection
-        # ("Task exception was never retrieved", a traceback after "bosun: interrupted"): not a study's news; nor is
-        # the client's batched comm to workers just ended on Ctrl-C ("distributed.batched - INFO - Batched Comm
-        # Closed" with a CommClosedError traceback before "bosun: interrupted": the CI's failure, 2026-11-29)
-        with contextlib.suppress(ImportError):  # Dask's import sets its loggers' levels: quieted after it
-            import distributed  # noqa: F401
-        with _quiet("asyncio", "distributed") if scheduler is None else _quiet("distributed.batched"):
-            n_workers, address = _run_cells(study, todo, done, total, cache, scheduler, workers, progress)
-    elif progress is not None:
-        progress(cached, total)
-    wall = time.perf_counter() - t0
+    n_workers, address, wall = run_missing(study, todo, done, cache, scheduler, workers, progress)
     table, oper = aggregate(study, scatter, done, tps, why)
     unsim = float(sum(scatter.prob[ij] for ij in why))
     return StudyResult(study, scatter, table, oper, len(todo), cached, wall, n_workers, address, done, unsim)

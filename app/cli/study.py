@@ -11,16 +11,24 @@ from app.cli.common import _as_usage_error, _finite_float, _positive_float, _pos
 from app.errors import BosunError
 
 
-# ----------------------------------------------------------------------------- operability (issue 17)
-def cmd_study_operability(args: argparse.Namespace) -> int:
-    """The crane-head compensation's operability over a scatter diagram, one simulation per cell on Dask."""
-    # Dask's own log lines are not the command's news, for the whole command: a Ctrl-C that ends the local
-    # workers made the client's loop thread log "Batched Comm Closed" with a traceback after the study had
-    # returned (the quiet context around the run had ended), before "bosun: interrupted" (CI, 2026-11-29, twice)
-    # (after Dask's import, which sets its loggers' levels from its config: set before it, they were undone)
+def _quiet_dask() -> None:
+    """Dask's own log lines are not a study command's news, for the whole command: a Ctrl-C that ends the local
+    workers made the client's loop thread log "Batched Comm Closed" with a traceback after the study had returned
+    (the quiet context around the run had ended), before "bosun: interrupted" (CI, 2026-11-29, twice).  Set after
+    Dask's import, which sets its loggers' levels from its config (set before it, they were undone); without Dask
+    the study says how to install it."""
     import contextlib
     import logging
 
+    with contextlib.suppress(ImportError):
+        import distributed  # noqa: F401
+    for name in ("distributed", "distributed.client", "distributed.gc"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+# ----------------------------------------------------------------------------- operability (issue 17)
+def cmd_study_operability(args: argparse.Namespace) -> int:
+    """The crane-head compensation's operability over a scatter diagram, one simulation per cell on Dask."""
     from app.analysis.operability import (
         OperabilityError,
         OperabilityStudy,
@@ -31,10 +39,7 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
         save,
     )
 
-    with contextlib.suppress(ImportError):  # without Dask, run_study says how to install it
-        import distributed  # noqa: F401
-    for name in ("distributed", "distributed.client", "distributed.gc"):
-        logging.getLogger(name).setLevel(logging.CRITICAL)
+    _quiet_dask()
     with _as_usage_error(OperabilityError):
         # a bad scheduler first: refused within seconds, before the vessel and the simulation are loaded
         scheduler = check_scheduler(args.scheduler) if args.scheduler else None
@@ -82,8 +87,6 @@ def cmd_study_operability(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------- load chart (issue 31, item 4)
 def cmd_study_loadchart(args: argparse.Namespace) -> int:
     """SWL(radius, Hs) = the crane's rated capacity / the simulated dynamic factor, per mode and payload (Dask)."""
-    import contextlib
-    import logging
 
     from app.analysis.loadchart import (
         LoadChartError,
@@ -96,10 +99,7 @@ def cmd_study_loadchart(args: argparse.Namespace) -> int:
     )
     from app.analysis.operability import check_scheduler, load_scatter
 
-    with contextlib.suppress(ImportError):  # without Dask, run_study says how to install it
-        import distributed  # noqa: F401
-    for name in ("distributed", "distributed.client", "distributed.gc"):
-        logging.getLogger(name).setLevel(logging.CRITICAL)
+    _quiet_dask()
     with _as_usage_error(LoadChartError):
         scheduler = check_scheduler(args.scheduler) if args.scheduler else None
         radii = parse_list(args.radii, "--radii")
