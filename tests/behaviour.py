@@ -41,7 +41,11 @@ state carries the load chart (``snap.load.payload_t``, ``radius``, ``capacity_t`
 crane-only fields are None); every array recorded before equal (checked array by array).  Then again the same
 session after its review: the radius is the TCP's where the head holds it (not the nominal TCP), so
 ``snap.load.radius``, ``capacity_t`` and ``swl_percent`` (this session's own fields) differ, and ``snap.load.rated``
-is added (three cases); every other array equal.
+is added (three cases); every other array equal.  Session 25 (issue 31, the predictors' cost per tick): the lift
+window's refresh is spread over the four engine ticks after its model sample (where both predictors update) and
+published at the last, so in ``engine_tac`` and ``engine_tac_neutral`` ``snap.lift.mean``, ``sigma`` and
+``probability`` each differ at the snapshots where a refresh fell due, and each such snapshot's is the recorded one
+a snapshot before (checked array by array: the same numbers, later); every other array equal.
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

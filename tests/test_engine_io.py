@@ -137,6 +137,8 @@ def test_bench_loop_runs_the_crane_head_engine_and_times_its_predictors():
     assert r["plant"] == "tac" and r["loop"]["ticks"] > 50
     pm = r["loop"]["predictor_ms"]
     assert pm["ticks"] > 50 and 0.0 < pm["p50"] <= pm["p99"] <= pm["max"]
+    for part in ("delay", "lift_window"):  # each predictor's own share, and together they are the whole
+        assert pm[part]["ticks"] == pm["ticks"] and 0.0 < pm[part]["p50"] <= pm[part]["max"] <= pm["max"] + 1e-9
     assert len(r["estop_ticks"]) == r["estops_sent"] == 5 and r["speed_after_estop"] is None
     with pytest.raises(ValueError, match="plant must be one of teleop, tac"):
         bench_loop(plant="lab")

@@ -11,7 +11,7 @@ import pytest
 
 from app.cli import main
 from app.control import predict_kernels
-from app.control.predict import MotionPredictor, PredictError, PredictorSpec, ar_fit, ar_rows
+from app.control.predict import LiftWindow, MotionPredictor, PredictError, PredictorSpec, ar_fit, ar_rows
 from app.scenarios.predict import PredictScenario, PredictScenarioError, simulate_predict
 
 
@@ -368,3 +368,71 @@ def test_the_compiled_window_share_is_the_numpy_reference():
             assert predict_kernels.within_share(path, errors, half) == ref
     path[0] = np.nan  # a NaN point is outside in both
     assert predict_kernels.within_share(path, errors, 10.0) == 0.0
+
+
+def test_the_compiled_update_is_the_numpy_reference(monkeypatch):
+    """``update``'s bookkeeping compiled (:func:`app.control.predict_kernels.ring_update`, the engines' per-tick
+    call) leaves the ring, the last Δ's samples and the fit bit for bit as the NumPy reference does — from the
+    start (fewer samples than an average's), over several channels, across refits — and a non-finite sample is
+    refused by both, with nothing written."""
+    if not predict_kernels.ENABLED:
+        pytest.skip("numba is off (BOSUN_JIT=0): no compiled path to compare")
+    sp = PredictorSpec(dt=0.1, decimate=5, order=6, window=30.0, refit=2.0, max_horizon=5.0)
+    rng = np.random.default_rng(9)
+    Y = np.cumsum(rng.normal(size=(400, 3)), axis=0) * 0.1
+    compiled, ref = MotionPredictor(sp, 3), MotionPredictor(sp, 3)
+    for i, y in enumerate(Y):
+        compiled.update(y)
+        with monkeypatch.context() as m:
+            m.setattr(predict_kernels, "ENABLED", False)
+            ref.update(y)
+        if i in (0, 1, 3, 4, 5, 150, 399):
+            assert compiled.k == ref.k
+            assert np.array_equal(compiled._ring, ref._ring) and np.array_equal(compiled._raw, ref._raw), i
+    assert compiled.ready and np.array_equal(compiled.coefficients, ref.coefficients)
+    ring = compiled._ring.copy()
+    for p in (compiled, ref):
+        with monkeypatch.context() as m:
+            m.setattr(predict_kernels, "ENABLED", p is compiled)
+            with pytest.raises(PredictError, match="not finite"):
+                p.update([0.0, np.nan, 0.0])
+    assert compiled.k == 400 and np.array_equal(compiled._ring, ring)
+
+
+def test_the_lift_window_spreads_its_refresh_over_the_ticks_after_a_model_sample(monkeypatch):
+    """The lift window counts at most DRAWS_PER_CALL of its Monte Carlo draws a call (the engine's tick) and
+    publishes, once all are counted, exactly the prediction and probability the model gave at its model sample —
+    before the next model sample, and with the threshold in force when the refresh began."""
+    import app.control.predict as predict
+
+    rng = np.random.default_rng(12)
+    t = np.arange(0.0, 420.0, 0.02)
+    z = 1.2 * np.sin(0.7 * t + 0.3) + 0.5 * np.sin(1.05 * t) + 0.05 * rng.standard_normal(t.size)
+    w = LiftWindow(0.02, threshold=1.5)
+    w.prime(z[:15000:5])
+    assert w.predictor.ready and w.probability == w.predictor.window_probability(0, 1.5, w.length)
+    counted = []
+    real = predict.window_count
+
+    def spy(path, errors, lo, hi, half):
+        counted.append(hi - lo)
+        return real(path, errors, lo, hi, half)
+
+    monkeypatch.setattr(predict, "window_count", spy)
+    p, checked, n = w.predictor, 0, 0
+    expect, began = None, False
+    for i in range(15000, 17500):
+        counted.clear()
+        w.feed(z[i : i + 1])
+        assert sum(counted) <= w.DRAWS_PER_CALL
+        if w._due:  # a model sample just now: what a refresh made at once would publish
+            assert expect is None and not counted  # the last refresh was published before it, on other calls
+            n += 1
+            w.threshold = 1.5 if n % 2 else 0.4  # the refresh begins at the next call, with this threshold
+            expect, began = (p.path(w._h)[:, 0] - p.mean[0], p.window_probability(0, w.threshold, w.length)), False
+        elif expect is not None and w._pending is not None and not began:
+            began, w.threshold = True, 2.5  # changed while the refresh is under way: it keeps the one it began with
+        elif expect is not None and w._pending is None:
+            assert np.array_equal(w.mean, expect[0]) and w.probability == expect[1]
+            checked, expect = checked + 1, None
+    assert checked >= 8

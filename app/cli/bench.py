@@ -273,6 +273,10 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
             f"  predictors (the delay's and the lift window's) per tick: p50 {pm['p50']:.3f} ms   "
             f"p99 {pm['p99']:.3f} ms   max {pm['max']:.3f} ms ({pm['ticks']} ticks; the max: a refit every 10 s)"
         )
+        for key, name in (("delay", "the delay's"), ("lift_window", "the lift window's")):
+            if key in pm:
+                q = pm[key]
+                print(f"    {name} alone: p50 {q['p50']:.3f} ms   p99 {q['p99']:.3f} ms   max {q['max']:.3f} ms")
     return 0
 
 

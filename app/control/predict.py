@@ -37,7 +37,9 @@ from numpy.typing import ArrayLike, NDArray
 from app.control import predict_kernels
 from app.errors import BosunError
 
-__all__ = ["Foresight", "LiftWindow", "MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows"]
+__all__ = [
+    "Foresight", "LiftWindow", "MotionPredictor", "PredictError", "PredictorSpec", "ar_fit", "ar_rows", "window_count",
+]  # fmt: skip
 
 
 class PredictError(BosunError):
@@ -150,13 +152,18 @@ class MotionPredictor:
     def update(self, y: ArrayLike) -> None:
         """Take the next sample (``channels`` values, ``spec.dt`` after the last)."""
         y = np.asarray(y, dtype=float).reshape(self.m)
-        if not np.all(np.isfinite(y)):
-            raise PredictError("predictor: a sample is not finite")
         sp = self.spec
-        self.k += 1
-        self._raw[self.k % sp.decimate] = y
-        n = min(self.k, sp.decimate)
-        self._ring[self.k % self._L] = self._raw.sum(axis=0) / n if n == sp.decimate else self._mean_raw(n)
+        if predict_kernels.ENABLED:  # compiled, one call (the engines' per-tick use: a tenth of the NumPy's time)
+            if not predict_kernels.ring_update(self._ring, self._raw, self.k + 1, y):
+                raise PredictError("predictor: a sample is not finite")
+            self.k += 1
+        else:
+            if not np.all(np.isfinite(y)):
+                raise PredictError("predictor: a sample is not finite")
+            self.k += 1
+            self._raw[self.k % sp.decimate] = y
+            n = min(self.k, sp.decimate)
+            self._ring[self.k % self._L] = self._raw.sum(axis=0) / n if n == sp.decimate else self._mean_raw(n)
         if self.t >= self._next_fit - 1e-9:
             self._next_fit += sp.refit
             self._fit()
@@ -226,8 +233,21 @@ class MotionPredictor:
         ``draws`` fixed standard normal draws (the same each call: a decision does not flicker with the dice).
         NaN before the first fit.  The model runs on the signal averaged over Δ: the window's points are its grid
         points from the one that covers now (the average's delay) to the one past ``length``."""
-        if self._fit_rec is None:
+        made = self.window_draws(channel, length, draws)
+        if made is None:
             return math.nan
+        path, errors = made
+        return window_count(path, errors, 0, errors.shape[0], half_width) / errors.shape[0]
+
+    def window_draws(
+        self, channel: int, length: float, draws: int = 2000
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """What :meth:`window_probability` counts: ``channel``'s predicted deviations from its mean at the window's
+        J grid points (J,) and the model's error draws there (draws, J), the draws made once a fit; None before
+        the first fit.  The share of rows with |path + row| ≤ half-width everywhere is the probability
+        (:func:`window_count`, which can count a share of the rows at a time)."""
+        if self._fit_rec is None:
+            return None
         sp = self.spec
         mu, G, _ = self._fit_rec
         J = min(self._h, math.ceil((length + self.delay) / sp.step) + 1)
@@ -238,13 +258,11 @@ class MotionPredictor:
                 np.ascontiguousarray(G[channel, :J, : sp.order]),
             )
         errors, G_c = made
-        if predict_kernels.ENABLED:  # compiled, one call (the engine's 2 Hz tick): a draw left at its first point out
-            return float(predict_kernels.window_share(self._ring, self.k, self._lags, float(mu[channel]), G_c, channel,
-                                                      errors, float(half_width)))  # fmt: skip
+        if predict_kernels.ENABLED:  # compiled, one call (the engine's 2 Hz tick)
+            return predict_kernels.window_path(self._ring, self.k, self._lags, float(mu[channel]), G_c, channel), errors
         hist = self._ring[(self.k - self._lags) % self._L]
         x = hist[: sp.order, channel] - mu[channel]
-        path = G_c @ x  # deviations from the mean at grid steps 1 … J
-        return float(np.mean(np.all(np.abs(path + errors) <= half_width, axis=1)))
+        return G_c @ x, errors  # deviations from the mean at grid steps 1 … J
 
     def _error_draws(self, channel: int, J: int, draws: int) -> NDArray[np.float64]:
         """``draws`` samples of the model's forecast errors at grid steps 1 … J (rows), jointly Gaussian."""
@@ -349,6 +367,15 @@ def _cubic(grid: NDArray[np.float64], y: NDArray[np.float64], h: NDArray[np.floa
     return p1 + 0.5 * u * (p2 - p0 + u * (2 * p0 - 5 * p1 + 4 * p2 - p3 + u * (3 * (p1 - p2) + p3 - p0)))
 
 
+def window_count(path: NDArray[np.float64], errors: NDArray[np.float64], lo: int, hi: int, half_width: float) -> int:
+    """How many of the error draws ``lo`` … ``hi`` − 1 (rows of ``errors``) keep ``path`` + draw within
+    ±``half_width`` at every point (:meth:`MotionPredictor.window_draws`): compiled
+    (:func:`app.control.predict_kernels.within_count`, each draw left at its first point outside) or NumPy."""
+    if predict_kernels.ENABLED:
+        return int(predict_kernels.within_count(path, errors, int(lo), int(hi), float(half_width)))
+    return int(np.count_nonzero(np.all(np.abs(path + errors[lo:hi]) <= half_width, axis=1)))
+
+
 class LiftWindow:
     """The lift-window indicator an engine runs (issue 31, item 3): a :class:`MotionPredictor` on one signal (the
     crane tip's heave, or the tip's heave over a target deck) fed the engine's samples every ``dt`` s, and at each
@@ -357,6 +384,7 @@ class LiftWindow:
     *open* when that is at least ``probability``.  :meth:`state` is what the GUI's strip draws."""
 
     STEP = 0.5  # s between the strip's points
+    DRAWS_PER_CALL = 700  # the window's Monte Carlo draws counted per call (2000 in three of the engine's ticks)
 
     def __init__(
         self, dt: float, threshold: float = 1.5, length: float = 10.0, probability: float = 0.95, ahead: float = 20.0
@@ -371,37 +399,75 @@ class LiftWindow:
         self.probability = math.nan
         self.primed = False
         self._fit_seen: tuple | None = None  # the fit the σ was computed for
+        self._sigma_fit: NDArray[np.float64] | None = None  # and that σ
+        self._due = False  # a refresh fell due at the last call's last model sample (feed)
+        self._pending: tuple | None = None  # the refresh under way: mean, σ, path, draws, half-width, counted, inside
+        self._queued: float | None = None  # a model sample that arrived at the last call, taken at the next
 
     def feed(self, z: NDArray[np.float64]) -> None:
-        """The signal's samples since the last call, ``dt`` apart (any number, also none)."""
-        p = self.predictor
+        """The signal's samples since the last call, ``dt`` apart (any number, also none).
+
+        The work is spread over the calls (the engine's ticks) so that none carries much of it: a model sample is
+        taken into the predictor at the next call (the tick after it arrives, which in the crane-head engine is the
+        delay predictor's own model sample), and the refresh that falls due then goes over the calls after that —
+        the path, σ and the first :data:`DRAWS_PER_CALL` of the window's Monte Carlo draws, then the rest — and
+        publishes the strip's prediction and probability together once the last draw is counted (four ticks,
+        80 ms, after the model sample at the engine's 50 Hz); whatever is still open when the next model sample is
+        taken is finished first, so the numbers are those of a refresh made at once.  Made whole on the model
+        sample's tick, the refresh and both predictors' model samples shared one tick, and that tick's cost was
+        the predictors' p99 (``bosun bench loop --plant tac``)."""
+        self._advance(self.DRAWS_PER_CALL)
+        if self._queued is not None:
+            self._take(self._queued)
+            self._queued = None
         z = np.asarray(z, dtype=float).ravel()
         first = (-self._n - 1) % self.every  # the first of these samples on the predictor's grid
         self._n += z.size
         for v in z[first :: self.every]:
-            p.update((v,))
-            if p.ready and p.k % p.spec.decimate == 0:
-                self._refresh()
+            if self._queued is not None:  # more than one model sample in a call: the earlier one now
+                self._take(self._queued)
+            self._queued = float(v)
+
+    def _take(self, v: float) -> None:
+        """One model sample into the predictor, after any refresh still open (it is of the samples before)."""
+        self._advance(None)
+        p = self.predictor
+        p.update((v,))
+        self._due = p.ready and p.k % p.spec.decimate == 0
 
     def prime(self, past: NDArray[np.float64]) -> None:
         """Start on the signal's past (oldest first, ``spec.dt`` apart, ending now): a real sensor has run all along
-        (:meth:`MotionPredictor.prime`)."""
+        (:meth:`MotionPredictor.prime`); the first refresh made at once."""
         self.predictor.prime(np.asarray(past, dtype=float).reshape(-1, 1))
         self.primed = True
-        if self.predictor.ready:
-            self._refresh()
+        self._pending = self._queued = None  # the past ends now: a sample not yet taken is in it
+        self._due = self.predictor.ready
+        self._advance(None)
 
-    def _refresh(self) -> None:
-        """At each model sample: the path (compiled), the σ (the fit's alone: once a fit) and the probability — in
-        the engine's loop, so its cost counts (``bosun bench loop --plant tac``: NumPy's predict, σ and all, at every
-        refresh took the p99 of the predictors' time per tick to 0.28 ms)."""
+    def _advance(self, budget: int | None) -> None:
+        """The refresh due or under way, by ``budget`` more Monte Carlo draws (None: to its end): begun with the
+        path (compiled), the σ (the fit's alone: once a fit) and the window's draws; published when all are
+        counted."""
         p = self.predictor
-        if p._fit_rec is not self._fit_seen:
-            self.sigma = p.predict(self._h)[1][:, 0]
-            self._fit_seen = p._fit_rec
-        y = p.path(self._h)
-        self.mean = y[:, 0] - p.mean[0]
-        self.probability = p.window_probability(0, self.threshold, self.length)
+        if self._due:
+            self._due = False
+            if p._fit_rec is not self._fit_seen:
+                self._sigma_fit = p.predict(self._h)[1][:, 0]
+                self._fit_seen = p._fit_rec
+            mean = p.path(self._h)[:, 0] - p.mean[0]
+            path, errors = p.window_draws(0, self.length)
+            self._pending = (mean, self._sigma_fit, path, errors, float(self.threshold), 0, 0)
+        if self._pending is None:
+            return
+        mean, sigma, path, errors, half, done, inside = self._pending
+        n = errors.shape[0]
+        upto = n if budget is None else min(n, done + budget)
+        inside += window_count(path, errors, done, upto, half)
+        if upto < n:
+            self._pending = (mean, sigma, path, errors, half, upto, inside)
+            return
+        self._pending = None
+        self.mean, self.sigma, self.probability = mean, sigma, inside / n
 
     @property
     def open(self) -> bool:
