@@ -63,7 +63,8 @@ class JointSpec:
 
 @dataclass(frozen=True, eq=False)
 class LinkSpec:
-    """One row of a standard DH table, A = Rz(θ) Tz(d) Tx(a) Rx(α).
+    """One row of a standard DH table, A = Rz(θ) Tz(d) Tx(a) Rx(α) (or, in :attr:`SerialSpec.written` of a modified
+    table, one row as the file wrote it: a_{i−1}, α_{i−1}, d_i, θ_i).
 
     ``theta`` and ``d`` hold the constant parts; the joint (if any) adds to the
     variable one.  ``joint`` is the 0-based index of the joint driving this link,
@@ -85,6 +86,11 @@ class SerialSpec:
 
     ``up`` names the world axis that points up ("+z" by default, "-z" for a z-down world such as a
     vessel's body frame {b}); only drawings use it, to show the machine the right way up.
+
+    ``links`` is always the standard DH table of the chain.  A file written in the modified convention
+    (``convention="modified"``, Craig) is turned into it when read (:func:`standard_from_modified`): the same
+    chain to rounding, so every kernel, solver, drawing and study runs on it unchanged; ``convention`` says how
+    the file wrote it and ``written`` keeps the rows as written.
     """
 
     links: tuple[LinkSpec, ...]
@@ -92,6 +98,34 @@ class SerialSpec:
     T_world_base: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
     T_flange_tool: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
     up: str = "+z"
+    convention: str = "standard"
+    written: tuple[LinkSpec, ...] = ()
+
+
+def standard_from_modified(
+    rows: tuple[LinkSpec, ...], T_world_base: NDArray[np.float64]
+) -> tuple[tuple[LinkSpec, ...], NDArray[np.float64]]:
+    """The standard DH table and base of a chain written in the modified convention (Craig, *Introduction to
+    Robotics*, 3rd ed., §3.4: row i holds a_{i−1}, α_{i−1}, d_i, θ_i and ᶦ⁻¹T_i = Rx(α_{i−1}) Tx(a_{i−1}) Rz(θ_i)
+    Tz(d_i)).
+
+    Rx(α) and Tx(a) commute (a rotation about x and a translation along it), so the chain
+
+        B · Rx(α₀)Tx(a₀) · Rz(θ₁)Tz(d₁) · Rx(α₁)Tx(a₁) · Rz(θ₂)Tz(d₂) ⋯ Rz(θₙ)Tz(dₙ)
+
+    regroups into standard links Rz(θ_i)Tz(d_i)Tx(a_i)Rx(α_i) — each row's θ and d with the *next* row's a and α
+    (the last link's a = α = 0) — behind the base B · Rx(α₀)Tx(a₀).  Exact but for rounding; the joints keep
+    their rows (a joint drives θ_i or d_i of its own row in both)."""
+    from dataclasses import replace
+
+    if not rows:
+        return rows, T_world_base
+    a0, al0 = rows[0].a, rows[0].alpha
+    c, s = math.cos(al0), math.sin(al0)
+    first = np.array([[1.0, 0.0, 0.0, a0], [0.0, c, -s, 0.0], [0.0, s, c, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    after = (*((r.a, r.alpha) for r in rows[1:]), (0.0, 0.0))  # each row's next row's a and α
+    links = tuple(replace(row, a=a, alpha=alpha) for row, (a, alpha) in zip(rows, after, strict=True))
+    return links, np.asarray(T_world_base, dtype=float) @ first
 
 
 @dataclass(frozen=True, eq=False)

@@ -30,6 +30,7 @@ from app.models.spec import (
     RobotSpec,
     SerialSpec,
     StewartSpec,
+    standard_from_modified,
 )
 from app.resources import robot_library
 
@@ -518,12 +519,18 @@ class _Reader:
                 coupling.append((names.index(other), self.num(c_el, "factor", bound="factor")))
             del j["element"]
             joint_specs.append(JointSpec(**j, coupling=tuple(coupling)))
+        base, written = self.frame(el.find("base")), tuple(links)
+        convention = el.get("convention", "standard")
+        if convention == "modified":  # the same chain as a standard table (SerialSpec's text)
+            links, base = standard_from_modified(written, base)
         return SerialSpec(
             links=tuple(links),
             joints=tuple(joint_specs),
-            T_world_base=self.frame(el.find("base")),
+            T_world_base=base,
             T_flange_tool=self.frame(el.find("tool")),
             up=el.get("up", "+z"),
+            convention=convention,
+            written=written if convention == "modified" else (),
         )
 
     def joint(self, el: etree._Element, kind: str, link_index: int) -> dict:
