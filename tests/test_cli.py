@@ -22,7 +22,7 @@ def run(capsys, *argv):
 def test_robots_table(capsys):
     code, out, err = run(capsys, "robots")
     assert code == 0 and err == ""
-    assert "comau_smart5_3dof" in out and "stewart" in out and "9 robot(s)" in out
+    assert "comau_smart5_3dof" in out and "stewart" in out and "11 robot(s)" in out
 
 
 def test_robots_json(capsys):

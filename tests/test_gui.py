@@ -155,6 +155,28 @@ def test_open_xml_reads_a_utf16_or_latin1_file_as_the_engine_does(qtbot, window,
     assert window.teleop.state.robot == "utf16_arm"
 
 
+def test_open_robot_file_takes_a_urdf(qtbot, window, tmp_path):
+    """Issue 32, item 1: a URDF opened in the GUI is driven as the robot file it makes (the engine reads its text);
+    a URDF the importer refuses gives the one-line message and keeps the robot."""
+    pytest.importorskip("yourdfpy", reason="yourdfpy (bosun[urdf])")
+    from app.resources import robot_library
+
+    window.teleop.load_robot_file(str(robot_library() / "urdf" / "ur5.urdf"))
+    qtbot.waitUntil(lambda: window.teleop.state.robot == "ur5", timeout=GUI_WAIT)
+    qtbot.waitUntil(lambda: len(window.teleop.state.q) == 6, timeout=GUI_WAIT)
+    bad = tmp_path / "loop.urdf"
+    bad.write_text(
+        '<robot name="loop">\n<link name="a"/><link name="b"/>\n'
+        '<joint name="ab" type="floating"><parent link="a"/><child link="b"/></joint>\n</robot>\n',
+        encoding="utf-8",
+    )
+    window.teleop.load_robot_file(str(bad))
+    qtbot.waitUntil(lambda: len(window.messages) > 0, timeout=GUI_WAIT)
+    title, message = window.messages[-1]
+    assert title == "Robot not loaded" and message.startswith("loop.urdf:3: joint 'ab': type 'floating'"), message
+    assert window.teleop.state.robot == "ur5"
+
+
 def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     path = tmp_path / "log.csv"
     window.teleop.log_path.setText(str(path))

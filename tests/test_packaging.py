@@ -38,7 +38,9 @@ def test_the_core_does_not_depend_on_qt_or_pygame():
     extras = PYPROJECT["project"]["optional-dependencies"]
     assert {"gui", "joystick", "bench", "test"} <= set(extras)
     assert any("pygame" in d for d in extras["joystick"]) and any("PyQt5" in d for d in extras["gui"])
-    assert extras["all"] == ["bosun[gui,joystick,bench,test,test-gui,plc,marine,study,docs]"]  # what setup.sh installs
+    assert extras["all"] == [
+        "bosun[gui,joystick,bench,test,test-gui,plc,marine,study,urdf,docs]"
+    ]  # what setup.sh installs
     assert any(d.startswith("mkdocs-material") for d in extras["docs"])  # the documentation site (issue 28)
     assert any(d.startswith("pyads") for d in extras["plc"])  # the real Motion-Lab's PLC (issue 16)
     assert any(d.startswith("capytaine") for d in extras["marine"])  # bosun vessel rao (issue 17)
@@ -48,6 +50,7 @@ def test_the_core_does_not_depend_on_qt_or_pygame():
 def test_shipped_data_is_found_through_importlib_resources():
     lib = robot_library()
     assert (lib / "robot.xsd").is_file() and (lib / "labs" / "motionlab.xml").is_file()
+    assert (lib / "urdf" / "ur5.urdf").is_file() and (lib / "urdf" / "franka_panda.urdf").is_file()
     assert {p.stem for p in lib.glob("*.xml")} >= {"scara", "offshore_crane", "em8000", "tac_delta_head"}
     assert {p.stem for p in device_profiles().glob("*.toml")} >= {"xbox_gamepad", "logitech_extreme_3d_pro"}
 

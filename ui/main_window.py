@@ -154,7 +154,7 @@ class MainWindow(QMainWindow):
         QShortcut(QKeySequence("Ctrl+1"), self, activated=lambda: self.teleop.set_mode("position"))
         QShortcut(QKeySequence("Ctrl+2"), self, activated=lambda: self.teleop.set_mode("velocity"))
         menu = self.menuBar().addMenu("&File")
-        act = QAction("Open robot XML…", self, triggered=self.teleop.choose_xml)
+        act = QAction("Open robot file (XML, URDF)…", self, triggered=self.teleop.choose_xml)
         act.setShortcut("Ctrl+O")
         menu.addAction(act)
         menu.addAction(QAction("Quit", self, triggered=self.close, shortcut="Ctrl+Q"))

@@ -336,7 +336,9 @@ class TeleopTab(QWidget):
     # ------------------------------------------------------------------ commands
     def choose_xml(self) -> None:
         """A non-modal file chooser: STOP and the rest of the window stay live while it is open."""
-        self.file_dialog = choose_file(self, "Open robot XML", os.getcwd(), "Robot files (*.xml)", self.load_robot_file)
+        self.file_dialog = choose_file(
+            self, "Open robot file", os.getcwd(), "Robot files (*.xml *.urdf)", self.load_robot_file
+        )
 
     def load_robot_file(self, path: str) -> None:
         """Send the chosen file's text: the engine reads no path outside its robot folders."""

@@ -1,5 +1,5 @@
-"""``bosun robots``, ``check``, ``fk``, ``jacobian``, ``ik``, ``analyze``, ``track``: the robot library, its
-kinematics and its solvers."""
+"""``bosun robots``, ``check``, ``import urdf``, ``fk``, ``jacobian``, ``ik``, ``analyze``, ``track``: the robot
+library, its kinematics and its solvers."""
 
 from __future__ import annotations
 
@@ -150,6 +150,28 @@ def cmd_check(args: argparse.Namespace) -> int:
     if len(args.robots) > 1:
         print(f"{len(args.robots) - failed} ok, {failed} refused", file=sys.stderr)
     return EXIT_USAGE if failed else 0
+
+
+def cmd_import_urdf(args: argparse.Namespace) -> int:
+    """A URDF's serial chain as a Bosun robot file (:mod:`app.models.urdf`), checked by loading what it wrote."""
+    from app.models.registry import build_model
+    from app.models.urdf import robot_xml_from_urdf
+    from app.models.xml import parse_robot_xml, read_robot_file, urdf_root
+
+    out = Path(args.out)
+    if out.suffix != ".xml":
+        raise BosunError(f"--out {args.out}: a robot file's name ends in .xml")
+    name = out.stem
+    if not name.isidentifier() or not name.isascii():
+        raise BosunError(f"--out {args.out}: the robot's name is the file's ('{name}'): use letters, digits and _")
+    label = str(args.file)
+    root = urdf_root(read_robot_file(Path(args.file), label), label)
+    text = robot_xml_from_urdf(root, label, base=args.base, tip=args.tip, name=name)
+    robot = build_model(parse_robot_xml(text, str(out)))  # what it wrote loads as a robot file
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text, encoding="utf-8")
+    print(f"wrote {out}: {name}, {robot.n_joints} joints ({', '.join(robot.joint_names)})")
+    return 0
 
 
 def cmd_fk(args: argparse.Namespace) -> int:
@@ -359,6 +381,21 @@ def register(sub) -> None:
         "Exit 0 when every file loads, 2 when any is refused.",
     ) as p:
         p.add_argument("robots", nargs="+", metavar="ROBOT", help="library names or paths to XML files")
+
+    imp = sub.add_parser("import", help="import a robot from another format (URDF) as a Bosun robot file")
+    imp_sub = imp.add_subparsers(dest="format", metavar="FORMAT", required=True)
+    with command(
+        imp_sub, "urdf", cmd_import_urdf, json=False,
+        help="a URDF's serial chain as a Bosun robot file (standard DH, base and tool)",
+        description="Reads FILE with yourdfpy and writes the chain from --base to --tip as a robot file (its DH "
+        "frames from the joint axes at q = 0; joint names, directions, zeros and limits the URDF's). Revolute, "
+        "continuous, prismatic and fixed joints; <mimic>, floating and planar joints and closed loops are refused "
+        "in one line (exit 2). A .urdf also loads directly wherever a robot file is accepted.",
+    ) as p:  # fmt: skip
+        p.add_argument("file", metavar="FILE", help="the URDF file")
+        p.add_argument("--base", metavar="LINK", help="the chain's first link (default: the URDF's root link)")
+        p.add_argument("--tip", metavar="LINK", help="the chain's last link, the tool (default: the only leaf)")
+        p.add_argument("--out", required=True, metavar="ROBOT.xml", help="the robot file to write (its name: ROBOT)")
 
     for name, func, text in [
         ("fk", cmd_fk, "forward kinematics: tool pose for joint values"),

@@ -54,7 +54,7 @@ def resolve(name_or_path: str | os.PathLike[str]) -> Path:
     if not text.strip():
         raise RobotNotFoundError("no robot given; name one from the library or a path to an XML file")
     _no_nul(text)
-    looks_like_path = text.endswith(".xml") or os.sep in text or "/" in text
+    looks_like_path = text.endswith((".xml", ".urdf")) or os.sep in text or "/" in text
     if looks_like_path:
         path = Path(text).expanduser()
         if not path.is_file():

@@ -32,6 +32,7 @@ from app.models.spec import (
     StewartSpec,
     standard_from_modified,
 )
+from app.models.urdf import is_urdf
 from app.resources import robot_library
 
 SCHEMA_PATH = robot_library() / "robot.xsd"  # package data (app/resources.py)
@@ -188,6 +189,37 @@ def parse_robot_file(path: str | Path, label: str | None = None) -> RobotSpec:
     return parse_robot_xml(read_robot_file(path, label), label)
 
 
+def _safe_root(text: str | bytes, path: str) -> etree._Element:
+    """The document's root, parsed as a robot file is: decoded, no entities, no network, no DOCTYPE, bounded size."""
+    if not isinstance(text, str):
+        if len(text) > MAX_FILE_BYTES:
+            raise RobotXmlError(path, None, f"file is {len(text)} bytes; a robot file is at most {MAX_FILE_BYTES}")
+        text = decode_robot_xml(bytes(text), path)
+    try:
+        data = _declared_utf8(text).encode("utf-8")
+    except UnicodeEncodeError as err:  # a lone surrogate: no file holds one
+        line = text[: err.start].count("\n") + 1
+        raise RobotXmlError(path, line, f"not text: U+{ord(text[err.start]):04X} is no character") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise RobotXmlError(path, None, f"file is {len(data)} bytes; a robot file is at most {MAX_FILE_BYTES}")
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, remove_comments=True, huge_tree=False)
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as err:
+        raise RobotXmlError(path, err.lineno, f"XML syntax error: {_strip_location(err.msg)}") from None
+    if root.getroottree().docinfo.doctype:
+        raise RobotXmlError(path, 1, "a DOCTYPE (DTD, entities) is not allowed in a robot file")
+    return root
+
+
+def urdf_root(text: str | bytes, path: str) -> etree._Element:
+    """A URDF document's root, parsed safely (:func:`_safe_root`); a document that is no URDF is refused."""
+    root = _safe_root(text, path)
+    if not is_urdf(root):
+        raise RobotXmlError(path, root.sourceline, "not a URDF (a <robot> with <link> and <joint> elements)")
+    return root
+
+
 def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
     """Parse and validate robot XML.
 
@@ -209,24 +241,9 @@ def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
     RobotXmlError
         For a syntax error, a schema violation or a value that cannot be used.
     """
-    if not isinstance(text, str):
-        if len(text) > MAX_FILE_BYTES:
-            raise RobotXmlError(path, None, f"file is {len(text)} bytes; a robot file is at most {MAX_FILE_BYTES}")
-        text = decode_robot_xml(bytes(text), path)
-    try:
-        data = _declared_utf8(text).encode("utf-8")
-    except UnicodeEncodeError as err:  # a lone surrogate: no file holds one
-        line = text[: err.start].count("\n") + 1
-        raise RobotXmlError(path, line, f"not text: U+{ord(text[err.start]):04X} is no character") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise RobotXmlError(path, None, f"file is {len(data)} bytes; a robot file is at most {MAX_FILE_BYTES}")
-    parser = etree.XMLParser(resolve_entities=False, no_network=True, remove_comments=True, huge_tree=False)
-    try:
-        root = etree.fromstring(data, parser)
-    except etree.XMLSyntaxError as err:
-        raise RobotXmlError(path, err.lineno, f"XML syntax error: {_strip_location(err.msg)}") from None
-    if root.getroottree().docinfo.doctype:
-        raise RobotXmlError(path, 1, "a DOCTYPE (DTD, entities) is not allowed in a robot file")
+    root = _safe_root(text, path)
+    if is_urdf(root):  # a URDF, wherever a robot file is accepted: its chain as the robot file it makes
+        return _from_urdf(root, path)
     schema = _schema()
     try:
         valid = schema.validate(root)
@@ -242,6 +259,18 @@ def parse_robot_xml(text: str | bytes, path: str = "<string>") -> RobotSpec:
     except (ArithmeticError, ValueError, TypeError, IndexError, KeyError) as err:
         # a boundary: a file that slips past the checks is refused with its name, never a traceback
         raise RobotXmlError(path, None, f"cannot be used ({type(err).__name__}: {err})") from None
+
+
+def _from_urdf(root: etree._Element, path: str) -> RobotSpec:
+    """A URDF document's chain (its only tip, from its root link: :mod:`app.models.urdf`) read as the robot file the
+    importer writes; a value of it that a robot file refuses is reported against the URDF."""
+    from app.models.urdf import robot_xml_from_urdf
+
+    text = robot_xml_from_urdf(root, path)
+    try:
+        return parse_robot_xml(text, path)
+    except RobotXmlError as err:
+        raise RobotXmlError(path, None, f"as imported from URDF: {err.message}") from None
 
 
 #: xs:double as a finite decimal: what the schema and float() both accept (no INF, NaN, '1e', '1.e')
