@@ -45,7 +45,9 @@ is added (three cases); every other array equal.  Session 25 (issue 31, the pred
 window's refresh is spread over the four engine ticks after its model sample (where both predictors update) and
 published at the last, so in ``engine_tac`` and ``engine_tac_neutral`` ``snap.lift.mean``, ``sigma`` and
 ``probability`` each differ at the snapshots where a refresh fell due, and each such snapshot's is the recorded one
-a snapshot before (checked array by array: the same numbers, later); every other array equal.
+a snapshot before (checked array by array: the same numbers, later); every other array equal.  The same session
+(issue 32, item 4): ``engine_teleop``'s snapshot carries the GA's task (``snap.ga_weights``, ``snap.ga_axis_weight``:
+two arrays added, the published 1, 1, 1 and 0); every other array equal.
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

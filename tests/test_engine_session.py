@@ -340,3 +340,35 @@ def test_braking_onto_a_position_limit_stays_within_the_acceleration_limit():
             worst = max(worst, float(np.max(np.abs(act.qddot) / acc)))
             assert np.all(np.abs(act.q) <= 1.0) and np.all(np.abs(act.qdot) <= speed * (1 + 1e-12))
     assert worst <= 1 + 1e-5  # rounding only (1 + 6.4e-7 measured over 1,050,000 steps; 1.125 before)
+
+
+def test_the_ga_task_is_set_through_the_protocol_and_disarms():
+    """Issue 32, item 4 (H111): ``set_ga_task`` rebuilds a GA solver with the operator's weights and tool axis,
+    reports them in the snapshot, and disarms the input (the next answer may lie elsewhere); the same task again
+    changes nothing; a bad task is one line and leaves the task in force; other solvers keep it for later."""
+    ses = Session(robot_name="comau_smart5_6dof", solver_name="ga-restart", mode="position")
+    snap = ses.snapshot()
+    assert snap.ga_weights == [1.0, 1.0, 1.0] and snap.ga_axis is None and snap.ga_axis_weight == 0.0
+    arm(ses)
+    ses.set_ga_task([1.0, 1.0, 4.0], [0.0, 0.0, -2.0])
+    snap = ses.snapshot()
+    assert not snap.flags.armed  # disarmed
+    assert snap.ga_weights == [1.0, 1.0, 4.0] and snap.ga_axis == [0.0, 0.0, -1.0] and snap.ga_axis_weight == 1.0
+    assert ses.solver.task.weights == (1.0, 1.0, 4.0) and ses.solver.name == "ga-restart"
+    t = arm(ses, 1.0)
+    assert ses.snapshot().flags.armed
+    ses.set_ga_task([1.0, 1.0, 4.0], [0.0, 0.0, -1.0], 1.0)  # the same task: nothing happens
+    assert ses.snapshot().flags.armed
+    for bad, message in (([0.0, 0.0, 0.0], "not all 0"), ([1.0, 1.0, 101.0], r"in \[0, 100\]")):
+        with pytest.raises(CommandError, match=message) as info:
+            ses.set_ga_task(bad)
+        assert "\n" not in str(info.value)
+    with pytest.raises(CommandError, match="needs the axis"):
+        ses.set_ga_task([1.0, 1.0, 1.0], None, 2.0)
+    assert ses.solver.task.weights == (1.0, 1.0, 4.0) and ses.snapshot().flags.armed
+    run(ses, 0.1, sample(), t0=t)
+    ses.set_solver("jacobian")
+    ses.set_ga_task([2.0, 1.0, 1.0])  # kept for the GA; the Jacobian solver is not rebuilt
+    assert ses.solver.name == "jacobian" and ses.snapshot().ga_weights == [2.0, 1.0, 1.0]
+    ses.set_solver("ga")
+    assert ses.solver.task.weights == (2.0, 1.0, 1.0)

@@ -150,3 +150,110 @@ def test_compiled_solve_keeps_the_time_budget():
     res = ga.solve_position(box.upper + box.extent)  # out of reach: only the budget ends it
     assert not res.success and res.reason == "time budget spent"
     assert res.iterations > 100 and 0.1 <= res.time_s < 0.2
+
+
+def test_ga_restart_unsticks_what_the_published_ga_leaves_stuck():
+    """Issue 32, item 4: cold targets on which the published GA stalls against a joint limit (no stop in 1,500
+    generations) are reached by ``ga-restart`` from the same seed in fewer generations, after re-seeding; on a
+    target the GA reaches at once both give the same answer (the extension changes nothing until a stall)."""
+    robot = load_robot("comau_smart5_3dof")
+    X = robot.position(np.random.default_rng(7).uniform(robot.lower, robot.upper, size=(120, robot.n_joints)))
+    stuck, unstuck = 0, 0
+    for x in X:
+        ga = make_solver("ga", robot, seed=3, time_budget=None, max_generations=1500)
+        res = ga.solve_position(x)
+        if res.success:
+            continue
+        stuck += 1
+        rs = make_solver("ga-restart", robot, seed=3, time_budget=None, max_generations=1500).solve_position(x)
+        unstuck += rs.success and "re-seeding" in rs.reason and rs.iterations < 1500
+    assert stuck >= 1 and unstuck == stuck, (stuck, unstuck)
+    easy = next(
+        x for x in X if make_solver("ga", robot, seed=3, time_budget=None, max_generations=20).solve_position(x).success
+    )
+    a = make_solver("ga", robot, seed=3, time_budget=None, max_generations=20).solve_position(easy)
+    b = make_solver("ga-restart", robot, seed=3, time_budget=None, max_generations=20).solve_position(easy)
+    assert np.array_equal(a.q, b.q) and a.iterations == b.iterations and a.reason == b.reason == "converged"
+
+
+@pytest.mark.parametrize("name", ["comau_smart5_3dof", "kuka_youbot"])
+def test_ga_restart_compiled_equals_its_reference(name):
+    """The re-seeding draws from the solver's stream in both paths: compiled and NumPy give the same answers."""
+    compiled, reference = load_robot(name), load_robot(name)
+    reference.use_kernels = False
+    a, b = (make_solver("ga-restart", r, seed=11, time_budget=None, max_generations=200) for r in (compiled, reference))
+    rng = np.random.default_rng(5)
+    for x in compiled.position(rng.uniform(compiled.lower, compiled.upper, size=(6, compiled.n_joints))):
+        assert_same(a.solve_position(x), b.solve_position(x))
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31), n=st.integers(1, 8))
+def test_a_task_s_costs_compiled_equal_the_reference(seed, n):
+    """A GA task's weights and tool-axis term (issue 32, item 4) cost the same compiled and in NumPy."""
+    from app.ik import GaTask
+
+    robot = random_chain(seed, n)
+    rng = np.random.default_rng(seed)
+    task = GaTask(tuple(rng.uniform(0.1, 5.0, 3)), tuple(rng.normal(size=3)), float(rng.uniform(0.1, 3.0)))
+    ga = make_solver("ga", robot, seed=seed, task=task)
+    pop = rng.uniform(robot.lower, robot.upper, size=(125, n))
+    x = robot.position(ga.random_q())
+    costs = []
+    for flag in (True, False):
+        robot.use_kernels = flag
+        costs.append(ga.cost(pop, x))
+    np.testing.assert_allclose(costs[0], costs[1], rtol=1e-12, atol=1e-12)
+    published = make_solver("ga", robot, seed=seed)
+    assert not np.allclose(costs[0], published.cost(pop, x))  # the task changes the cost
+
+
+def test_a_task_weights_the_axes_and_turns_the_tool():
+    """Weights (1, 1, 4): every solved target is met four times as closely in normalised z (|ê_z| < 0.005, which
+    the published cost leaves up to 0.01); a tool-axis term along −z: solved targets have the tool pointing down.
+    The default task is the published cost, bit for bit."""
+    from app.ik import GaTask
+
+    robot = load_robot("franka_panda")
+    rng = np.random.default_rng(4)
+    X = robot.position(rng.uniform(robot.lower, robot.upper, size=(25, robot.n_joints)))
+    opts = {"seed": 2, "time_budget": None, "max_generations": 2000}
+    plain = make_solver("ga-restart", robot, **opts)
+    heavy = make_solver("ga-restart", robot, task=GaTask((1.0, 1.0, 4.0)), **opts)
+    down = make_solver("ga-restart", robot, task=GaTask(axis=(0.0, 0.0, -1.0), axis_weight=1.0), **opts)
+    box = plain.box
+    ez_plain, ez_heavy, pointing = [], [], []
+    for x in X:
+        for solver, into in ((plain, ez_plain), (heavy, ez_heavy)):
+            res = solver.solve_position(x)
+            assert res.success, res.reason
+            into.append(abs(res.position[2] - x[2]) / box.extent[2])
+        res = down.solve_position(x)
+        if res.success:  # a target under the arm's own base may have no pose with the tool pointing down
+            pointing.append(-robot.fk(res.q)[2, 2])
+    assert max(ez_heavy) < 0.005 < max(ez_plain)
+    # the stop now asks for the tool within ~11° of down as well: about half the targets within 2,000 generations
+    assert len(pointing) >= 10 and min(pointing) > 0.98, pointing
+    pop = rng.uniform(robot.lower, robot.upper, size=(50, robot.n_joints))
+    assert np.array_equal(
+        make_solver("ga", robot, task=GaTask()).cost(pop, X[0]), make_solver("ga", robot).cost(pop, X[0])
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"weights": (0, 0, 0)}, "not all 0"),
+        ({"weights": (1, -1, 1)}, r"in \[0, 100\]"),
+        ({"weights": (1, float("nan"), 1)}, r"in \[0, 100\]"),
+        ({"axis_weight": 1.0}, "needs the axis"),
+        ({"axis": (0, 0, 0), "axis_weight": 1.0}, "not all 0"),
+        ({"axis": (0, 0, 1), "axis_weight": -2.0}, r"tool-axis weight must be in \[0, 100\]"),
+    ],
+)
+def test_a_bad_task_is_one_line(kwargs, message):
+    from app.ik import GaTask
+
+    with pytest.raises(ValueError, match=message) as info:
+        GaTask(**kwargs)
+    assert "\n" not in str(info.value)

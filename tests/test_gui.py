@@ -177,6 +177,27 @@ def test_open_robot_file_takes_a_urdf(qtbot, window, tmp_path):
     assert window.teleop.state.robot == "ur5"
 
 
+def test_the_ga_task_row_sends_and_shows_the_engine_s_task(qtbot, window):
+    """Issue 32, item 4 (H111): the GA task chosen in the teleop tab reaches the engine and the row shows the
+    engine's task (another client's numbers as a custom line); it is greyed out while a non-GA solver drives."""
+    tab = window.teleop
+    qtbot.waitUntil(lambda: tab.state is not None and tab.solver.findText("ga-restart") >= 0, timeout=GUI_WAIT)
+    tab.solver.setCurrentText("ga-restart")
+    tab.solver.activated.emit(tab.solver.currentIndex())
+    qtbot.waitUntil(lambda: tab.state.solver == "ga-restart" and tab.ga_task.isEnabled(), timeout=GUI_WAIT)
+    assert tab.ga_task.currentText() == "published cost"
+    tab.ga_task.setCurrentText("tool down, height first")
+    tab.ga_task.activated.emit(tab.ga_task.currentIndex())
+    qtbot.waitUntil(lambda: tab.state.ga_weights == [1.0, 1.0, 4.0] and tab.state.ga_axis == [0.0, 0.0, -1.0],
+                    timeout=GUI_WAIT)  # fmt: skip
+    tab.link.send("set_ga_task", weights=[2.0, 1.0, 1.0])  # another client's task
+    qtbot.waitUntil(lambda: tab.ga_task.currentText() == "custom: weights (2, 1, 1)", timeout=GUI_WAIT)
+    tab.solver.setCurrentText("jacobian")
+    tab.solver.activated.emit(tab.solver.currentIndex())
+    qtbot.waitUntil(lambda: tab.state.solver == "jacobian" and not tab.ga_task.isEnabled(), timeout=GUI_WAIT)
+    assert tab.state.ga_weights == [2.0, 1.0, 1.0]  # kept for the GA
+
+
 def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     path = tmp_path / "log.csv"
     window.teleop.log_path.setText(str(path))
@@ -335,7 +356,7 @@ def test_picker_lists_only_what_the_engine_drives(qtbot, window):
     assert {"scara", "comau_smart5_3dof", "offshore_crane"} <= names
     assert not names & {"em8000", "em1500", "tac_delta_head"}  # a Stewart platform and the Delta head are refused
     solvers = {window.teleop.solver.itemText(i) for i in range(window.teleop.solver.count())}
-    assert solvers == {"ga", "jacobian", "analytic"}  # the Comau 3-DOF has a closed form
+    assert solvers == {"ga", "ga-restart", "jacobian", "analytic"}  # the Comau 3-DOF has a closed form
     window.teleop.robot.setCurrentText("scara")
     window.teleop.robot.activated.emit(window.teleop.robot.currentIndex())
     qtbot.waitUntil(lambda: window.teleop.desc is not None and window.teleop.desc.robot == "scara", timeout=GUI_WAIT)

@@ -27,9 +27,9 @@ PAIRS = [(r, s) for r in SERIAL for s in solvers_for(load_robot(r))]
 
 
 def test_solver_registry_and_applicability():
-    assert solvers_for(load_robot("comau_smart5_3dof")) == ["ga", "jacobian", "analytic"]
-    assert solvers_for(load_robot("offshore_crane")) == ["ga", "jacobian", "analytic"]
-    assert solvers_for(load_robot("scara")) == ["ga", "jacobian"]
+    assert solvers_for(load_robot("comau_smart5_3dof")) == ["ga", "ga-restart", "jacobian", "analytic"]
+    assert solvers_for(load_robot("offshore_crane")) == ["ga", "ga-restart", "jacobian", "analytic"]
+    assert solvers_for(load_robot("scara")) == ["ga", "ga-restart", "jacobian"]
     with pytest.raises(IKError, match="unknown solver 'newton'"):
         make_solver("newton", load_robot("scara"))
     with pytest.raises(IKError, match="no closed-form solution for kuka_youbot"):
@@ -43,9 +43,11 @@ def test_fk_of_ik_reaches_reachable_targets(robot_name, solver_name, rng):
     # The GA is run deterministically (generation cap, no clock).  Its tolerance: every target
     # within 2 % of the workspace diagonal, and its published stop rule (normalised cost < 0.01)
     # met on all but at most one of six (measured over 30 targets per robot: 97-100 %, worst
-    # error 1.2 % of the diagonal).  The other solvers must reach 0.1 mm every time.
-    if solver_name == "ga":
-        solver = make_solver("ga", robot, seed=3, time_budget=None, max_generations=3000)
+    # error 1.2 % of the diagonal); ga-restart (issue 32, item 4) meets its stop on all six.  The other solvers
+    # must reach 0.1 mm every time.
+    genetic = solver_name.startswith("ga")
+    if genetic:
+        solver = make_solver(solver_name, robot, seed=3, time_budget=None, max_generations=3000)
     else:
         solver = make_solver(solver_name, robot, seed=3, time_budget=None)
     misses = 0
@@ -54,13 +56,13 @@ def test_fk_of_ik_reaches_reachable_targets(robot_name, solver_name, rng):
         res = solver.solve_position(x)
         assert np.all(robot.within_limits(res.q)) and np.all(np.isfinite(res.q))
         np.testing.assert_allclose(res.position, robot.position(res.q), atol=1e-12)
-        if solver_name == "ga":
+        if genetic:
             assert res.error <= 0.02 * solver.box.diagonal
             assert res.success == (res.cost < 0.01)
             misses += not res.success
         else:
             assert res.success and res.error < 1e-4, res.reason
-    assert misses <= 1
+    assert misses <= (1 if solver_name == "ga" else 0)
 
 
 @pytest.mark.parametrize("elbow", ["up", "down"])
@@ -122,7 +124,8 @@ def test_comau_joint_velocity_and_acceleration_eqs_21_22(rng):
 @pytest.mark.parametrize("robot_name, solver_name", PAIRS)
 def test_unreachable_target_reports_failure_and_closest_point(robot_name, solver_name):
     robot = load_robot(robot_name)
-    kwargs = {"max_generations": 400, "time_budget": None} if solver_name == "ga" else {"time_budget": None}
+    genetic = solver_name.startswith("ga")
+    kwargs = {"max_generations": 400, "time_budget": None} if genetic else {"time_budget": None}
     solver = make_solver(solver_name, robot, seed=2, **kwargs)
     box = solver.box
     target = box.upper + 0.5 * box.extent  # well outside the box enclosing the workspace
@@ -131,7 +134,7 @@ def test_unreachable_target_reports_failure_and_closest_point(robot_name, solver
     assert np.all(robot.within_limits(res.q)) and np.all(np.isfinite(res.q))
     # no farther than the workspace allows: compare with the nearest of many sampled reachable points
     nearest = np.linalg.norm(sample_positions(robot, 50_000, np.random.default_rng(0)) - target, axis=1).min()
-    slack = 0.02 * box.diagonal if solver_name == "ga" else 1e-3 * box.diagonal
+    slack = 0.02 * box.diagonal if genetic else 1e-3 * box.diagonal
     assert res.error <= nearest + slack
 
 

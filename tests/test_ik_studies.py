@@ -67,11 +67,11 @@ def test_tracking_with_jacobian_warm_start():
 def test_bench_ik_rows():
     rows = bench_ik([load_robot("offshore_crane")], targets=5)
     assert [(r["solver"], r["start"]) for r in rows] == [
-        (s, m) for s in ("ga", "jacobian", "analytic") for m in ("cold", "warm")
+        (s, m) for s in ("ga", "ga-restart", "jacobian", "analytic") for m in ("cold", "warm")
     ]
     for r in rows:
         assert r["targets"] == 5 and 0 <= r["success_rate"] <= 1 and r["p99_ms"] >= r["p95_ms"] >= r["median_ms"] > 0
-    assert rows[4]["success_rate"] == rows[5]["success_rate"] == 1.0  # analytic: exact, inside the limits
+    assert rows[6]["success_rate"] == rows[7]["success_rate"] == 1.0  # analytic: exact, inside the limits
 
 
 def test_warm_targets_are_one_centimetre_apart_and_reachable():
@@ -156,5 +156,5 @@ def test_cli_analyze_and_track_write_files(capsys, tmp_path):
 def test_cli_bench_ik_json(capsys):
     assert main(["bench", "ik", "--targets", "2", "--robots", "scara", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["benchmark"] == "ik" and {r["solver"] for r in data["results"]} == {"ga", "jacobian"}
+    assert data["benchmark"] == "ik" and {r["solver"] for r in data["results"]} == {"ga", "ga-restart", "jacobian"}
     assert "cores" in data["machine"]

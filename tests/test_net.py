@@ -32,6 +32,7 @@ def test_round_trip_every_client_message():
         "device_lost": {"device": "stick"},
         "set_robot": {"robot": "scara"},
         "set_solver": {"solver": "ga"},
+        "set_ga_task": {"weights": [1.0, 1.0, 4.0], "axis": [0.0, 0.0, -1.0], "axis_weight": 0.5},
         "set_mode": {"mode": "position"},
         "set_frame": {"frame": "tool"},
         "set_scaling": {"k_p": [1.0, 1.0, 1.0], "x_w": [0.0, 1.0, 2.0], "k_v": [0.1, 0.1, 0.1]},

@@ -38,6 +38,17 @@ from ui.widgets.view3d import make_robot_view
 MANUAL = "on-screen stick / keyboard"
 
 
+#: the GA tasks the teleop tab offers (issue 32, item 4): name → (weights per world axis, tool axis or None);
+#: the protocol's set_ga_task takes any numbers
+GA_TASKS: dict[str, tuple[list[float], list[float] | None]] = {
+    "published cost": ([1.0, 1.0, 1.0], None),
+    "height first (z × 4)": ([1.0, 1.0, 4.0], None),
+    "plan first (x, y × 4)": ([4.0, 4.0, 1.0], None),
+    "tool pointing down": ([1.0, 1.0, 1.0], [0.0, 0.0, -1.0]),
+    "tool down, height first": ([1.0, 1.0, 4.0], [0.0, 0.0, -1.0]),
+}
+
+
 class InputManager(QObject):
     """Polls the chosen input at 100 Hz and hands it to the engine of the tab on screen.
 
@@ -156,18 +167,29 @@ class TeleopTab(QWidget):
         self.opened: dict[str, tuple[str, str]] = {}  # robot name -> (file name, text) of files opened by path
         row = QHBoxLayout()
         row.addWidget(self.robot, 1)
-        self.open_xml = QPushButton("Open XML…")
-        self.open_xml.setToolTip("load any robot file (DH table and limits); an invalid file keeps the current robot")
+        self.open_xml = QPushButton("Open…")
+        self.open_xml.setToolTip(
+            "load any robot file (XML: a DH table and limits) or a URDF; an invalid file keeps the current robot"
+        )
         self.open_xml.clicked.connect(self.choose_xml)
         row.addWidget(self.open_xml)
         f.addRow("robot", row)
         self.solver = QComboBox()
         self.solver.setToolTip(
-            "IK solvers that apply to this robot: ga (the paper's genetic algorithm), jacobian (damped least "
-            "squares), analytic (closed form, Comau-type arms)"
+            "IK solvers that apply to this robot: ga (the paper's genetic algorithm), ga-restart (the same, re-seeded "
+            "when it stalls), jacobian (damped least squares), analytic (closed form, Comau-type arms)"
         )
         self.solver.activated.connect(lambda _i: self.link.send("set_solver", solver=self.solver.currentText()))
         f.addRow("solver", self.solver)
+        self.ga_task = QComboBox()
+        self.ga_task.addItems(list(GA_TASKS))
+        self.ga_task.setToolTip(
+            "the GA's task (issue 32): weights of its position cost per axis and a tool-axis term; 'published "
+            "cost' is the paper's. It shapes the GA's position mode; a change disarms the stick (centre it and "
+            "hold enable again). Other solvers keep it for when a GA is chosen."
+        )
+        self.ga_task.activated.connect(lambda _i: self.send_ga_task(self.ga_task.currentText()))
+        f.addRow("GA task", self.ga_task)
         mode_row = QHBoxLayout()
         self.mode_group = QButtonGroup(self)
         self.mode_pos = QRadioButton("position")
@@ -303,7 +325,7 @@ class TeleopTab(QWidget):
         split.addWidget(middle)
         self.plots = LivePlots()
         split.addWidget(self.plots)
-        for combo in (self.robot, self.solver, self.device):  # long names must not widen the column
+        for combo in (self.robot, self.solver, self.ga_task, self.device):  # long names must not widen the column
             combo.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)
             combo.setMinimumContentsLength(14)
         # the column is as wide as its widest control needs (nothing cut at its right edge) plus the scroll bar
@@ -372,6 +394,28 @@ class TeleopTab(QWidget):
         else:
             self.link.send("set_robot", robot=name)
 
+    def _sync_ga_task(self, state) -> None:
+        """The GA task combo shows the engine's task: its preset, or a custom line (another client's numbers)."""
+        weights = [float(v) for v in getattr(state, "ga_weights", [1.0, 1.0, 1.0])]
+        axis = getattr(state, "ga_axis", None)
+        axis_weight = float(getattr(state, "ga_axis_weight", 0.0))
+        name = next(
+            (n for n, (w, a) in GA_TASKS.items()
+             if w == weights and a == (None if axis is None else [round(v, 9) for v in axis])
+             and axis_weight == (0.0 if a is None else 1.0)),
+            None,
+        )  # fmt: skip
+        if name is None:
+            axis_text = "" if axis is None else f", axis ({', '.join(f'{v:.2g}' for v in axis)}) × {axis_weight:g}"
+            name = f"custom: weights ({', '.join(f'{v:g}' for v in weights)}){axis_text}"
+            if self.ga_task.findText(name) < 0:
+                self.ga_task.addItem(name)
+        if self.ga_task.currentText() != name and not self.ga_task.view().isVisible():
+            self.ga_task.setCurrentText(name)
+        ga = str(state.solver).startswith("ga")
+        if self.ga_task.isEnabled() != ga:
+            self.ga_task.setEnabled(ga)
+
     def set_mode(self, mode: str) -> None:
         self.link.send("set_mode", mode=mode)
 
@@ -379,9 +423,18 @@ class TeleopTab(QWidget):
         k_p, k_v = self.k_p.value(), self.k_v.value()
         self.link.send("set_scaling", k_p=[k_p] * 3, k_v=[k_v] * 3, x_w=[s.value() for s in self.x_w])
 
+    def send_ga_task(self, name: str) -> None:
+        preset = GA_TASKS.get(name)
+        if preset is None:  # a task set by another client: shown, not re-sent
+            return
+        weights, axis = preset
+        self.link.send("set_ga_task", weights=weights, **({} if axis is None else {"axis": axis}))
+
     def on_reply(self, re: str, ok: bool, error: str) -> None:
-        if not ok and re in ("set_robot", "set_solver", "set_mode", "set_frame", "set_scaling", "invalid"):
-            what = {"set_robot": "Robot not loaded", "set_solver": "Solver not changed"}.get(re, "Command refused")
+        if not ok and re in ("set_robot", "set_solver", "set_ga_task", "set_mode", "set_frame", "set_scaling",
+                             "invalid"):  # fmt: skip
+            what = {"set_robot": "Robot not loaded", "set_solver": "Solver not changed",
+                    "set_ga_task": "GA task not changed"}.get(re, "Command refused")  # fmt: skip
             self.error.emit(what, error)
 
     # ------------------------------------------------------------------ display
@@ -454,6 +507,7 @@ class TeleopTab(QWidget):
             if self.solver.findText(state.solver) < 0:
                 self.solver.addItem(state.solver)
             self.solver.setCurrentText(state.solver)
+        self._sync_ga_task(state)
         button = self.mode_pos if state.mode == "position" else self.mode_vel
         if not button.isChecked():
             button.setChecked(True)

@@ -102,6 +102,22 @@ def _solver_options(args: argparse.Namespace) -> dict[str, Any]:
         if args.solver != "analytic":
             raise BosunError("--elbow applies to --solver analytic only")
         opts["elbow"] = args.elbow
+    weights, axis, axis_weight = (getattr(args, k, None) for k in ("ga_weights", "ga_axis", "ga_axis_weight"))
+    if weights is not None or axis is not None or axis_weight is not None:
+        from app.ik import GaTask
+
+        if not str(args.solver).startswith("ga"):
+            raise BosunError("--ga-weights, --ga-axis and --ga-axis-weight apply to --solver ga or ga-restart only")
+        if axis_weight is not None and axis is None:
+            raise BosunError("--ga-axis-weight needs --ga-axis")
+        try:
+            opts["task"] = GaTask(
+                tuple(weights) if weights is not None else (1.0, 1.0, 1.0),
+                None if axis is None else tuple(axis),
+                (1.0 if axis_weight is None else axis_weight) if axis is not None else 0.0,
+            )
+        except ValueError as err:
+            raise BosunError(str(err)) from None
     return opts
 
 

@@ -427,6 +427,19 @@ def register(sub) -> None:
             default=None,
             help="branch for --solver analytic (default auto: the valid one nearest the start)",
         )
+        task = p.add_argument_group("GA task (--solver ga or ga-restart; issue 32: the published cost by default)")
+        task.add_argument(
+            "--ga-weights", nargs=3, type=_finite_float, metavar=("WX", "WY", "WZ"), default=None,
+            help="weights of the normalised position error per world axis (default 1 1 1, the published cost)",
+        )  # fmt: skip
+        task.add_argument(
+            "--ga-axis", nargs=3, type=_finite_float, metavar=("AX", "AY", "AZ"), default=None,
+            help="the direction the tool's z should point along (with --ga-axis-weight)",
+        )  # fmt: skip
+        task.add_argument(
+            "--ga-axis-weight", type=_finite_float, metavar="W", default=None,
+            help="weight of the tool-axis term w (1 - z·a)/2 (default 1 with --ga-axis)",
+        )  # fmt: skip
         add_json(p)
 
     with command(

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
@@ -27,7 +27,7 @@ from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, LogEntry, Scene, command
 from app.engine.studies import STUDIES, StudyError, StudyRunner
 from app.errors import BosunError, error_line, one_line, printable_path
-from app.ik import DEFAULT, make_solver, solvers_for
+from app.ik import DEFAULT, GaTask, make_solver, solvers_for
 from app.models.registry import (
     allowed_dirs,
     list_robots,
@@ -102,6 +102,7 @@ class Session(Scene):
     actuator_tau: float = 0.05
     seed: int = 0
     robots_dirs: tuple = ()  # folders set_robot may read besides the library (``--robots-dir``)
+    ga_task: GaTask = field(default_factory=GaTask)  # the GA's task weighting (set_ga_task; the published cost)
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -134,7 +135,7 @@ class Session(Scene):
         if not isinstance(robot, SerialRobot):
             raise CommandError(f"{robot.name} is a {robot.kind} mechanism; the teleoperation engine drives serial arms")
         if solver is None:
-            solver = make_solver(solver_name, robot, seed=self.seed)
+            solver = self._make_solver(solver_name, robot)
         q0 = 0.5 * (robot.lower + robot.upper)
         old = getattr(self, "robot", None)
         if old is not None and old.joint_names == robot.joint_names and np.all(robot.within_limits(self.actuators.q)):
@@ -177,7 +178,7 @@ class Session(Scene):
                     f"{model.name} is a {model.kind} mechanism; the teleoperation engine drives serial arms"
                 )
             try:
-                built = make_solver(solver, model, seed=self.seed)
+                built = self._make_solver(solver, model)
             except BosunError as err:
                 if "no closed-form solution" not in str(err):
                     raise
@@ -195,13 +196,47 @@ class Session(Scene):
     def set_solver(self, solver: str) -> None:
         name = solver
         try:
-            solver = make_solver(name, self.robot, seed=self.seed)
+            solver = self._make_solver(name, self.robot)
         except BosunError as err:
             raise CommandError(str(err)) from None
         self.solver, self.solver_name = solver, name
         self.changed()
         self.input.disarm("solver changed")
         self.note("info", f"solver {name}")
+
+    def _make_solver(self, name: str, robot):
+        """A solver for ``robot``; the GA family with the operator's task (:meth:`set_ga_task`)."""
+        if name.startswith("ga"):
+            return make_solver(name, robot, seed=self.seed, task=self.ga_task)
+        return make_solver(name, robot, seed=self.seed)
+
+    @command
+    def set_ga_task(self, weights: list[float], axis: list[float] | None = None, axis_weight: float | None = None):
+        """The GA's task weighting (issue 32, item 4; :class:`app.ik.GaTask`): weights of the normalised position
+        error per world axis, and the direction the tool's z should point along with its weight (default 1 with
+        an axis).  It shapes the GA's position mapping; a change rebuilds a GA solver and disarms the input (the
+        next answer may lie elsewhere, H111)."""
+        if axis is None and axis_weight:
+            raise CommandError("GA task: a tool-axis weight needs the axis (3 numbers)")
+        try:
+            task = GaTask(tuple(weights), None if axis is None else tuple(axis),
+                          (1.0 if axis_weight is None else axis_weight) if axis is not None else 0.0)  # fmt: skip
+        except ValueError as err:
+            raise CommandError(str(err)) from None
+        if task == self.ga_task:
+            return
+        self.ga_task = task
+        if self.solver_name.startswith("ga"):
+            self.solver = self._make_solver(self.solver_name, self.robot)
+            self.input.disarm("GA task changed")
+        self.changed()
+        w = ", ".join(f"{v:g}" for v in task.weights)
+        axis_text = (
+            ""
+            if task.axis is None
+            else f"; tool z along ({', '.join(f'{v:.3g}' for v in task.axis)}) × {task.axis_weight:g}"
+        )
+        self.note("info", f"GA task: weights ({w}){axis_text}")
 
     @command
     def set_mode(self, mode: str) -> None:
@@ -525,6 +560,9 @@ class Session(Scene):
             tick=self.ticks,
             robot=self.robot_name,
             solver=self.solver_name,
+            ga_weights=list(self.ga_task.weights),
+            ga_axis=None if self.ga_task.axis is None else list(self.ga_task.axis),
+            ga_axis_weight=self.ga_task.axis_weight,
             mode=self.mode,
             frame=self.frame,
             q=q.tolist(),

@@ -8,12 +8,13 @@ import numpy as np
 
 from app.ik.analytic import AnalyticSolver
 from app.ik.base import DEFAULT, IKError, IKResult, Solver
-from app.ik.genetic import GeneticSolver
+from app.ik.genetic import GaTask, GeneticSolver, RestartGeneticSolver
 from app.ik.jacobian import JacobianSolver
 
 #: solver name -> class; a new method registers here (or via :func:`register_solver`)
 SOLVERS: dict[str, type[Solver]] = {
     GeneticSolver.name: GeneticSolver,
+    RestartGeneticSolver.name: RestartGeneticSolver,
     JacobianSolver.name: JacobianSolver,
     AnalyticSolver.name: AnalyticSolver,
 }
@@ -67,10 +68,12 @@ __all__ = [
     "DEFAULT",
     "SOLVERS",
     "AnalyticSolver",
+    "GaTask",
     "GeneticSolver",
     "IKError",
     "IKResult",
     "JacobianSolver",
+    "RestartGeneticSolver",
     "Solver",
     "make_solver",
     "register_solver",

@@ -20,10 +20,12 @@ array C-contiguous float64, one numba specialisation):
   :mod:`app.models.kernels`): dh (5, L), the DH links' θ₀ [rad], d₀ [m], a [m], cos α, sin α
   (A = Rz(θ) Tz(d) Tx(a) Rx(α), TAC paper eq. 39); M (2, L, n), the joint maps M_θ, M_d (θ = θ₀ + M_θ q,
   d = d₀ + M_d q); T (2, 4, 4), T_world_base, T_flange_tool [m];
-* ``limits`` (the position cost's constants; built once per solver): lower, upper (n,), the joint
+* ``limits`` (the position cost's constants; built once per solver and task): lower, upper (n,), the joint
   limits [rad, m] a gene must keep to; box_lower, box_extent (3,) [m], the workspace box that
   normalises positions (step 2: x̂ = (x − box_lower) / box_extent); penalty, the factor (100) on the
-  cost of a chromosome with a gene outside its limits (at least +1);
+  cost of a chromosome with a gene outside its limits (at least +1); the task (issue 32, item 4:
+  :class:`app.ik.genetic.GaTask`): weights (3,) on the normalised error per axis (1, 1, 1 published),
+  axis_weight and axis (3,), the tool-axis term's weight (0: none, published) and the wanted tool z;
 * ``rules`` (the operators of steps 5–7; built once per solver and mapping): span (n,), the range the
   mutation amplitude refers to (the joint ranges [rad, m] in the position mapping, the one-tick speed
   window 2 × speed [rad/s, m/s] in the velocity mapping); n_elite, the individuals kept unaltered
@@ -88,12 +90,35 @@ def _tool_points(chain, Q):
 
 
 @_jit
+def _tool_axes(chain, Q):
+    """The tool's z axis (m, 3) in the world for configurations Q (m, n): :func:`_tool_points`' recursion on a
+    direction (the links' rotations only)."""
+    theta0, _, _, ca, sa, M_theta, _, T_base, T_tool = _chain(chain)
+    L, n = M_theta.shape
+    V = np.empty((Q.shape[0], 3))
+    for k in range(Q.shape[0]):
+        x, y, z = T_tool[0, 2], T_tool[1, 2], T_tool[2, 2]
+        for i in range(L - 1, -1, -1):
+            y, z = ca[i] * y - sa[i] * z, sa[i] * y + ca[i] * z
+            th = 0.0
+            for j in range(n):
+                th += M_theta[i, j] * Q[k, j]
+            c, s = math.cos(theta0[i] + th), math.sin(theta0[i] + th)
+            x, y = c * x - s * y, s * x + c * y
+        for r in range(3):
+            V[k, r] = T_base[r, 0] * x + T_base[r, 1] * y + T_base[r, 2] * z
+    return V
+
+
+@_jit
 def position_costs(chain, pop, x_t, limits):
-    """``GeneticSolver.cost``: normalised distance to x_t (eq. 5 on the workspace box), × ``penalty`` (at
-    least +1) for a chromosome with a gene outside its limits.  pop (m, n) → (m,)."""
-    lower, upper, box_lower, box_extent, penalty = limits
+    """``GeneticSolver.cost``: normalised distance to x_t (eq. 5 on the workspace box), with the task's per-axis
+    weights w (√(Σ w e²): the published cost at w = 1) and its tool-axis term w_a (1 − z·z_t)/2 (none at w_a = 0),
+    × ``penalty`` (at least +1) for a chromosome with a gene outside its limits.  pop (m, n) → (m,)."""
+    lower, upper, box_lower, box_extent, penalty, weights, axis_weight, axis = limits
     m, n = pop.shape
     P = _tool_points(chain, pop)
+    Z = _tool_axes(chain, pop) if axis_weight > 0.0 else P
     t0 = (x_t[0] - box_lower[0]) / box_extent[0]
     t1 = (x_t[1] - box_lower[1]) / box_extent[1]
     t2 = (x_t[2] - box_lower[2]) / box_extent[2]
@@ -102,7 +127,9 @@ def position_costs(chain, pop, x_t, limits):
         e0 = (P[k, 0] - box_lower[0]) / box_extent[0] - t0
         e1 = (P[k, 1] - box_lower[1]) / box_extent[1] - t1
         e2 = (P[k, 2] - box_lower[2]) / box_extent[2] - t2
-        d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        d = math.sqrt(weights[0] * (e0 * e0) + weights[1] * (e1 * e1) + weights[2] * (e2 * e2))
+        if axis_weight > 0.0:
+            d += axis_weight * 0.5 * (1.0 - (Z[k, 0] * axis[0] + Z[k, 1] * axis[1] + Z[k, 2] * axis[2]))
         outside = False
         for j in range(n):
             outside = outside or pop[k, j] < lower[j] or pop[k, j] > upper[j]
@@ -226,7 +253,8 @@ def warm_up_steps() -> list:
     dh = np.stack([np.zeros(L), np.zeros(L), np.ones(L), np.ones(L), np.zeros(L)])
     chain = (dh, np.stack([np.eye(L, n), np.zeros((L, n))]), np.stack([np.eye(4), np.eye(4)]))  # a robot record
     pop, cost, rng = np.zeros((4, n)), np.ones(4), np.random.default_rng(0)
-    limits = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0)  # joint limits, workspace box, penalty
+    # joint limits, workspace box, penalty, the task's axis weights, tool-axis weight and direction
+    limits = (-np.ones(n), np.ones(n), -np.ones(3), np.ones(3), 100.0, np.ones(3), 0.0, np.zeros(3))
     rules = (np.ones(n), 1, 0.5, 0.005, 0.05)  # mutation span, elite, operators
     target = (np.zeros(n), 0.01, np.zeros(3), np.ones(3), 3.0)  # θ_a, Δt, x_t, u, w
     window, stop = (-np.ones(n), np.ones(n)), (0.01, 1)  # velocity window; stop cost, generations

@@ -167,6 +167,17 @@ class SetSolver(Message):
     solver: str = spec("str", 64)
 
 
+@scene_command("set_ga_task")
+class SetGaTask(Message):
+    """The GA's task weighting (issue 32, item 4): the normalised position error's weight per world axis, and
+    optionally the direction the tool's z should point along with that term's weight (default 1).  The published
+    cost is weights 1, 1, 1 and no axis.  A change disarms the input."""
+
+    weights: list[float] = spec("vec3", 100.0)
+    axis: list[float] | None = spec("vec3", 1.0e3, optional=True)
+    axis_weight: float | None = spec("float", 100.0, optional=True)
+
+
 @scene_command("set_mode")
 class SetMode(Message):
     """Choose the position or the velocity workspace."""

@@ -145,6 +145,10 @@ class TeleopSnapshot(Snapshot):
     tick: int = 0
     robot: str = ""
     solver: str = ""
+    # the GA's task weighting in force (issue 32, item 4: set_ga_task): per-axis weights, tool axis and its weight
+    ga_weights: list[float] = field(default_factory=lambda: [1.0, 1.0, 1.0])
+    ga_axis: list[float] | None = None
+    ga_axis_weight: float = 0.0
     mode: str = "position"
     frame: str = "world"  # the frame the stick commands in (issue 30, item 1)
     q: list[float] = field(default_factory=list)  # joint positions [rad | m]
