@@ -270,3 +270,25 @@ def test_alarms_json_has_every_alarm_and_null_for_a_boolean_ones_limit(capsys):
     assert set(alarms) == {a.key for a in catalog()}
     assert alarms["estop"]["limit"] is None
     assert all(alarms[a.key]["limit"] == a.limit for a in catalog() if a.analog)
+
+
+def test_bosun_ik_takes_the_ga_task(capsys):
+    """Issue 32, item 4: ``--ga-weights``, ``--ga-axis``, ``--ga-axis-weight`` shape the GA's cost from the command
+    line; with another solver, or out of range, they are refused in one line (exit 2)."""
+
+    from app.models.registry import load_robot
+
+    args = ["ik", "franka_panda", "--target", "0.45", "0.1", "0.35", "--solver", "ga-restart", "--seed", "1"]
+    assert main([*args, "--ga-axis", "0", "0", "-1", "--time-budget", "2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"]
+    z_tool = load_robot("franka_panda").fk(np.array(out["q"]))[:3, 2]
+    assert z_tool[2] < -0.98  # the tool points down
+    for extra, message in (
+        (["--solver", "jacobian", "--ga-weights", "1", "1", "2"], "apply to --solver ga or ga-restart only"),
+        (["--ga-weights", "0", "0", "0"], "not all 0"),
+        (["--ga-axis-weight", "2"], "--ga-axis-weight needs --ga-axis"),
+    ):
+        assert main(["ik", "franka_panda", "--target", "0.45", "0.1", "0.35", *extra]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err

@@ -107,6 +107,12 @@ def cmd_server(args: argparse.Namespace) -> int:
         operator_secret=operator_secret,
         operator_timeout=args.operator_timeout,
     )
+    if args.record:
+        try:
+            server.record(args.record, seed=getattr(session, "seed", 0))
+        except BosunError:
+            server.close()
+            raise
     signal.signal(signal.SIGTERM, lambda *_: server.stop())
     running.append(server)  # from now on the parent watcher stops the loop
     print(f"bosun server: {session.robot_name} / {session.solver_name} / {session.mode} at {rate:g} Hz", flush=True)
@@ -118,6 +124,8 @@ def cmd_server(args: argparse.Namespace) -> int:
         print("  the operator role needs this engine's launch secret", flush=True)
     if plc is not None:
         print(f"  plant: the Motion-Lab's PLC at {plc} over ADS (pyads); STOP writes MAIN.bStop", flush=True)
+    if server.recorder is not None:
+        print(f"  recording to {server.recorder.path} (MCAP)", flush=True)
     try:
         server.run(duration=args.duration)
     except KeyboardInterrupt:
@@ -126,6 +134,10 @@ def cmd_server(args: argparse.Namespace) -> int:
         server.close()
     st = server.stats.summary()
     print(f"bosun server: stopped after {st['ticks']} ticks, {st['missed_deadlines']} missed deadlines", flush=True)
+    if server.recorder is not None:
+        rec = server.recorder
+        print(f"bosun server: recorded {rec.messages} messages to {rec.path} ({rec.path.stat().st_size} bytes)",
+              flush=True)  # fmt: skip
     return 0
 
 
@@ -270,6 +282,11 @@ def register(sub) -> None:
         help="this machine's AMS Net ID, if the PLC's route to it names another (default: the ADS library's)",
     )
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
+    p.add_argument(
+        "--record", default=None, metavar="FILE.mcap",
+        help="record the session (inputs, commands, E-STOPs, ticks, description and every published state) to an "
+        "MCAP file with JSON schemas, as Foxglove and PlotJuggler open it",
+    )  # fmt: skip
     p.add_argument(
         "--exit-with-parent",
         action="store_true",

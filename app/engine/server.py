@@ -129,6 +129,8 @@ class EngineServer:
         self.rate = rate
         self.dt = 1.0 / rate
         self.publish_every = max(1, round(rate / publish_rate))
+        self.recorder = None  # a SessionRecorder (app/engine/record.py) while the session is on record
+        self._replies: list[tuple[bool, str]] | None = None  # a recorded command's replies
         self.token = token
         self.operator_secret = operator_secret
         self.auth = AuthThrottle()
@@ -228,6 +230,8 @@ class EngineServer:
     # ------------------------------------------------------------------ loop: applying what came in
     def _send_reply(self, ident: bytes, re: str, ok: bool, error: str = "") -> None:
         """A reply from the loop, through the I/O thread."""
+        if self._replies is not None:
+            self._replies.append((ok, error or ""))
         answer = Reply(re=re, ok=ok, error=error[:1000] if error else None)
         with contextlib.suppress(zmq.ZMQError):
             self._reply_out.send_multipart([ident, encode_message(answer)], zmq.NOBLOCK)
@@ -236,8 +240,11 @@ class EngineServer:
         """E-STOPs first; then commands and input in arrival order.  An E-STOP that came after a
         command in this batch is applied again after it (a ``reset`` sent before a STOP cannot undo it)."""
         estops, events = self.inbox.take()
+        rec = self.recorder
         for _, tick, source in estops:
             self.session.estop(source=source)
+            if rec is not None:
+                rec.on_estop(source)
             self.estops += 1
             self.estop_ticks.append(self.stats.ticks - tick + 1)  # 1: the first tick after its receipt
         for event in events:
@@ -247,12 +254,16 @@ class EngineServer:
                 if ident != self.operator:  # the role moved on after it came in
                     continue
                 self.session.feed(sample, sample.t)
+                if rec is not None:
+                    rec.on_input(sample, sample.t)
                 if t_send is not None:
                     self._pending_latency = t_send
             elif kind == "lost":
                 _, ident, released, t = event
                 if ident == self.operator:
                     self.session.feed(None, t, released=released)
+                    if rec is not None:
+                        rec.on_input(None, t, released)
             elif kind == "note":
                 self.session.note(event[1], event[2])
             elif kind == "operator":
@@ -265,8 +276,23 @@ class EngineServer:
                 for t_recv, _, source in estops:
                     if t_recv > t:
                         self.session.estop(source=source)
+                        if rec is not None:
+                            rec.on_estop(source)
 
     def _command(self, ident: bytes, mtype: str, msg: Message, name: str) -> None:
+        rec = self.recorder
+        if rec is None:
+            self._apply_command(ident, mtype, msg, name)
+            return
+        self._replies = []  # the reply this command gets, for the record
+        try:
+            self._apply_command(ident, mtype, msg, name)
+        finally:
+            replies, self._replies = self._replies, None
+        ok, error = replies[-1] if replies else (True, "")  # a deferred command: applied, its reply comes later
+        rec.on_command(mtype, to_wire(msg.fields()), name, ok, error)
+
+    def _apply_command(self, ident: bytes, mtype: str, msg: Message, name: str) -> None:
         try:
             if ident != self.operator:
                 raise CommandError(f"{mtype}: {name} is no longer the operator")
@@ -324,8 +350,11 @@ class EngineServer:
         """Encode the scene's description when it changed (the I/O thread answers ``describe`` with it)."""
         seq = self.session.describe_seq
         if seq != self._described:
-            self._description = encode_message(Description(description=to_wire(self.session.describe())))
+            wire = to_wire(self.session.describe())
+            self._description = encode_message(Description(description=wire))
             self._described = seq
+            if self.recorder is not None:
+                self.recorder.description(wire)
             if self._io_thread is not None:  # announced to every subscriber; late joiners ask for it
                 with contextlib.suppress(zmq.ZMQError):
                     self.pub.send(self._description, zmq.NOBLOCK)
@@ -350,7 +379,10 @@ class EngineServer:
             max_tick_ms=round(1e3 * self.max_tick, 1),
             paused=self.session.paused,
         )
-        self.pub.send(encode_message(State(state=to_wire(snap))), zmq.NOBLOCK)
+        wire = to_wire(snap)
+        if self.recorder is not None:
+            self.recorder.on_state(wire)
+        self.pub.send(encode_message(State(state=wire)), zmq.NOBLOCK)
         while self.session.events:
             mtype, fields = self.session.events.popleft()
             with contextlib.suppress(zmq.ZMQError):
@@ -406,6 +438,8 @@ class EngineServer:
 
     def step(self, now: float) -> None:
         """One tick: E-STOPs, inbox, a job's result swapped in, control, latency bookkeeping, publication."""
+        if self.recorder is not None:
+            self.recorder.on_tick(self.stats.ticks, now, self.dt)
         self._apply_inbox()
         self._jobs()
         inp = getattr(self.session, "input", None)
@@ -472,12 +506,24 @@ class EngineServer:
             self._io_thread.join(timeout=5)
         return self.stats
 
+    def record(self, path: str, seed: int = 0) -> None:
+        """Put the session on record in the MCAP file ``path`` (:mod:`app.engine.record`) from the next tick."""
+        from app.engine.record import SessionRecorder
+
+        rec = SessionRecorder(path, type(self.session.snapshot()), type(self.session.describe()))
+        rec.session(getattr(self.session, "KIND", ""), self.rate, self.rate / self.publish_every, seed)
+        rec.description(to_wire(self.session.describe()))
+        self.recorder = rec
+
     def stop(self) -> None:
         self._stop.set()
 
     def close(self) -> None:
         if hasattr(self, "_stop"):
             self._stop.set()
+        rec = getattr(self, "recorder", None)
+        if rec is not None:
+            rec.close()  # the file finished: its summary and index written
         jobs = getattr(getattr(self, "session", None), "jobs", None)
         if jobs is not None:
             jobs.close()  # a pending job's thread stops at its next step
