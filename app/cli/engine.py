@@ -1,4 +1,5 @@
-"""``bosun server``, ``joystick``, ``keys``: the engine headless, the input client, CURVE keys."""
+"""``bosun server``, ``replay``, ``joystick``, ``keys``: the engine headless (and its recordings run again), the
+input client, CURVE keys."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import threading
 import time
 from pathlib import Path
 
+from app.cli.args import command
 from app.cli.common import (
     _positive_float,
 )
@@ -214,8 +216,40 @@ def cmd_joystick(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_replay(args: argparse.Namespace) -> int:
+    """Run a recorded session again (app/engine/replay.py); with --check, every published state compared."""
+    import json as _json
+
+    from app.engine.replay import replay
+
+    report = replay(args.file, check=args.check, tolerance=args.tolerance)
+    if args.json:
+        print(_json.dumps(report.to_dict(), indent=2))
+    else:
+        print(f"bosun replay: {report.path}: the {report.kind} engine, {report.ticks} ticks, {report.inputs} inputs, "
+              f"{report.commands} commands, {report.estops} E-STOPs")  # fmt: skip
+        if args.check:
+            if report.equal:
+                print(f"  every one of {report.states} published states equal to the recording (to {args.tolerance:g})")
+            else:
+                print(f"  {report.differing} of {report.states} states differ; the first: {report.first}")
+    return 1 if args.check and not report.equal else 0
+
+
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
+    with command(
+        sub, "replay", cmd_replay, help="run a recorded session (bosun server --record) again; --check compares it",
+        description="Builds the recorded engine's scene, applies the recorded inputs, commands and E-STOPs through "
+        "the loop's own command path and steps it with the recorded ticks. With --check every published state is "
+        "compared with the recording (exit 1 when one differs: the first difference is named). A recording that "
+        "holds work the loop did off its thread (a new sea, a study) is refused; a time-budgeted solver (the GA) "
+        "may take other steps on another run, and the check says where.",
+    ) as p:  # fmt: skip
+        p.add_argument("file", metavar="FILE.mcap", help="the recording")
+        p.add_argument("--check", action="store_true", help="compare every published state with the recording")
+        p.add_argument("--tolerance", type=_positive_float, default=1e-12,
+                       help="numbers equal to this, relative above 1 (default 1e-12)")  # fmt: skip
 
     def add_engine_args(p: argparse.ArgumentParser) -> None:
         p.add_argument("--robot", default="comau_smart5_3dof", help="robot to load (default comau_smart5_3dof)")

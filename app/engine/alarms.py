@@ -43,13 +43,17 @@ class AlarmList:
     note : callable(level, text), optional
         Receives a log line when an alarm is raised, cleared, shelved or unshelved.
     clock : callable, optional
-        Wall-clock seconds for the time stamps (default ``time.time``).
+        Wall-clock seconds for the time stamps; default: the engine's tick (:meth:`at`) on the wall clock — the
+        wall time at start plus the monotonic time since, so the stamps follow the ticks (a replay of a recorded
+        session, given the same :attr:`wall_offset`, stamps its alarms alike), ``time.time`` before the first tick.
     """
 
-    def __init__(self, source: str, note: Callable[[str, str], None] | None = None, clock=time.time) -> None:
+    def __init__(self, source: str, note: Callable[[str, str], None] | None = None, clock=None) -> None:
         self.source = source
         self._note = note or (lambda level, text: None)
-        self._clock = clock
+        #: wall-clock minus monotonic seconds, fixed at start: a tick's wall time is wall_offset + its time
+        self.wall_offset = time.time() - time.monotonic()
+        self._clock = clock or self._tick_wall
         self.items: dict[str, Alarm] = {}
         self._since: dict[str, tuple[bool, float]] = {}  # key -> (condition, engine time it became so)
         self._now: float | None = None
@@ -57,6 +61,9 @@ class AlarmList:
         self.raised = 0  # alarms raised since start (the rate benchmarks count them)
 
     # ------------------------------------------------------------------ time
+    def _tick_wall(self) -> float:
+        return time.time() if self._now is None else self.wall_offset + self._now
+
     def at(self, now: float) -> None:
         """The engine's (monotonic) time of this tick: on- and off-delays count in it, and shelving ends."""
         self._now = now

@@ -134,6 +134,10 @@ class LabSession(Scene):
         else:
             self.note("info", f"Motion-Lab on its PLC at {self.plc}: connecting; the machines as the PLC reports them")
 
+    def replay_args(self) -> dict:
+        """What builds this scene again for a replay (app/engine/replay.py): whether it drove the real lab."""
+        return {"plc": self.plc is not None}
+
     def _platform(self, name: str) -> int:
         if name not in self.names:
             raise CommandError(f"unknown platform {name!r} (this lab has {', '.join(self.names)})")

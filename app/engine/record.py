@@ -6,16 +6,18 @@ every field):
 
 * ``/session`` (once): the engine's kind, its rate and publication rate, seed, version and command line;
 * ``/description``: the scene's description, at the start and whenever it changes;
-* ``/tick``: every control tick's engine time and Δt (what a replay steps with);
+* ``/tick``: every control tick, after its inputs and commands: the loop's clock, Δt, the input receiver's
+  listening time and the solver's budget (what a replay steps with);
+* ``/health``: the loop's own health alarms after each tick (measured on the machine: a replay sets them);
 * ``/input``: every input sample fed to the scene (axes, buttons, device, its time; a lost device as
   ``device_lost``), in the order the loop applied it;
 * ``/command``: every command the loop applied (its type and fields, who sent it, and whether it was refused);
 * ``/estop``: every E-STOP applied (its source);
 * ``/state``: every published snapshot, as the clients get it.
 
-Message times (log and publish) are the engine's simulated time in nanoseconds; a viewer's timeline is the
-session's.  The recorder costs nothing when off (the server holds None), and what it writes is checked by
-``tests/test_record.py`` through the ``mcap`` reader.  Replay (``bosun replay``) is not built yet.
+Message times (log and publish) are the loop's own time from the start of the recording (tick × Δt) in
+nanoseconds.  The recorder costs nothing when off (the server holds None), and what it writes is checked by
+``tests/test_record.py`` through the ``mcap`` reader; :mod:`app.engine.replay` runs a recording again.
 """
 
 from __future__ import annotations
@@ -78,8 +80,17 @@ def _type_schema(tp: Any) -> dict:
 @dataclasses.dataclass
 class _Tick:
     tick: int
-    t: float
+    now: float
     dt: float
+    listened: float | None
+    solve_budget: float
+
+
+@dataclasses.dataclass
+class _Health:
+    tick: int
+    now: float
+    alarms: list[list]
 
 
 @dataclasses.dataclass
@@ -100,6 +111,7 @@ class _Command:
     by: str
     ok: bool
     error: str
+    deferred: bool
 
 
 @dataclasses.dataclass
@@ -116,6 +128,7 @@ class _Session:
     seed: int
     version: str
     argv: list[str]
+    scene: dict
 
 
 def _clean(obj: Any) -> Any:
@@ -154,6 +167,7 @@ class SessionRecorder:
             ("/input", _Input, "bosun.Input"),
             ("/command", _Command, "bosun.Command"),
             ("/estop", _Estop, "bosun.Estop"),
+            ("/health", _Health, "bosun.Health"),
             ("/state", snapshot_cls, f"bosun.{snapshot_cls.__name__}"),
         ):
             schema = json.dumps(json_schema(cls, name)).encode("utf-8")
@@ -176,16 +190,27 @@ class SessionRecorder:
         self.messages += 1
 
     # ------------------------------------------------------------------ what the loop reports
-    def session(self, kind: str, rate: float, publish_rate: float, seed: int) -> None:
-        self._write("/session", dataclasses.asdict(_Session(kind, rate, publish_rate, int(seed), __version__,
-                                                            list(sys.argv))), 0.0)  # fmt: skip
+    def session(self, kind: str, rate: float, publish_rate: float, seed: int, scene: dict) -> None:
+        """The session's start: the engine's kind, rates and seed, and what builds its scene again (``scene``:
+        the teleop scene's robot, its file's text, solver, mode and frame; the others' defaults)."""
+        rec = _Session(kind, rate, publish_rate, int(seed), __version__, list(sys.argv), scene)
+        self._write("/session", dataclasses.asdict(rec), 0.0)
 
     def description(self, wire: dict) -> None:
         self._write("/description", wire)
 
-    def on_tick(self, tick: int, t: float, dt: float) -> None:
-        self.tick, self.t = tick, t
-        self._write("/tick", {"tick": tick, "t": t, "dt": dt})
+    def on_tick(self, tick: int, now: float, dt: float, listened: float | None, budget: float) -> None:
+        """A control tick about to run: its number, the loop's clock ``now`` (monotonic), Δt, the input
+        receiver's last listening time and the solver's budget — what a replay gives the scene."""
+        self.tick = tick
+        self.t = tick * dt  # the messages' time: the loop's own, from the recording's start
+        self._write("/tick", {"tick": tick, "now": now, "dt": dt, "listened": listened, "solve_budget": budget})
+
+    def on_health(self, now: float, health: list) -> None:
+        """The loop's health alarms after a tick (``loop_stall``, ``engine_slow``): measured, not replayable."""
+        self._write(
+            "/health", {"tick": self.tick, "now": now, "alarms": [[k, bool(on), text] for k, on, text in health]}
+        )
 
     def on_input(self, sample, t: float, released: bool | None = None) -> None:
         if sample is None:
@@ -196,15 +221,17 @@ class SessionRecorder:
                        "lost": False}  # fmt: skip
         self._write("/input", payload)
 
-    def on_command(self, mtype: str, fields: dict, by: str, ok: bool, error: str = "") -> None:
+    def on_command(self, mtype: str, fields: dict, by: str, ok: bool, error: str = "", deferred: bool = False) -> None:
+        """A command the loop applied: its refusal, or ``deferred`` when its work went off the loop (its result
+        came on a later tick: a replay refuses such a recording)."""
         self._write("/command", {"tick": self.tick, "type": mtype, "fields": fields, "by": by, "ok": ok,
-                                 "error": error})  # fmt: skip
+                                 "error": error, "deferred": deferred})  # fmt: skip
 
     def on_estop(self, source: str) -> None:
         self._write("/estop", {"tick": self.tick, "source": source})
 
     def on_state(self, wire: dict) -> None:
-        self._write("/state", wire, wire.get("t", self.t))
+        self._write("/state", wire)
 
     def close(self) -> None:
         if self.closed:

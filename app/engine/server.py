@@ -49,6 +49,7 @@ import sys
 import threading
 import time
 from collections import deque
+from typing import Any
 
 import zmq
 
@@ -78,6 +79,39 @@ SLOW_FACTOR = 0.9  # of real time: below it for SLOW_FOR seconds in a row, contr
 SLOW_FOR = 5
 STALL_PERIODS = 10  # a tick longer than this many periods (and STALL_MIN_S) raises loop_stall (issue 27, item 2)
 STALL_MIN_S = 0.1  # s: at 1 kHz ten periods are 10 ms, a scheduler's hiccup on a busy computer, not a stall
+
+
+def apply_health(alarms, now: float, health: list[tuple[str, bool, str]]) -> None:
+    """The loop's health alarms (``loop_stall``, ``engine_slow``: key, raised, text) set at ``now``."""
+    alarms.at(now)
+    for key, on, text in health:
+        alarms.set(key, on, text=text)
+
+
+def apply_command(session: Scene, mtype: str, msg: Message, name: str) -> Any:
+    """A client's command applied to the scene, as the loop applies it (and a replay again, app/engine/replay.py):
+    what the scene command returns (a :class:`Deferred` when its work went off the loop); refusals raise
+    :class:`CommandError` or :class:`BosunError`."""
+    if mtype == "reset":
+        session.reset()
+    elif mtype == "ack_alarm":
+        alarms = getattr(session, "alarms", None)
+        n = alarms.ack(msg.key or None) if alarms is not None else 0
+        session.note("info", f"{name} acknowledged {n} alarm{'s' if n != 1 else ''}")
+    elif mtype == "shelve_alarm":
+        minutes = float(SHELVE_DEFAULT_S / 60 if msg.minutes is None else msg.minutes)
+        try:
+            if minutes == 0:
+                session.alarms.unshelve(msg.key, f"by {name}")
+            else:
+                session.alarms.shelve(msg.key, 60.0 * minutes, who=name)
+        except ValueError as err:
+            raise CommandError(str(err)) from None
+    elif mtype == "pause":
+        session.pause(bool(msg.on))
+    elif mtype in SCENE_MESSAGES:
+        return session.run(msg)
+    return None
 
 
 class EngineServer:
@@ -266,10 +300,14 @@ class EngineServer:
                         rec.on_input(None, t, released)
             elif kind == "note":
                 self.session.note(event[1], event[2])
+                if rec is not None:
+                    rec.on_command("note", {"level": event[1], "text": event[2]}, "", True)
             elif kind == "operator":
                 changed = getattr(self.session, "operator_changed", None)
                 if changed is not None:
                     changed(event[1])
+                if rec is not None:
+                    rec.on_command("operator_changed", {"name": event[1]}, event[1], True)
             elif kind == "command":
                 _, ident, mtype, msg, name, t = event
                 self._command(ident, mtype, msg, name)
@@ -290,34 +328,16 @@ class EngineServer:
         finally:
             replies, self._replies = self._replies, None
         ok, error = replies[-1] if replies else (True, "")  # a deferred command: applied, its reply comes later
-        rec.on_command(mtype, to_wire(msg.fields()), name, ok, error)
+        rec.on_command(mtype, to_wire(msg.fields()), name, ok, error, deferred=not replies)
 
     def _apply_command(self, ident: bytes, mtype: str, msg: Message, name: str) -> None:
         try:
             if ident != self.operator:
                 raise CommandError(f"{mtype}: {name} is no longer the operator")
-            if mtype == "reset":
-                self.session.reset()
-            elif mtype == "ack_alarm":
-                alarms = getattr(self.session, "alarms", None)
-                n = alarms.ack(msg.key or None) if alarms is not None else 0
-                self.session.note("info", f"{name} acknowledged {n} alarm{'s' if n != 1 else ''}")
-            elif mtype == "shelve_alarm":
-                minutes = float(SHELVE_DEFAULT_S / 60 if msg.minutes is None else msg.minutes)
-                try:
-                    if minutes == 0:
-                        self.session.alarms.unshelve(msg.key, f"by {name}")
-                    else:
-                        self.session.alarms.shelve(msg.key, 60.0 * minutes, who=name)
-                except ValueError as err:
-                    raise CommandError(str(err)) from None
-            elif mtype == "pause":
-                self.session.pause(bool(msg.on))
-            elif mtype in SCENE_MESSAGES:
-                done = self.session.run(msg)
-                if isinstance(done, Deferred):  # its work runs off the loop: the reply when it is swapped in
-                    self._deferred[done.ticket] = (ident, mtype)
-                    return
+            done = apply_command(self.session, mtype, msg, name)
+            if isinstance(done, Deferred):  # its work runs off the loop: the reply when it is swapped in
+                self._deferred[done.ticket] = (ident, mtype)
+                return
         except (CommandError, BosunError) as err:
             self.session.note("warning", f"{mtype} refused: {err}")
             self._send_reply(ident, mtype, False, str(err))
@@ -420,32 +440,37 @@ class EngineServer:
             return
         alarms.at(now)
         stalled = self.max_tick > max(STALL_PERIODS * self.dt, STALL_MIN_S)
-        alarms.set(
-            "loop_stall",
-            stalled,
-            text=f"{alarms.source} control loop stalled: a tick took {1e3 * self.max_tick:.0f} ms "
-            f"({self.max_tick / self.dt:.0f} periods)"
-            if stalled
-            else "",  # cleared after its off-delay; the text keeps the stall's figure
-        )
         suffering = self._slow_seconds >= SLOW_FOR or went_stale
-        alarms.set(
-            "engine_slow",
-            suffering or (alarms.active("engine_slow") and lagging),
-            text=f"{alarms.source} engine too slow: {100 * self.realtime_factor:.0f} % of real time"
-            + (", input went stale" if went_stale else f" for {self._slow_seconds:.0f} s"),
-        )
+        health = [
+            (
+                "loop_stall",
+                stalled,
+                f"{alarms.source} control loop stalled: a tick took {1e3 * self.max_tick:.0f} ms "
+                f"({self.max_tick / self.dt:.0f} periods)"
+                if stalled
+                else "",  # cleared after its off-delay; the text keeps the stall's figure
+            ),
+            (
+                "engine_slow",
+                suffering or (alarms.active("engine_slow") and lagging),
+                f"{alarms.source} engine too slow: {100 * self.realtime_factor:.0f} % of real time"
+                + (", input went stale" if went_stale else f" for {self._slow_seconds:.0f} s"),
+            ),
+        ]
+        apply_health(alarms, now, health)
+        if self.recorder is not None:  # the loop's own health, which a replay cannot measure: on record
+            self.recorder.on_health(now, health)
 
     def step(self, now: float) -> None:
         """One tick: E-STOPs, inbox, a job's result swapped in, control, latency bookkeeping, publication."""
-        if self.recorder is not None:
-            self.recorder.on_tick(self.stats.ticks, now, self.dt)
         self._apply_inbox()
         self._jobs()
         inp = getattr(self.session, "input", None)
         if inp is not None:
             inp.listened = self.inbox.listened  # input ages on the receiver's clock (issue 26, item 9)
         budget = 0.4 * self.dt
+        if self.recorder is not None:  # after the tick's inputs and commands, before its control step
+            self.recorder.on_tick(self.stats.ticks, now, self.dt, getattr(inp, "listened", None), budget)
         try:
             self.session.tick(now, self.dt, solve_budget=budget)
         except Exception as err:  # a failing control step stops the machines and says so; the loop goes on
@@ -511,7 +536,11 @@ class EngineServer:
         from app.engine.record import SessionRecorder
 
         rec = SessionRecorder(path, type(self.session.snapshot()), type(self.session.describe()))
-        rec.session(getattr(self.session, "KIND", ""), self.rate, self.rate / self.publish_every, seed)
+        scene = getattr(self.session, "replay_args", dict)()
+        alarms = getattr(self.session, "alarms", None)
+        if alarms is not None:  # its time stamps follow the ticks from this offset (app/engine/alarms.py)
+            scene["alarm_wall_offset"] = alarms.wall_offset
+        rec.session(getattr(self.session, "KIND", ""), self.rate, self.rate / self.publish_every, seed, scene)
         rec.description(to_wire(self.session.describe()))
         self.recorder = rec
 

@@ -151,6 +151,11 @@ class Session(Scene):
         self.robot_xml = xml
         self.changed()
 
+    def replay_args(self) -> dict:
+        """What builds this scene again for a replay (app/engine/replay.py): its robot and file's text, solver,
+        mode."""
+        return {"robot": self.robot_name, "robot_xml": self.robot_xml, "solver": self.solver_name, "mode": self.mode}
+
     def moving(self) -> bool:
         """Whether any joint moves faster than 0.1 % of its speed limit."""
         return bool(np.any(np.abs(self.actuators.qdot) > 1e-3 * self.robot.speed))
