@@ -212,3 +212,60 @@ def test_a_replay_refuses_what_it_cannot_reproduce_in_one_line(tmp_path):
     junk.write_bytes(b"not an mcap file at all")
     with pytest.raises(ReplayError, match="not a readable MCAP recording"):
         replay(junk)
+
+
+def _write_recording(path, kind, states, estops=()):
+    """A recording made by hand: /session, then /state messages (and /estop after the state numbers given)."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as g:
+        w = Writer(g)
+        w.start()
+        sid = w.register_schema("s", "jsonschema", b"{}")
+        ch = {t: w.register_channel(t, "json", sid) for t in ("/session", "/state", "/estop")}
+        head = {"kind": kind, "rate_hz": 50, "publish_rate_hz": 10, "seed": 0, "version": "x", "argv": [], "scene": {}}
+        w.add_message(ch["/session"], 0, json.dumps(head).encode(), 0)
+        for i, s in enumerate(states):
+            w.add_message(ch["/state"], i + 1, json.dumps(s).encode(), i + 1)
+            if i in estops:
+                w.add_message(ch["/estop"], i + 1, json.dumps({"tick": i, "source": "op"}).encode(), i + 1)
+        w.finish()
+
+
+def test_the_score_sheet_counts_what_the_states_say(tmp_path, capsys):
+    """Issue 32, item 6's score sheet on a hand-made crane-head recording (0.1 s apart): the peak tension factor and
+    ψ, the swing while hanging (a landed load's angle is no swing), the time over SWL, STOPs, saturation episodes and
+    their time, touchdown speeds and re-hits; ``bosun score`` writes score.json and score.png; a teleop recording
+    is refused in one line."""
+    from app.analysis.score import score_recording
+    from app.cli import main
+
+    states = []
+    for i in range(40):
+        landed = 20 <= i < 30 or i >= 35
+        swing = 3.0 if i == 5 else (50.0 if landed else 1.0)
+        speed = 0.3 if i == 19 else (0.1 if i == 34 else 0.0)
+        load = {
+            "tension_factor": 1.0 + (2.4 if i == 12 else 0.0), "psi": 1.0 + 0.01 * i, "swing_deg": swing,
+            "swl_percent": 120.0 if 10 <= i < 15 else 80.0, "landed": landed, "rel_speed": speed,
+            "rehits": 2 if 25 <= i < 30 else 0,
+        }  # fmt: skip
+        states.append({"kind": "tac", "t": 0.1 * i, "load": load, "sample": {"saturated": i in (3, 4, 8)}})
+    path = tmp_path / "made.mcap"
+    _write_recording(path, "tac", states, estops=(7, 30))
+    sheet = score_recording(path)
+    assert sheet.peak_tension_factor == 3.4 and sheet.peak_psi == pytest.approx(1.39)
+    assert sheet.peak_swing_deg == 3.0  # the 50° of a landed load is not swing
+    assert sheet.time_over_swl_s == pytest.approx(0.5) and sheet.peak_swl_percent == 120.0
+    assert sheet.estops == 2 and sheet.saturations == 2 and sheet.saturated_s == pytest.approx(0.3)
+    assert sheet.landing_speeds_mps == [0.3, 0.1] and sheet.rehits == 2
+    assert sheet.duration_s == pytest.approx(4.0)
+    assert main(["score", str(path), "--out", str(tmp_path / "sheet")]) == 0
+    assert "peak_tension_factor" in capsys.readouterr().out
+    data = json.loads((tmp_path / "sheet" / "score.json").read_text(encoding="utf-8"))
+    assert data["max_landing_speed_mps"] == 0.3 and (tmp_path / "sheet" / "score.png").read_bytes()[:4] == b"\x89PNG"
+    teleop = tmp_path / "teleop.mcap"
+    _write_recording(teleop, "teleop", [{"kind": "teleop", "t": 0.0}])
+    assert main(["score", str(teleop)]) == 2
+    err = capsys.readouterr().err
+    assert "no hanging load to score" in err and len(err.strip().splitlines()) == 1

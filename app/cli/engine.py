@@ -236,8 +236,41 @@ def cmd_replay(args: argparse.Namespace) -> int:
     return 1 if args.check and not report.equal else 0
 
 
+def cmd_score(args: argparse.Namespace) -> int:
+    """The training score sheet of a recorded crane-head or Motion-Lab session (app/analysis/score.py)."""
+    import json as _json
+
+    from app.analysis.score import score_recording, write_score
+
+    sheet = score_recording(args.file)
+    out = Path(args.out) if args.out else Path(args.file).with_suffix("")
+    j, png = write_score(sheet, out)
+    if args.json:
+        print(_json.dumps(sheet.to_dict(), indent=2))
+        return 0
+    d = sheet.to_dict()
+    print(f"bosun score: {sheet.path} ({sheet.kind}, {sheet.duration_s:.0f} s)")
+    for key in ("peak_tension_factor", "peak_psi", "peak_swing_deg", "rms_swing_deg", "time_over_swl_s", "estops",
+                "saturations", "saturated_s", "max_landing_speed_mps", "rehits"):  # fmt: skip
+        v = d[key]
+        print(f"  {key:24s} {'—' if v is None else (f'{v:.3g}' if isinstance(v, float) else v)}")
+    print(f"  landings: {len(sheet.landing_speeds_mps)}; wrote {j} and {png}")
+    return 0
+
+
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
+    with command(
+        sub, "score", cmd_score, json=False,
+        help="a training score sheet of a recorded crane-head or Motion-Lab session (JSON and a one-page figure)",
+        description="Peak dynamic factor (the wire's tension over the load's weight, and the load chart's ψ), "
+        "swing (peak, rms while the load hangs), time over SWL, STOPs, the head's saturations, touchdown speeds "
+        "and re-hits, from the recording's published states; score.json and score.png in --out (default: the "
+        "recording's name without .mcap).",
+    ) as p:  # fmt: skip
+        p.add_argument("file", metavar="FILE.mcap", help="the recording (bosun server --record)")
+        p.add_argument("--out", default=None, metavar="DIR", help="where score.json and score.png go")
+        p.add_argument("--json", action="store_true", help="the sheet as JSON on standard output")
     with command(
         sub, "replay", cmd_replay, help="run a recorded session (bosun server --record) again; --check compares it",
         description="Builds the recorded engine's scene, applies the recorded inputs, commands and E-STOPs through "

@@ -27,6 +27,7 @@ from app.engine.scene import CommandError
 from app.engine.server import apply_command, apply_health
 from app.errors import BosunError
 from app.net.codec import build
+from app.net.recording import RecordingError, read_recording
 from app.net.snapshots import to_wire
 from app.teleop.devices import InputSample
 
@@ -68,22 +69,9 @@ class ReplayReport:
 
 def _messages(path: Path):
     try:
-        from mcap.reader import make_reader
-    except ImportError:  # pragma: no cover - mcap is a core dependency
-        raise ReplayError("replaying needs the mcap package (pip install mcap)") from None
-    import json
-
-    try:
-        f = open(path, "rb")  # noqa: SIM115 - closed below
-    except OSError as err:
-        raise ReplayError(f"{path}: cannot read: {err.strerror or err}") from None
-    with f:
-        try:
-            reader = make_reader(f)
-            for _, channel, message in reader.iter_messages(log_time_order=False):
-                yield channel.topic, json.loads(message.data)
-        except Exception as err:
-            raise ReplayError(f"{path}: not a readable MCAP recording ({type(err).__name__}: {err})") from None
+        yield from read_recording(path)
+    except RecordingError as err:
+        raise ReplayError(str(err)) from None
 
 
 def _scene(kind: str, scene: dict, seed: int):
