@@ -140,8 +140,13 @@ class ViewerWindow(QMainWindow):
         e = state.engine
         role = self.link.role
         paused = " · <b>paused</b> (no operator console shows it)" if e.paused else ""
+        desc = self.link.description
+        title = getattr(desc, "title", "") or ""
+        replay = (
+            f" · <b>{title[title.index('replay of') :]}</b>" if "replay of" in title else ""
+        )  # never taken for live
         self.info.setText(
-            f"<b>{state.kind}</b> engine at {self.link.url} · you: <b>{role}</b> · "
+            f"<b>{state.kind}</b> engine at {self.link.url}{replay} · you: <b>{role}</b> · "
             f"operator: <b>{e.operator or 'none'}</b> · {e.clients} clients{paused}"
         )
         if state.kind == "teleop" and self.kind == "teleop":

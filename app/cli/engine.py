@@ -222,6 +222,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
     from app.engine.replay import replay
 
+    if args.serve:
+        return _serve_replay(args)
     report = replay(args.file, check=args.check, tolerance=args.tolerance)
     if args.json:
         print(_json.dumps(report.to_dict(), indent=2))
@@ -234,6 +236,40 @@ def cmd_replay(args: argparse.Namespace) -> int:
             else:
                 print(f"  {report.differing} of {report.states} states differ; the first: {report.first}")
     return 1 if args.check and not report.equal else 0
+
+
+def _serve_replay(args: argparse.Namespace) -> int:
+    """``bosun replay FILE --serve``: the recording played back in an engine loop at its own rate, for viewers."""
+    import signal
+
+    from app.engine.replay import Replayer, ReplayScene
+    from app.engine.server import EngineServer
+    from app.net.transport import check_url, is_local
+
+    if args.check:
+        raise BosunError("--serve plays the recording back for viewers; --check compares it: one or the other")
+    check_url(args.bind)
+    if not is_local(args.bind):
+        raise BosunError(f"--bind {args.bind}: a replay serves this machine only (tcp://127.0.0.1:PORT)")
+    replayer = Replayer(args.file, check=False)
+    scene = ReplayScene(replayer)
+    server = EngineServer(scene, bind=args.bind, rate=replayer.rate, publish_rate=replayer.publish_rate)
+    signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    print(
+        f"bosun replay: {args.file}: the {replayer.report.kind} engine played back at {replayer.rate:g} Hz", flush=True
+    )
+    print(f"  requests on {server.url}, state on {server.state_url}; watch it: bosun view --connect {server.url}",
+          flush=True)  # fmt: skip
+    try:
+        server.run(duration=args.duration)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.close()
+        replayer.close()
+    print(f"bosun replay: played {replayer.report.ticks} ticks{' (the whole recording)' if replayer.done else ''}",
+          flush=True)  # fmt: skip
+    return 0
 
 
 def cmd_score(args: argparse.Namespace) -> int:
@@ -283,6 +319,11 @@ def register(sub) -> None:
         p.add_argument("--check", action="store_true", help="compare every published state with the recording")
         p.add_argument("--tolerance", type=_positive_float, default=1e-12,
                        help="numbers equal to this, relative above 1 (default 1e-12)")  # fmt: skip
+        p.add_argument("--serve", action="store_true",
+                       help="play it back in an engine loop at its own rate for viewers (bosun view, the GUI); "
+                       "live input is ignored, commands refused, STOP freezes it")  # fmt: skip
+        p.add_argument("--bind", default="tcp://127.0.0.1:5555", help="with --serve: the request URL (this machine)")
+        p.add_argument("--duration", type=_positive_float, default=None, help="with --serve: stop after this long [s]")
 
     def add_engine_args(p: argparse.ArgumentParser) -> None:
         p.add_argument("--robot", default="comau_smart5_3dof", help="robot to load (default comau_smart5_3dof)")

@@ -31,7 +31,7 @@ from app.net.recording import RecordingError, read_recording
 from app.net.snapshots import to_wire
 from app.teleop.devices import InputSample
 
-__all__ = ["MEASURED", "ReplayError", "ReplayReport", "replay"]
+__all__ = ["MEASURED", "ReplayError", "ReplayReport", "Replayer", "replay"]
 
 #: a state's fields that time the machine, not the scene: the server's bookkeeping and the solver's wall time
 MEASURED = frozenset({"engine", "solver_time"})
@@ -127,74 +127,121 @@ def _compare(recorded: Any, replayed: Any, where: str, tol: float, out: list) ->
         out.append((where, recorded, replayed, math.inf))
 
 
-def replay(path: str | Path, *, check: bool = True, tolerance: float = 1e-12, progress=None) -> ReplayReport:
-    """Run the recording at ``path`` again (module text); with ``check`` compare every published state."""
-    path = Path(path)
-    it = _messages(path)
-    try:
-        topic, head = next(it)
-    except StopIteration:
-        raise ReplayError(f"{path}: an empty recording") from None
-    if topic != "/session":
-        raise ReplayError(f"{path}: not a Bosun recording (it starts with '{topic}', not '/session')")
-    kind = head.get("kind", "")
-    scene = head.get("scene") or {}
-    session = _scene(kind, scene, int(head.get("seed", 0)))
-    alarms = getattr(session, "alarms", None)
-    if alarms is not None and scene.get("alarm_wall_offset") is not None:
-        alarms.wall_offset = float(scene["alarm_wall_offset"])  # the alarms stamped on the recording's wall clock
-    report = ReplayReport(str(path), kind)
-    inp = getattr(session, "input", None)
-    topic = "/session"
-    try:
-        for topic, m in it:
-            if topic == "/command":
-                report.commands += 1
-                _command(session, m, report)
-            elif topic == "/estop":
-                report.estops += 1
-                session.estop(source=m["source"])
-            elif topic == "/input":
-                report.inputs += 1
-                if m["lost"]:
-                    session.feed(None, m["t"], released=m["released"])
-                else:
-                    sample = InputSample(tuple(m["axes"]), tuple(m["buttons"]), m["device"], m["t"])
-                    session.feed(sample, m["t"])
-            elif topic == "/tick":
-                if inp is not None and m.get("listened") is not None:
-                    inp.listened = m["listened"]
-                session.tick(m["now"], m["dt"], solve_budget=m["solve_budget"])
-                report.ticks += 1
-                if progress is not None and report.ticks % 500 == 0:
-                    progress(report.ticks)
-            elif topic == "/state":
+class Replayer:
+    """A recording stepped one control tick at a time (:meth:`advance`): the replayed scene is :attr:`session`,
+    the comparison so far :attr:`report`.  :func:`replay` runs it to the end; ``bosun replay --serve`` steps it
+    in an engine loop that viewers watch (:func:`serve`)."""
+
+    def __init__(self, path: str | Path, *, check: bool = True, tolerance: float = 1e-12) -> None:
+        self.path = Path(path)
+        self.check, self.tolerance = check, tolerance
+        self._it = _messages(self.path)
+        try:
+            topic, head = next(self._it)
+        except StopIteration:
+            raise ReplayError(f"{self.path}: an empty recording") from None
+        if topic != "/session":
+            raise ReplayError(f"{self.path}: not a Bosun recording (it starts with '{topic}', not '/session')")
+        self.head = head
+        kind = head.get("kind", "")
+        scene = head.get("scene") or {}
+        self.session = _scene(kind, scene, int(head.get("seed", 0)))
+        alarms = getattr(self.session, "alarms", None)
+        if alarms is not None and scene.get("alarm_wall_offset") is not None:
+            alarms.wall_offset = float(scene["alarm_wall_offset"])  # the alarms stamped on the recording's clock
+        self.report = ReplayReport(str(self.path), kind)
+        self.rate = float(head.get("rate_hz", 50.0))
+        self.publish_rate = float(head.get("publish_rate_hz", self.rate))
+        self._pending: tuple[str, Any] | None = None
+        self.done = False
+        self._tick = self.session.tick  # the scene's own step (``serve`` puts the replay's in its place)
+
+    def _next(self) -> tuple[str, Any] | None:
+        if self._pending is not None:
+            msg, self._pending = self._pending, None
+            return msg
+        return next(self._it, None)
+
+    def advance(self) -> bool:
+        """Apply the recording up to and through its next control tick (with the state published and the health
+        alarms set after it); False at the end of the recording."""
+        if self.done:
+            return False
+        ticked = False
+        topic = "/session"
+        try:
+            while True:
+                msg = self._next()
+                if msg is None:
+                    self.done = True
+                    return ticked
+                topic, m = msg
+                if ticked and topic not in ("/state", "/health", "/description"):
+                    self._pending = msg  # the next tick's
+                    return True
+                self._apply(topic, m)
+                ticked = ticked or topic == "/tick"
+        except (KeyError, TypeError) as err:  # a message of another shape: another version wrote it
+            raise ReplayError(
+                f"{self.path}: a {topic} message lacks {err}: written by Bosun {self.head.get('version', '?')} in "
+                "another format"
+            ) from None
+
+    def _apply(self, topic: str, m: dict) -> None:
+        session, report = self.session, self.report
+        if topic == "/command":
+            report.commands += 1
+            _command(session, m, report)
+        elif topic == "/estop":
+            report.estops += 1
+            session.estop(source=m["source"])
+        elif topic == "/input":
+            report.inputs += 1
+            if m["lost"]:
+                session.feed(None, m["t"], released=m["released"])
+            else:
+                session.feed(InputSample(tuple(m["axes"]), tuple(m["buttons"]), m["device"], m["t"]), m["t"])
+        elif topic == "/tick":
+            inp = getattr(session, "input", None)
+            if inp is not None and m.get("listened") is not None:
+                inp.listened = m["listened"]
+            self._tick(m["now"], m["dt"], solve_budget=m["solve_budget"])
+            report.ticks += 1
+        elif topic == "/state":
+            report.states += 1
+            if self.check:
                 snap = to_wire(session.snapshot())
-                session.events.clear()  # published with the state, as the server does
-                report.states += 1
-                if check:
-                    diffs: list = []
-                    _compare(m, snap, "", tolerance, diffs)
-                    if diffs:
-                        report.differing += 1
-                        finite = [d[3] for d in diffs if math.isfinite(d[3])]
-                        report.largest = max([report.largest, *finite])
-                        if not report.first:
-                            w, a, b, _ = diffs[0]
-                            report.first = f"tick {report.ticks}, {w}: recorded {a!r}, replayed {b!r}"
-            elif topic == "/health":
-                alarms = getattr(session, "alarms", None)
-                if alarms is not None:
-                    apply_health(alarms, m["now"], [tuple(a) for a in m["alarms"]])
-    except (KeyError, TypeError) as err:  # a message of another shape: another version wrote it
-        raise ReplayError(
-            f"{path}: a {topic} message lacks {err}: written by Bosun {head.get('version', '?')} in another format"
-        ) from None
-    finally:
-        closer = getattr(session, "close", None)
+                diffs: list = []
+                _compare(m, snap, "", self.tolerance, diffs)
+                if diffs:
+                    report.differing += 1
+                    finite = [d[3] for d in diffs if math.isfinite(d[3])]
+                    report.largest = max([report.largest, *finite])
+                    if not report.first:
+                        w, a, b, _ = diffs[0]
+                        report.first = f"tick {report.ticks}, {w}: recorded {a!r}, replayed {b!r}"
+        elif topic == "/health":
+            alarms = getattr(session, "alarms", None)
+            if alarms is not None:
+                apply_health(alarms, m["now"], [tuple(a) for a in m["alarms"]])
+
+    def close(self) -> None:
+        closer = getattr(self.session, "close", None)
         if closer is not None:
             closer()
-    return report
+
+
+def replay(path: str | Path, *, check: bool = True, tolerance: float = 1e-12, progress=None) -> ReplayReport:
+    """Run the recording at ``path`` again (module text); with ``check`` compare every published state."""
+    r = Replayer(path, check=check, tolerance=tolerance)
+    try:
+        while r.advance():
+            if progress is not None and r.report.ticks % 500 == 0:
+                progress(r.report.ticks)
+            r.session.events.clear()  # published with the states, as the server does
+    finally:
+        r.close()
+    return r.report
 
 
 def _command(session, m: dict, report: ReplayReport) -> None:
@@ -226,3 +273,60 @@ def _command(session, m: dict, report: ReplayReport) -> None:
         report.first = f"tick {report.ticks}, command {mtype}: recorded {'done' if m.get('ok') else 'refused'}, " \
                        f"replayed {'done' if ok else 'refused: ' + error}"  # fmt: skip
         report.differing += 1
+
+
+class ReplayScene:
+    """A recording played back in an engine loop (``bosun replay --serve``): each control tick steps the
+    :class:`Replayer` by one recorded tick, so viewers (``bosun view``, the GUI) watch the session as it ran, in
+    real time.  Everything else is the replayed scene's (attribute access passes through), except what would
+    change the recording's course: live input is ignored, commands are refused in one line, ``pause`` stands the
+    playback still, and STOP freezes it where it is with the scene's E-STOP latched (a replay's STOP ends it)."""
+
+    def __init__(self, replayer: Replayer) -> None:
+        self._replayer = replayer
+        self._stopped = False
+        self._paused = False
+        replayer.session.note("info", f"a replay of {replayer.path.name}: nothing here drives a machine")
+
+    def describe(self) -> Any:
+        """The scene's description, its title saying that this is a replay (a viewer never takes it for live)."""
+        d = self._replayer.session.describe()
+        d.title = f"{d.title} — replay of {self._replayer.path.name}"
+        return d
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._replayer.session, name)
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    @property
+    def finished(self) -> bool:
+        return self._replayer.done
+
+    def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
+        if not (self._stopped or self._paused):
+            self._replayer.advance()
+
+    def feed(self, sample, now: float, released: bool = False) -> None:
+        """Live input plays no part in a replay."""
+
+    def operator_changed(self, name: str) -> None:
+        """A replay has no operator to disarm."""
+
+    def pause(self, on: bool) -> None:
+        self._paused = bool(on)
+
+    def estop(self, source: str = "operator") -> None:
+        self._stopped = True
+        self._replayer.session.estop(source=source)
+
+    def reset(self) -> None:
+        raise CommandError("this engine replays a recording: its STOP ends the replay (run it again)")
+
+    def run(self, msg) -> Any:
+        raise CommandError(f"{msg.TYPE}: this engine replays a recording; commands are refused")
+
+    def command(self, mtype: str, **fields: Any) -> Any:
+        raise CommandError(f"{mtype}: this engine replays a recording; commands are refused")
