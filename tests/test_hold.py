@@ -109,3 +109,19 @@ def test_rest_is_stillness_not_a_reversal_through_zero_speed():
     run = run_sequence(ses, stick_sequence(np.random.default_rng([0, 72]), "position"), seed=72, rate=250.0)
     assert run.settle_s > 5.0  # the 11 m to the answer take the crane seconds
     assert run.worst < HOLD_TOLERANCE, run
+
+
+def test_bench_hold_takes_the_solvers_to_run(capsys):
+    """``bosun bench hold --solvers``: only those solvers' cases (issue 32's ga-restart was benched alone);
+    an unknown one is refused in one line."""
+    import json
+
+    from app.cli import main
+
+    args = ["bench", "hold", "--sequences", "1", "--robots", "scara", "--modes", "velocity", "--rate", "250"]
+    assert main([*args, "--solvers", "ga-restart", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["results"]
+    assert [(r["solver"], r["mode"]) for r in rows] == [("ga-restart", "velocity")] and rows[0]["held"] == 1
+    assert main([*args, "--solvers", "newton"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown solver 'newton'" in err and len(err.strip().splitlines()) == 1

@@ -200,16 +200,20 @@ def bench_hold(
     rate: float = 1000.0,
     workers: int = 1,
     progress=None,
+    solvers: tuple[str, ...] | None = None,
 ) -> list[dict]:
-    """Every robot × solver × mode, ``sequences`` seeded sequences each, on ``workers`` processes; one row a
-    case (:func:`summarise`).  ``progress(done, total)`` counts sequences."""
+    """Every robot × solver (those of ``solvers`` that apply; default all) × mode, ``sequences`` seeded sequences
+    each, on ``workers`` processes; one row a case (:func:`summarise`).  ``progress(done, total)`` counts
+    sequences."""
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
     from app.ik import solvers_for
     from app.models.registry import load_robot
 
-    cases = [(r, s, m) for r in robots for s in solvers_for(load_robot(r)) for m in modes]
+    cases = [
+        (r, s, m) for r in robots for s in solvers_for(load_robot(r)) if solvers is None or s in solvers for m in modes
+    ]
     tasks = [(c, k, min(CHUNK, sequences - k), seed, rate) for c in cases for k in range(0, sequences, CHUNK)]
     runs: dict[tuple, list[HoldRun]] = {c: [] for c in cases}
     total, done = len(cases) * sequences, 0

@@ -133,10 +133,20 @@ def cmd_bench_hold(args: argparse.Namespace) -> int:
     robots = _serial_robots(args.robots)
     if not 1.0 <= args.rate <= 1000.0:
         raise BosunError(f"--rate must be between 1 and 1000 Hz, got {args.rate:g}")
+    solvers = None
+    if args.solvers:
+        from app.ik import solver_names
+
+        unknown = [s for s in args.solvers if s not in solver_names()]
+        if unknown:
+            raise BosunError(f"--solvers: unknown solver {unknown[0]!r} (solvers: {', '.join(solver_names())})")
+        solvers = tuple(args.solvers)
     rows = bench_hold(
         robots, tuple(args.modes), args.sequences, seed=args.seed, rate=args.rate, workers=args.workers,
-        progress=_progress_bar("hold", unit="sequence"),
+        progress=_progress_bar("hold", unit="sequence"), solvers=solvers,
     )  # fmt: skip
+    if not rows:
+        raise BosunError("no case to run: none of --solvers applies to the robots chosen")
     if args.json:
         _print_bench_json("hold", {"rate": args.rate, "results": rows})
         return 0
@@ -318,6 +328,7 @@ def register(sub) -> None:
     with command(bench, "hold", cmd_bench_hold, help=hold_help) as b:
         b.add_argument("--sequences", type=_positive_int, default=1000, help="sequences per robot × solver × mode")
         b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
+        b.add_argument("--solvers", nargs="+", default=None, help="solvers (default: every one that applies)")
         b.add_argument("--modes", nargs="+", choices=["velocity", "position"], default=["velocity", "position"])
         b.add_argument("--rate", type=float, default=1000.0, help="engine rate [Hz] (default 1000, as the engine runs)")
         b.add_argument("--seed", type=int, default=0, help="seed of the stick sequences (default 0)")
