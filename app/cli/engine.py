@@ -50,6 +50,19 @@ def _plc_target(args: argparse.Namespace):
     return PlcTarget.parse(args.plc, args.plc_host, args.plc_local_id)
 
 
+def _run_until_stopped(server, duration: float | None) -> None:
+    """Run an engine's loop until SIGTERM, Ctrl+C or ``duration``; its sockets closed after."""
+    import signal
+
+    signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    try:
+        server.run(duration=duration)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.close()
+
+
 def cmd_server(args: argparse.Namespace) -> int:
     import signal
 
@@ -128,12 +141,7 @@ def cmd_server(args: argparse.Namespace) -> int:
         print(f"  plant: the Motion-Lab's PLC at {plc} over ADS (pyads); STOP writes MAIN.bStop", flush=True)
     if server.recorder is not None:
         print(f"  recording to {server.recorder.path} (MCAP)", flush=True)
-    try:
-        server.run(duration=args.duration)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        server.close()
+    _run_until_stopped(server, args.duration)
     st = server.stats.summary()
     print(f"bosun server: stopped after {st['ticks']} ticks, {st['missed_deadlines']} missed deadlines", flush=True)
     if server.recorder is not None:
@@ -240,8 +248,6 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
 def _serve_replay(args: argparse.Namespace) -> int:
     """``bosun replay FILE --serve``: the recording played back in an engine loop at its own rate, for viewers."""
-    import signal
-
     from app.engine.replay import Replayer, ReplayScene
     from app.engine.server import EngineServer
     from app.net.transport import check_url, is_local
@@ -254,18 +260,14 @@ def _serve_replay(args: argparse.Namespace) -> int:
     replayer = Replayer(args.file, check=False)
     scene = ReplayScene(replayer)
     server = EngineServer(scene, bind=args.bind, rate=replayer.rate, publish_rate=replayer.publish_rate)
-    signal.signal(signal.SIGTERM, lambda *_: server.stop())
     print(
         f"bosun replay: {args.file}: the {replayer.report.kind} engine played back at {replayer.rate:g} Hz", flush=True
     )
     print(f"  requests on {server.url}, state on {server.state_url}; watch it: bosun view --connect {server.url}",
           flush=True)  # fmt: skip
     try:
-        server.run(duration=args.duration)
-    except KeyboardInterrupt:
-        pass
+        _run_until_stopped(server, args.duration)
     finally:
-        server.close()
         replayer.close()
     print(f"bosun replay: played {replayer.report.ticks} ticks{' (the whole recording)' if replayer.done else ''}",
           flush=True)  # fmt: skip
