@@ -47,7 +47,13 @@ published at the last, so in ``engine_tac`` and ``engine_tac_neutral`` ``snap.li
 ``probability`` each differ at the snapshots where a refresh fell due, and each such snapshot's is the recorded one
 a snapshot before (checked array by array: the same numbers, later); every other array equal.  The same session
 (issue 32, item 4): ``engine_teleop``'s snapshot carries the GA's task (``snap.ga_weights``, ``snap.ga_axis_weight``:
-two arrays added, the published 1, 1, 1 and 0); every other array equal.
+two arrays added, the published 1, 1, 1 and 0); every other array equal.  Session 26 (issue 32, item 5: the
+direction-aware scaling): ``engine_teleop`` recorded again.  In position mode the reference now walks to the
+solver's answer at the joints' speed limits, guarded, instead of jumping to it, and the Comau's upper arm is slowed
+by its own column (a capsule pair in its zone), so the arm was still moving where the script changes the robot: the
+script gained a second of rest before the change.  Every array up to the first position-mode stick tick (t = 1.9 s:
+the velocity-mode drive, the hold, the mode change) equal bit for bit to the record before (checked array by
+array); the snapshot carries the hazard (``snap.hazard.*``).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):
@@ -208,6 +214,7 @@ def _engine_teleop() -> dict[str, np.ndarray]:
         (0.1, lambda: s.set_mode("position"), z, False),
         (0.1, None, z, True),
         (1.0, None, (-0.5, 0.2, 0.4), True),
+        (1.0, None, z, False),  # released: the arm comes to rest (slowed by its column, issue 32 item 5)
         (0.2, analytic_3dof, z, False),  # a robot change, and the closed-form solver
         (0.1, None, z, True),
         (0.8, None, (0.3, 0.3, -0.3), True),

@@ -84,8 +84,10 @@ def test_the_target_stops_at_the_modes_range_with_its_alarm_and_survives_a_sea_c
     t = arm(ses, run(ses, 0.5))
     t = run(ses, 4.0, stick(x=1.0), t)  # 2 m asked for: beyond the head's range (a quarter of its workspace)
     off = np.array(ses.sim.p_d_n) - ses.sim.p_d_n0
-    assert off[0] == pytest.approx(ses.target_range["tac"][0], abs=TCP_SPEED * DT + 1e-9)
+    # issue 32, item 5: slowed through the range's outer quarter, it comes up to the edge and never past it
+    assert 0.0 < ses.target_range["tac"][0] - off[0] < 0.2 * 0.25 * ses.target_range["tac"][0]
     assert ses.target_limited
+    assert ses.snapshot().hazard.kind == "workspace" and ses.snapshot().hazard.name == "tac range x"
     t = run(ses, 0.5, stick(x=1.0), t)
     assert "target_limit" in {a["key"] for a in ses.alarms.snapshot()}
     held = np.array(ses.sim.p_d_n)

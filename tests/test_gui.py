@@ -198,6 +198,22 @@ def test_the_ga_task_row_sends_and_shows_the_engine_s_task(qtbot, window):
     assert tab.state.ga_weights == [2.0, 1.0, 1.0]  # kept for the GA
 
 
+def test_the_teleop_page_names_the_nearest_hazard_and_shows_when_it_slows(qtbot, window):
+    """Issue 32, item 5: the hazard and its distance on the page, amber while it slows the command."""
+    from app.net.snapshots import HazardState
+
+    tab = window.teleop
+    qtbot.waitUntil(lambda: tab.state is not None, timeout=GUI_WAIT)
+    assert tab.hazard.text() in ("none near", "–") or "clearance" in tab.hazard.text() or "σ" in tab.hazard.text()
+    near = HazardState(kind="collision", name="link 2 ↔ floor", value=0.034, share=0.3, slowed=True,
+                       text="link 2 ↔ floor: clearance 34 mm")  # fmt: skip
+    tab._sync_controls(replace(tab.state, hazard=near))
+    assert tab.hazard.text() == "link 2 ↔ floor: clearance 34 mm — slowing"
+    assert "b06000" in tab.hazard.styleSheet()
+    tab._sync_controls(replace(tab.state, hazard=HazardState()))
+    assert tab.hazard.text() == "none near" and tab.hazard.styleSheet() == ""
+
+
 def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     path = tmp_path / "log.csv"
     window.teleop.log_path.setText(str(path))

@@ -211,6 +211,13 @@ class TeleopTab(QWidget):
         )
         self.frame.activated.connect(lambda _i: self.link.send("set_frame", frame=self.frame.currentText()))
         f.addRow("frame", self.frame)
+        self.hazard = ElidedLabel("–")  # one line: the nearest hazard and its distance (issue 32, item 5)
+        self.hazard.setToolTip(
+            "the hazard nearest its stop while you drive: a collision (the arm's capsules, the floor), a singularity "
+            "or a joint limit, and its distance; amber while it slows the command (only the part of it that "
+            "approaches the hazard: moving away is never slowed)"
+        )
+        f.addRow("hazard", self.hazard)
         cl.addWidget(g)
 
         g = QGroupBox("Input")
@@ -514,6 +521,12 @@ class TeleopTab(QWidget):
         frame = getattr(state, "frame", "world")
         if self.frame.currentText() != frame and not self.frame.view().isVisible():  # the engine's frame
             self.frame.setCurrentText(frame)
+        hz = getattr(state, "hazard", None)
+        slowing = hz is not None and hz.slowed
+        text = (hz.text if hz is not None and hz.text else "none near") + (" — slowing" if slowing else "")
+        if self.hazard.text() != text:
+            self.hazard.setText(text)
+            self.hazard.setStyleSheet("color: #b06000; font-weight: bold;" if slowing else "")
         sc = state.scaling
         if sc is None:
             return

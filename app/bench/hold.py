@@ -44,8 +44,9 @@ class HoldRun:
     drift: float
     settle_s: float
     travel: float  # tool path length while the stick moved (a sequence that never moved tests nothing)
-    ref_step: float = 0.0  # while the stick rests: the largest change of the joint reference in one tick, as a
-    # fraction of each joint's range (a resting stick's refined answer must stay local)
+    ref_step: float = 0.0  # while the stick rests: the largest change of the solver's answer (the joint goal the
+    # reference walks to, issue 32 item 5) in one tick, as a fraction of each joint's range (a resting stick's
+    # refined answer must stay local)
 
     @property
     def worst(self) -> float:
@@ -108,13 +109,13 @@ def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 
     t0 = t
     settled = math.inf
     span = robot.upper - robot.lower
-    q_ref = session.q_ref.copy()
+    q_goal = session.q_goal.copy()
     ref_step = 0.0
 
     def watch_reference() -> None:
-        nonlocal q_ref, ref_step
-        ref_step = max(ref_step, float(np.max(np.abs(session.q_ref - q_ref) / span)))
-        q_ref = session.q_ref.copy()
+        nonlocal q_goal, ref_step
+        ref_step = max(ref_step, float(np.max(np.abs(session.q_goal - q_goal) / span)))
+        q_goal = session.q_goal.copy()
 
     still_since = None  # rest is stillness that lasts REST_S: a joint reversing towards a new answer passes
     while t - t0 < settle_limit_s:  # through zero speed for a tick or two (position mode: 11 m from its answer)

@@ -12,6 +12,9 @@ hidden by the motion predictor (issue 31, item 2) and its lift-window indicator 
 time in each tick is reported as ``predictor_ms`` (p50, p99, max; the first tick, which primes them on the sensor's
 past, left out) — issue 31's cost criterion, ≤ 0.1 ms p99, measured in the engine's own loop — and each one's alone
 (``predictor_ms.delay``, ``predictor_ms.lift_window``).
+
+The teleop engine's direction-aware scaling and safe-braking rule (issue 32, item 5) are timed the same way:
+``guard_ms`` (p50, p99, max, and ``in_zone``, the share of ticks with a hazard in its zone).
 """
 
 from __future__ import annotations
@@ -58,6 +61,32 @@ def _timed_predictors(session, cost: dict[str, list[float]]) -> None:
     sim._foresee, session._feed_lift, session.tick = timed(foresee, cost["delay"]), timed(feed, cost["lift"]), ticked
 
 
+def _timed_guard(session, cost: dict[str, list[float]]) -> None:
+    """Wrap the teleop session's direction-aware scaling and safe-braking rule (issue 32, item 5:
+    ``Session._guarded``) so that its time in each tick goes to ``cost["guard"]``, and whether a hazard was in its
+    zone that tick to ``cost["zone"]``."""
+    guarded, tick = session._guarded, session.tick
+
+    def timed(fn):
+        def run(*a, **k):
+            t_in = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                cost["guard"][-1] += time.perf_counter() - t_in
+
+        return run
+
+    def ticked(*a, **k):
+        cost["guard"].append(0.0)
+        try:
+            return tick(*a, **k)
+        finally:
+            cost["zone"].append(1.0 if session.hazard.kind else 0.0)
+
+    session._guarded, session.tick = timed(guarded), ticked
+
+
 def _percentiles(ms: np.ndarray) -> dict:
     return {"p50": float(np.percentile(ms, 50)), "p99": float(np.percentile(ms, 99)), "max": float(ms.max()),
             "ticks": int(ms.size)}  # fmt: skip
@@ -72,7 +101,7 @@ def _engine_process(
 
     warm_up()
     logging.getLogger("bosun").setLevel(logging.ERROR)  # the flood's refusals are counted below, not printed
-    cost: dict[str, list[float]] = {"delay": [], "lift": []}
+    cost: dict[str, list[float]] = {"delay": [], "lift": [], "guard": [], "zone": []}
     if plant == "tac":
         from app.engine.tac_session import TacSession
 
@@ -84,6 +113,7 @@ def _engine_process(
         _timed_predictors(session, cost)
     else:
         session = Session(robot_name=robot, solver_name=solver, mode="velocity")
+        _timed_guard(session, cost)
     server = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=PUBLISH_RATE)
     urls.put(server.url)
     try:
@@ -104,6 +134,9 @@ def _engine_process(
         d, lift = (np.array(cost[k][1:]) * 1e3 for k in ("delay", "lift"))  # the first tick primes them on the past
         summary["predictor_ms"] = _percentiles(d + lift)
         summary["predictor_ms"]["delay"], summary["predictor_ms"]["lift_window"] = _percentiles(d), _percentiles(lift)
+    if plant == "teleop" and len(cost["guard"]) > 1:
+        summary["guard_ms"] = _percentiles(np.array(cost["guard"][1:]) * 1e3)
+        summary["guard_ms"]["in_zone"] = float(np.mean(cost["zone"][1:]))  # the share of ticks with a hazard near
     results.put(summary)
 
 

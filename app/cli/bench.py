@@ -1,4 +1,4 @@
-"""``bosun bench ik|loop|sim|hold|alarms|plc-soak``: benchmarks, not tests."""
+"""``bosun bench ik|loop|sim|hold|guard|alarms|plc-soak``: benchmarks, not tests."""
 
 from __future__ import annotations
 
@@ -124,6 +124,60 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
             ],
         )
     )
+    return 0
+
+
+def cmd_bench_guard(args: argparse.Namespace) -> int:
+    from app.bench import guard as bench
+
+    robots = _serial_robots(args.robots)
+    if not 10.0 <= args.rate <= 1000.0:
+        raise BosunError(f"--rate must be between 10 and 1000 Hz, got {args.rate:g}")
+    bench.SPEED = args.speed
+    rows = bench.bench_guard(
+        robots, args.streams, rate=args.rate, workers=args.workers, progress=_progress_bar("guard", unit="stream"),
+        speed=args.speed,
+    )  # fmt: skip
+    if args.json:
+        _print_bench_json("guard", {"rate": args.rate, "speed": args.speed, "results": rows})
+        return 0
+    print(
+        f"bosun bench guard: {args.streams} seeded random stick streams per robot, velocity mode, jacobian, "
+        f"{args.rate:g} Hz, {args.speed:g}× the default stick speed"
+    )
+    print("penetration: the deepest capsule overlap of the actual joints; opening: ticks whose command's direction")
+    print("opens every hazard in its zone, and the least tool speed kept on them (the acceptance: ≥ 0.9; a tick the")
+    print("safe-braking rule braked counts 0); braked: ticks that rule braked the joints (opening ones among them)")
+    print(
+        _table(
+            [
+                "robot",
+                "streams",
+                "max penetration [mm]",
+                "least clearance [mm]",
+                "past a limit",
+                "opening ticks",
+                "least speed kept",
+                "slowed ticks",
+                "braked ticks",
+            ],
+            [
+                [
+                    r["robot"],
+                    str(r["streams"]),
+                    f"{r['max_penetration_m'] * 1e3:.2f}",
+                    f"{r['least_clearance_m'] * 1e3:.1f}",
+                    f"{r['max_limit_excess']:.2g}",
+                    str(r["opening_ticks"]),
+                    f"{r['min_opening_speed']:.3f}",
+                    str(r["slowed_ticks"]),
+                    f"{r['braked_ticks']} ({r['opening_braked_ticks']} opening)",
+                ]
+                for r in rows
+            ],
+        )
+    )
+    print(_machine_line())
     return 0
 
 
@@ -287,12 +341,19 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
             if key in pm:
                 q = pm[key]
                 print(f"    {name} alone: p50 {q['p50']:.3f} ms   p99 {q['p99']:.3f} ms   max {q['max']:.3f} ms")
+    if "guard_ms" in lp:
+        gm = lp["guard_ms"]
+        print(
+            f"  hazard checks (direction-aware scaling and safe braking) per tick: p50 {gm['p50']:.3f} ms   "
+            f"p99 {gm['p99']:.3f} ms   max {gm['max']:.3f} ms; a hazard in its zone {100 * gm['in_zone']:.0f} % of "
+            "the ticks"
+        )
     return 0
 
 
 def register(sub) -> None:
     """Add this group's commands to ``bosun``'s subparsers."""
-    bench = group(sub, "bench", "benchmarks (not tests): bench ik, loop, sim, hold, alarms, plc-soak", "bench")
+    bench = group(sub, "bench", "benchmarks (not tests): bench ik, loop, sim, hold, guard, alarms, plc-soak", "bench")
     with command(bench, "ik", cmd_bench, help="median/p95 solve time and success per robot and solver") as b:
         b.add_argument("--targets", type=int, default=500, help="seeded reachable targets per robot (default 500)")
         b.add_argument("--seed", type=int, default=7, help="seed of targets and solvers (default 7)")
@@ -332,6 +393,13 @@ def register(sub) -> None:
         b.add_argument("--modes", nargs="+", choices=["velocity", "position"], default=["velocity", "position"])
         b.add_argument("--rate", type=float, default=1000.0, help="engine rate [Hz] (default 1000, as the engine runs)")
         b.add_argument("--seed", type=int, default=0, help="seed of the stick sequences (default 0)")
+        b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
+    guard_help = "direction-aware scaling: random stick streams into the arms' hazards (issue 32, item 5)"
+    with command(bench, "guard", cmd_bench_guard, help=guard_help) as b:
+        b.add_argument("--streams", type=_positive_int, default=1000, help="streams per robot (default 1000)")
+        b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
+        b.add_argument("--rate", type=float, default=250.0, help="engine rate [Hz] (default 250)")
+        b.add_argument("--speed", type=_positive_float, default=1.0, help="stick speed × the default k_v (default 1)")
         b.add_argument("--workers", type=_positive_int, default=1, help="processes (default 1)")
     alarms_help = "alarm rates of a scripted session (three engines, a study, VVMC, two STOPs) vs EEMUA 191"
     with command(bench, "alarms", cmd_bench_alarms, help=alarms_help) as b:

@@ -23,6 +23,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from app.control.guard import GuardReport, HazardGuard
 from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, LogEntry, Scene, command
 from app.engine.studies import STUDIES, StudyError, StudyRunner
@@ -39,6 +40,7 @@ from app.models.registry import (
 from app.models.serial import SerialRobot
 from app.models.workspace import workspace_box
 from app.net.snapshots import (
+    HazardState,
     RobotEntry,
     ScalingState,
     StudyState,
@@ -125,6 +127,8 @@ class Session(Scene):
         self.ticks = 0
         self.sim_time = 0.0
         self._armed_prev = False
+        self.dt_last = 0.002  # the last tick's length [s] (the guard's stopping point)
+        self.braked = 0  # ticks the safe-braking rule braked the joints (:meth:`_guarded`)
         self._frame_at_arming: np.ndarray | None = None  # position mode: the frame's rotation when armed
         self._load(self.robot_name, self.solver_name)
 
@@ -142,10 +146,13 @@ class Session(Scene):
             q0 = self.actuators.q.copy()  # the same joints reloaded: the arm stays where it stands
         act = JointActuators(robot.lower, robot.upper, robot.speed, robot.accel, self.actuator_tau, q0)
         box = workspace_box(robot)
+        guard = HazardGuard.for_robot(robot)
         # everything built: now switch (a failure above leaves the old robot in place)
-        self.robot, self.solver, self.actuators, self.box = robot, solver, act, box
+        self.robot, self.solver, self.actuators, self.box, self.guard = robot, solver, act, box, guard
+        self.hazard = GuardReport()
         self.robot_name, self.solver_name = robot.name, solver_name
         self.q_ref = act.q.copy()
+        self.q_goal = self.q_ref.copy()  # position mode: the solver's answer the reference walks to
         self.target = robot.position(self.q_ref)
         self.scaling = default_scaling(box, self.target)
         self.robot_xml = xml
@@ -252,6 +259,7 @@ class Session(Scene):
             # position mode starts from where the tool is: releasing the stick returns here
             self.scaling = self.scaling.with_origin(self.robot.position(self.actuators.q))
             self.q_ref = self.actuators.q.copy()
+            self.q_goal = self.q_ref.copy()
             self.command_point = None
             self.input.disarm("mode changed")
             self.note("info", f"mode {mode}")
@@ -334,12 +342,14 @@ class Session(Scene):
         """Stop all motion in this tick and latch."""
         self.actuators.stop()
         self.q_ref = self.actuators.q.copy()
+        self.q_goal = self.q_ref.copy()
         self._latch(f"E-STOP from {source}")
 
     def reset(self) -> None:
         """Clear a latched E-STOP; the arm holds where it stands until the operator commands anew."""
         if self.estop_latched:
             self.q_ref = self.actuators.q.copy()
+            self.q_goal = self.q_ref.copy()
             self.command_point = None
             if self.mode == "position":
                 self.scaling = self.scaling.with_origin(self.robot.position(self.actuators.q))
@@ -358,11 +368,40 @@ class Session(Scene):
         overshooting; farther (the last commanded reference, which leads the joints while they
         accelerate) moves the machine on after the operator stopped commanding."""
         self.q_ref = self.actuators.stopping_point(dt)
+        self.q_goal = self.q_ref.copy()
+        self.hazard = GuardReport()
+
+    def _guarded(self, dq: np.ndarray) -> None:
+        """Move the reference by the joint step ``dq``, scaled along the directions that bring a hazard nearer, and
+        supervised (issue 32, item 5: :meth:`app.control.guard.HazardGuard.tick`, one compiled call).
+
+        The scaling moves the capsules' stop out by how far the arm can be from its reference (the servo lags it
+        and each joint brakes on its own): without that the reference kept its clearance while the lagging,
+        acceleration-limited joints cut the corner (the Panda's tool 63 mm into the floor; judged from the
+        joints' stopping point instead, 0.2 m).  The safe-braking rule then keeps the reference only if, after this
+        tick, the joints can still brake to rest with every capsule clearance at least 2.5 mm (or what braking now
+        would leave, if less): else a gentler reference the servo follows in proportion, else the joints brake now.
+        By induction the arm can always be stopped clear (at twice the default stick speed the scaling alone let
+        the Panda's tool 31 mm into the floor: review of the first runs of ``bosun bench guard``)."""
+        self.q_ref, self.hazard, action = self.guard.tick(self.q_ref, dq, self.actuators, self.dt_last)
+        if action == 2:
+            self.braked += 1
+
+    def _walk_to_goal(self, dt: float) -> None:
+        """Position mode: the reference walks to the solver's answer at the joints' speed limits (the step scaled
+        as a whole, its direction kept), guarded: a jump through a hazard is not taken at once."""
+        dq = self.q_goal - self.q_ref
+        reach = self.robot.speed * dt
+        over = float(np.max(np.abs(dq) / reach, initial=0.0))
+        if over > 1.0:
+            dq = dq / over
+        self._guarded(dq)
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
         """One control step of length dt [s] at engine time ``now`` [s]."""
         self.ticks += 1
         self.sim_time += dt
+        self.dt_last = dt
         inp = self.input.step(now)
         if inp.stop:
             self.estop(source=f"the stop button of {self.input.profile.name}")
@@ -398,6 +437,7 @@ class Session(Scene):
             else:  # eq. (1) in the operator's frame, as it was at arming
                 point = self.scaling.x_w + in_frame(np.asarray(self.scaling.k_p) * s, self._frame_at_arming)
             res = self._solve_position(point, budget)
+            self._walk_to_goal(dt)
             self.command_point = point
             self.target = np.asarray(point, dtype=float)
         else:
@@ -411,7 +451,8 @@ class Session(Scene):
                 self.command_point = start + xdot * dt
                 res = self.solver.solve_velocity(self.q_ref, xdot, dt, time_budget=budget)  # eqs. (4), (7), (9)
                 self.target = x_ref + xdot * dt  # eq. (7): the solver's target this tick
-                self.q_ref = res.q
+                self._guarded(res.q - self.q_ref)
+                self.q_goal = self.q_ref.copy()
             else:
                 res = None  # centred stick: brake to the nearest stop and hold there
                 if self.command_point is not None:
@@ -435,17 +476,17 @@ class Session(Scene):
             self._refine_misses = 0
         if still and (self._position_answered or self._refine_misses >= REFINE_TRIES):
             return None  # answered, or nothing nearer found in REFINE_TRIES tries: out of reach, hold
-        res = self.solver.solve_position(point, self.q_ref, time_budget=budget)
+        res = self.solver.solve_position(point, self.q_goal, time_budget=budget)
         if still:
             self._refine_misses += 1
             # a refinement for a resting stick: nearer by a millimetre and a local step only (a GA's or a
             # restart's answer elsewhere in joint space, a little nearer, swung the arm 2.8 rad: review)
-            now_error = float(np.linalg.norm(self.robot.position(self.q_ref) - point))
-            local = bool(np.all(np.abs(res.q - self.q_ref) <= REFINE_STEP * (self.robot.upper - self.robot.lower)))
+            now_error = float(np.linalg.norm(self.robot.position(self.q_goal) - point))
+            local = bool(np.all(np.abs(res.q - self.q_goal) <= REFINE_STEP * (self.robot.upper - self.robot.lower)))
             if not (res.error < now_error - 1e-3 and local):
                 return res
             self._refine_misses = 0
-        self.q_ref = res.q
+        self.q_goal = res.q
         self._position_answered = bool(res.success)
         return res
 
@@ -477,17 +518,24 @@ class Session(Scene):
             step = self.robot.position(self.q_ref) - self.robot.position(q_before)
             progress = float(step @ xdot) / (v_cmd * dt * v_cmd) if v_cmd > 0 else 1.0
             at_lo, at_hi = self.q_ref <= lo + tol, self.q_ref >= hi - tol
+            hz = self.hazard
             if progress < 0.5 and np.any(at_lo | at_hi):
                 k = int(np.flatnonzero(at_lo | at_hi)[0])
                 blocked = f"{self.robot.joint_names[k]} at its {'lower' if at_lo[k] else 'upper'} limit"
-            limited = not blocked and progress < 0.9
+            elif progress < 0.5 and hz.slowed and hz.kind == "joint limit":  # the guard slows it onto the limit
+                joint, side, _ = hz.name.rsplit(" ", 2)
+                blocked = f"{joint} near its {side} limit ({hz.value:.3g} to go)"
+            limited = not blocked and progress < 0.9 and not self.hazard.slowed
         al.set("joint_limit", bool(blocked), text=f"{blocked}: the commanded direction is blocked")
+        hz = self.hazard
+        # a collision's own alarm (a joint limit and a singularity have theirs: joint_limit, near_singularity)
+        al.set("hazard_slowed", self.enabled and hz.slowed and hz.kind == "collision", text=f"Slowed near {hz.text()}")
         if limited != self._speed_limited:  # a status, not an alarm: no operator action (rationalisation)
             self._speed_limited = limited
             if limited:
                 self.note("info", "speed limited: the joints' speed limits slow the tool below the stick's speed")
         reach = self.mode == "position" and self.enabled and self.command_point is not None
-        miss = float(np.linalg.norm(self.robot.position(self.q_ref) - self.command_point)) if reach else 0.0
+        miss = float(np.linalg.norm(self.robot.position(self.q_goal) - self.command_point)) if reach else 0.0
         al.set(
             "target_unreachable",
             reach and not self._position_answered,
@@ -559,6 +607,7 @@ class Session(Scene):
         st = self.studies.state
         head = self._head()
         head["flags"].enabled = self.enabled
+        hz = self.hazard
         return TeleopSnapshot(
             **head,
             t=self.sim_time,
@@ -581,9 +630,21 @@ class Session(Scene):
             solver_time=float(self.solver_time),
             solver_ok=bool(self.solver_ok),
             scaling=ScalingState(k_p=list(self.scaling.k_p), x_w=list(self.scaling.x_w), k_v=list(self.scaling.k_v)),
+            hazard=HazardState(
+                kind=hz.kind,
+                name=hz.name,
+                value=_finite(hz.value),
+                share=_finite(hz.share),
+                slowed=hz.slowed,
+                text=hz.text(),
+            ),
             command=None if self.command_point is None else np.asarray(self.command_point, float).tolist(),
             study=StudyState(**{k: st[k] for k in ("id", "kind", "status", "done", "total", "error")}),
         )
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
 
 
 def _study_line(msg: dict) -> str:

@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from app.control.guard import scale_in_box
 from app.control.predict import LiftWindow
 from app.engine.alarms import AlarmList
 from app.engine.jobs import Deferred
@@ -35,6 +36,7 @@ from app.models.registry import load_spec, resolve
 from app.models.xml import read_robot_file
 from app.net.snapshots import (
     CraneLoadState,
+    HazardState,
     Hull,
     LiftWindowState,
     SeaState,
@@ -64,6 +66,9 @@ SATURATION_WINDOW = 1000  # simulation steps (10 s at 0.01 s) over which the sat
 STICK_TO_NED = np.diag([1.0, 1.0, -1.0])
 TCP_SPEED = 0.5  # m/s at full stick (assumed: half the head's reach a second, 90°/s arms)
 WINCH_SPEED = 1.0  # m/s at full stick on the w axis (the winch's own limit is higher: app/scenes/crane_load.py)
+#: issue 32, item 5: the target slows through the outer quarter of its range; it is "at its range" (the alarm)
+#: where an axis asked outward keeps under this share of its step
+LIMITED_SHARE = 0.2
 #: how far the stick may move the TCP's target from its calm-water point, per axis of {n} [m] (assumed): the head
 #: alone (tac) within a quarter of its workspace's smallest extent; with the crane (cooperative) within the crane's
 #: working range around the point of eq. (60)
@@ -152,6 +157,7 @@ class TacSession(Scene):
             "cooperative": TARGET_RANGE_COOPERATIVE,
         }
         self.target_limited = False
+        self.hazard = HazardState()  # the nearest hazard the stick's last command was scaled for (issue 32, item 5)
         hull = self.system.workspace.hull
         self._hull = {
             "points": np.round(hull.points[hull.vertices], 4).tolist(),
@@ -642,6 +648,7 @@ class TacSession(Scene):
         there on top of the compensation.  Only when armed and enabled (deadman, fresh), never frozen or in
         ``off``; the target's offset stays within the mode's range (:meth:`TacSimulator.move_target`)."""
         self.target_limited = False
+        self.hazard = HazardState()
         # the winch: heave compensation while the head compensates; the stick's w pays out (positive) or hauls in
         drive = not frozen and inp.enabled and not self.estop_latched
         self.load.ahc, self.load.stopped = self.mode != "off" and not frozen, self.estop_latched
@@ -655,12 +662,34 @@ class TacSession(Scene):
         if self.frame == "base" and self.last:  # along the vessel's heading; the followed point moves with it
             eta = np.asarray(self.last["eta"])
             dp = euler_zyx_to_matrix(np.array([0.0, 0.0, eta[5]])) @ dp
+        dp = self._scaled(dp)
+        if self.frame == "base" and self.last:
             before = self.sim.p_d_n.copy()
-            self.target_limited = self.sim.move_target(dp, self.target_range[self.mode])
+            self.target_limited |= self.sim.move_target(dp, self.target_range[self.mode])
             if self._p_b is not None:
                 self._p_b = self._p_b + euler_zyx_to_matrix(eta[3:6]).T @ (self.sim.p_d_n - before)
             return
-        self.target_limited = self.sim.move_target(dp, self.target_range[self.mode])
+        self.target_limited |= self.sim.move_target(dp, self.target_range[self.mode])
+
+    def _scaled(self, dp: np.ndarray) -> np.ndarray:
+        """The stick's step of the TCP's target ``dp`` [m, {n}] scaled along the directions that bring the edge of
+        the mode's range nearer (issue 32, item 5: the head's reach alone, the crane's with it): each axis's outward
+        part through the outer quarter of the range (:func:`~app.control.guard.scale_in_box`); inward and along an
+        edge never.  A load coming down onto a deck is a landing, not a collision: it is not slowed here (its
+        speed, re-hits and slack are the landing watch's)."""
+        limit = self.target_range[self.mode]
+        out, axis, gap = scale_in_box(dp, self.sim.p_d_n - self.sim.p_d_n0, limit)
+        # at its range: an axis asked outward keeps under a fifth of its step (within 8 cm of the head's edge)
+        held = np.abs(out) < LIMITED_SHARE * np.abs(dp)
+        self.target_limited = self.target_limited or bool(np.any(held))
+        if axis >= 0:
+            slowed = bool(np.any(np.abs(out) < np.abs(dp) - 1e-15))
+            name = f"{self.mode} range {'xyz'[axis]}"
+            self.hazard = HazardState(
+                kind="workspace", name=name, value=gap, share=gap / (0.25 * float(limit[axis])), slowed=slowed,
+                text=f"{name}: {gap:.2f} m to its edge",
+            )  # fmt: skip
+        return out
 
     def _load_state(self) -> CraneLoadState:
         ld = self.load
@@ -741,6 +770,7 @@ class TacSession(Scene):
             x_d=self.system.x_d,
             p_d_n=self.sim.p_d_n.tolist(),
             load=self._load_state() if self.last else None,
+            hazard=self.hazard,
             target=self.target,
             frame=self.frame,
             target_age=round(self._target_age(), 3) if self.vessel_deck is not None else None,

@@ -68,6 +68,7 @@ KERNEL_FILES = (
     "scenes/tac_kernels.py",
     "models/pendulum_kernels.py",
     "control/antisway_kernels.py",
+    "control/guard_kernels.py",
 )
 
 

@@ -78,6 +78,7 @@ class LinkSpec:
     a: float
     alpha: float
     joint: int | None = None
+    radius: float | None = None  # the link's collision capsule radius [m] (``<collision radius>``; None: as drawn)
 
 
 @dataclass(frozen=True, eq=False)

@@ -513,6 +513,10 @@ class _Reader:
                 raise self.fail(joint_el, f"link {name}: a fixed link has no <joint>")
             if kind != "fixed" and joint_el is None:
                 raise self.fail(link_el, f"link {name}: a {kind} link needs a <joint> with limits")
+            col = link_el.find("collision")
+            radius = None
+            if col is not None:
+                radius = self.num(col, "radius", bound="size")
             joint_index = None
             if joint_el is not None:
                 joint_index = len(joints)
@@ -526,6 +530,7 @@ class _Reader:
                     a=self.num(dh, "a", bound="length"),
                     alpha=self.num(dh, "alpha", angle=True, bound="angle"),
                     joint=joint_index,
+                    radius=radius,
                 )
             )
         if not joints:

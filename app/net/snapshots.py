@@ -126,6 +126,18 @@ class ScalingState:
 
 
 @dataclass(kw_only=True, slots=True)
+class HazardState:
+    """The hazard nearest its stop this tick (issue 32, item 5: app/control/guard.py); none in its zone: kind ""."""
+
+    kind: str = ""  # "", joint limit, singularity, collision
+    name: str = ""  # as the operator reads it: "wrist_1 upper limit", "link 2 ↔ link 5", "link 3 ↔ floor"
+    value: float | None = None  # clearance [m], σ ratio, or distance to the limit [rad | m]
+    share: float | None = None  # share of its zone left: 1 at the zone's edge, 0 at the stop
+    slowed: bool = False  # the command was scaled along the hazard's direction this tick
+    text: str = ""  # one line: the hazard and its distance
+
+
+@dataclass(kw_only=True, slots=True)
 class StudyState:
     """The engine's IK study (``study_start``): results come once, in a ``study`` message."""
 
@@ -163,6 +175,7 @@ class TeleopSnapshot(Snapshot):
     solver_time: float = 0.0  # [s]
     solver_ok: bool = True
     scaling: ScalingState | None = None
+    hazard: HazardState = field(default_factory=HazardState)  # the direction-aware scaling's nearest hazard
     study: StudyState = field(default_factory=StudyState)
 
 
@@ -293,6 +306,7 @@ class TacSnapshot(Snapshot):
     x_d: float = 0.0  # desired head centre on the head's x axis [m]
     p_d_n: list[float] = field(default_factory=list)  # desired TCP in {n} [m]
     load: CraneLoadState | None = None  # the hanging load (issue 30, item 3)
+    hazard: HazardState = field(default_factory=HazardState)  # what the stick's command was scaled for (issue 32)
     target: str = "platform"  # the landing target: the fixed platform or a second vessel's deck (issue 30, item 5)
     frame: str = "world"  # the stick's frame: world, or target (following the target deck)
     target_age: float | None = None  # the second vessel's motion data age [s] (None: a fixed platform)

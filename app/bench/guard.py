@@ -1,0 +1,201 @@
+"""Direction-aware scaling under random sticks (issue 32, item 5's acceptance): seeded random stick streams drive
+the teleop scene (:class:`~app.engine.session.Session`) into its hazards, and every tick is checked.
+
+Per stream, at the actual joints (the actuators', not the reference):
+
+* ``penetration`` [m]: the deepest capsule overlap (minus the least clearance when it is negative; 0 otherwise)
+  over every pair and floor the guard checks (:class:`~app.control.guard.HazardGuard`);
+* ``limit_excess``: the farthest any joint went past a limit [rad or m];
+* ``opening`` ticks: a step whose direction opens (or keeps) every hazard in its zone — the σ ratio, every
+  clearance and every joint's distance to its limit no smaller 10⁻⁷ rad along it than where it starts, measured
+  by the hazards' own values, not the guard's gradients — and, of them, the least
+  ratio of the tool's step after scaling to its step before (``min_opening_speed``: 1 means never slowed; the
+  acceptance asks ≥ 0.9; an opening tick the safe-braking rule braked counts as 0);
+* ``slowed`` ticks, ``braked`` ticks (the safe-braking rule, :meth:`~app.control.guard.HazardGuard.tick`),
+  and the least clearance reached.
+
+Streams: 6 to 12 segments of 0.2–1 s, each stick deflection uniform in [−1, 1]³ with a third of the axes at full
+deflection, velocity mode, the Jacobian solver, at the rate given, the workspace scaling's default speed (or a
+multiple of it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from app.engine.session import Session
+from app.teleop.devices import InputSample
+
+DIRECTION_STEP = 1e-7  # [rad | m]: a command's direction is judged by the hazards' change over this step along it
+SPEED = 1.0  # the stick's speed as a multiple of the workspace scaling's default k_v
+
+
+@dataclass(frozen=True)
+class GuardRun:
+    seed: int
+    ticks: int
+    penetration: float  # [m], ≥ 0
+    least_clearance: float  # [m] (inf: nothing checked)
+    limit_excess: float  # [rad | m], ≥ 0
+    opening: int  # ticks whose unscaled step opened every hazard in its zone (at least one in its zone)
+    min_opening_speed: float  # the least tool step ratio (scaled/unscaled) over those ticks (1: never slowed)
+    slowed: int  # ticks the guard scaled the step
+    braked: int = 0  # ticks the safe-braking rule braked the joints (HazardGuard.tick)
+    opening_braked: int = 0  # of the opening ticks, those it braked (counted as speed 0 kept)
+
+
+class _Watch:
+    """Stands in for the session's guard: passes every call on, and measures each tick's step."""
+
+    def __init__(self, guard, settings) -> None:
+        self.guard = guard
+        self.s = settings
+        self.opening = 0
+        self.min_opening_speed = 1.0
+        self.slowed = 0
+        self.opening_braked = 0
+
+    def __getattr__(self, name):
+        return getattr(self.guard, name)
+
+    def _in_zone(self, q, v, margin) -> tuple[np.ndarray, np.ndarray]:
+        r = self.guard.robot
+        span = r.upper - r.lower
+        lim = np.minimum(q - r.lower, r.upper - q)
+        zones = np.concatenate(([self.s.sigma_zone], np.full(v.size - 1, self.s.clear_zone + margin)))
+        return lim < self.s.limit_zone * span, v < zones
+
+    def tick(self, q_ref, dq, act, dt):
+        q_ref = np.array(q_ref, dtype=float)
+        margin = self.guard.margin(q_ref, act.stopping_point(dt))
+        new, rep, action = self.guard.tick(q_ref, dq, act, dt)
+        if rep.slowed:
+            self.slowed += 1
+        if not np.any(dq):
+            return new, rep, action
+        r = self.guard.robot
+        e = DIRECTION_STEP / float(np.max(np.abs(dq)))  # the command's direction: a step of 1e-7 along it
+        v0, v1 = self.guard.values(q_ref), self.guard.values(q_ref + e * dq)
+        lim_zone, geo_zone = self._in_zone(q_ref, v0, margin)
+        if lim_zone.any() or geo_zone.any():
+            lim0 = np.minimum(q_ref - r.lower, r.upper - q_ref)
+            lim1 = np.minimum(q_ref + e * dq - r.lower, r.upper - (q_ref + e * dq))
+            opens = np.all(lim1[lim_zone] >= lim0[lim_zone]) and np.all(v1[geo_zone] >= v0[geo_zone])
+            if opens:
+                self.opening += 1
+                p0 = r.position(q_ref)
+                want = float(np.linalg.norm(r.position(np.clip(q_ref + dq, r.lower, r.upper)) - p0))
+                got = float(np.linalg.norm(r.position(new) - p0))
+                if action == 2:
+                    self.opening_braked += 1
+                    self.min_opening_speed = 0.0
+                elif want > 1e-12:
+                    self.min_opening_speed = min(self.min_opening_speed, got / want)
+        return new, rep, action
+
+
+def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray, float]]:
+    """6–12 random (stick, seconds) segments of 0.2–1 s (see the module's text)."""
+    out = []
+    for _ in range(int(rng.integers(6, 13))):
+        s = rng.uniform(-1.0, 1.0, 3)
+        full = rng.random(3) < 1 / 3
+        s[full] = np.sign(s[full] + 1e-9)
+        out.append((s, float(rng.uniform(0.2, 1.0))))
+    return out
+
+
+def run_stream(robot: str, seed: int, rate: float = 250.0, speed: float | None = None) -> GuardRun:
+    """One seeded stream on a fresh teleop scene of ``robot``."""
+    rng = np.random.default_rng([seed, 32])
+    ses = Session(robot_name=robot, solver_name="jacobian", mode="velocity", seed=seed)
+    factor = SPEED if speed is None else speed
+    ses.scaling = replace(ses.scaling, k_v=tuple(factor * float(v) for v in ses.scaling.k_v))
+    guard = ses.guard
+    watch = _Watch(guard, guard.settings)
+    ses.guard = watch
+    r = ses.robot
+    dt = 1.0 / rate
+    t = 0.0
+    ticks = 0
+    least = math.inf
+    excess = 0.0
+
+    def step(stick, enable=True):
+        nonlocal t, ticks, least, excess
+        t += dt
+        ses.feed(InputSample(tuple(float(v) for v in stick), (enable,), "guard-bench"), t)
+        ses.tick(t, dt, solve_budget=0.4 * dt)
+        ticks += 1
+        q = ses.actuators.q
+        least = min(least, guard.min_clearance(q))
+        excess = max(excess, float(np.max(np.maximum(r.lower - q, q - r.upper))))
+
+    for enable in (False, True):
+        for _ in range(3):
+            step((0.0, 0.0, 0.0), enable)
+    for stick, seconds in stick_stream(rng):
+        for _ in range(max(1, round(seconds / dt))):
+            step(stick)
+    for _ in range(round(0.5 / dt)):  # centred: the arm brakes and holds
+        step((0.0, 0.0, 0.0))
+    return GuardRun(
+        seed=seed, ticks=ticks, penetration=max(0.0, -least) if math.isfinite(least) else 0.0,
+        least_clearance=least, limit_excess=max(excess, 0.0), opening=watch.opening,
+        min_opening_speed=watch.min_opening_speed, slowed=watch.slowed, braked=ses.braked,
+        opening_braked=watch.opening_braked,
+    )  # fmt: skip
+
+
+def _chunk(task) -> tuple[str, list[GuardRun]]:
+    robot, first, n, rate, speed = task
+    return robot, [run_stream(robot, k, rate, speed) for k in range(first, first + n)]
+
+
+def summarise(robot: str, runs: list[GuardRun]) -> dict:
+    return {
+        "robot": robot,
+        "streams": len(runs),
+        "ticks": sum(r.ticks for r in runs),
+        "max_penetration_m": max(r.penetration for r in runs),
+        "least_clearance_m": min(r.least_clearance for r in runs),
+        "max_limit_excess": max(r.limit_excess for r in runs),
+        "opening_ticks": sum(r.opening for r in runs),
+        "min_opening_speed": min(r.min_opening_speed for r in runs),
+        "slowed_ticks": sum(r.slowed for r in runs),
+        "braked_ticks": sum(r.braked for r in runs),
+        "opening_braked_ticks": sum(r.opening_braked for r in runs),
+        "streams_slowed": sum(r.slowed > 0 for r in runs),
+    }
+
+
+def bench_guard(
+    robots: list[str], streams: int, rate: float = 250.0, workers: int = 1, progress=None, speed: float = 1.0
+) -> list[dict]:
+    """``streams`` seeded streams per robot on ``workers`` processes; one row a robot (:func:`summarise`)."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    chunk = 10
+    tasks = [(r, k, min(chunk, streams - k), rate, speed) for r in robots for k in range(0, streams, chunk)]
+    runs: dict[str, list[GuardRun]] = {r: [] for r in robots}
+    total, done = len(robots) * streams, 0
+
+    def take(robot, part):
+        nonlocal done
+        runs[robot] += part
+        done += len(part)
+        if progress is not None:
+            progress(done, total)
+
+    if workers <= 1:
+        for task in tasks:
+            take(*_chunk(task))
+    else:
+        with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+            for robot, part in pool.map(_chunk, tasks):
+                take(robot, part)
+    return [summarise(r, runs[r]) for r in robots]

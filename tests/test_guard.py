@@ -1,0 +1,248 @@
+"""Issue 32, item 5: direction-aware scaling at the loop rate (app/control/guard.py, app/control/guard_kernels.py,
+Session._guarded and Session._supervise).  `bosun bench guard` runs the acceptance's 1 000 streams a robot."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from app.bench.guard import DIRECTION_STEP, run_stream
+from app.control import guard_kernels as gk
+from app.control.guard import GuardSettings, HazardGuard
+from app.engine.session import Session
+from app.errors import RobotXmlError
+from app.models.registry import load_robot, load_robot_text
+from app.teleop.devices import InputSample
+
+ROBOTS = ["comau_smart5_3dof", "comau_smart5_6dof", "franka_panda", "kuka_youbot", "scara", "ur5"]
+
+
+def test_segment_distance_is_the_least_distance_of_their_points():
+    rng = np.random.default_rng(5)
+    s = np.linspace(0.0, 1.0, 401)
+    for k in range(200):
+        p1, q1, p2, q2 = rng.normal(size=(4, 3))
+        if k % 5 == 0:
+            q2 = p2 + 0.3 * (q1 - p1)  # parallel
+        if k % 7 == 0:
+            q1 = p1.copy()  # a point
+        a = p1 + s[:, None] * (q1 - p1)
+        b = p2 + s[:, None] * (q2 - p2)
+        brute = np.min(np.linalg.norm(a[:, None, :] - b[None, :, :], axis=-1))
+        d = gk._segment_distance(p1, q1, p2, q2)
+        assert d <= brute + 1e-12
+        assert brute - d < 5e-3 * max(1.0, np.linalg.norm(q1 - p1) + np.linalg.norm(q2 - p2))
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_the_sigma_ratio_is_the_speed_scaled_jacobians(name):
+    robot = load_robot(name)
+    guard = HazardGuard.for_robot(robot)
+    rng = np.random.default_rng(1)
+    for q in rng.uniform(robot.lower, robot.upper, size=(50, robot.n_joints)):
+        sv = np.linalg.svd(robot.jacobian(q)[:3] * robot.speed, compute_uv=False)
+        assert guard.values(q)[0] == pytest.approx(sv[2] / sv[0], abs=1e-12)
+
+
+def _floor_pose(guard):
+    """A pose with a link near the floor and no other hazard in its zone, found by a seeded search."""
+    robot = guard.robot
+    rng = np.random.default_rng(3)
+    for q in rng.uniform(robot.lower, robot.upper, size=(20000, robot.n_joints)):
+        v = guard.values(q)
+        floor = v[1 + len(guard.pairs) :]
+        zone = np.concatenate(([guard.settings.sigma_zone], np.full(v.size - 1, guard.settings.clear_zone)))
+        lim = np.minimum(q - robot.lower, robot.upper - q) < guard.settings.limit_zone * (robot.upper - robot.lower)
+        if np.all(v[1:] > 0.02) and floor.min() < 0.05 and np.sum(v < zone) == 1 and not lim.any():
+            return q
+    raise AssertionError("no pose near the floor found")
+
+
+def test_a_step_that_opens_every_hazard_is_not_touched_and_one_that_approaches_loses_only_that_component():
+    robot = load_robot("comau_smart5_6dof")
+    guard = HazardGuard.for_robot(robot)
+    q = _floor_pose(guard)
+    v0 = guard.values(q)
+    n = robot.n_joints
+    h = 1e-6
+    grads = np.array([(guard.values(q + h * e) - guard.values(q - h * e)) / (2 * h) for e in np.eye(n)]).T
+    zone = np.concatenate(([guard.settings.sigma_zone], np.full(v0.size - 1, guard.settings.clear_zone)))
+    active = np.flatnonzero(v0 < zone)
+    assert active.size == 1
+    rng = np.random.default_rng(0)
+    opened = approached = 0
+    for _ in range(400):
+        dq = rng.normal(size=n) * 2e-3
+        rates = grads[active] @ dq
+        lim = np.minimum(q - robot.lower, robot.upper - q) < guard.settings.limit_zone * (robot.upper - robot.lower)
+        if lim.any():
+            continue
+        out, rep = guard.step(q, dq)
+        if np.all(rates > 1e-9):  # opens every hazard in its zone: untouched, bit for bit
+            assert np.array_equal(out, dq) and not rep.slowed and rep.scale == 1.0
+            opened += 1
+        elif active.size == 1 and rates[0] < -1e-9:  # approaches the one hazard: only its component goes
+            g = grads[active[0]]
+            removed = dq - out
+            u = g / np.linalg.norm(g)
+            assert np.linalg.norm(removed - (removed @ u) * u) <= 1e-6 * np.linalg.norm(removed)
+            assert g @ out >= g @ dq - 1e-12  # slower approach, never a faster one
+            assert rep.slowed and rep.kind == "collision" and "floor" in rep.name
+            approached += 1
+    assert opened > 20 and approached > 20
+
+
+def test_at_the_stop_an_approach_is_taken_out_and_a_retreat_is_kept():
+    robot = load_robot("scara")
+    guard = HazardGuard.for_robot(robot, GuardSettings())
+    q = 0.5 * (robot.lower + robot.upper)
+    q[2] = robot.lower[2]  # the prismatic joint at its lower limit
+    dq = np.zeros(robot.n_joints)
+    dq[2] = -1e-3  # further down: into the limit
+    out, rep = guard.step(q, dq)
+    assert out[2] == pytest.approx(0.0, abs=1e-12)
+    assert rep.kind == "joint limit" and rep.name.endswith("lower limit") and rep.slowed
+    out, rep = guard.step(q, -dq)
+    assert np.array_equal(out, -dq) and not rep.slowed
+
+
+def test_capsules_come_from_the_robot_file_and_a_bad_radius_is_one_line():
+    from app.models.registry import robots_dir
+
+    xml = (robots_dir() / "scara.xml").read_text(encoding="utf-8")
+    first = xml.index("</link>")
+    with_radius = xml[:first] + '<collision radius="0.07"/>' + xml[first:]
+    guard = HazardGuard.for_robot(load_robot_text(with_radius, "scara-capsules.xml"))
+    default = HazardGuard.for_robot(load_robot("scara"))
+    link1 = [k for k, label in enumerate(guard.labels) if label == "link 1"]
+    assert link1 and all(guard.radii[k] == 0.07 for k in link1)
+    assert all(default.radii[k] != 0.07 for k in link1)
+    bad = xml[:first] + '<collision radius="-1"/>' + xml[first:]
+    with pytest.raises(RobotXmlError) as err:
+        load_robot_text(bad, "bad.xml")
+    line = str(err.value)
+    assert "\n" not in line and "bad.xml:" in line and "radius" in line
+
+
+def test_pairs_touching_at_mid_range_are_listed_not_checked():
+    guard = HazardGuard.for_robot(load_robot("ur5"))
+    assert any("floor" in why and "not checked" in why for why in guard.ignored)
+    q = 0.5 * (guard.robot.lower + guard.robot.upper)
+    assert guard.min_clearance(q) > guard.settings.clear_stop  # what is checked starts clear
+
+
+def _drive(ses, stick, seconds, t, dt=0.004):
+    for _ in range(round(seconds / dt)):
+        t += dt
+        ses.feed(InputSample(tuple(stick), (True,), "test"), t)
+        ses.tick(t, dt)
+    return t
+
+
+def test_the_stick_drives_the_panda_down_to_the_floor_it_stops_clear_names_it_and_lets_the_arm_out():
+    ses = Session(robot_name="franka_panda", solver_name="jacobian", mode="velocity")
+    guard = ses.guard
+    t = 0.0
+    for en in (False, True):
+        t += 0.004
+        ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "test"), t)
+        ses.tick(t, 0.004)
+    t = _drive(ses, (-1.0, 0.0, -1.0), 6.0, t)  # back and down, full stick, for 6 s
+    least = guard.min_clearance(ses.actuators.q)
+    assert 0.0 <= least < guard.settings.clear_zone, least  # reached the zone, never through
+    snap = ses.snapshot()
+    assert snap.hazard.kind == "collision" and snap.hazard.name == "tool ↔ floor", snap.hazard
+    assert any(a.key == "hazard_slowed" and a.active and "clearance" in a.text for a in snap.alarms), snap.alarms
+    p0 = ses.robot.position(ses.actuators.q)
+    t = _drive(ses, (0.0, 0.0, 1.0), 0.5, t)  # up again: away from the floor, at the stick's speed
+    rise = ses.robot.position(ses.actuators.q)[2] - p0[2]
+    assert rise > 0.5 * 0.5 * ses.scaling.k_v[2], rise  # half a second at k_v, less the servo's start
+    assert guard.min_clearance(ses.actuators.q) > least
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_random_stick_streams_never_penetrate_never_pass_a_limit_and_never_slow_an_opening_command(name):
+    """The acceptance in miniature (two streams a robot; `bosun bench guard` runs 1 000)."""
+    for seed in (0, 1):
+        run = run_stream(name, seed, rate=250.0)
+        assert run.penetration <= 1e-3, run
+        assert run.limit_excess <= 1e-12, run
+        assert run.min_opening_speed >= 0.9, run
+        assert math.isfinite(run.least_clearance)
+
+
+def test_the_direction_step_is_small_against_every_zone():
+    s = GuardSettings()
+    assert 1e-3 * min(s.clear_zone, s.sigma_zone, s.limit_zone) > DIRECTION_STEP
+
+
+def test_scale_in_box_slows_only_the_outward_part_near_a_face():
+    from app.control.guard import scale_in_box
+
+    limit = np.array([1.0, 1.0, 1.0])
+    step = np.array([0.01, -0.01, 0.01])
+    out, axis, gap = scale_in_box(step, [0.9, 0.9, 0.0], limit)  # x and y in the zone (outer quarter)
+    assert out[0] == pytest.approx(0.01 * 0.1 / 0.25)  # outward: slowed to the share of the zone left
+    assert out[1] == step[1] and out[2] == step[2]  # y inward, z far from its faces: as asked
+    assert axis == 0 and gap == pytest.approx(0.1)
+    out, axis, _ = scale_in_box(step, [1.0, 0.0, 0.0], limit)
+    assert out[0] == 0.0 and axis == 0  # at the face: nothing outward
+    out, _, _ = scale_in_box(-step, [1.0, 0.0, 0.0], limit)
+    np.testing.assert_array_equal(out, -step)  # back in: never slowed
+
+
+def test_the_crane_heads_target_slows_into_its_range_and_comes_back_at_full_speed():
+    """The crane-head scene's workspace (the head's reach alone in tac mode): the stick's outward part slows
+    through the range's outer quarter; the hazard is named with its distance; the way back is at the stick's
+    speed (0.5 m/s)."""
+    from app.engine.tac_session import TCP_SPEED
+    from tests.test_crane_stick import DT, arm, run, session, stick
+
+    ses = session("tac", hs=0.5)
+    t = arm(ses, run(ses, 0.5))
+    limit = ses.target_range["tac"][1]
+    t = run(ses, 5.0, stick(y=1.0), t)
+    off = np.array(ses.sim.p_d_n) - ses.sim.p_d_n0
+    assert 0.0 < limit - off[1] < 0.25 * limit
+    hz = ses.snapshot().hazard
+    assert hz.kind == "workspace" and hz.name == "tac range y" and hz.slowed and "m to its edge" in hz.text
+    before = np.array(ses.sim.p_d_n)
+    t = run(ses, 0.4, stick(y=-1.0), t)
+    back = np.array(ses.sim.p_d_n) - before
+    assert back[1] == pytest.approx(-TCP_SPEED * 0.4, abs=TCP_SPEED * DT + 1e-9)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_every_gradient_in_closed_form_equals_central_differences(name):
+    """The σ ratio's gradient (the derivative of a simple singular value through the chain's second derivatives)
+    and each clearance's (its closest points' rates along the line between them) against central differences of
+    the values, at seeded random poses with every hazard counted (zones wide open)."""
+    robot = load_robot(name)
+    guard = HazardGuard.for_robot(robot)
+    n = robot.n_joints
+    settings = guard._settings.copy()
+    settings[0] = 0.0  # no joint-limit rows
+    settings[2], settings[4] = 2.0, 1e9  # every σ and clearance in its zone
+    m = 1 + len(guard.pairs) + len(guard.plane_caps)
+    rng = np.random.default_rng(11)
+    h = 1e-6
+    checked = 0
+    for q in rng.uniform(robot.lower, robot.upper, size=(40, n)):
+        G = np.zeros((n + m, n))
+        rows = (np.zeros(n + m), np.zeros(n + m), np.zeros(n + m), np.zeros(n + m, np.int64), np.zeros(n + m, np.int64))
+        na = gk._active(robot.kernel_record, guard._chain, guard._model, guard._limits, q, settings, G, rows)
+        assert na == m
+        v0 = guard.values(q)
+        fd = np.array([(guard.values(q + h * e) - guard.values(q - h * e)) / (2 * h) for e in np.eye(n)]).T
+        if v0[0] < 1e-6:
+            continue  # at a singularity the ratio has a kink: no gradient to compare
+        for r in range(na):
+            k = 0 if rows[3][r] == gk.SINGULAR else 1 + rows[4][r] + (len(guard.pairs) if rows[3][r] == gk.PLANE else 0)
+            # a kink where a clearance's closest points jump ends the comparison there; elsewhere they agree
+            if np.linalg.norm(fd[k]) < 1e-9 and np.linalg.norm(G[r]) < 1e-9:
+                continue
+            assert np.allclose(G[r], fd[k], rtol=1e-4, atol=1e-6), (name, r, G[r], fd[k])
+            checked += 1
+    assert checked > 40
