@@ -35,6 +35,7 @@ KERNEL_MODULES = {
     "app.scenes.tac_kernels": 8.0,
     "app.control.antisway_kernels": 20.0,
     "app.control.guard_kernels": 3.0,
+    "app.scenes.teleop_kernels": 2.0,
     "app.control.predict_kernels": 1.0,  # 2026-11-29: 50 s cold beside two busy processes; about 20 s alone
 }
 

@@ -53,7 +53,9 @@ solver's answer at the joints' speed limits, guarded, instead of jumping to it, 
 by its own column (a capsule pair in its zone), so the arm was still moving where the script changes the robot: the
 script gained a second of rest before the change.  Every array up to the first position-mode stick tick (t = 1.9 s:
 the velocity-mode drive, the hold, the mode change) equal bit for bit to the record before (checked array by
-array); the snapshot carries the hazard (``snap.hazard.*``).
+array); the snapshot carries the hazard (``snap.hazard.*``).  The same session ``engine_tac``, ``engine_tac_neutral``
+and ``engine_lab`` recorded again: their snapshots carry the hazard too (``snap.hazard.slowed``: one array added
+each, every other array equal, checked array by array: neither script's stick comes near its range's edge).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

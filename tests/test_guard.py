@@ -246,3 +246,30 @@ def test_every_gradient_in_closed_form_equals_central_differences(name):
             assert np.allclose(G[r], fd[k], rtol=1e-4, atol=1e-6), (name, r, G[r], fd[k])
             checked += 1
     assert checked > 40
+
+
+def test_the_labs_work_point_slows_into_its_range_and_comes_back_at_full_speed():
+    """The Motion-Lab under VVMC: the stick's work-point shift on EM1500 slows through the outer quarter of its
+    ±1 m range (direction-aware), the engine's snapshot names the edge and its distance; back in at full speed."""
+    from app.engine.lab_session import LabSession
+    from app.scenes.lab import R_B2_DECK, WORK_SHIFT_MAX
+    from tests.test_lab_remote_vvmc import _lab_in_waves, _run
+
+    lab = _lab_in_waves(hs=0.5)
+    _run(lab, 0.5)
+    deck_x = R_B2_DECK.T @ np.array([1.0, 0.0, 0.0])  # the operator's deck x in {b2}
+    axis = int(np.argmax(np.abs(deck_x)))
+    _run(lab, 6.0, tool=(0.25, 0.0, 0.0))  # 1.5 m asked: through the outer quarter (from 0.75 m) to the edge
+    shift = float(abs(lab.work_shift[axis]))
+    assert 0.95 < shift < WORK_SHIFT_MAX[axis]  # slowed, never past
+    assert lab.work_shift_limited  # at its range: the flag the engine's alarm reads
+    assert lab.work_hazard is not None and lab.work_hazard[0] == axis and lab.work_hazard[2]
+    before = lab.work_shift.copy()
+    _run(lab, 0.2, tool=(-0.25, 0.0, 0.0))
+    assert abs(lab.work_shift[axis] - before[axis]) == pytest.approx(0.05, abs=1e-9)  # back: 0.25 m/s × 0.2 s
+    ses = LabSession.__new__(LabSession)  # the engine's reading of the lab's hazard, on this lab
+    ses.lab = lab
+    _run(lab, 1.0, tool=(0.25, 0.0, 0.0))
+    hz = ses._hazard()
+    assert hz.kind == "workspace" and hz.name == f"work point range {'xyz'[axis]}" and hz.slowed
+    assert "m to its edge" in hz.text

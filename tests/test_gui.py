@@ -214,6 +214,21 @@ def test_the_teleop_page_names_the_nearest_hazard_and_shows_when_it_slows(qtbot,
     assert tab.hazard.text() == "none near" and tab.hazard.styleSheet() == ""
 
 
+def test_the_crane_and_lab_pages_name_the_range_edge_near():
+    """Issue 32, item 5: the crane-head page's readout (and the lab's, the same way) names the edge of the TCP
+    target's range the stick is slowed for, and its distance."""
+    from types import SimpleNamespace
+
+    from app.net.snapshots import HazardState
+    from ui.marine_tab import CraneHeadTab
+
+    near = HazardState(kind="workspace", name="tac range x", value=0.12, share=0.3, slowed=True,
+                       text="tac range x: 0.12 m to its edge")  # fmt: skip
+    line = CraneHeadTab._hazard_line(SimpleNamespace(hazard=near))
+    assert "tac range x: 0.12 m to its edge — slowing" in line and "#b06000" in line
+    assert CraneHeadTab._hazard_line(SimpleNamespace(hazard=HazardState())) == ""
+
+
 def test_csv_logger_in_the_gui(qtbot, window, tmp_path):
     path = tmp_path / "log.csv"
     window.teleop.log_path.setText(str(path))

@@ -6,6 +6,7 @@ the engine is started when the tab is first opened (or a link is given, e.g. by 
 
 from __future__ import annotations
 
+import html
 import math
 from collections.abc import Callable
 
@@ -640,8 +641,17 @@ class CraneHeadTab(SceneEngineMixin, QWidget):
             f"{stop}{paused}t = {s.t:.1f} s — mode <b>{state.tac_mode}</b>, {flag}<br>"
             f"sea: {sea_text}<br>"
             f"e_c {s.e_c:.3f} m, e_s {s.e_s:.3f} m; last {HISTORY_S:g} s rms ratio {ratio}<br>"
-            f"x_d = {state.x_d:.2f} m"
+            f"x_d = {state.x_d:.2f} m{self._hazard_line(state)}"
         )
+
+    @staticmethod
+    def _hazard_line(state) -> str:
+        """The edge of the TCP target's range the stick's command was last scaled for (issue 32, item 5)."""
+        hz = getattr(state, "hazard", None)
+        if hz is None or not hz.text:
+            return ""
+        color = "#b06000" if hz.slowed else "inherit"
+        return f"<br><span style='color:{color}'>{html.escape(hz.text)}{' — slowing' if hz.slowed else ''}</span>"
 
     def _shown(self) -> None:
         """The tab is on screen again: plots drawn from the newest data and refitted to it."""

@@ -11,7 +11,7 @@ Per stream, at the actual joints (the actuators', not the reference):
   by the hazards' own values, not the guard's gradients — and, of them, the least
   ratio of the tool's step after scaling to its step before (``min_opening_speed``: 1 means never slowed; the
   acceptance asks ≥ 0.9; an opening tick the safe-braking rule braked counts as 0);
-* ``slowed`` ticks, ``braked`` ticks (the safe-braking rule, :meth:`~app.control.guard.HazardGuard.tick`),
+* ``slowed`` ticks, ``braked`` ticks (the safe-braking rule, :func:`~app.scenes.teleop_guard.guard_tick`),
   and the least clearance reached.
 
 Streams: 6 to 12 segments of 0.2–1 s, each stick deflection uniform in [−1, 1]³ with a third of the axes at full
@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from app.engine.session import Session
+from app.scenes import teleop_guard
 from app.teleop.devices import InputSample
 
 DIRECTION_STEP = 1e-7  # [rad | m]: a command's direction is judged by the hazards' change over this step along it
@@ -43,7 +44,7 @@ class GuardRun:
     opening: int  # ticks whose unscaled step opened every hazard in its zone (at least one in its zone)
     min_opening_speed: float  # the least tool step ratio (scaled/unscaled) over those ticks (1: never slowed)
     slowed: int  # ticks the guard scaled the step
-    braked: int = 0  # ticks the safe-braking rule braked the joints (HazardGuard.tick)
+    braked: int = 0  # ticks the safe-braking rule braked the joints (scenes.teleop_guard)
     opening_braked: int = 0  # of the opening ticks, those it braked (counted as speed 0 kept)
 
 
@@ -68,10 +69,10 @@ class _Watch:
         zones = np.concatenate(([self.s.sigma_zone], np.full(v.size - 1, self.s.clear_zone + margin)))
         return lim < self.s.limit_zone * span, v < zones
 
-    def tick(self, q_ref, dq, act, dt):
+    def tick(self, guard, q_ref, dq, act, dt):
         q_ref = np.array(q_ref, dtype=float)
         margin = self.guard.margin(q_ref, act.stopping_point(dt))
-        new, rep, action = self.guard.tick(q_ref, dq, act, dt)
+        new, rep, action = teleop_guard.guard_tick(guard, q_ref, dq, act, dt)
         if rep.slowed:
             self.slowed += 1
         if not np.any(dq):
@@ -116,7 +117,7 @@ def run_stream(robot: str, seed: int, rate: float = 250.0, speed: float | None =
     ses.scaling = replace(ses.scaling, k_v=tuple(factor * float(v) for v in ses.scaling.k_v))
     guard = ses.guard
     watch = _Watch(guard, guard.settings)
-    ses.guard = watch
+    ses.guard_tick = watch.tick
     r = ses.robot
     dt = 1.0 / rate
     t = 0.0

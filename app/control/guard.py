@@ -52,7 +52,7 @@ class GuardSettings:
     clear_zone, clear_stop : capsule clearance [m] (0.10; 0.005)
     kink : the σ ratio under which σ_min has no gradient (|x|-like at a singularity: every direction opens it)
     passes : projection passes over the hazards in their zones
-    hard_stop : the safe-braking rule's clearance [m] (:meth:`HazardGuard.tick`)
+    hard_stop : the safe-braking rule's clearance [m] (:func:`app.scenes.teleop_guard.guard_tick`)
     """
 
     limit_zone: float = 0.05
@@ -120,7 +120,7 @@ class HazardGuard:
         self._settings = self.settings.array()
         self.lever = self._levers()
         self._report = np.zeros(6)
-        self._tick_report = np.zeros(8)
+        self.tick_report = np.zeros(8)  # app.scenes.teleop_guard's
         self._out = np.zeros(1 + len(self.pairs) + len(self.plane_caps))
         self._pts = np.zeros((len(self.caps), 2, 3))
         # the kernels' records (app/control/guard_kernels.py): the chain's constants, the capsule model, the limits
@@ -304,29 +304,6 @@ class HazardGuard:
             self.robot.kernel_record, self._chain, self._model, self._limits, q, dq, settings, self._report
         )
         return out, self.report(self._report)
-
-    def tick(self, q_ref: ArrayLike, dq: ArrayLike, act, dt: float) -> tuple[NDArray[np.float64], GuardReport, int]:
-        """The teleop engine's guard for one tick (:func:`app.control.guard_kernels.guard_tick`): the reference
-        ``q_ref`` moved by ``dq`` scaled along the directions that bring a hazard nearer, with the capsules' margin
-        for how far the servo ``act`` (:class:`~app.sim.actuators.JointActuators`) lags it, then kept only if the
-        joints can still brake clear after it (else a gentler one, else the joints' stopping point).  Returns the
-        new reference, the report and what the safe-braking rule did (0 kept, 1 gentler, 2 braked)."""
-        servo = (act.q, act.qdot, act.qddot, act.lower, act.upper, act.speed, act.accel, act.tau, float(dt),
-                 self.lever)  # fmt: skip
-        new = gk.guard_tick(
-            self.robot.kernel_record, self._chain, self._model, servo, np.ascontiguousarray(q_ref, dtype=float),
-            np.ascontiguousarray(dq, dtype=float), self._settings, self._tick_report,
-        )  # fmt: skip
-        rep = self._tick_report
-        action = int(rep[6])
-        if action == 2 and rep[7] >= 0:  # braked for a clearance: name it
-            k = int(rep[7])
-            P = len(self.pairs)
-            kind, idx = (gk.PAIR, k) if k < P else (gk.PLANE, k - P)
-            value = float(self.values(act.q)[1 + k])
-            return new, GuardReport(kind="collision", name=self.hazard_name(kind, idx), value=value, slowed=True,
-                                    scale=0.0), action  # fmt: skip
-        return new, self.report(rep[:6]), action
 
     def report(self, rep: NDArray[np.float64]) -> GuardReport:
         kind = int(rep[0])

@@ -48,6 +48,7 @@ from app.net.snapshots import (
     ComauJog,
     ComauState,
     CraneLoadState,
+    HazardState,
     LabDescription,
     LabScenePoints,
     LabSnapshot,
@@ -65,7 +66,7 @@ from app.plc.symbols import GENERATOR_FREQUENCY_HZ, GENERATOR_PHASE_DEG
 from app.scenarios.swing import SwingControl
 from app.scenarios.vvmc import LateView
 from app.scenes.crane_load import SNAP_FACTOR, LandingWatch
-from app.scenes.lab import REMOTE_TOOL_SPEED, MotionLab
+from app.scenes.lab import REMOTE_TOOL_SPEED, WORK_SHIFT_MAX, MotionLab
 from app.scenes.lab_load import LabLoad
 from app.teleop.pipeline import InputPipeline
 
@@ -711,7 +712,19 @@ class LabSession(Scene):
             comau_jog=self._jog_state(),
             swing=self._swing_state(),
             load=self._load_state(),
+            hazard=self._hazard(),
         )
+
+    def _hazard(self) -> HazardState:
+        """The work point's range edge the operator's shift was last scaled for (issue 32, item 5), if near."""
+        hz = self.lab.work_hazard
+        if hz is None or self.lab.comau_mode != "motion_comp":
+            return HazardState()
+        axis, gap, slowed = hz
+        name = f"work point range {'xyz'[axis]}"
+        share = gap / (0.25 * float(WORK_SHIFT_MAX[axis]))
+        return HazardState(kind="workspace", name=name, value=gap, share=share, slowed=slowed,
+                           text=f"{name}: {gap:.2f} m to its edge")  # fmt: skip
 
     def _jog_state(self) -> ComauJog:
         j = self._jog

@@ -47,6 +47,7 @@ from app.net.snapshots import (
     TeleopDescription,
     TeleopSnapshot,
 )
+from app.scenes.teleop_guard import guard_tick
 from app.sim.actuators import JointActuators
 from app.teleop.devices import InputSample
 from app.teleop.mapping import (
@@ -129,6 +130,7 @@ class Session(Scene):
         self._armed_prev = False
         self.dt_last = 0.002  # the last tick's length [s] (the guard's stopping point)
         self.braked = 0  # ticks the safe-braking rule braked the joints (:meth:`_guarded`)
+        self.guard_tick = guard_tick  # the guard's tick (a benchmark watches it: app/bench/guard.py)
         self._frame_at_arming: np.ndarray | None = None  # position mode: the frame's rotation when armed
         self._load(self.robot_name, self.solver_name)
 
@@ -373,7 +375,7 @@ class Session(Scene):
 
     def _guarded(self, dq: np.ndarray) -> None:
         """Move the reference by the joint step ``dq``, scaled along the directions that bring a hazard nearer, and
-        supervised (issue 32, item 5: :meth:`app.control.guard.HazardGuard.tick`, one compiled call).
+        supervised (issue 32, item 5: :func:`app.scenes.teleop_guard.guard_tick`, one compiled call).
 
         The scaling moves the capsules' stop out by how far the arm can be from its reference (the servo lags it
         and each joint brakes on its own): without that the reference kept its clearance while the lagging,
@@ -383,7 +385,7 @@ class Session(Scene):
         would leave, if less): else a gentler reference the servo follows in proportion, else the joints brake now.
         By induction the arm can always be stopped clear (at twice the default stick speed the scaling alone let
         the Panda's tool 31 mm into the floor: review of the first runs of ``bosun bench guard``)."""
-        self.q_ref, self.hazard, action = self.guard.tick(self.q_ref, dq, self.actuators, self.dt_last)
+        self.q_ref, self.hazard, action = self.guard_tick(self.guard, self.q_ref, dq, self.actuators, self.dt_last)
         if action == 2:
             self.braked += 1
 

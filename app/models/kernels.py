@@ -69,6 +69,7 @@ KERNEL_FILES = (
     "models/pendulum_kernels.py",
     "control/antisway_kernels.py",
     "control/guard_kernels.py",
+    "scenes/teleop_kernels.py",
 )
 
 

@@ -522,6 +522,7 @@ class LabSnapshot(Snapshot):
     comau_jog: ComauJog | None = None  # the Comau's joint jog (item 5)
     swing: SwingState | None = None  # the load-swing estimator and anti-swing (item 4; None: not available)
     load: CraneLoadState | None = None  # the load on its wire and its landing on EM1500 (issue 30; hook in {g})
+    hazard: HazardState = field(default_factory=HazardState)  # the work point's range edge near (issue 32)
 
 
 @dataclass(kw_only=True, slots=True)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from app.control.guard import scale_in_box
 from app.control.lab import BRAKE, COMAU_LAW, WINCH_LAW
 from app.errors import BosunError
 from app.models import lab_kernels as model_kernels
@@ -140,6 +141,8 @@ class MotionLab:
         self.joints.reset(layout.park_q)
         self.comau_mode = "remote"
         self.tool_velocity_cmd = np.zeros(3)  # REMOTE: in {r} [m/s]; MOTION_COMP: the work point's in {b2}
+        self.work_hazard: tuple | None = None  # the work point's range edge near (issue 32, item 5)
+        self._range_held = False
         # the operator's shift of the work point in {b2} under VVMC (issue 30, item 4) and its rate
         self.work_shift, self.work_shift_rate = np.zeros(3), np.zeros(3)
         self.work_shift_limited = False  # the last shift was stopped by WORK_SHIFT_MAX or the Comau's reach
@@ -483,15 +486,27 @@ class MotionLab:
                 self.work_shift_rate = np.zeros(3)  # the shift holds (the common case costs no array work)
             return
         rate = R_B2_DECK @ np.asarray(cmd, dtype=float)
+        rate = self._scaled_in_range(rate, self.work_shift, dt)
         shift = self.work_shift
         if np.any(rate != 0.0):
             want = self.work_shift + rate * dt
             shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
-            self.work_shift_limited = bool(np.any(shift != want))
+            self.work_shift_limited = bool(np.any(shift != want)) or self._range_held
             if not self._reachable(shift):  # the last reachable point holds
                 shift, self.work_shift_limited = self.work_shift, True
         self.work_shift_rate = (shift - self.work_shift) / dt
         self.work_shift = shift
+
+    def _scaled_in_range(self, rate: NDArray[np.float64], shift: NDArray[np.float64], dt: float) -> NDArray:
+        """The operator's rate of the work point's shift [m/s], its outward part slowed through the outer quarter
+        of ±WORK_SHIFT_MAX (issue 32, item 5: direction-aware, :func:`app.control.guard.scale_in_box`; inward and
+        along an edge never); :attr:`work_hazard` says which edge is near: (axis, distance [m], slowed) or None."""
+        step, axis, gap = scale_in_box(rate * dt, shift, WORK_SHIFT_MAX)
+        slowed = bool(np.any(np.abs(step) < np.abs(rate * dt) - 1e-15))
+        self.work_hazard = (axis, gap, slowed) if axis >= 0 else None
+        # at its range (work_shift_limited): an axis asked outward keeps under a fifth of its step (5 cm from it)
+        self._range_held = bool(np.any(np.abs(step) < 0.2 * np.abs(rate * dt)))
+        return step / dt
 
     def _seen_state(self, k: int) -> tuple[NDArray, NDArray, NDArray]:
         """Platform k's η, η̇, η̈ as the controllers see it (the sensor's, or true)."""
@@ -519,10 +534,11 @@ class MotionLab:
         c_dot = np.zeros(3)
         if not self.frozen and (cmd[0] or cmd[1] or cmd[2]):
             c_dot = R_B2_DECK @ np.asarray(cmd, dtype=float)  # {n2} has {b2}'s axes at neutral (z down)
+            c_dot = self._scaled_in_range(c_dot, neutral + self.level_offset - w0, dt)
             want = neutral + self.level_offset + c_dot * dt - w0
             shift = np.clip(want, -WORK_SHIFT_MAX, WORK_SHIFT_MAX)
-            self.work_shift_limited = bool(np.any(shift != want))
-            if self.work_shift_limited or not self._reachable_near(shift):
+            self.work_shift_limited = bool(np.any(shift != want)) or self._range_held
+            if bool(np.any(shift != want)) or not self._reachable_near(shift):
                 c_dot, self.work_shift_limited = np.zeros(3), True
             else:
                 self.level_offset = self.level_offset + c_dot * dt

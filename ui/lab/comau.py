@@ -3,6 +3,7 @@ buttons, the winch's spring-return speed slider, the REMOTE stick, VVMC on/off a
 
 from __future__ import annotations
 
+import html
 import math
 from collections.abc import Callable
 
@@ -404,8 +405,14 @@ class ComauWinchPage(QWidget):
             moving = max(map(abs, c.qd), default=0.0) > MOVING or abs(w.speed) > MOVING
             what = "braking" if moving else "stopped"
             stop = f"<b style='color:{STOP_COLOR}'>E-STOP latched: Comau and winch {what}</b><br>"
+        hz = getattr(state, "hazard", None)  # the work point's range edge near (issue 32, item 5)
+        near = ""
+        if hz is not None and hz.text:
+            color = "#b06000" if hz.slowed else "inherit"
+            near = f"<br><span style='color:{color}'>{html.escape(hz.text)}{' — slowing' if hz.slowed else ''}</span>"
         self.readout.setText(
             f"{stop}tool − work point {e:.1f} mm &nbsp; swing {math.degrees(pend.swing):.2f}° &nbsp; t {state.t:.1f} s"
+            f"{near}"
         )
 
     def draw(self, ring) -> None:
