@@ -273,3 +273,35 @@ def test_the_labs_work_point_slows_into_its_range_and_comes_back_at_full_speed()
     hz = ses._hazard()
     assert hz.kind == "workspace" and hz.name == f"work point range {'xyz'[axis]}" and hz.slowed
     assert "m to its edge" in hz.text
+
+
+def test_random_sticks_on_the_crane_head_never_leave_its_range_and_never_slow_an_inward_command():
+    """The crane-head scene under seeded random sticks (tac mode, the head's range alone; axes at full deflection
+    or centred): the TCP target's offset
+    never passes its range, and each tick's step keeps every inward (or along-edge) component of the stick's
+    command whole; outward ones only shrink."""
+    from app.engine.tac_session import STICK_TO_NED, TCP_SPEED
+    from tests.test_crane_stick import DT, arm, run, session, stick
+
+    ses = session("tac", hs=0.5)
+    t = arm(ses, run(ses, 0.5))
+    limit = ses.target_range["tac"]
+    rng = np.random.default_rng(32)
+    inward = outward = 0
+    for _ in range(12):
+        s = rng.integers(-1, 2, 3).astype(float)  # full deflections or centred: the profile's shaping keeps them
+        for _ in range(int(rng.uniform(0.5, 3.0) / DT)):
+            off0 = np.array(ses.sim.p_d_n) - ses.sim.p_d_n0
+            t = run(ses, DT, stick(*s), t)
+            off1 = np.array(ses.sim.p_d_n) - ses.sim.p_d_n0
+            want = STICK_TO_NED @ (TCP_SPEED * s) * DT
+            got = off1 - off0
+            assert np.all(np.abs(off1) <= limit + 1e-12)
+            for i in range(3):
+                if want[i] * off0[i] <= 0.0:  # inward (or from the centre)
+                    assert got[i] == pytest.approx(want[i], abs=1e-12)
+                    inward += 1
+                else:
+                    assert 0.0 <= got[i] / want[i] <= 1.0 + 1e-12
+                    outward += 1
+    assert inward > 100 and outward > 100

@@ -8,9 +8,10 @@ Per stream, at the actual joints (the actuators', not the reference):
 * ``limit_excess``: the farthest any joint went past a limit [rad or m];
 * ``opening`` ticks: a step whose direction opens (or keeps) every hazard in its zone — the σ ratio, every
   clearance and every joint's distance to its limit no smaller 10⁻⁷ rad along it than where it starts, measured
-  by the hazards' own values, not the guard's gradients — and, of them, the least
-  ratio of the tool's step after scaling to its step before (``min_opening_speed``: 1 means never slowed; the
-  acceptance asks ≥ 0.9; an opening tick the safe-braking rule braked counts as 0);
+  by the hazards' own values, not the guard's gradients — and, of them, the least ratio of the arm's motion in the
+  tick (the servo's step from where the joints are) with the guarded reference to its motion with the reference as
+  asked (``min_opening_speed``: 1 means never slowed; the acceptance asks ≥ 0.9; an opening tick the safe-braking
+  rule braked counts as 0);
 * ``slowed`` ticks, ``braked`` ticks (the safe-braking rule, :func:`~app.scenes.teleop_guard.guard_tick`),
   and the least clearance reached.
 
@@ -28,6 +29,7 @@ import numpy as np
 
 from app.engine.session import Session
 from app.scenes import teleop_guard
+from app.sim.actuators import JOINT_ACTUATORS
 from app.teleop.devices import InputSample
 
 DIRECTION_STEP = 1e-7  # [rad | m]: a command's direction is judged by the hazards' change over this step along it
@@ -46,6 +48,7 @@ class GuardRun:
     slowed: int  # ticks the guard scaled the step
     braked: int = 0  # ticks the safe-braking rule braked the joints (scenes.teleop_guard)
     opening_braked: int = 0  # of the opening ticks, those it braked (counted as speed 0 kept)
+    opening_slow: int = 0  # of the opening ticks, those kept under 90 % of their speed (braked ones included)
 
 
 class _Watch:
@@ -58,6 +61,7 @@ class _Watch:
         self.min_opening_speed = 1.0
         self.slowed = 0
         self.opening_braked = 0
+        self.opening_slow = 0  # opening ticks kept under 90 % of their speed
 
     def __getattr__(self, name):
         return getattr(self.guard, name)
@@ -87,14 +91,25 @@ class _Watch:
             opens = np.all(lim1[lim_zone] >= lim0[lim_zone]) and np.all(v1[geo_zone] >= v0[geo_zone])
             if opens:
                 self.opening += 1
-                p0 = r.position(q_ref)
-                want = float(np.linalg.norm(r.position(np.clip(q_ref + dq, r.lower, r.upper)) - p0))
-                got = float(np.linalg.norm(r.position(new) - p0))
+                # the arm's motion this tick (the servo's step from where it is) with the command as asked and as
+                # guarded: the speed it moves at, not the reference's (a reference the servo cannot follow is no
+                # faster; the safe-braking rule's gentler reference is the one it follows in proportion)
+                x = (act.q, act.qdot, act.qddot)
+                full = np.clip(q_ref + dq, r.lower, r.upper)
+                (q_full, _, _), _ = JOINT_ACTUATORS.step(x, (full,), act.params, dt, act.use_kernels)
+                (q_new, _, _), _ = JOINT_ACTUATORS.step(
+                    x, (np.ascontiguousarray(new),), act.params, dt, act.use_kernels
+                )
+                p0 = r.position(act.q)
+                want = float(np.linalg.norm(r.position(q_full) - p0))
+                got = float(np.linalg.norm(r.position(q_new) - p0))
                 if action == 2:
                     self.opening_braked += 1
+                    self.opening_slow += 1
                     self.min_opening_speed = 0.0
                 elif want > 1e-12:
                     self.min_opening_speed = min(self.min_opening_speed, got / want)
+                    self.opening_slow += got < 0.9 * want
         return new, rep, action
 
 
@@ -147,7 +162,7 @@ def run_stream(robot: str, seed: int, rate: float = 250.0, speed: float | None =
         seed=seed, ticks=ticks, penetration=max(0.0, -least) if math.isfinite(least) else 0.0,
         least_clearance=least, limit_excess=max(excess, 0.0), opening=watch.opening,
         min_opening_speed=watch.min_opening_speed, slowed=watch.slowed, braked=ses.braked,
-        opening_braked=watch.opening_braked,
+        opening_braked=watch.opening_braked, opening_slow=watch.opening_slow,
     )  # fmt: skip
 
 
@@ -169,6 +184,7 @@ def summarise(robot: str, runs: list[GuardRun]) -> dict:
         "slowed_ticks": sum(r.slowed for r in runs),
         "braked_ticks": sum(r.braked for r in runs),
         "opening_braked_ticks": sum(r.opening_braked for r in runs),
+        "opening_slow_ticks": sum(r.opening_slow for r in runs),
         "streams_slowed": sum(r.slowed > 0 for r in runs),
     }
 

@@ -61,7 +61,7 @@ class GuardSettings:
     sigma_stop: float = 0.01
     clear_zone: float = 0.10
     clear_stop: float = 0.005
-    kink: float = 1e-9
+    kink: float = 1e-6
     passes: int = 4
     hard_stop: float = 0.0025  # [m]: the safe-braking rule's clearance (half the scaling's stop: its losses pass)
 
@@ -243,19 +243,18 @@ class HazardGuard:
         )  # fmt: skip
 
     def _levers(self) -> NDArray[np.float64]:
-        """Per joint, a bound on how far any point of the arm moves per unit of that joint [m/rad, or 1 for a
-        prismatic joint]: the reach of the chain after it (Σ |a| + |d| of the later links, the tool's offset and
-        the largest capsule radius)."""
+        """Per joint j, a bound on how fast any point of the arm moves with it [m/rad or m/m]: from
+        ∂p/∂q_j = Σ_l (M_θ[l, j] z_l × (p − o_l) + M_d[l, j] z_l), |∂p/∂q_j| ≤ Σ_l |M_θ[l, j]| R_l + |M_d[l, j]|, with
+        R_l the reach of the chain after link l: Σ |a| + the largest |d| of the later links (a prismatic link's at
+        the end of its stroke: the knuckle-boom crane's 4 m telescope, left out at first, let the safe-braking rule
+        skip a check it needed, review), the tool's offset and the largest capsule radius."""
         r = self.robot
         tool = float(np.linalg.norm(np.asarray(r.T_flange_tool)[:3, 3]))
-        out = np.zeros(r.n_joints)
-        for j, joint in enumerate(r.joints):
-            if joint.kind == "prismatic":
-                out[j] = 1.0
-                continue
-            after = sum(abs(link.a) + abs(link.d) for link in r.links[joint.link :])
-            out[j] = after + tool + float(self.radii.max(initial=0.0))
-        return out
+        span = np.maximum(np.abs(r.lower), np.abs(r.upper))
+        d_max = np.abs(r._d0) + np.abs(r._M_d) @ span  # each link's largest |d| over the joints' ranges
+        length = np.abs(r._a) + d_max
+        R = np.array([float(length[l:].sum()) for l in range(len(length))]) + tool + float(self.radii.max(initial=0.0))
+        return np.abs(r._M_theta).T @ R + np.abs(r._M_d).sum(axis=0)
 
     def margin(self, q_ref: ArrayLike, q_arm: ArrayLike) -> float:
         """How far any point of the arm at ``q_arm`` can be from where it is at ``q_ref`` [m]: Σ_j lever_j |Δq_j|

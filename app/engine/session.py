@@ -131,6 +131,7 @@ class Session(Scene):
         self.dt_last = 0.002  # the last tick's length [s] (the guard's stopping point)
         self.braked = 0  # ticks the safe-braking rule braked the joints (:meth:`_guarded`)
         self.guard_tick = guard_tick  # the guard's tick (a benchmark watches it: app/bench/guard.py)
+        self._brake_ref: np.ndarray | None = None  # the safe-braking rule's reference while it brakes
         self._frame_at_arming: np.ndarray | None = None  # position mode: the frame's rotation when armed
         self._load(self.robot_name, self.solver_name)
 
@@ -372,6 +373,7 @@ class Session(Scene):
         self.q_ref = self.actuators.stopping_point(dt)
         self.q_goal = self.q_ref.copy()
         self.hazard = GuardReport()
+        self._brake_ref = None
 
     def _guarded(self, dq: np.ndarray) -> None:
         """Move the reference by the joint step ``dq``, scaled along the directions that bring a hazard nearer, and
@@ -385,9 +387,15 @@ class Session(Scene):
         would leave, if less): else a gentler reference the servo follows in proportion, else the joints brake now.
         By induction the arm can always be stopped clear (at twice the default stick speed the scaling alone let
         the Panda's tool 31 mm into the floor: review of the first runs of ``bosun bench guard``)."""
-        self.q_ref, self.hazard, action = self.guard_tick(self.guard, self.q_ref, dq, self.actuators, self.dt_last)
-        if action == 2:
+        q_ref, self.hazard, action = self.guard_tick(self.guard, self.q_ref, dq, self.actuators, self.dt_last)
+        if action == 2:  # brake: to the stopping point of the first braking tick, held until the rule lets go
             self.braked += 1
+            if self._brake_ref is None:
+                self._brake_ref = q_ref
+            q_ref = self._brake_ref
+        else:
+            self._brake_ref = None
+        self.q_ref = q_ref
 
     def _walk_to_goal(self, dt: float) -> None:
         """Position mode: the reference walks to the solver's answer at the joints' speed limits (the step scaled

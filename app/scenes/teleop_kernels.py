@@ -74,11 +74,15 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     joint's lever [m/rad] (:meth:`app.control.guard.HazardGuard.margin`).  The scaling's margin is how far the arm
     can be from the reference: Σ lever |q_ref − q_stop| (q_stop the joints' stopping point).  The supervision
     (safe braking): the new reference is kept if, after one servo step towards it, the joints can still brake to
-    rest with every capsule clearance at least ``hard`` (settings[9]) — or, where braking now would leave less, at
-    least that; else the reference nearer the stopping point that the servo follows in proportion (each joint's
-    change of speed within its acceleration limit) if it passes the same test; else the stopping point (the joints
-    brake now).  report (8,): :func:`guard_step`'s six, then what the supervision did (0 kept, 1 gentler,
-    2 braked) and the clearance it acted for (its index among the pairs then the floor's, −1 none)."""
+    rest with every capsule clearance at least ``hard`` (settings[9]) — or, where the braking the joints can do now
+    leaves less, at least that; else the reference nearer the stopping point that the servo follows in proportion
+    (each joint's change of speed within its acceleration limit) if it passes the same test; else the stopping
+    point (the joints brake now; the caller holds that reference while they brake: recomputed each tick it would
+    move a tick's travel ahead of a servo that brakes towards it).  The check is skipped when every clearance now
+    exceeds the zone by twice the joints' reach this tick and in braking (the levers' Lipschitz bound).
+
+    report (8,): :func:`guard_step`'s six, then what the supervision did (0 kept, 1 gentler, 2 braked) and the
+    clearance it acted for (its index among the pairs then the floor's, −1 none)."""
     q, qdot, qddot, lower, upper, speed, accel, tau, dt, lever = servo
     n = q.shape[0]
     q_stop = _stopping_point(q, qdot, accel, lower, upper, dt)
@@ -120,8 +124,7 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     if ok:
         return new
     floor = np.empty(m)
-    (q1, v1, _), _ = actuator_block(x, (q_stop,), p, dt)
-    _braking_least(robot, model, q1, v1, accel, pts, buf, floor)
+    _braking_least(robot, model, q, qdot, accel, pts, buf, floor)  # the braking the joints can do now
     worst, worst_c = 0.0, -1
     for c in range(m):
         floor[c] = min(hard, floor[c])
