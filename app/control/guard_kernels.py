@@ -464,9 +464,10 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     return out
 
 
-def warm_up_steps() -> list:
-    """Zero-argument calls that compile (or load) this file's kernels with the argument types
-    :class:`app.control.guard.HazardGuard` passes (for :func:`app.warmup.warm_up`): a three-link chain."""
+def warm_up_records() -> tuple:
+    """The records of a three-link chain, as :class:`app.control.guard.HazardGuard` builds them (robot, chain,
+    capsule model, joint limits, settings, q, dq): the warm-up calls' arguments here and in
+    :mod:`app.scenes.teleop_kernels`."""
     L = n = 3
     dh = np.stack([np.zeros(L), np.zeros(L), np.ones(L), np.ones(L), np.zeros(L)])
     robot = (dh, np.stack([np.eye(L, n), np.zeros((L, n))]), np.stack([np.eye(4), np.eye(4)]))
@@ -476,7 +477,13 @@ def warm_up_steps() -> list:
              np.array([1], dtype=np.int64))  # fmt: skip
     limits = (-np.ones(n), np.ones(n))
     settings = np.array([0.05, 0.0, 0.04, 0.01, 0.1, 0.005, 1e-6, 4.0, 0.0, 0.0025])
-    q, dq = np.full(n, 0.3), np.full(n, 1e-3)
+    return robot, chain, model, limits, settings, np.full(n, 0.3), np.full(n, 1e-3)
+
+
+def warm_up_steps() -> list:
+    """Zero-argument calls that compile (or load) this file's kernels with the argument types
+    :class:`app.control.guard.HazardGuard` passes (for :func:`app.warmup.warm_up`): a three-link chain."""
+    robot, chain, model, limits, settings, q, dq = warm_up_records()
     return [
         lambda: hazard_values(robot, chain, model, q, np.zeros((2, 2, 3)), np.zeros(3)),
         lambda: guard_step(robot, chain, model, limits, q, dq, settings, np.zeros(6)),

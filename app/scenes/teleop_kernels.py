@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from app.control.guard_kernels import _clearances, guard_step
+from app.control.guard_kernels import _clearances, guard_step, warm_up_records
 from app.models.kernels import ENABLED, _jit
 from app.sim.kernels import actuator_block
 
@@ -159,14 +159,7 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) :func:`guard_tick` with the argument types
     :func:`app.scenes.teleop_guard.guard_tick` passes (for :func:`app.warmup.warm_up`): a three-link chain."""
-    L = n = 3
-    dh = np.stack([np.zeros(L), np.zeros(L), np.ones(L), np.ones(L), np.zeros(L)])
-    robot = (dh, np.stack([np.eye(L, n), np.zeros((L, n))]), np.stack([np.eye(4), np.eye(4)]))
-    chain = (np.eye(L, n), np.zeros((L, n)), np.ones(n))
-    caps = np.array([[0, 1], [2, 1]], dtype=np.int64)
-    model = (caps, np.full(2, 0.1), np.array([[0, 1]], dtype=np.int64), np.array([0.0, 0.0, 1.0, -1.0]),
-             np.array([1], dtype=np.int64))  # fmt: skip
-    settings = np.array([0.05, 0.0, 0.04, 0.01, 0.1, 0.005, 1e-9, 4.0, 0.0, 0.0025])
-    q, dq, ones = np.full(n, 0.3), np.full(n, 1e-3), np.ones(n)
+    robot, chain, model, _, settings, q, dq = warm_up_records()
+    n, ones = q.size, np.ones(q.size)
     servo = (q, np.zeros(n), np.zeros(n), -ones, ones, ones, np.full(n, 10.0), 0.05, 0.002, ones)
     return [lambda: guard_tick(robot, chain, model, servo, q, dq, settings, np.zeros(8))]
