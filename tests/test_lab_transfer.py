@@ -135,3 +135,70 @@ def test_the_command_runs_the_lab_transfer_and_refuses_the_crane_s_options(tmp_p
     bad = subprocess.run([*cmd, "--target", "vessel"], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "the lab lands on EM1500's deck" in bad.stderr
     assert "Traceback" not in bad.stderr
+
+
+# ------------------------------------------------------------------ the transfer compiled (issue 30, speed)
+def _count_paths(monkeypatch):
+    """Count the steps taken through the objects and the compiled steps."""
+    from app.scenarios import lab_transfer
+
+    counts = {"objects": 0, "compiled": 0, "calls": 0}
+    step, block = lab_transfer._LabRun.step, lab_transfer._LabRun.block
+
+    def counted_step(self):
+        counts["objects"] += 1
+        return step(self)
+
+    def counted_block(self, n):
+        counts["calls"] += 1
+        taken = block(self, n)
+        counts["compiled"] += taken
+        return taken
+
+    monkeypatch.setattr(lab_transfer._LabRun, "step", counted_step)
+    monkeypatch.setattr(lab_transfer._LabRun, "block", counted_block)
+    return counts
+
+
+@pytest.mark.parametrize("mode", ["off", "compensated", "antisway"])
+def test_the_compiled_transfer_takes_the_steps_the_objects_take(mode, monkeypatch):
+    """``simulate_lab`` compiled (app/scenes/lab_transfer_kernels.py, blocks of steps) against every step through
+    the objects (the reference): the same phases, the same landing and the same rows to rounding (the glue's
+    3-vector products are summed in another order than NumPy's, so positions agree to 1e-12 m, not bit for bit; the
+    swing column is an arccos near zero, which turns 1e-16 into 1e-8°).  A short transfer (0.3 m across, 2 s
+    waits) with the reach checks, the touch, the set-down and, in anti-swing, the law's noise drawn ahead."""
+    from app.models.kernels import ENABLED
+    from app.scenarios.lab_transfer import simulate_lab
+
+    if not ENABLED:
+        pytest.skip("numba is off (BOSUN_JIT=0): nothing compiled to compare")
+    sc = TransferScenario.for_scene("lab", mode=mode, move=0.3, wait=2.0)
+    ref = simulate_lab(sc, compiled=False)
+    counts = _count_paths(monkeypatch)
+    fast = simulate_lab(sc, compiled=True)
+    assert counts["compiled"] > 0.9 * len(fast.phases)  # the steps were compiled, not the objects'
+    assert fast.phases == ref.phases
+    assert fast.rows.shape == ref.rows.shape
+    a, b = fast.rows, ref.rows
+    same_inf = np.isinf(b) & (a == b)  # the gap is infinite off the deck, in both
+    a, b = np.where(same_inf, 0.0, a), np.where(same_inf, 0.0, b)
+    cols = [i for i, name in enumerate(fast.columns) if name != "swing_deg"]
+    assert np.abs(a[:, cols] - b[:, cols]).max() < 1e-9
+    assert np.abs(a[:, fast.columns.index("swing_deg")] - b[:, fast.columns.index("swing_deg")]).max() < 1e-5
+    for key in FIELDS + ("peak_swing_deg", "duration_s"):
+        assert fast.summary[key] == pytest.approx(ref.summary[key], rel=1e-9, abs=1e-12), key
+    assert fast.summary["alarms"] == pytest.approx(ref.summary["alarms"])
+
+
+def test_the_noise_drawn_ahead_is_the_generator_s_own():
+    """The anti-swing's sensor noise is drawn ahead for the compiled steps: served one by one it is what the
+    generator's own ``normal`` calls give, bit for bit, in the same order."""
+    from app.scenarios.lab_transfer import _NormalStream
+
+    a, b = np.random.default_rng([1, 304]), _NormalStream(np.random.default_rng([1, 304]))
+    for k in range(3000):
+        n, sigma = (3, 0.05) if k % 2 == 0 else (2, 0.0087)
+        ahead = b.ahead(5 * (k % 7)).copy()
+        got = b.normal(0.0, sigma, n)
+        assert np.array_equal(got, a.normal(0.0, sigma, n))
+        assert np.array_equal(ahead[:n] * sigma, got) or k % 7 == 0

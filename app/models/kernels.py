@@ -70,6 +70,7 @@ KERNEL_FILES = (
     "control/antisway_kernels.py",
     "control/guard_kernels.py",
     "scenes/teleop_kernels.py",
+    "scenes/lab_transfer_kernels.py",
 )
 
 

@@ -642,7 +642,7 @@ class MotionLab:
         mode, track = self._records(dt)
         has = self.payload_target_b2 is not None
         target = self.payload_target_b2 if has else self._target
-        e_b2, p_w_g, p_p_g, legs1, legs2 = self._out
+        e_b2, p_w_g = self._out[:2]
         true = (p1.filter.x, p1.filter.v, p1.filter.a, p2.filter.x, p2.filter.v, p2.filter.a)
         seen = (False, *true) if self.measured is None else (True, *self.measured[0], *self.measured[1])
         v_cmd = np.ascontiguousarray(self.tool_velocity_cmd, dtype=float)
@@ -662,6 +662,13 @@ class MotionLab:
             R2 = self._rates_buf[1, 0]
             T_g_n2 = self._T_world_n[1]
             p_w_g[:] = p_w_g - T_g_n2[:3, :3] @ (R2 @ d)
+        return self._compiled_sample(h_err)
+
+    def _compiled_sample(self, h_err: float) -> LabSample:
+        """The sample after a compiled step (its records hold the step's outputs; ``h_err`` the payload height
+        error it returned)."""
+        (p1, p2), f, wf, pd = self.platforms, self.joints, self.winch.filter, self.pendulum
+        e_b2, p_w_g, p_p_g, legs1, legs2 = self._out
         return LabSample(
             t=self.t,
             eta1=p1.filter.x.copy(),
