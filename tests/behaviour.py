@@ -56,6 +56,12 @@ the velocity-mode drive, the hold, the mode change) equal bit for bit to the rec
 array); the snapshot carries the hazard (``snap.hazard.*``).  The same session ``engine_tac``, ``engine_tac_neutral``
 and ``engine_lab`` recorded again: their snapshots carry the hazard too (``snap.hazard.slowed``: one array added
 each, every other array equal, checked array by array: neither script's stick comes near its range's edge).
+Session 27: ``engine_teleop`` recorded again.  In position
+mode the reference's walk to the solver's answer now moves each joint at its own speed limit (clipped per joint)
+instead of scaling the whole step to the slowest-to-arrive joint: with a joint blocked by the guard, the others
+crept to their goals ever slower and the arm never came to rest (17 of 520 resting position-mode sticks in ``bosun
+bench hold``, safety H114).  Every array up to the first position-mode stick tick (t = 1.9 s) equal bit for bit
+(checked array by array); from t = 1.95 s the position mode's differ.
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

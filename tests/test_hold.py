@@ -125,3 +125,18 @@ def test_bench_hold_takes_the_solvers_to_run(capsys):
     assert main([*args, "--solvers", "newton"]) == 2
     err = capsys.readouterr().err
     assert "unknown solver 'newton'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_resting_position_stick_behind_a_hazard_settles():
+    """Safety H114 (found by ``bosun bench hold`` after issue 32's guard): the stick resting at a point whose answer
+    lies behind the floor (the Comau's forearm on its base plate).  The guard stops the joints that close on the
+    floor; the reference's walk used to scale its whole step to the joint with the farthest to go — the blocked one
+    — so the free joints crept to their goals ever slower and the arm never came to rest (17 of 520 position-mode
+    sequences; this one still moved after 30 s).  Each joint now walks at its own speed limit: the free ones
+    arrive, the blocked one stays clear, the arm rests."""
+    rng = np.random.default_rng([0, 9])  # bench hold's sequence 9 at seed 0
+    ses = Session(robot_name="comau_smart5_3dof", solver_name="jacobian", mode="position", seed=9)
+    run = run_sequence(ses, stick_sequence(rng, "position"), seed=9, rate=250.0)
+    assert ses.hazard.kind == "collision" and "floor" in ses.hazard.name  # the answer is behind the floor
+    assert np.isfinite(run.settle_s) and run.settle_s < 5.0, run
+    assert run.worst < HOLD_TOLERANCE, run

@@ -193,26 +193,9 @@ def bench_guard(
     robots: list[str], streams: int, rate: float = 250.0, workers: int = 1, progress=None, speed: float = 1.0
 ) -> list[dict]:
     """``streams`` seeded streams per robot on ``workers`` processes; one row a robot (:func:`summarise`)."""
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
+    from app.bench.pool import gather
 
     chunk = 10
     tasks = [(r, k, min(chunk, streams - k), rate, speed) for r in robots for k in range(0, streams, chunk)]
-    runs: dict[str, list[GuardRun]] = {r: [] for r in robots}
-    total, done = len(robots) * streams, 0
-
-    def take(robot, part):
-        nonlocal done
-        runs[robot] += part
-        done += len(part)
-        if progress is not None:
-            progress(done, total)
-
-    if workers <= 1:
-        for task in tasks:
-            take(*_chunk(task))
-    else:
-        with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
-            for robot, part in pool.map(_chunk, tasks):
-                take(robot, part)
+    runs = gather(_chunk, tasks, robots, len(robots) * streams, workers, progress)
     return [summarise(r, runs[r]) for r in robots]

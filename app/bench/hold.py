@@ -206,9 +206,7 @@ def bench_hold(
     """Every robot × solver (those of ``solvers`` that apply; default all) × mode, ``sequences`` seeded sequences
     each, on ``workers`` processes; one row a case (:func:`summarise`).  ``progress(done, total)`` counts
     sequences."""
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
-
+    from app.bench.pool import gather
     from app.ik import solvers_for
     from app.models.registry import load_robot
 
@@ -216,21 +214,5 @@ def bench_hold(
         (r, s, m) for r in robots for s in solvers_for(load_robot(r)) if solvers is None or s in solvers for m in modes
     ]
     tasks = [(c, k, min(CHUNK, sequences - k), seed, rate) for c in cases for k in range(0, sequences, CHUNK)]
-    runs: dict[tuple, list[HoldRun]] = {c: [] for c in cases}
-    total, done = len(cases) * sequences, 0
-
-    def take(case, chunk):
-        nonlocal done
-        runs[case] += chunk
-        done += len(chunk)
-        if progress is not None:
-            progress(done, total)
-
-    if workers <= 1:
-        for t in tasks:
-            take(*_chunk(t))
-    else:
-        with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
-            for case, chunk in pool.map(_chunk, tasks):
-                take(case, chunk)
+    runs = gather(_chunk, tasks, cases, len(cases) * sequences, workers, progress)
     return [summarise(c, runs[c]) for c in cases]

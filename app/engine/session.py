@@ -398,14 +398,12 @@ class Session(Scene):
         self.q_ref = q_ref
 
     def _walk_to_goal(self, dt: float) -> None:
-        """Position mode: the reference walks to the solver's answer at the joints' speed limits (the step scaled
-        as a whole, its direction kept), guarded: a jump through a hazard is not taken at once."""
-        dq = self.q_goal - self.q_ref
+        """Position mode: the reference walks to the solver's answer, each joint at its own speed limit, guarded: a
+        jump through a hazard is not taken at once.  Each joint's step is clipped on its own (safety H114): scaled
+        as a whole to the joint with the farthest to go, a step whose far joint the guard held (an answer behind
+        the floor) left the others creeping to their goals ever slower, and the arm never came to rest."""
         reach = self.robot.speed * dt
-        over = float(np.max(np.abs(dq) / reach, initial=0.0))
-        if over > 1.0:
-            dq = dq / over
-        self._guarded(dq)
+        self._guarded(np.clip(self.q_goal - self.q_ref, -reach, reach))
 
     def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
         """One control step of length dt [s] at engine time ``now`` [s]."""
