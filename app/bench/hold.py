@@ -186,10 +186,10 @@ def summarise(case: tuple, runs: list[HoldRun]) -> dict:
         "max_overrun_m": max(r.overrun for r in runs),
         "max_drift_m": max(r.drift for r in runs),
         "max_reference_step": max(r.ref_step for r in runs),
-        "worst_m": worst.worst,
+        "worst_m": worst.worst if math.isfinite(worst.worst) else None,  # None: a sequence never came to rest
         "worst_sequence": worst.seed,
         "never_settled": len(runs) - len(settled),
-        "max_settle_s": max(settled, default=math.inf),
+        "max_settle_s": max(settled, default=None),
     }
 
 

@@ -208,7 +208,16 @@ def cmd_bench_hold(args: argparse.Namespace) -> int:
     print(f"held: overrun past the braking stop and drift once at rest both < {HOLD_TOLERANCE * 100:g} cm")
     print(
         _table(
-            ["robot", "solver", "mode", "held", "max overrun [mm]", "max drift [mm]", "slowest settle [s]"],
+            [
+                "robot",
+                "solver",
+                "mode",
+                "held",
+                "max overrun [mm]",
+                "max drift [mm]",
+                "slowest settle [s]",
+                "never at rest",
+            ],
             [
                 [
                     r["robot"],
@@ -217,7 +226,8 @@ def cmd_bench_hold(args: argparse.Namespace) -> int:
                     f"{r['held']}/{r['sequences']}",
                     f"{r['max_overrun_m'] * 1e3:.3f}",
                     f"{r['max_drift_m'] * 1e3:.3f}",
-                    f"{r['max_settle_s']:.2f}",
+                    "never" if r["max_settle_s"] is None else f"{r['max_settle_s']:.2f}",
+                    str(r["never_settled"]),
                 ]
                 for r in rows
             ],
