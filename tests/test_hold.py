@@ -140,3 +140,19 @@ def test_a_resting_position_stick_behind_a_hazard_settles():
     assert ses.hazard.kind == "collision" and "floor" in ses.hazard.name  # the answer is behind the floor
     assert np.isfinite(run.settle_s) and run.settle_s < 5.0, run
     assert run.worst < HOLD_TOLERANCE, run
+
+
+def test_a_sequence_never_at_rest_is_reported_in_json_not_a_traceback():
+    """``bosun bench hold --json`` with a sequence that never came to rest printed a traceback (inf is not JSON):
+    the case now says so with None and a count."""
+    import json
+    import math
+
+    from app.bench.hold import HoldRun, summarise
+
+    runs = [HoldRun(seed=0, overrun=1e-4, drift=0.0, settle_s=math.inf, travel=1.0), HoldRun(1, 0.0, 0.0, 0.5, 1.0)]
+    row = summarise(("ur5", "jacobian", "position"), runs)
+    assert row["held"] == 1 and row["never_settled"] == 1 and row["worst_m"] is None and row["worst_sequence"] == 0
+    assert json.loads(json.dumps(row, allow_nan=False))["max_settle_s"] == 0.5
+    alone = summarise(("ur5", "jacobian", "position"), runs[:1])
+    assert alone["max_settle_s"] is None and json.dumps(alone, allow_nan=False)
