@@ -38,6 +38,7 @@ KERNEL_MODULES = {
     "app.scenes.teleop_kernels": 2.0,
     "app.control.predict_kernels": 1.0,  # 2026-11-29: 50 s cold beside two busy processes; about 20 s alone
     "app.scenes.lab_transfer_kernels": 23.0,  # 2026-11-30: 23 s cold alone (the lab's step compiled into its own)
+    "app.scenes.crane_transfer_kernels": 8.0,  # 2026-11-30
 }
 
 

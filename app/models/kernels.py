@@ -71,6 +71,7 @@ KERNEL_FILES = (
     "control/guard_kernels.py",
     "scenes/teleop_kernels.py",
     "scenes/lab_transfer_kernels.py",
+    "scenes/crane_transfer_kernels.py",
 )
 
 

@@ -30,6 +30,7 @@ below the load's starting height.  ``--operator FILE`` replays a recorded stick 
 
 from __future__ import annotations
 
+import copy
 import csv
 import math
 from dataclasses import asdict, dataclass, field, replace
@@ -40,8 +41,20 @@ from numpy.typing import NDArray
 
 from app.errors import BosunError
 from app.marine.waves import SPECTRA
+from app.models import kernels as model_kernels
+from app.models.pendulum import G
 from app.scenarios.tac import TacScenario, TacSimulator
-from app.scenes.crane_load import SLACK_FACTOR, SNAP_FACTOR, CraneLoad, CraneSwingControl, LandingWatch
+from app.scenes import crane_transfer_kernels as ck
+from app.scenes import lab_transfer_kernels as lt
+from app.scenes.crane_load import (
+    NOISE,
+    SIDEWAYS_SPEED,
+    SLACK_FACTOR,
+    SNAP_FACTOR,
+    CraneLoad,
+    CraneSwingControl,
+    LandingWatch,
+)  # fmt: skip
 from app.scenes.load_lead import CRANE_LEAD_MAX, LoadLead
 from app.scenes.target_deck import TargetVessel
 
@@ -286,15 +299,17 @@ COLUMNS = (
 )  # fmt: skip
 
 
-def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult:
+def simulate(sc: TransferScenario, progress=None, cancel=None, compiled: bool = True) -> TransferResult:
     """One transfer (module text); ``progress(t, t_max)`` now and then, ``cancel()`` True stops it.
 
     The crane and head advance :data:`CHUNK` steps at a time with the TCP's target held (the crane-head engine's
-    50 Hz tick); the operator, the winch, the load, the deck and the anti-swing law step every ``dt``."""
+    50 Hz tick); the operator, the winch, the load, the deck and the anti-swing law step every ``dt``, each chunk's
+    steps in one compiled call (:class:`_CraneSteps`) where the load is in the steady state it covers and numba is
+    there, else through the objects (``compiled`` False: always, the reference)."""
     if sc.scene == "lab":
         from app.scenarios.lab_transfer import simulate_lab
 
-        return simulate_lab(sc, progress, cancel)
+        return simulate_lab(sc, progress, cancel, compiled=None if compiled else False)
     operator = StickFile.read(sc.operator) if sc.operator != "scripted" else ScriptedOperator(sc)
     tac = TacScenario(
         hs=sc.hs, tp=sc.tp, heading=sc.heading, spectrum=sc.spectrum, seed=sc.seed, rao=sc.rao, dt=sc.dt,
@@ -329,6 +344,7 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     rows, phases = [], []
     watch = LandingWatch()
     slack_n = snap_n = sideways_n = 0
+    fast = _CraneSteps(sc, load, watch, swing, lead, vessel2) if compiled and model_kernels.ENABLED else None
     t = 0.0
     d_prev = d
     while not operator.done and t < T_MAX:
@@ -346,7 +362,19 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
             sim.p_d_n = np.array([hook_cmd_n[0] + offset[0], hook_cmd_n[1] + offset[1], p0[2]])
         c = sim.advance(CHUNK)
         tcps = c.p_s_n if sc.mode == "off" else c.p_c_n
-        for tcp in tcps:
+        i0 = 0
+        if fast is not None and fast.steady(R_deck):  # the chunk's steps compiled (app/scenes/crane_transfer_kernels)
+            loop = {"cmd": cmd, "t": t, "d": d, "n_up": n_up, "d_prev": d_prev, "lead_tcp": lead_tcp,
+                    "lead_ref": lead_ref, "v_prev": v_prev, "offset": offset, "acc": acc,
+                    "counts": [slack_n, snap_n, sideways_n]}  # fmt: skip
+            i0 = fast.chunk(tcps, operator, R_deck, loop, rows, phases)
+            cmd, t, d, n_up, d_prev = loop["cmd"], loop["t"], loop["d"], loop["n_up"], loop["d_prev"]
+            lead_tcp, lead_ref, v_prev = loop["lead_tcp"], loop["lead_ref"], loop["v_prev"]
+            offset, acc = loop["offset"], loop["acc"]
+            slack_n, snap_n, sideways_n = loop["counts"]
+            if operator.done:
+                i0 = len(tcps)
+        for tcp in tcps[i0:]:
             v_cmd = operator.command(t, dt, watch.touched)
             cmd = cmd + v_cmd * dt
             t = t + dt
@@ -397,6 +425,183 @@ def simulate(sc: TransferScenario, progress=None, cancel=None) -> TransferResult
     if swing is not None:
         res.summary["estimator_resets"] = swing.resets
     return res
+
+
+class _CraneSteps:
+    """A chunk's steps of :func:`simulate` in one call of :func:`app.scenes.crane_transfer_kernels.crane_steps`:
+    the operator's commands, the target deck, its spot's accelerations and the sensors' noise worked out ahead; the
+    objects (load, watch, swing law, lead, operator) left as the objects' own steps would leave them
+    (tests/test_transfer.py runs both ways)."""
+
+    def __init__(self, sc, load, watch, swing, lead, vessel2) -> None:
+        self.sc, self.load, self.watch, self.swing, self.lead, self.vessel2 = sc, load, watch, swing, lead, vessel2
+        self.P0 = swing._fresh()[0][1].copy() if swing is not None else np.eye(4)
+        self.no_swing = ck.warm_up_records()[1] if swing is None else None
+
+    def steady(self, R_deck) -> bool:
+        """Whether the state is one :func:`crane_steps` covers: the load hanging with three TCP samples, heave
+        compensation on or off (not fading, no E-STOP), one landing (no relift), the target's axes level."""
+        load, dt = self.load, self.sc.dt
+        fade, g_last = load._ahc
+        want = 1.0 if load.ahc and not load.stopped else 0.0
+        return (
+            load.use_kernels is not False and load.state is not None and len(load._tcp) == 3 and not load.stopped
+            and fade is None and want == g_last and not self.watch.relift
+            and (self.lead is None or self.lead.dt == dt) and (self.swing is None or self.swing.dt == dt)
+            and bool(np.array_equal(R_deck, np.eye(3)))
+        )  # fmt: skip
+
+    def _spot(self, acc, t: float):
+        """The deck spot's acceleration at this step, from the block ahead (refilled as :func:`simulate` does)."""
+        if acc is None or acc[2] >= acc[1].shape[0]:
+            acc = [t, self.vessel2.spot_accelerations(t + self.sc.dt * np.arange(LEAD_BLOCK)), 0]
+        a = acc[1][acc[2]]
+        acc[2] += 1
+        return acc, a
+
+    def _noise(self, k: int) -> list:
+        sw, out = self.swing, []
+        for _ in range(k):
+            if not sw._noise:  # as CraneSwingControl.step draws it
+                sw._noise = list(sw.rng.normal(0.0, 1.0, (1000, 5)) * NOISE) if sw.noise else [np.zeros(5)] * 1000
+            out.append(sw._noise.pop())
+        return out
+
+    def chunk(self, tcps, operator, R_deck, loop: dict, rows: list, phases: list) -> int:
+        """The chunk's steps compiled (fewer if the load touched down: the operator sees it); the loop's values in
+        ``loop`` updated; the number taken."""
+        watch, swing, lead, vessel2, dt = self.watch, self.swing, self.lead, self.vessel2, self.sc.dt
+        ahead, touched, t = copy.copy(operator), watch.touched, loop["t"]
+        V, ph, D, N, A = [], [], [], [], []
+        acc = None if loop["acc"] is None else list(loop["acc"])
+        d, n_up = loop["d"], loop["n_up"]
+        for _ in range(len(tcps)):
+            V.append(ahead.command(t, dt, touched))
+            ph.append(ahead.phase)
+            t = t + dt
+            if vessel2 is not None:
+                d, n_up, _ = vessel2.deck(t)
+                if lead is not None:
+                    acc, a = self._spot(acc, t)
+                    A.append(a)
+            D.append(d)
+            N.append(n_up)
+            if ahead.done:
+                break
+        k = len(V)
+        W = self._noise(k) if swing is not None else []
+        f = np.ascontiguousarray
+        given = (
+            f(V, dtype=float), f(tcps[:k], dtype=float), f(D, dtype=float), f(N, dtype=float),
+            f(A, dtype=float) if A else np.zeros((k, 3)), f(W, dtype=float) if W else np.zeros((k, 5)),
+        )  # fmt: skip
+        records, s = self._records(R_deck, loop)
+        out = np.empty((k, len(COLUMNS)))
+        taken = ck.crane_steps(*records, given, out, s)
+        self._write_back(s, records, loop, given, taken)
+        if taken == k:
+            operator.__dict__.update(ahead.__dict__)
+            loop["acc"] = acc
+        else:  # the operator and the spot's block again up to where the steps stopped
+            again, t, acc = copy.copy(operator), loop["t0"], loop["acc"]
+            for _ in range(taken):
+                again.command(t, dt, touched)
+                t = t + dt
+                if vessel2 is not None and lead is not None:
+                    acc, _ = self._spot(acc, t)
+            operator.__dict__.update(again.__dict__)
+            loop["acc"] = acc
+            for w in W[taken:][::-1]:
+                swing._noise.append(w)
+        rows.extend(out[:taken])
+        phases.extend(ph[:taken])
+        return taken
+
+    def _records(self, R_deck, loop: dict) -> tuple[tuple, np.ndarray]:
+        sc, load, watch, swing, lead, tk = self.sc, self.load, self.watch, self.swing, self.lead, ck
+        r, v = load.state
+        load_rec = (
+            r, v, load.drum, load._drum_p, load._load_p, np.array(load._tcp, dtype=float),
+            np.array(load.tcp_v, dtype=float), np.array(load.tcp_a, dtype=float), np.zeros(3),
+            np.array(loop["d_prev"], dtype=float),
+        )  # fmt: skip
+        if swing is not None:
+            x = swing.x
+            swing_rec = (*x[:7], swing.record, self.P0)
+        else:
+            swing_rec = self.no_swing
+        ref = loop["lead_ref"]
+        lead_rec = (
+            np.array(loop["lead_tcp"], dtype=float),
+            (np.zeros(3), np.zeros(3)) if ref is None else tuple(np.array(a, dtype=float) for a in ref),
+            np.array(loop["v_prev"], dtype=float),
+        )  # fmt: skip
+        flags = (
+            sc.mode == "off", self.vessel2 is not None, lead is not None, lead is not None and lead.shape,
+            swing is not None, swing is not None and swing.active,
+        )  # fmt: skip
+        lead_p = (float(sc.dt), float(lead.cap), float(lead.fade), float(lead.tau), float(G), bool(lead.shape)) if (
+            lead is not None) else (float(sc.dt), 1.0, 1.0, 1.0, float(G), False)  # fmt: skip
+        consts = (float(SLACK_FACTOR), float(SNAP_FACTOR), float(SIDEWAYS_SPEED), float(load.static_tension()))
+        run = (
+            flags, np.array(loop["cmd"], dtype=float), np.ascontiguousarray(R_deck, dtype=float), float(sc.dt),
+            lead_p, consts, float(load.spec.speed), np.array(loop["offset"], dtype=float),
+        )  # fmt: skip
+        s = np.zeros(tk.S)
+        L = lt  # the slots
+        s[L.S_T], s[L.S_WINCH_SPEED] = loop["t"], load.speed_command
+        if lead is not None:
+            (x2, y2), (x1, y1) = lead._f
+            s[L.S_LEAD_T], s[L.S_LEAD_A : L.S_LEAD_A + 3] = lead.t, lead._a_cmd
+            s[L.S_LEAD_F : L.S_LEAD_F + 4] = x2, y2, x1, y1
+        s[L.S_TENSION], s[L.S_CONTACT_FORCE], s[L.S_GAP] = load.tension, load.contact_force, load.gap
+        s[L.S_TOUCHED] = watch.touched
+        s[L.S_TOUCH_SPEED] = math.nan if watch.touch_speed is None else watch.touch_speed
+        s[L.S_CONTACTS], s[L.S_REL_SPEED], s[L.S_IN_CONTACT] = watch.contacts, watch.rel_speed, watch.in_contact
+        s[L.S_REHIT], s[L.S_SLACK] = watch.rehit, watch.slack
+        s[L.S_SNAP], s[L.S_SIDEWAYS] = watch.snap, watch.sideways
+        s[L.S_SLACK_N : L.S_SLACK_N + 3] = loop["counts"]
+        if swing is not None:
+            s[L.S_L_PREV], s[L.S_RESETS] = swing.x[7], swing.resets
+        s[L.S_Z_TARGET], s[L.S_HAS_Z], s[L.S_L_RIDE] = load.law
+        s[L.S_TRACK] = load._ahc[1] == 1.0
+        loop["t0"] = loop["t"]
+        return (load_rec, swing_rec, lead_rec, run), s
+
+    def _write_back(self, s, records, loop: dict, given, taken: int) -> None:
+        load, watch, swing, lead = self.load, self.watch, self.swing, self.lead
+        load_rec, swing_rec, lead_rec, run = records
+        L = lt
+        if not taken:
+            return
+        loop["t"] = float(s[L.S_T])
+        loop["cmd"], loop["offset"] = run[1].copy(), run[7].copy()
+        loop["d"], loop["n_up"] = given[2][taken - 1].copy(), given[3][taken - 1].copy()
+        loop["d_prev"] = load_rec[9].copy()
+        loop["counts"] = [int(v) for v in s[L.S_SLACK_N : L.S_SLACK_N + 3]]
+        load.speed_command = float(s[L.S_WINCH_SPEED])
+        hist = load_rec[5]
+        load._tcp = [hist[0].copy(), hist[1].copy(), hist[2].copy()]
+        load.tcp_v, load.tcp_a = load_rec[6].copy(), load_rec[7].copy()
+        load.deck = (True, loop["d"], loop["n_up"], load_rec[8].copy())
+        load.tension, load.contact_force, load.gap = (float(v) for v in s[L.S_TENSION : L.S_GAP + 1])
+        load.law = (float(s[L.S_Z_TARGET]), bool(s[L.S_HAS_Z]), float(s[L.S_L_RIDE]))
+        watch.touched = bool(s[L.S_TOUCHED])
+        watch.touch_speed = None if math.isnan(s[L.S_TOUCH_SPEED]) else float(s[L.S_TOUCH_SPEED])
+        watch.contacts, watch.rel_speed = int(s[L.S_CONTACTS]), float(s[L.S_REL_SPEED])
+        watch.in_contact, watch.rehit, watch.slack = bool(s[L.S_IN_CONTACT]), bool(s[L.S_REHIT]), bool(s[L.S_SLACK])
+        watch.snap, watch.sideways = bool(s[L.S_SNAP]), bool(s[L.S_SIDEWAYS])
+        if lead is not None:
+            x2, y2, x1, y1 = (float(v) for v in s[L.S_LEAD_F : L.S_LEAD_F + 4])
+            lead.t, lead._f = float(s[L.S_LEAD_T]), ((x2, y2), (x1, y1))
+            lead._a_cmd = tuple(float(v) for v in s[L.S_LEAD_A : L.S_LEAD_A + 3])
+            loop["lead_tcp"] = lead_rec[0].copy()
+            loop["lead_ref"] = (lead_rec[1][0].copy(), lead_rec[1][1].copy())
+            loop["v_prev"] = given[0][taken - 1].copy()
+        if swing is not None:
+            swing.x = (*swing_rec[:7], float(s[L.S_L_PREV]))
+            swing.resets = int(s[L.S_RESETS])
+            swing.offset = run[7].copy()
 
 
 def summarise(res: TransferResult, operator, touch_speed, contacts, slack_n, snap_n, sideways_n) -> dict:

@@ -62,7 +62,9 @@ from app.scenes.lab_kernels import lab_step
 from app.scenes.tac_kernels import ease_in
 from app.sim.kernels import follow_clamped, load_block
 
-__all__ = ["ROW", "S", "no_swing", "transfer_steps", "warm_up_records", "warm_up_steps"]
+__all__ = [
+    "ROW", "S", "lead_step", "no_swing", "transfer_steps", "warm_up_records", "warm_up_steps", "watch_step",
+]  # fmt: skip
 
 # the scalars' slots (``s``)
 S_T, S_ALPHA, S_BETA, S_ALPHA_DOT, S_BETA_DOT, S_HAS_TARGET, S_WINCH_SPEED = 0, 1, 2, 3, 4, 5, 6
@@ -72,7 +74,8 @@ S_LEVEL_PAY, S_LIMITED, S_RANGE_HELD, S_HAZ_AXIS, S_HAZ_GAP, S_HAZ_SLOWED, S_REA
 S_TENSION, S_CONTACT_FORCE, S_GAP, S_TOUCHED, S_TOUCH_SPEED, S_CONTACTS, S_REL_SPEED = 30, 31, 32, 33, 34, 35, 36
 S_IN_CONTACT, S_REHIT, S_SLACK, S_SNAP, S_SIDEWAYS, S_SLACK_N, S_SNAP_N, S_SIDEWAYS_N = 37, 38, 39, 40, 41, 42, 43, 44
 S_L_PREV, S_SATURATED, S_NIS, S_LAW_ACTIVE, S_H_ERR, S_LOAD_L, S_HAZARD_SET = 45, 46, 47, 48, 49, 50, 51
-S = 52  # slots
+S_Z_TARGET, S_HAS_Z, S_L_RIDE, S_TRACK, S_RESETS = 52, 53, 54, 55, 56  # the crane's (crane_transfer_kernels)
+S = 57  # slots
 ROW = 22  # the row's columns (app.scenarios.transfer.COLUMNS)
 
 R_B2_DECK = np.diag(np.array([1.0, -1.0, -1.0]))  # app.scenes.lab.R_B2_DECK
@@ -186,6 +189,33 @@ def _level_plan(lab, run, s, cmd):
 
 
 @_jit
+def lead_step(s, a, a_cmd, length, p):
+    """:meth:`app.scenes.load_lead.LoadLead.step` on the scalars' lead slots: the target's acceleration ``a`` (3,),
+    the operator's commanded acceleration ``a_cmd`` (3,; led only with ``shape``), the wire's length; ``p`` = (dt,
+    cap, fade, the lag τ, g, shape).  Returns (f_x, f_y, ẍ_x, ẍ_y, f_x and f_y a step ago, two steps ago) with ẍ the
+    acceleration led (the target's plus the lagged operator's)."""
+    dt, cap, fade, tau, g, shape = p
+    s[S_LEAD_T] += dt
+    ax, ay, az = a[0], a[1], a[2]
+    if shape:
+        kk = min(1.0, dt / tau)
+        for i in range(3):
+            s[S_LEAD_A + i] = s[S_LEAD_A + i] + (a_cmd[i] - s[S_LEAD_A + i]) * kk
+        ax, ay, az = ax + s[S_LEAD_A], ay + s[S_LEAD_A + 1], az + s[S_LEAD_A + 2]
+    kl = length / max(g - az, 0.5 * g)  # app.models.pendulum.suspension_lead_xy
+    fx, fy = ax * kl, ay * kl
+    nf = math.hypot(fx, fy)
+    if nf > cap:
+        fx, fy = fx * cap / nf, fy * cap / nf
+    if s[S_LEAD_T] < fade:
+        gain = ease_in(s[S_LEAD_T] / fade)[0]
+        fx, fy = fx * gain, fy * gain
+    x2, y2, x1, y1 = s[S_LEAD_F], s[S_LEAD_F + 1], s[S_LEAD_F + 2], s[S_LEAD_F + 3]
+    s[S_LEAD_F], s[S_LEAD_F + 1], s[S_LEAD_F + 2], s[S_LEAD_F + 3] = x1, y1, fx, fy
+    return fx, fy, ax, ay, x1, y1, x2, y2
+
+
+@_jit
 def _level_step(lab, run, s, c_dot, rates, x2a, wire_len):
     """The rest of :meth:`MotionLab._shift_level` with :meth:`MotionLab._lead_step`: the work shift and its rate,
     the lead, the winch's target in the level frame (in place)."""
@@ -196,26 +226,12 @@ def _level_step(lab, run, s, c_dot, rates, x2a, wire_len):
     if flags[3]:  # the load lead (LoadLead.step)
         a = np.empty(3)
         Rs = _mv3(Rdd, spot)
+        a_cmd = np.empty(3)
         for i in range(3):
             a[i] = x2a[i] + Rs[i]
-        s[S_LEAD_T] += dt
-        ax, ay, az = a[0], a[1], a[2]
-        if flags[4]:
-            kk = min(1.0, dt / lead_tau)
-            for i in range(3):
-                ai = (c_dot[i] - c_dot_prev[i]) / dt
-                s[S_LEAD_A + i] = s[S_LEAD_A + i] + (ai - s[S_LEAD_A + i]) * kk
-            ax, ay, az = ax + s[S_LEAD_A], ay + s[S_LEAD_A + 1], az + s[S_LEAD_A + 2]
-        kl = wire_len / max(g - az, 0.5 * g)  # app.models.pendulum.suspension_lead_xy
-        fx, fy = ax * kl, ay * kl
-        nf = math.hypot(fx, fy)
-        if nf > lead_cap:
-            fx, fy = fx * lead_cap / nf, fy * lead_cap / nf
-        if s[S_LEAD_T] < lead_fade:
-            gain = ease_in(s[S_LEAD_T] / lead_fade)[0]
-            fx, fy = fx * gain, fy * gain
-        x2, y2, x1, y1 = s[S_LEAD_F], s[S_LEAD_F + 1], s[S_LEAD_F + 2], s[S_LEAD_F + 3]
-        s[S_LEAD_F], s[S_LEAD_F + 1], s[S_LEAD_F + 2], s[S_LEAD_F + 3] = x1, y1, fx, fy
+            a_cmd[i] = (c_dot[i] - c_dot_prev[i]) / dt
+        lead_p = (dt, lead_cap, lead_fade, lead_tau, g, flags[4])
+        fx, fy, ax, ay, x1, y1, x2, y2 = lead_step(s, a, a_cmd, wire_len, lead_p)
         f = np.array((fx, fy, 0.0))
         a_ref = np.array((ax + (fx - 2.0 * x1 + x2) / (dt * dt), ay + (fy - 2.0 * y1 + y2) / (dt * dt), 0.0))
         f_dot = np.array(((fx - x1) / dt, (fy - y1) / dt, 0.0))
@@ -308,10 +324,11 @@ def _load_step(lab_out, load, run, s, x2, L1, dt):
 
 
 @_jit
-def _watch_step(load, run, s):
-    """:meth:`LandingWatch.step` (``relift`` off) into the scalars."""
-    _, v, _, _, deck_v, n_up, _, _ = load
-    slack_factor, snap_factor, sideways_speed, static = run[16]
+def watch_step(v, deck_v, n_up, s, consts):
+    """:meth:`app.scenes.crane_load.LandingWatch.step` (``relift`` off) into the scalars, from the load's velocity,
+    the deck's velocity and up normal; ``consts`` = (slack factor, snap factor, sideways speed, static tension);
+    returns whether a contact began."""
+    slack_factor, snap_factor, sideways_speed, static = consts
     rel = np.empty(3)
     for i in range(3):
         rel[i] = v[i] - deck_v[i]
@@ -443,7 +460,7 @@ def transfer_steps(lab, platforms, load, swing, run, given, rows, s):
         s[S_HAS_TARGET] = 1.0 if has else 0.0
         # ---- the load, the watch, the swing law
         H2 = _load_step((p_t_g, v_t_g), load, run, s, x2, wl[0], dt)
-        onset = _watch_step(load, run, s)
+        onset = watch_step(load[1], load[4], load[5], s, run[16])
         first_touch = onset and s[S_CONTACTS] == 1.0
         off0, off1 = 0.0, 0.0
         if antisway:
