@@ -172,10 +172,26 @@ def test_the_compiled_transfer_takes_the_steps_the_objects_take(mode, monkeypatc
 
     if not ENABLED:
         pytest.skip("numba is off (BOSUN_JIT=0): nothing compiled to compare")
+    from app.scenarios import lab_transfer
+
     sc = TransferScenario.for_scene("lab", mode=mode, move=0.3, wait=2.0)
+    runs, init = [], lab_transfer._LabRun.__init__
+
+    def kept(self, *args):
+        init(self, *args)
+        runs.append(self)
+
+    monkeypatch.setattr(lab_transfer._LabRun, "__init__", kept)
     ref = simulate_lab(sc, compiled=False)
     counts = _count_paths(monkeypatch)
     fast = simulate_lab(sc, compiled=True)
+    # the lab as the last step left it: its sample (the pendulum as its step left it, before the load's sync) and
+    # the platforms' rotation rates the controllers' views read
+    (lab_ref, lab_fast) = (r.lab for r in runs)
+    for name in ("swing", "q", "p_t_g", "p_p_g", "e_t_b2", "L_w", "payload_height_error"):
+        assert np.allclose(getattr(lab_fast.last, name), getattr(lab_ref.last, name), rtol=1e-9, atol=1e-9), name
+    for a_fast, a_ref in zip(lab_fast._rates, lab_ref._rates, strict=True):
+        assert np.allclose(np.array(a_fast), np.array(a_ref), rtol=1e-9, atol=1e-9)
     assert counts["compiled"] > 0.9 * len(fast.phases)  # the steps were compiled, not the objects'
     assert fast.phases == ref.phases
     assert fast.rows.shape == ref.rows.shape

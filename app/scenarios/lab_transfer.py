@@ -238,6 +238,8 @@ class _LabRun:
                 return False
         if swing is not None and swing.measurement != "angles":
             return False
+        if swing is not None and lab.lead_ref_d is not None and not lab.load_lead:
+            return False  # the swing law would take a lead's reference the steps do not keep
         if lab.comau_mode == "remote":
             return lab.winch.mode == "remote" and swing is None
         level = lab.comau_mode == "motion_comp" and lab.work_frame == "level" and lab.winch.mode == "motion_comp"
@@ -264,7 +266,7 @@ class _LabRun:
         rows = np.empty((k, len(COLUMNS)))
         records, s = self._records()
         taken = tk.transfer_steps(*records, (V, Z), rows, s)
-        self._write_back(s, records)
+        self._write_back(s, records, taken)
         if taken and math.isnan(rows[taken - 1, 0]):
             raise LabError("a tool offset is a finite position and velocity (3 values each)")
         if swing is not None:
@@ -381,10 +383,12 @@ class _LabRun:
         s[tk.S_LOAD_L] = load._L
         return ((state, params, y), platforms, loads, sw, run), s
 
-    def _write_back(self, s: np.ndarray, records: tuple) -> None:
+    def _write_back(self, s: np.ndarray, records: tuple, taken: int) -> None:
         """The scalars the steps changed, back into the objects (the arrays were changed in place)."""
         lab, load, watch, swing = self.lab, self.load, self.watch, self.swing
         pd, lead = lab.pendulum, lab._lead
+        if not taken:  # stopped before its first step: nothing changed
+            return
         lab.t = self.t = float(s[tk.S_T])
         pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot = (float(v) for v in s[tk.S_ALPHA : tk.S_BETA_DOT + 1])
         if s[tk.S_HAS_TARGET] and lab.payload_target_b2 is None:
@@ -418,4 +422,5 @@ class _LabRun:
             swing.law.active = bool(s[tk.S_LAW_ACTIVE])
             swing.ekf.innovation = records[3][7].copy()
             self.off = lab.platform_pose(1)[:3, :3].T @ (lab.layout.T_world_n1[:3, :3] @ lab.tool_offset[0])
-        lab.last = lab._compiled_sample(float(s[tk.S_H_ERR]))
+        lab._rates = lab._rate_views  # as MotionLab._step_compiled leaves them
+        lab.last = lab._compiled_sample(float(s[tk.S_H_ERR]), (float(s[tk.S_SAMPLE_ALPHA]), float(s[tk.S_SAMPLE_BETA])))

@@ -664,9 +664,9 @@ class MotionLab:
             p_w_g[:] = p_w_g - T_g_n2[:3, :3] @ (R2 @ d)
         return self._compiled_sample(h_err)
 
-    def _compiled_sample(self, h_err: float) -> LabSample:
+    def _compiled_sample(self, h_err: float, swing: tuple[float, float] | None = None) -> LabSample:
         """The sample after a compiled step (its records hold the step's outputs; ``h_err`` the payload height
-        error it returned)."""
+        error it returned; ``swing`` the pendulum's angles it left, where something has set them since)."""
         (p1, p2), f, wf, pd = self.platforms, self.joints, self.winch.filter, self.pendulum
         e_b2, p_w_g, p_p_g, legs1, legs2 = self._out
         return LabSample(
@@ -684,7 +684,7 @@ class MotionLab:
             e_t_b2=e_b2.copy(),
             L_w=float(wf.x[0]),
             L_w_dot=float(wf.v[0]),
-            swing=(pd.alpha, pd.beta),
+            swing=(pd.alpha, pd.beta) if swing is None else swing,
             payload_height_error=h_err,
         )
 

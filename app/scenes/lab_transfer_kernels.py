@@ -75,7 +75,8 @@ S_TENSION, S_CONTACT_FORCE, S_GAP, S_TOUCHED, S_TOUCH_SPEED, S_CONTACTS, S_REL_S
 S_IN_CONTACT, S_REHIT, S_SLACK, S_SNAP, S_SIDEWAYS, S_SLACK_N, S_SNAP_N, S_SIDEWAYS_N = 37, 38, 39, 40, 41, 42, 43, 44
 S_L_PREV, S_SATURATED, S_NIS, S_LAW_ACTIVE, S_H_ERR, S_LOAD_L, S_HAZARD_SET = 45, 46, 47, 48, 49, 50, 51
 S_Z_TARGET, S_HAS_Z, S_L_RIDE, S_TRACK, S_RESETS = 52, 53, 54, 55, 56  # the crane's (crane_transfer_kernels)
-S = 57  # slots
+S_SAMPLE_ALPHA, S_SAMPLE_BETA = 57, 58  # the lab's pendulum as its step left it (the sample's), before the sync
+S = 59  # slots
 ROW = 22  # the row's columns (app.scenarios.transfer.COLUMNS)
 
 R_B2_DECK = np.diag(np.array([1.0, -1.0, -1.0]))  # app.scenes.lab.R_B2_DECK
@@ -458,6 +459,7 @@ def transfer_steps(lab, platforms, load, swing, run, given, rows, s):
             x, u, (geometry, joint_p, wire_p, load_p), y, dt
         )
         s[S_HAS_TARGET] = 1.0 if has else 0.0
+        s[S_SAMPLE_ALPHA], s[S_SAMPLE_BETA] = s[S_ALPHA], s[S_BETA]
         # ---- the load, the watch, the swing law
         H2 = _load_step((p_t_g, v_t_g), load, run, s, x2, wl[0], dt)
         onset = watch_step(load[1], load[4], load[5], s, run[16])
