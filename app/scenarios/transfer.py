@@ -81,6 +81,7 @@ T_MAX = 1800.0  # s: a run ends by then whatever the operator does
 #: LEAD_FADE s (the quintic of H108)
 LEAD_FADE = 5.0
 LEAD_BLOCK = 1000  # steps of the deck's accelerations evaluated at once
+LEVEL = np.eye(3)  # the target frame's axes: the world's (app.scenes.target_deck.TargetVessel.deck)
 
 
 class TransferError(BosunError):
@@ -448,7 +449,7 @@ class _CraneSteps:
             load.use_kernels is not False and load.state is not None and len(load._tcp) == 3 and not load.stopped
             and fade is None and want == g_last and not self.watch.relift
             and (self.lead is None or self.lead.dt == dt) and (self.swing is None or self.swing.dt == dt)
-            and bool(np.array_equal(R_deck, np.eye(3)))
+            and bool(np.array_equal(R_deck, LEVEL))
         )  # fmt: skip
 
     def _spot(self, acc, t: float):
@@ -518,7 +519,7 @@ class _CraneSteps:
         return taken
 
     def _records(self, R_deck, loop: dict) -> tuple[tuple, np.ndarray]:
-        sc, load, watch, swing, lead, tk = self.sc, self.load, self.watch, self.swing, self.lead, ck
+        sc, load, watch, swing, lead = self.sc, self.load, self.watch, self.swing, self.lead
         r, v = load.state
         load_rec = (
             r, v, load.drum, load._drum_p, load._load_p, np.array(load._tcp, dtype=float),
@@ -547,7 +548,7 @@ class _CraneSteps:
             flags, np.array(loop["cmd"], dtype=float), np.ascontiguousarray(R_deck, dtype=float), float(sc.dt),
             lead_p, consts, float(load.spec.speed), np.array(loop["offset"], dtype=float),
         )  # fmt: skip
-        s = np.zeros(tk.S)
+        s = np.zeros(lt.S)
         L = lt  # the slots
         s[L.S_T], s[L.S_WINCH_SPEED] = loop["t"], load.speed_command
         if lead is not None:

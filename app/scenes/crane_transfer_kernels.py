@@ -40,7 +40,6 @@ from app.scenes.lab_transfer_kernels import (
     S_HAS_Z,
     S_L_PREV,
     S_L_RIDE,
-    S_REL_SPEED,
     S_RESETS,
     S_SLACK,
     S_T,
@@ -52,6 +51,7 @@ from app.scenes.lab_transfer_kernels import (
     S,
     lead_step,
     watch_step,
+    write_row,
 )
 from app.sim.kernels import drum_block, load_block
 
@@ -170,17 +170,7 @@ def crane_steps(load, swing, lead, run, given, rows, s):
             q = load_t.copy()
             for i in range(3):
                 load_t[i] = R_deck[0, i] * q[0] + R_deck[1, i] * q[1] + R_deck[2, i] * q[2]
-        err = 0.0
-        for i in range(3):
-            err += (load_t[i] - cmd[i]) ** 2
-        row = rows[k]
-        row[0] = s[S_T]
-        for i in range(3):
-            row[1 + i], row[4 + i], row[8 + i], row[11 + i] = cmd[i], load_t[i], p[i], d[i]
-        row[7] = math.sqrt(err)
-        row[14], row[15], row[16] = s[S_GAP], s[S_REL_SPEED], swing_deg
-        row[17], row[18], row[19] = s[S_TENSION] / static, s[S_CONTACT_FORCE] / 1e3, wl[0]
-        row[20], row[21] = offset[0], offset[1]
+        write_row(rows[k], s, (cmd, load_t, p, d), swing_deg, wl[0], (offset[0], offset[1]), static)
         if onset and s[S_CONTACTS] == 1.0:  # the operator sees the touch
             return k + 1
     return n

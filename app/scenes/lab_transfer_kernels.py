@@ -64,6 +64,7 @@ from app.sim.kernels import follow_clamped, load_block
 
 __all__ = [
     "ROW", "S", "lead_step", "no_swing", "transfer_steps", "warm_up_records", "warm_up_steps", "watch_step",
+    "write_row",
 ]  # fmt: skip
 
 # the scalars' slots (``s``)
@@ -187,6 +188,24 @@ def _level_plan(lab, run, s, cmd):
             for i in range(3):
                 new_offset[i] = level_offset[i] + c_dot[i] * dt
     return True, c_dot, new_offset, limited, hazard
+
+
+@_jit
+def write_row(row, s, points, swing_deg, wire, offset, static):
+    """A row of :data:`app.scenarios.transfer.COLUMNS` from the step's scalars: ``points`` = (the commanded point
+    and the load, in the target frame; the TCP and the deck point), the swing angle [deg], the wire's length, the
+    anti-swing's offset (x, y) and the static tension."""
+    cmd, load_t, tcp, deck = points
+    err = 0.0
+    for i in range(3):
+        err += (load_t[i] - cmd[i]) ** 2
+    row[0] = s[S_T]
+    for i in range(3):
+        row[1 + i], row[4 + i], row[8 + i], row[11 + i] = cmd[i], load_t[i], tcp[i], deck[i]
+    row[7] = math.sqrt(err)
+    row[14], row[15], row[16] = s[S_GAP], s[S_REL_SPEED], swing_deg
+    row[17], row[18], row[19] = s[S_TENSION] / static, s[S_CONTACT_FORCE] / 1e3, wire
+    row[20], row[21] = offset[0], offset[1]
 
 
 @_jit
@@ -480,24 +499,13 @@ def transfer_steps(lab, platforms, load, swing, run, given, rows, s):
         for i in range(3):
             d[i] = rg[i] - spot[i]
         load_t = _mtv3(R_g_n2, d)
-        err = 0.0
-        for i in range(3):
-            err += (load_t[i] - cmd[i]) ** 2
         e = np.empty(3)
         for i in range(3):
             e[i] = r[i] - s_tool[i]
         ell = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
         swing_deg = math.degrees(math.acos(min(1.0, max(-1.0, e[2] / ell))))
         tcp, deck = _mtv3(R_G_D, p_t_g), _mtv3(R_G_D, spot)
-        static = run[16][3]
-        row = rows[k]
-        row[0] = s[S_T]
-        for i in range(3):
-            row[1 + i], row[4 + i], row[8 + i], row[11 + i] = cmd[i], load_t[i], tcp[i], deck[i]
-        row[7] = math.sqrt(err)
-        row[14], row[15], row[16] = s[S_GAP], s[S_REL_SPEED], swing_deg
-        row[17], row[18], row[19] = s[S_TENSION] / static, s[S_CONTACT_FORCE] / 1e3, wl[0]
-        row[20], row[21] = off0, off1
+        write_row(rows[k], s, (cmd, load_t, tcp, deck), swing_deg, wl[0], (off0, off1), run[16][3])
         if first_touch or (has and not had):  # the operator sees the touch; Python keeps the winch's target
             return k + 1
     return n
