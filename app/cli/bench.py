@@ -127,9 +127,61 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_lab_guard(args: argparse.Namespace) -> int:
+    """``bosun bench guard --scene lab``: the Comau's guard against the platforms (app/bench/lab_guard.py)."""
+    from app.bench.lab_guard import bench_lab_guard
+
+    if args.robots is not None:
+        raise BosunError("--robots is for the teleop scene; the lab's arm is its Comau (--scene lab takes none)")
+    row = bench_lab_guard(args.streams, workers=args.workers, progress=_progress_bar("guard", unit="stream"))
+    if args.json:
+        _print_bench_json("guard", {"scene": "lab", "results": [row]})
+        return 0
+    print(
+        f"bosun bench guard --scene lab: {args.streams} seeded stick streams, the Comau in REMOTE on its data-sheet "
+        "limits, the platforms held at random poses, 5 ms steps"
+    )
+    print("penetration: the deepest overlap of the arm's capsules with EM8000's deck, its pedestal or EM1500's deck,")
+    print("at the actual joints; opening: steps whose command opens every clearance in the zone, and the least drive")
+    print("step kept on them (the acceptance: ≥ 0.9)")
+    near = row["nearest_in_zone_ticks"]
+    print(
+        _table(
+            [
+                "streams",
+                "steps",
+                "max penetration [mm]",
+                "least clearance [mm]",
+                "past a limit",
+                "opening steps",
+                "least step kept",
+                "slowed steps",
+                "in the zone: EM8000 deck / pedestal / EM1500 deck",
+            ],
+            [
+                [
+                    str(row["streams"]),
+                    str(row["ticks"]),
+                    f"{row['max_penetration_m'] * 1e3:.2f}",
+                    f"{row['least_clearance_m'] * 1e3:.1f}",
+                    f"{row['max_limit_excess']:.2g}",
+                    str(row["opening_ticks"]),
+                    f"{row['min_opening_speed']:.3f}",
+                    str(row["slowed_ticks"]),
+                    " / ".join(str(v) for v in near.values()),
+                ]
+            ],
+        )
+    )
+    print(_machine_line())
+    return 0
+
+
 def cmd_bench_guard(args: argparse.Namespace) -> int:
     from app.bench import guard as bench
 
+    if args.scene == "lab":
+        return _bench_lab_guard(args)
     robots = _serial_robots(args.robots)
     if not 10.0 <= args.rate <= 1000.0:
         raise BosunError(f"--rate must be between 10 and 1000 Hz, got {args.rate:g}")
@@ -407,6 +459,10 @@ def register(sub) -> None:
     guard_help = "direction-aware scaling: random stick streams into the arms' hazards (issue 32, item 5)"
     with command(bench, "guard", cmd_bench_guard, help=guard_help) as b:
         b.add_argument("--streams", type=_positive_int, default=1000, help="streams per robot (default 1000)")
+        b.add_argument(
+            "--scene", choices=["teleop", "lab"], default="teleop",
+            help="teleop: the library arms (default); lab: the Motion-Lab's Comau against the platforms",
+        )  # fmt: skip
         b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
         b.add_argument("--rate", type=float, default=250.0, help="engine rate [Hz] (default 250)")
         b.add_argument("--speed", type=_positive_float, default=1.0, help="stick speed × the default k_v (default 1)")

@@ -5,6 +5,9 @@ compensation (Motion-Lab paper §§4–6).
   through q̇ = J⁺ ṗ, eq. 21) and MOTION_COMP (VVMC: the work point fixed on EM1500, eqs. 54–56 inverted for the
   tool point in the robot base, the analytic IK of eqs. 7–20 and the feed-forward q̇ = J⁺ ṗ_t^r of eq. 21),
   or BRAKE (HOLD, E-STOP).  Its output is the joint command of the drives (:data:`app.sim.motionlab.COMAU_DRIVES`).
+* :data:`COMAU_GUARD`: the law's joint command scaled along the directions that bring the Comau's links nearer
+  an obstacle — EM8000's deck under it, its pedestal and column, EM1500's deck (issue 32, item 5; the obstacles
+  and capsules are :class:`ComauGuard`'s).
 * :data:`WINCH_LAW`: active heave compensation, the wire length that keeps the load's height fixed relative
   to EM1500 (with the relative vertical speed as feed-forward), or the operator's speed; its output is the
   length reference of the drum (:data:`app.sim.motionlab.WINCH_DRUM`).
@@ -17,8 +20,10 @@ them: ``view`` = (η1, η̇1, R1, Ṙ1, η2, η̇2, R2, Ṙ2).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from app.control import lab_kernels
 from app.control.lab_kernels import BRAKE, MOTION_COMP, REMOTE, SETTLED
@@ -26,7 +31,7 @@ from app.models.block import Block
 from app.models.closed_form import ComauArm
 from app.models.comau import ComauKinematics, nearest_ik
 
-__all__ = ["BRAKE", "COMAU_LAW", "MOTION_COMP", "REMOTE", "SETTLED", "WINCH_LAW"]
+__all__ = ["BRAKE", "COMAU_GUARD", "COMAU_LAW", "MOTION_COMP", "REMOTE", "SETTLED", "WINCH_LAW", "ComauGuard"]
 
 
 def _comau_reference(x, u, p, dt):
@@ -70,6 +75,265 @@ COMAU_LAW = Block(
     params=("cm", "T_base", "signs", "T_n1_n2", "T_b1_r", "w_b2", "park_q", "lower", "upper"),
     reference=_comau_reference,
     kernel=lab_kernels.comau_law,
+)
+
+
+# ---------------------------------------------------------------------------------------------- the Comau's guard
+CAPSULES = ("upper arm", "forearm", "extension arm")
+OBSTACLES = ("EM8000 deck", "pedestal", "EM1500 deck")
+
+
+@dataclass(frozen=True, eq=False)
+class ComauGuard:
+    """The Comau's capsules and its obstacles in its base {r} (z up), for :data:`COMAU_GUARD`.
+
+    Capsules: the upper arm (shoulder–elbow), the forearm (elbow–wrist) and the extension arm (wrist–tool point),
+    with the radii the lab's drawing gives them (:func:`app.models.drawing.machines.link_radius`, tapered along the
+    chain as :class:`app.control.guard.HazardGuard`'s; a link's ``<collision radius>`` where the file gives one).
+    Obstacles: EM8000's deck (the plane z = 0 of {b1}, under the robot: its edge is not modelled, so beyond it the
+    deck's plane still counts), the pedestal from that deck to the robot's column top (0, 0, d1) with the
+    drawing's pedestal radius, and EM1500's deck (a disc of its upper joints' radius, as the load lands on it:
+    :mod:`app.scenes.lab_load`).  Zone and stop [m] (0.15, 0.02: the arm's lag at its 30°/s is ~0.1 m of
+    extension-arm travel over the drives' 0.05 s and their braking), the braking share κ of the braking bound."""
+
+    radii: NDArray[np.float64]
+    deck1: NDArray[np.float64]
+    pedestal: NDArray[np.float64]
+    pedestal_radius: float
+    deck2_radius: float
+    zone: float = 0.15
+    stop: float = 0.02
+    braking: float = 0.5
+
+    @classmethod
+    def for_lab(cls, robot, cm: NDArray[np.float64], T_b1_r: NDArray[np.float64], deck2_radius: float) -> ComauGuard:
+        from app.models.drawing.machines import link_radius  # the drawing's sizes (no Qt: pure geometry)
+
+        links = robot.links
+        r0 = link_radius(links)
+        drawn = [r0 * (1.0 - 0.4 * k / max(1, len(links) - 1)) for k in (1, 2)] + [0.6 * r0]
+        radii = [
+            float(links[i].radius) if getattr(links[i], "radius", None) is not None else drawn[k]
+            for k, i in enumerate((1, 2, 3))
+        ]
+        R_r, p_r = T_b1_r[:3, :3], T_b1_r[:3, 3]
+        up = R_r.T @ np.array([0.0, 0.0, -1.0])  # {b1} is z down
+        h = float(p_r[2])  # n·x = h for the deck's points (−R_rᵀ p_r among them): n·(−R_rᵀ p_r) = p_r[2]
+        foot = h * up  # the deck's point under the robot's base
+        pedestal = np.array([foot, [0.0, 0.0, float(cm[1])]])
+        return cls(np.array(radii), np.array([*up, h]), pedestal, 1.6 * r0, float(deck2_radius))
+
+    def record(self) -> tuple:
+        """The guard's parameters as :func:`app.scenes.lab_kernels.lab_step` takes them."""
+        f64 = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+        return (
+            f64(self.radii), f64(self.deck1), f64(self.pedestal), f64([self.pedestal_radius]),
+            f64([self.deck2_radius]), f64([self.zone, self.stop, self.braking]),
+        )  # fmt: skip
+
+    @staticmethod
+    def text(report: NDArray[np.float64]) -> str:
+        """The report's hazard as the operator reads it ("" none): "extension arm ↔ EM1500 deck: 83 mm"."""
+        kind = int(report[0])
+        if kind < 0:
+            return ""
+        return f"{CAPSULES[int(report[1])]} ↔ {OBSTACLES[kind]}: clearance {float(report[2]) * 1e3:.0f} mm"
+
+
+def _arm_points(cm, q):
+    """Shoulder, elbow, wrist and tool point in {r} and their Jacobians (the reference of
+    :func:`app.control.lab_kernels.arm_points`; the tool's are eqs. 3 and 5)."""
+    a1, d1, a2, a3, L = (float(c) for c in cm)
+    s1, c1, s2, c2, s3, c3 = np.sin(q[0]), np.cos(q[0]), np.sin(q[1]), np.cos(q[1]), np.sin(q[2]), np.cos(q[2])
+    links_u = np.array([a1, a2 * s2, -a3 * c3, -L * s3])  # each link's own radial and height parts
+    links_z = np.array([d1, a2 * c2, -a3 * s3, L * c3])
+    u, z = np.cumsum(links_u), np.cumsum(links_z)
+    du = np.array([[0, 0], [a2 * c2, 0], [a2 * c2, a3 * s3], [a2 * c2, a3 * s3 - L * c3]])
+    dz = np.array([[0, 0], [-a2 * s2, 0], [-a2 * s2, -a3 * c3], [-a2 * s2, -a3 * c3 - L * s3]])
+    P = np.stack([c1 * u, -s1 * u, z], axis=1)
+    J = np.zeros((4, 3, 3))
+    J[:, :, 0] = np.stack([-s1 * u, -c1 * u, np.zeros(4)], axis=1)
+    J[:, :, 1] = np.stack([c1 * du[:, 0], -s1 * du[:, 0], dz[:, 0]], axis=1)
+    J[:, :, 2] = np.stack([c1 * du[:, 1], -s1 * du[:, 1], dz[:, 1]], axis=1)
+    return P, J
+
+
+def _disc_gap(x, c, n, R):
+    h = float(n @ (x - c))
+    w = x - c - h * n
+    rho = float(np.linalg.norm(w))
+    if rho <= R:
+        return h, n
+    e = w * ((rho - R) / rho) + h * n
+    d = float(np.linalg.norm(e))
+    return (0.0, n) if d <= 0.0 else (d, e / d)
+
+
+def _segment_disc(a, b, c, n, R):
+    """As the kernel: a golden-section search for the least disc clearance on a–b, then the ends."""
+    golden = 0.5 * (math.sqrt(5.0) - 1.0)
+    lo, hi = 0.0, 1.0
+    for _ in range(40):
+        m1, m2 = hi - golden * (hi - lo), lo + golden * (hi - lo)
+        if _disc_gap(a + (b - a) * m1, c, n, R)[0] <= _disc_gap(a + (b - a) * m2, c, n, R)[0]:
+            hi = m2
+        else:
+            lo = m1
+    best_s, best = 0.0, _disc_gap(a, c, n, R)[0]
+    for s in (1.0, 0.5 * (lo + hi)):
+        f = _disc_gap(a + (b - a) * s, c, n, R)[0]
+        if f < best:
+            best_s, best = s, f
+    d, e = _disc_gap(a + (b - a) * best_s, c, n, R)
+    return d, best_s, e
+
+
+def _segments_closest(p1, q1, p2, q2):
+    """Closest points of two segments (Ericson §5.1.9), by the guard's kernel (no second copy of it)."""
+    from app.control.guard_kernels import _segment_closest
+
+    return _segment_closest(p1, q1, p2, q2)
+
+
+def guard_hazards_reference(cm, radii, world, q):
+    """The reference of :func:`app.control.lab_kernels.guard_hazards`: (G (m, 3), values, obstacles, capsules), for
+    each capsule and obstacle the nearest point's row and each end's, in the kernel's order."""
+    deck1, ped, ped_r, deck2 = world
+    P, J = _arm_points(cm, q)
+    rows = []
+
+    def away(k, s, p, o, dist):
+        Jk = J[k] + s * (J[k + 1] - J[k])  # a point at a fixed share of a rigid segment moves as the share of its ends
+        return (p - o) / dist @ Jk if dist > 1e-12 else np.zeros(3)
+
+    for k in range(3):
+        a, b, r = P[k], P[k + 1], radii[k]
+        Jk = lambda s, k=k: J[k] + s * (J[k + 1] - J[k])  # noqa: E731
+        for s, e in ((0.0, a), (1.0, b)):
+            rows.append((deck1[:3] @ Jk(s), float(deck1[:3] @ e - deck1[3]) - r, 0, k))
+        if k > 0:
+            for which in range(3):
+                if which == 0:
+                    dist, s, t = _segments_closest(a, b, ped[0], ped[1])
+                else:
+                    s, e = (0.0, a) if which == 1 else (1.0, b)
+                    dist, _, t = _segments_closest(e, e, ped[0], ped[1])
+                o = ped[0] + (ped[1] - ped[0]) * t
+                rows.append((away(k, s, a + (b - a) * s, o, dist), dist - r - ped_r[0], 1, k))
+        for which in range(3):
+            if which == 0:
+                d, s, e = _segment_disc(a, b, deck2[0:3], deck2[3:6], deck2[6])
+            else:
+                s = 0.0 if which == 1 else 1.0
+                d, e = _disc_gap(a if which == 1 else b, deck2[0:3], deck2[3:6], deck2[6])
+            rows.append((e @ Jk(s), d - r, 2, k))
+    G = np.array([r[0] for r in rows])
+    return G, np.array([r[1] for r in rows]), np.array([r[2] for r in rows]), np.array([r[3] for r in rows])
+
+
+def _least(rate):
+    """The least part of a clearance's ``rate`` a joint must carry to count as closing or opening it (the kernel's)."""
+    return np.maximum(lab_kernels.CONTRIBUTES, lab_kernels.CONTRIBUTES_SHARE * np.abs(rate))[..., None]
+
+
+def _guard_reference(x, u, p, dt):
+    """The NumPy reference of :func:`app.control.lab_kernels.comau_guard`."""
+    command, q, qd, world = u
+    cm, radii, (lower, upper, speed, accel, limit_brake, tau), (zone, stop, kappa) = p
+    brake, q_ref, v_ref, use_v, scale = command
+    report = np.array([-1.0, -1.0, math.nan, math.nan, 0.0])
+    if brake:
+        return x, (command, report)
+    G, val, kind, cap = guard_hazards_reference(cm, radii, world, q)
+    clear = val.copy()
+    v0 = np.clip((q_ref - q) / max(tau, dt) + (v_ref if use_v else 0.0), -speed * scale, speed * scale)
+    up, down = np.maximum(upper - q, 0.0), np.maximum(q - lower, 0.0)
+    hi_v = np.minimum(speed * scale, np.minimum(np.sqrt(2.0 * limit_brake * up), up / dt))
+    lo_v = -np.minimum(speed * scale, np.minimum(np.sqrt(2.0 * limit_brake * down), down / dt))
+    gg = np.einsum("ij,ij->i", G, G)
+    A = kappa * float(np.min(accel)) * np.sqrt(gg)
+    C = G * qd  # each joint's part of each clearance's rate
+    T = np.where(C < 0.0, np.abs(qd) / accel, 0.0).max(axis=1)  # the joints closing it stop in T at the latest
+    room_j = np.where(qd > 0.0, upper - q, q - lower)
+    now = np.where((C > 0.0) & (room_j < np.abs(qd) * T[:, None]), 0.0, C).sum(axis=1)  # an opening joint at its limit
+    Am = kappa * np.where(-_least(now) > C, np.abs(G) * accel, 0.0).sum(axis=1)  # the joints closing each gap
+    moving = (now < 0.0) & (Am > 0.0)
+    val = np.where(moving, val - now * now / (2.0 * np.where(moving, Am, 1.0)), val)
+    r0 = G @ v0
+    room = np.maximum(val - stop, 0.0)
+    active = val < zone
+    share = np.clip(room / (zone - stop), 0.0, 1.0)
+    brake_rate = np.sqrt(2.0 * A * room)
+    bound = np.where(r0 < 0.0, -np.minimum(share * -r0, np.minimum(room / (2.0 * dt), brake_rate)), 0.0)
+    bound = np.where(gg <= 1e-24, -np.inf, bound)
+    check = active & np.isfinite(bound)
+    out, slowed = v0.copy(), np.zeros(len(val), dtype=bool)
+    if active.any():
+        for _ in range(4):
+            changed = False
+            for i in np.flatnonzero(check):
+                r = float(G[i] @ out)
+                if r < bound[i] - 1e-15:
+                    out = np.clip(out + (bound[i] - r) / gg[i] * G[i], np.minimum(lo_v, v0), np.maximum(hi_v, v0))
+                    slowed[i] = changed = True
+            if not changed:
+                break
+        alpha = 1.0
+        for i in np.flatnonzero(check):
+            r = float(G[i] @ out)
+            if r < bound[i] - 1e-12:
+                slowed[i] = True
+                alpha = min(alpha, bound[i] / r) if r < 0.0 else 0.0
+        if alpha < 1.0:
+            out = out * max(alpha, 0.0)
+    # the safe-braking check on the command's outcome (the kernel's text)
+    steps = int(min(np.max(np.ceil(np.abs(out - qd) / (accel * dt) - 1e-9), initial=0.0), lab_kernels.ROLLOUT))
+    closing = np.zeros(len(clear), dtype=bool)
+    for i in np.flatnonzero(active):
+        v, qr, d = qd.copy(), q.copy(), float(clear[i])
+        lowest = d
+        for _ in range(steps):
+            v = v + np.clip(out - v, -accel * dt, accel * dt)
+            up = np.sqrt(2.0 * limit_brake * np.maximum(upper - qr, 0.0))
+            v = np.clip(v, -np.sqrt(2.0 * limit_brake * np.maximum(qr - lower, 0.0)), up)
+            qr = qr + v * dt
+            d += float(G[i] @ v) * dt
+            lowest = min(lowest, d)
+        now = float(G[i] @ v)
+        if now < 0.0:
+            Am = kappa * float(np.where(G[i] * v < -_least(now)[0], np.abs(G[i]) * accel, 0.0).sum())
+            lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
+        closing[i] = lowest < stop - lab_kernels.BRAKE_SLACK and lowest < clear[i]
+    for i in np.flatnonzero(closing):
+        least = float(_least(G[i] @ qd)[0])
+        for j in range(3):
+            if G[i, j] * qd[j] < -least and out[j] * qd[j] > 0.0:
+                out[j] = 0.0
+            elif G[i, j] * qd[j] > least and out[j] * qd[j] < qd[j] * qd[j]:
+                out[j] = min(max(qd[j], lo_v[j]), hi_v[j])  # one that opens the gap keeps its speed
+            else:
+                continue
+            slowed[i] = active[i] = True
+    pick = active & (slowed if slowed.any() else True)
+    if pick.any():
+        left = np.where(pick, (val - stop) / (zone - stop), np.inf)
+        i = int(np.argmin(left))
+        report[:4] = kind[i], cap[i], clear[i], left[i]
+    if not slowed.any():
+        return x, (command, report)
+    report[4] = 1.0
+    return x, ((brake, q.copy(), out, True, scale), report)
+
+
+#: the Comau's guard between its law and its drives: the command slowed along the approaches to an obstacle
+COMAU_GUARD = Block(
+    "Comau guard (capsules against the platforms)",
+    state=(),
+    inputs=("command", "q", "q_dot", "world"),
+    outputs=("command", "report"),
+    params=("cm", "radii", "drives", "settings"),
+    reference=_guard_reference,
+    kernel=lab_kernels.comau_guard,
 )
 
 

@@ -12,10 +12,11 @@ import math
 
 import numpy as np
 
+from app.control.guard_kernels import _segment_closest
 from app.models.kernels import _jit
 from app.models.lab_kernels import comau_ik, comau_tool, lstsq3, mtv, mv
 
-__all__ = ["comau_law", "winch_law"]
+__all__ = ["arm_points", "comau_guard", "comau_law", "guard_hazards", "winch_law"]
 
 SETTLED, REMOTE, MOTION_COMP, BRAKE = 0, 1, 2, 3  # the Comau's modes in comau_law (HOLD and E-STOP brake alike)
 
@@ -122,6 +123,369 @@ def winch_law(x, u, p, dt):
     return (target, has_target), (ref, ref_v)
 
 
+# ---------------------------------------------------------------------------------------------- the Comau's guard
+#: the guard's obstacles (the report's kind): EM8000's deck under the robot, the robot's pedestal and column,
+#: EM1500's deck; and the report's −1: none in its zone
+DECK1, PEDESTAL, DECK2 = 0, 1, 2
+GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+CONTRIBUTES = 1e-6  # [m/s]: the least part of a clearance's rate a joint must carry to count as closing or opening it
+BRAKE_SLACK = 0.002  # [m]: how far below the stop distance the check lets braking end before it brakes (at the stop,
+#: an opening command's first step may still close by a fraction of a millimetre: that is not worth braking it for)
+ROLLOUT = 400  # steps: the longest the check follows the drives to the command (2 s at the lab's 5 ms)
+CONTRIBUTES_SHARE = 0.05  # … and the least share of the rate (a joint that barely moves a gap is not braked for it)
+
+
+@_jit
+def arm_points(cm, q, P, J):
+    """The Comau's shoulder, elbow, wrist and tool point in {r} into ``P`` (4, 3), and their Jacobians ∂p/∂q into
+    ``J`` (4, 3, 3).  In the arm's plane (radial u, height z) eq. (3) is a sum of the links' own vectors —
+    shoulder (a1, d1), upper arm a2 (s2, c2), forearm a3 (−c3, −s3), extension L (−s3, c3) — and a point is
+    (c1 u, −s1 u, z): the tool's row is eq. (3)'s p_t^r and its Jacobian eq. (5)'s."""
+    a1, d1, a2, a3, L = cm[0], cm[1], cm[2], cm[3], cm[4]
+    s1, c1 = math.sin(q[0]), math.cos(q[0])
+    s2, c2 = math.sin(q[1]), math.cos(q[1])
+    s3, c3 = math.sin(q[2]), math.cos(q[2])
+    u = (a1, a1 + a2 * s2, a1 + a2 * s2 - a3 * c3, a1 + a2 * s2 - a3 * c3 - L * s3)
+    z = (d1, d1 + a2 * c2, d1 + a2 * c2 - a3 * s3, d1 + a2 * c2 - a3 * s3 + L * c3)
+    u2 = (0.0, a2 * c2, a2 * c2, a2 * c2)
+    z2 = (0.0, -a2 * s2, -a2 * s2, -a2 * s2)
+    u3 = (0.0, 0.0, a3 * s3, a3 * s3 - L * c3)
+    z3 = (0.0, 0.0, -a3 * c3, -a3 * c3 - L * s3)
+    for k in range(4):
+        P[k, 0], P[k, 1], P[k, 2] = c1 * u[k], -s1 * u[k], z[k]
+        J[k, 0, 0], J[k, 1, 0], J[k, 2, 0] = -s1 * u[k], -c1 * u[k], 0.0
+        J[k, 0, 1], J[k, 1, 1], J[k, 2, 1] = c1 * u2[k], -s1 * u2[k], z2[k]
+        J[k, 0, 2], J[k, 1, 2], J[k, 2, 2] = c1 * u3[k], -s1 * u3[k], z3[k]
+
+
+@_jit
+def _disc_gap(x, c, n, R):
+    """Clearance of the point x from the disc (centre c, unit normal n, radius R) and the unit direction from the
+    disc's nearest point to x: over the disc the signed height (negative: through it) along n, beyond its rim the
+    distance to the rim."""
+    h = n[0] * (x[0] - c[0]) + n[1] * (x[1] - c[1]) + n[2] * (x[2] - c[2])
+    w0, w1, w2 = x[0] - c[0] - h * n[0], x[1] - c[1] - h * n[1], x[2] - c[2] - h * n[2]
+    rho = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if rho <= R:
+        return h, n[0], n[1], n[2]
+    k = (rho - R) / rho
+    e0, e1, e2 = w0 * k + h * n[0], w1 * k + h * n[1], w2 * k + h * n[2]
+    d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+    if d <= 0.0:
+        return 0.0, n[0], n[1], n[2]
+    return d, e0 / d, e1 / d, e2 / d
+
+
+@_jit
+def _segment_disc(a, b, c, n, R):
+    """The least clearance of the segment a–b from the disc (:func:`_disc_gap`) and where on it (s in [0, 1]):
+    the ends and a golden-section search between them (the distance to a convex set is convex along a line)."""
+    x = np.empty(3)
+    lo, hi = 0.0, 1.0
+    for _ in range(40):
+        m1 = hi - GOLDEN * (hi - lo)
+        m2 = lo + GOLDEN * (hi - lo)
+        for i in range(3):
+            x[i] = a[i] + (b[i] - a[i]) * m1
+        f1 = _disc_gap(x, c, n, R)[0]
+        for i in range(3):
+            x[i] = a[i] + (b[i] - a[i]) * m2
+        f2 = _disc_gap(x, c, n, R)[0]
+        if f1 <= f2:
+            hi = m2
+        else:
+            lo = m1
+    best_s, best = 0.0, _disc_gap(a, c, n, R)[0]
+    for s in (1.0, 0.5 * (lo + hi)):
+        for i in range(3):
+            x[i] = a[i] + (b[i] - a[i]) * s
+        f = _disc_gap(x, c, n, R)[0]
+        if f < best:
+            best_s, best = s, f
+    for i in range(3):
+        x[i] = a[i] + (b[i] - a[i]) * best_s
+    d, e0, e1, e2 = _disc_gap(x, c, n, R)
+    return d, best_s, e0, e1, e2
+
+
+@_jit
+def _grad(J, k, s, e0, e1, e2, g):
+    """g = eᵀ ∂p/∂q at the point s of capsule k (between arm points k and k + 1: a point at a fixed share of a rigid
+    segment moves as the share of its ends)."""
+    for j in range(3):
+        ja0 = J[k, 0, j] + s * (J[k + 1, 0, j] - J[k, 0, j])
+        ja1 = J[k, 1, j] + s * (J[k + 1, 1, j] - J[k, 1, j])
+        ja2 = J[k, 2, j] + s * (J[k + 1, 2, j] - J[k, 2, j])
+        g[j] = e0 * ja0 + e1 * ja1 + e2 * ja2
+
+
+#: the guard's rows: for each capsule and obstacle the nearest point and each end (a capsule sweeping round can
+#: close on an obstacle at its far end while its nearest point still recedes): EM8000's deck 3 × 2 (its ends), the
+#: pedestal 2 × 3, EM1500's deck 3 × 3
+ROWS = 21
+
+
+@_jit
+def _away(J, k, s, a, b, o, dist, g):
+    """``g`` (a row of G): the gradient of |p − o| at the point p at s of capsule k (a–b), o fixed (zero if p = o)."""
+    if dist > 1e-12:
+        _grad(J, k, s, (a[0] + (b[0] - a[0]) * s - o[0]) / dist, (a[1] + (b[1] - a[1]) * s - o[1]) / dist,
+              (a[2] + (b[2] - a[2]) * s - o[2]) / dist, g)  # fmt: skip
+    else:
+        g[0], g[1], g[2] = 0.0, 0.0, 0.0
+
+
+@_jit
+def guard_hazards(cm, radii, world, q, G, val, kind, cap):
+    """The Comau's clearances [m] from its obstacles at q and their gradients ∂d/∂q (rows of ``G`` (:data:`ROWS`,
+    3)), with each one's obstacle (:data:`DECK1`, :data:`PEDESTAL`, :data:`DECK2`) and capsule (0 upper arm,
+    1 forearm, 2 extension arm: arm points k to k + 1 of :func:`arm_points`); returns how many (:data:`ROWS`).
+    For each capsule and obstacle: the nearest point's clearance and each end's (EM8000's deck, a plane: the ends'
+    only, one of them the nearest).
+
+    ``world`` = (deck1 (4,): EM8000's deck n·x = h in {r}; pedestal (2, 3): its axis from the deck to the column's
+    top, and its radius (1,); deck2 (7,): EM1500's deck centre, up normal and radius in {r}).  The capsules'
+    ``radii`` (3,).  The upper arm is joined to the column at the shoulder: its pedestal pair is not checked."""
+    deck1, ped, ped_r, deck2 = world
+    P = np.empty((4, 3))
+    J = np.empty((4, 3, 3))
+    arm_points(cm, q, P, J)
+    c2 = deck2[0:3]
+    n2 = deck2[3:6]
+    o = np.empty(3)
+    m = 0
+    for k in range(3):
+        a, b, r = P[k], P[k + 1], radii[k]
+        # EM8000's deck: a plane, each end's height
+        for s in (0.0, 1.0):
+            e = a if s == 0.0 else b
+            val[m], kind[m], cap[m] = deck1[0] * e[0] + deck1[1] * e[1] + deck1[2] * e[2] - deck1[3] - r, DECK1, k
+            _grad(J, k, s, deck1[0], deck1[1], deck1[2], G[m])
+            m += 1
+        # the pedestal and column: the segments' nearest points, then each end's nearest point on the pedestal
+        if k > 0:
+            for which in range(3):
+                if which == 0:
+                    dist, s, t = _segment_closest(a, b, ped[0], ped[1])
+                else:
+                    s = 0.0 if which == 1 else 1.0
+                    e = a if which == 1 else b
+                    dist, _, t = _segment_closest(e, e, ped[0], ped[1])
+                for i in range(3):
+                    o[i] = ped[0, i] + (ped[1, i] - ped[0, i]) * t
+                val[m], kind[m], cap[m] = dist - r - ped_r[0], PEDESTAL, k
+                _away(J, k, s, a, b, o, dist, G[m])
+                m += 1
+        # EM1500's deck: a disc; the segment's nearest point, then each end
+        for which in range(3):
+            if which == 0:
+                d, s, e0, e1, e2 = _segment_disc(a, b, c2, n2, deck2[6])
+            else:
+                s = 0.0 if which == 1 else 1.0
+                d, e0, e1, e2 = _disc_gap(a if which == 1 else b, c2, n2, deck2[6])
+            val[m], kind[m], cap[m] = d - r, DECK2, k
+            _grad(J, k, s, e0, e1, e2, G[m])
+            m += 1
+    return m
+
+
+@_jit
+def comau_guard(x, u, p, dt):
+    """The Comau's joint command scaled along the directions that bring it nearer an obstacle (issue 32, item 5:
+    :mod:`app.control.guard`'s velocity damper, Faverjon & Tournassoud 1987; Kanoun, Lamiraux & Wieber 2011 eq. 10,
+    with the braking bound of Flacco, De Luca & Khatib 2015 eq. 13 that the lab's own program puts on its joint
+    limits); no state.
+
+    Inputs (command, q, q̇, world): the law's command (brake, q_ref, q̇_ref, use q̇_ref, speed scale), the joints and
+    their rates, the obstacles in {r} (:func:`guard_hazards`).  Parameters (cm, radii, drives (lower, upper, speed,
+    accel, the limits' braking b, τ: the drives' own), settings (zone, stop, braking share κ)).  The drives would
+    move at v = (q_ref − q)/τ (+ q̇_ref), within speed × scale (:func:`app.sim.kernels.motion_filter_update`).
+
+    1. Each clearance d is first taken as what braking from the arm's own approach g·q̇ < 0 would leave,
+       d − (g·q̇)²/(2A'), A' = κ Σ |g_j| a_j over the joints that close it (each braking at its limit a_j, κ a
+       margin; a joint that opens it but reaches its own limit before those could stop is left out of g·q̇): an
+       arm already closing fast is slowed sooner.
+    2. For each hazard in its zone (d < zone) whose rate g·v is an approach (< 0) the rate is bounded by
+
+           g·v ≥ −min(s |g·v⁰|, (d − stop)/(2 dt), √(2 A (d − stop))),   s = (d − stop)/(zone − stop),
+
+       A = κ a_min |g| (the approach's deceleration when the joints change along g, as the correction does), and
+       only the component along g is removed (a few passes, then the whole rate scaled down if a bound still
+       fails: zero meets every bound); a correction never takes a joint faster towards its limit than the drives'
+       own braking there allows (√(2 b (q_max − q)), Flacco et al. eq. 13: a joint at its limit cannot open a gap).
+    3. The command's outcome is checked, each clearance in its zone to first order: where the drives, following
+       the rate until they have it (each joint's speed changing by a_j dt a step, braking to its limit as the
+       drives' velocity bound does: a joint that opens a gap stops at its limit), would pass below the stop
+       distance (:data:`BRAKE_SLACK` under it), or leave the arm closing faster than it could then brake short of
+       it (with A'), the joints that close that gap are commanded to rest (the drives brake them at their limits;
+       a joint the command already turns back keeps its command) and the joints that open it keep their speed, as
+       A' assumes (slowing them would close it too).
+
+    A rate that opens every hazard, with the arm not closing on one too fast, or a BRAKE is returned as it came,
+    bit for bit; a slowed one as a pure rate (q_ref = q, q̇_ref = v).
+
+    y = (command, report (5,): of the hazards that slowed it (else of all in their zones) the one with the least of
+    its zone left — obstacle (−1: none in its zone), capsule, its clearance as it is [m], share of its zone left
+    (of the braking-adjusted clearance), slowed (1.0))."""
+    command, q, qd, world = u
+    cm, radii, drives, settings = p
+    brake, q_ref, v_ref, use_v, scale = command
+    lower, upper, speed, accel, limit_brake, tau = drives
+    zone, stop, kappa = settings[0], settings[1], settings[2]
+    report = np.empty(5)
+    report[0], report[1], report[2], report[3], report[4] = -1.0, -1.0, math.nan, math.nan, 0.0
+    if brake:
+        return x, (command, report)
+    G = np.zeros((ROWS, 3))
+    val = np.zeros(ROWS)
+    kind = np.zeros(ROWS, np.int64)
+    cap = np.zeros(ROWS, np.int64)
+    m = guard_hazards(cm, radii, world, q, G, val, kind, cap)
+    clear = val.copy()
+    v0 = np.empty(3)
+    t = max(tau, dt)
+    a_min = min(accel[0], min(accel[1], accel[2]))
+    hi_v, lo_v = np.empty(3), np.empty(3)  # the speeds the drives allow, up and down (near a limit, its braking)
+    for j in range(3):
+        lim = speed[j] * scale
+        up, down = max(upper[j] - q[j], 0.0), max(q[j] - lower[j], 0.0)
+        hi_v[j] = min(lim, min(math.sqrt(2.0 * limit_brake[j] * up), up / dt))
+        lo_v[j] = -min(lim, min(math.sqrt(2.0 * limit_brake[j] * down), down / dt))
+        v = (q_ref[j] - q[j]) / t + (v_ref[j] if use_v else 0.0)
+        v0[j] = min(max(v, -lim), lim)
+    active = np.zeros(ROWS, np.bool_)
+    bound = np.zeros(ROWS)
+    slowed = np.zeros(ROWS, np.bool_)
+    closing = np.zeros(ROWS, np.bool_)
+    any_active = False
+    for i in range(m):
+        gg = G[i, 0] * G[i, 0] + G[i, 1] * G[i, 1] + G[i, 2] * G[i, 2]
+        A = kappa * a_min * math.sqrt(gg)  # the approach's deceleration when the joints change along g, a margin
+        # the arm's own approach (its momentum), less what a joint opening it gives if that joint reaches its limit
+        # before the joints closing it could stop
+        T = 0.0
+        for j in range(3):
+            if G[i, j] * qd[j] < 0.0:
+                T = max(T, abs(qd[j]) / accel[j])
+        now = 0.0
+        for j in range(3):
+            c = G[i, j] * qd[j]
+            if c > 0.0 and (upper[j] - q[j] if qd[j] > 0.0 else q[j] - lower[j]) < abs(qd[j]) * T:
+                c = 0.0
+            now += c
+        if now < 0.0:
+            Am = 0.0  # braking the joints that close it, each at its limit, with the margin
+            least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
+            for j in range(3):
+                if G[i, j] * qd[j] < -least:
+                    Am += kappa * abs(G[i, j]) * accel[j]
+            if Am > 0.0:
+                val[i] -= now * now / (2.0 * Am)  # what braking from it now would leave
+        if val[i] >= zone:
+            continue
+        active[i] = True
+        any_active = True
+        r0 = G[i, 0] * v0[0] + G[i, 1] * v0[1] + G[i, 2] * v0[2]
+        room = max(val[i] - stop, 0.0)
+        if gg <= 1e-24:
+            bound[i] = -math.inf  # no gradient (a distance no joint changes): nothing to scale
+        elif r0 < 0.0:
+            s = min(max(room / (zone - stop), 0.0), 1.0)
+            bound[i] = -min(s * -r0, min(room / (2.0 * dt), math.sqrt(2.0 * A * room)))
+        else:
+            bound[i] = 0.0  # not approaching: never slowed, and no correction may turn it into an approach
+    out = v0.copy()
+    if any_active:
+        for _ in range(4):
+            changed = False
+            for i in range(m):
+                if not active[i] or bound[i] == -math.inf:
+                    continue
+                r = G[i, 0] * out[0] + G[i, 1] * out[1] + G[i, 2] * out[2]
+                gg = G[i, 0] * G[i, 0] + G[i, 1] * G[i, 1] + G[i, 2] * G[i, 2]
+                if r < bound[i] - 1e-15:
+                    c = (bound[i] - r) / gg
+                    for j in range(3):  # a joint at its limit cannot take the correction
+                        out[j] = min(max(out[j] + c * G[i, j], min(lo_v[j], v0[j])), max(hi_v[j], v0[j]))
+                    slowed[i] = True
+                    changed = True
+            if not changed:
+                break
+        alpha = 1.0
+        for i in range(m):
+            if not active[i] or bound[i] == -math.inf:
+                continue
+            r = G[i, 0] * out[0] + G[i, 1] * out[1] + G[i, 2] * out[2]
+            if r < bound[i] - 1e-12:
+                slowed[i] = True
+                alpha = min(alpha, bound[i] / r) if r < 0.0 else 0.0
+        if alpha < 1.0:
+            for j in range(3):
+                out[j] *= max(alpha, 0.0)
+    # 3. the safe-braking check on the command's outcome (the text's third step)
+    steps = 0
+    for j in range(3):
+        steps = max(steps, int(math.ceil(abs(out[j] - qd[j]) / (accel[j] * dt) - 1e-9)))  # noqa: RUF046 (numba)
+    steps = min(steps, ROLLOUT)
+    v = np.empty(3)
+    qr = np.empty(3)
+    for i in range(m):
+        if not active[i]:
+            continue  # outside its zone, braking from its approach included: the first-order model is not for far
+        for j in range(3):
+            v[j], qr[j] = qd[j], q[j]
+        d = clear[i]
+        lowest = d
+        for _ in range(steps):
+            for j in range(3):  # the drives: toward the command at the acceleration limit, braking at the joint limits
+                vj = v[j] + min(max(out[j] - v[j], -accel[j] * dt), accel[j] * dt)
+                up = math.sqrt(2.0 * limit_brake[j] * max(upper[j] - qr[j], 0.0))
+                down = math.sqrt(2.0 * limit_brake[j] * max(qr[j] - lower[j], 0.0))
+                v[j] = min(max(vj, -down), up)
+                qr[j] += v[j] * dt
+            d += (G[i, 0] * v[0] + G[i, 1] * v[1] + G[i, 2] * v[2]) * dt
+            lowest = min(lowest, d)
+        now = G[i, 0] * v[0] + G[i, 1] * v[1] + G[i, 2] * v[2]
+        if now < 0.0:
+            Am = 0.0
+            least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
+            for j in range(3):
+                if G[i, j] * v[j] < -least:
+                    Am += kappa * abs(G[i, j]) * accel[j]
+            lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
+        if lowest < stop - BRAKE_SLACK and lowest < clear[i]:
+            closing[i] = True
+    for i in range(m):
+        if not closing[i]:
+            continue
+        least = max(CONTRIBUTES, CONTRIBUTES_SHARE * abs(G[i, 0] * qd[0] + G[i, 1] * qd[1] + G[i, 2] * qd[2]))
+        for j in range(3):
+            if G[i, j] * qd[j] < -least and out[j] * qd[j] > 0.0:
+                out[j] = 0.0
+                slowed[i] = True
+                active[i] = True
+            elif G[i, j] * qd[j] > least and out[j] * qd[j] < qd[j] * qd[j]:
+                out[j] = min(max(qd[j], lo_v[j]), hi_v[j])  # one that opens the gap keeps its speed (to a limit)
+                slowed[i] = True
+                active[i] = True
+    any_slowed = False
+    for i in range(m):
+        any_slowed = any_slowed or slowed[i]
+    best, best_share = -1, math.inf
+    for i in range(m):
+        if not active[i] or (any_slowed and not slowed[i]):
+            continue
+        share = (val[i] - stop) / (zone - stop)
+        if share < best_share:
+            best, best_share = i, share
+    if best >= 0:
+        report[0], report[1], report[2], report[3] = float(kind[best]), float(cap[best]), clear[best], best_share
+    if not any_slowed:
+        return x, (command, report)
+    report[4] = 1.0
+    return x, ((brake, q.copy(), out, np.bool_(True), scale), report)
+
+
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) the laws as their blocks call them from Python (for
     :func:`app.warmup.warm_up`; the lab's step compiles them into its own code)."""
@@ -130,7 +494,11 @@ def warm_up_steps() -> list:
     view = (z6, z6, eye3, eye3, z6, z6, eye3, eye3)
     law_p = (cm, eye4, np.array([1.0, -1.0]), eye4, eye4, o3, z3, -o3, o3)
     winch_u = (np.bool_(True), 0.0, np.ones(1), (0.0, 0.0), (z3, z3), (eye4, eye3, z6))
+    world = (np.array([0.0, 0.0, 1.0, -1.0]), np.zeros((2, 3)), np.ones(1), np.array([2.0, 0, 0, 0, 0, 1, 0.8]))
+    command = (np.bool_(False), z3, z3, np.bool_(True), 1.0)
+    guard_p = (cm, o3, (-o3, o3, o3, o3, o3, 0.05), np.array([0.15, 0.02, 0.5]))
     return [
         lambda: comau_law((), (MOTION_COMP, z3, z3, (z3, z3, z3, z3), view), law_p, 0.01),
+        lambda: comau_guard((), (command, z3, z3, world), guard_p, 0.01),
         lambda: winch_law((np.zeros(3), np.bool_(False)), winch_u, (eye4, np.ones(1)), 0.01),
     ]

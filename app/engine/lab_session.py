@@ -31,6 +31,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from app.control.lab import ComauGuard
 from app.engine.alarms import AlarmList
 from app.engine.jobs import Deferred
 from app.engine.scene import CommandError, Scene, command
@@ -495,6 +496,8 @@ class LabSession(Scene):
         limited = lab.comau_mode == "motion_comp" and pushed and bool(getattr(lab, "work_shift_limited", False))
         al.set("work_point_limit", limited, text="Work point at the Comau's reach: it stops there")
         al.set("payload_below_deck", self._payload_below_deck(), text="Load below the EM1500 deck")
+        hz = self._hazard()
+        al.set("hazard_slowed", hz.slowed and hz.kind == "collision", text=f"Slowed near {hz.text}")
         slack, snap, rehit, sideways = self._landing_events  # the landing on EM1500 (issue 30, item 5)
         self._landing_events = [False] * 4
         al.set("slack_wire", slack, text="Slack wire: the load is not on the deck and the wire does not carry it")
@@ -716,7 +719,14 @@ class LabSession(Scene):
         )
 
     def _hazard(self) -> HazardState:
-        """The work point's range edge the operator's shift was last scaled for (issue 32, item 5), if near."""
+        """The hazard nearest its stop (issue 32, item 5): the Comau's arm near a platform's deck or its pedestal
+        (:class:`app.control.lab.ComauGuard`, ahead of anything else), else the work point's range edge the
+        operator's shift was last scaled for, if near."""
+        rep = self.lab.guard_report
+        if rep[0] >= 0 and self.plc is None:  # the simulated lab (on the real one the PLC moves the Comau)
+            text = ComauGuard.text(rep)
+            return HazardState(kind="collision", name=text.split(":")[0], value=float(rep[2]), share=float(rep[3]),
+                               slowed=bool(rep[4]), text=text)  # fmt: skip
         hz = self.lab.work_hazard
         if hz is None or self.lab.comau_mode != "motion_comp":
             return HazardState()

@@ -316,8 +316,8 @@ class _LabRun:
             lab._reach_ok if reach is not None else np.zeros(3),
         )  # fmt: skip
         wire = (wf.lower, wf.upper, wf.speed, wf.accel, float(wf.tau))
-        params = (lab._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)))
-        y = (lab._rates_buf, lab.p_t_n1, lab.p_t_g, lab.v_t_g, lab.a_t_g, lab.at_limit, *lab._out)
+        params = (lab._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)), lab._guard_p)
+        y = (lab._rates_buf, lab.p_t_n1, lab.p_t_g, lab.v_t_g, lab.a_t_g, lab.at_limit, *lab._out, lab.guard_report)
         platforms = tuple(
             (
                 (p.filter.x, p.filter.v, p.filter.a),

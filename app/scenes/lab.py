@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.control.guard import scale_in_box
-from app.control.lab import BRAKE, COMAU_LAW, WINCH_LAW
+from app.control.lab import BRAKE, COMAU_GUARD, COMAU_LAW, WINCH_LAW, ComauGuard
 from app.errors import BosunError
 from app.models import lab_kernels as model_kernels
 from app.models.closed_form import ComauArm
@@ -176,6 +176,11 @@ class MotionLab:
         self._geometry = (self._comau, *c, m1.a_n, m1.b_b, m2.a_n, m2.b_b)
         self._target = np.zeros(3)
         self._out = tuple(np.zeros(n) for n in (3, 3, 3, 6, 6))  # e_t_b2, p_w_g, p_p_g, legs1, legs2
+        # the Comau's guard against the platforms (issue 32, item 5) and its report of the last step
+        deck2_radius = float(np.max(np.linalg.norm(m2.b_b[:, :2], axis=1)))  # EM1500's deck, as the load's
+        self.guard = ComauGuard.for_lab(self.robot, self._comau, layout.T_b1_r, deck2_radius)
+        self._guard_p = self.guard.record()
+        self.guard_report = np.array([-1.0, -1.0, np.nan, np.nan, 0.0])
         self._use_kernels = False  # the set-up below runs the reference; the flag is set at the end
         self.payload_target_b2: NDArray[np.float64] | None = None
         # what the controllers see of the platforms: None, the true states; else one streaming sensor per
@@ -650,8 +655,9 @@ class MotionLab:
         offset = (*self.tool_offset, *self._law_shift())
         u = (true, seen, (mode, v_cmd, offset, track, float(w.speed_command)))
         wire = (wf.lower, wf.upper, wf.speed, wf.accel, float(wf.tau))
-        p = (self._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)))
+        p = (self._geometry, f.limits(), wire, (float(pd.damping), float(pd.g)), self._guard_p)
         y = (self._rates_buf, self.p_t_n1, self.p_t_g, self.v_t_g, self.a_t_g, self.at_limit, *self._out)
+        y = y + (self.guard_report,)
         has, pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, h_err = lab_kernels.lab_step(x, u, p, y, float(dt))
         if has and self.payload_target_b2 is None:
             self.payload_target_b2 = target.copy()
@@ -701,6 +707,10 @@ class MotionLab:
         u = (mode, f.x, v_cmd, offset, (e1, ed1, R1, Rd1, e2, ed2, R2, Rd2))
         law_p = (*g[:3], *g[5:9], f.lower, f.upper)
         _, command = COMAU_LAW.step((), u, law_p, dt, use_kernels=False)
+        world = self._guard_world(e1, R1, e2, R2)
+        guard_p = (g[0], self._guard_p[0], f.limits(), self._guard_p[5])
+        _, (command, report) = COMAU_GUARD.step((), (command, f.x, f.v, world), guard_p, dt, use_kernels=False)
+        self.guard_report[:] = report
         (f.x, f.v, f.a, _), _ = COMAU_DRIVES.step((f.x, f.v, f.a, self.at_limit), command, f.limits(), dt, False)
         self._update_tool()
         # the winch: its law (EM1500 as the controllers see it, eq. 39), then its drum
@@ -716,6 +726,17 @@ class MotionLab:
         # the load
         self.pendulum.step(dt, R_G_D.T @ self.a_t_g, self.winch.length, self.winch.speed)
         return self._sample()
+
+    def _guard_world(self, e1, R1, e2, R2) -> tuple:
+        """The Comau's obstacles in {r} (the reference of :func:`app.scenes.lab_kernels.guard_world`): EM1500's deck
+        where the controller sees it, through {n1} (eq. 39) and EM8000's body (eq. 54 inverted)."""
+        _, deck1, ped, ped_r, deck_r, _ = self._guard_p
+        T12, Tr = self._geometry[5], self.layout.T_b1_r
+        c_n1 = T12[:3, 3] + T12[:3, :3] @ e2[:3]
+        n_n1 = T12[:3, :3] @ (R2 @ np.array([0.0, 0.0, -1.0]))
+        c = Tr[:3, :3].T @ (R1.T @ (c_n1 - e1[:3]) - Tr[:3, 3])
+        n = Tr[:3, :3].T @ (R1.T @ n_n1)
+        return deck1, ped, ped_r, np.array([*c, *n, deck_r[0]])
 
     def _update_tool(self) -> None:
         p1 = self.platforms[0]

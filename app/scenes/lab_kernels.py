@@ -2,7 +2,8 @@
 
 :func:`lab_step` does what :meth:`app.scenes.lab.MotionLab.step` does after the platforms, calling the blocks
 in the diagram's order: the platforms' body rates (eqs. 33, 47, 51) as true and as the controllers see them
-(the sensor), the Comau's law (:func:`app.control.lab_kernels.comau_law`) and drives
+(the sensor), the Comau's law (:func:`app.control.lab_kernels.comau_law`), its guard
+(:func:`app.control.lab_kernels.comau_guard`: the obstacles from :func:`guard_world`) and drives
 (:func:`app.sim.kernels.drives_block`), the tool point (eqs. 54–57), the winch's law
 (:func:`app.control.lab_kernels.winch_law`) and drum (:func:`app.sim.kernels.drum_block`), the load
 (:func:`app.models.pendulum_kernels.pendulum_step`) and the sample.  The reference is the same diagram run block
@@ -16,11 +17,14 @@ Records (every array C-contiguous float64, bool for ``at_limit``; updated in pla
   η̈1, η2, η̇2, η̈2) as the sensors report them, used by the controllers when ``measured``; command (Comau mode
   of :mod:`app.control.lab_kernels`, tool velocity in {r}, offset (p, ṗ in {n1}, the operator's shift d, ḋ of the
   work point in {b2}), winch tracks, winch speed);
-* ``p`` = (geometry, joints, wire, load): geometry (cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r, w_b2,
-  park_q, a_n1, b_b1, a_n2, b_b2); the drives' (lower, upper, speed, accel, brake, τ); the drum's (lower,
-  upper, speed, accel, τ); the load's (c, g);
+* ``p`` = (geometry, joints, wire, load, guard): geometry (cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r,
+  w_b2, park_q, a_n1, b_b1, a_n2, b_b2); the drives' (lower, upper, speed, accel, brake, τ); the drum's (lower,
+  upper, speed, accel, τ); the load's (c, g); the Comau's guard (its capsules' radii (3,), EM8000's deck (4,),
+  the pedestal (2, 3) and its radius (1,), EM1500's deck radius (1,), settings (zone, stop, braking share)):
+  :class:`app.control.lab.ComauGuard`;
 * ``y`` (written): (rates (2, 3, 3, 3): R, Ṙ, R̈ of both bodies; p_t^n1, p_t^g, ṗ_t^g, p̈_t^g; at_limit (4,);
-  e_b2 (tool minus work point in {b2}); the work point and the load (eq. 58) in {g}; both platforms' legs).
+  e_b2 (tool minus work point in {b2}); the work point and the load (eq. 58) in {g}; both platforms' legs; the
+  guard's report (5,) of :func:`app.control.lab_kernels.comau_guard`).
 
 Returns (has_target, α, β, α̇, β̇, payload height error).
 """
@@ -31,12 +35,32 @@ import math
 
 import numpy as np
 
-from app.control.lab_kernels import comau_law, winch_law
+from app.control.lab_kernels import comau_guard, comau_law, winch_law
 from app.models.kernels import _jit
 from app.models.lab_kernels import leg_lengths, mtv, mv, pose_in, stewart_rates, tool_on_platform
 from app.sim.kernels import drives_block, drum_block, pendulum_step
 
-__all__ = ["lab_step", "warm_up_steps"]
+__all__ = ["guard_world", "lab_step", "warm_up_steps"]
+
+
+@_jit
+def guard_world(guard_p, T_n1_n2, T_b1_r, cx1, cR1, cx2, cR2):
+    """The Comau's obstacles in its base {r} (:func:`app.control.lab_kernels.guard_hazards`): EM8000's deck and the
+    pedestal, fixed there, and EM1500's deck (z = 0 of {b2}, up = −z, a disc) where the controller sees it (eq. 39
+    through {n1}, eq. 54 inverted)."""
+    _, deck1, ped, ped_r, deck_r, _ = guard_p
+    deck2 = np.empty(7)
+    cn = mv(T_n1_n2, cx2[0], cx2[1], cx2[2])
+    nz = mv(cR2, 0.0, 0.0, -1.0)
+    nn = mv(T_n1_n2, nz[0], nz[1], nz[2])
+    b = mtv(cR1, T_n1_n2[0, 3] + cn[0] - cx1[0], T_n1_n2[1, 3] + cn[1] - cx1[1], T_n1_n2[2, 3] + cn[2] - cx1[2])
+    cr = mtv(T_b1_r, b[0] - T_b1_r[0, 3], b[1] - T_b1_r[1, 3], b[2] - T_b1_r[2, 3])
+    nb = mtv(cR1, nn[0], nn[1], nn[2])
+    nr = mtv(T_b1_r, nb[0], nb[1], nb[2])
+    for i in range(3):
+        deck2[i], deck2[3 + i] = cr[i], nr[i]
+    deck2[6] = deck_r[0]
+    return (deck1, ped, ped_r, deck2)
 
 
 @_jit
@@ -44,8 +68,8 @@ def lab_step(x, u, p, y, dt):
     """One Motion-Lab step after the platforms (see the module text for the records)."""
     joints, wire, load, (target, has_target) = x
     (x1, v1, a1, x2, v2, a2), seen, command = u
-    geometry, joint_p, wire_p, (damping, g) = p
-    rates, p_t_n1, p_t_g, v_t_g, a_t_g, at_limit, e_b2, p_w_g, p_p_g, legs1, legs2 = y
+    geometry, joint_p, wire_p, (damping, g), guard_p = p
+    rates, p_t_n1, p_t_g, v_t_g, a_t_g, at_limit, e_b2, p_w_g, p_p_g, legs1, legs2, hazard = y
     cm, T_base, signs, T_g_n1, T_g_n2, T_n1_n2, T_b1_r, w_b2, park_q, a_n1, b_b1, a_n2, b_b2 = geometry
     comau_mode, v_cmd, offset, track, speed_cmd = command
     measured, cx1, cv1, ca1, cx2, cv2, ca2 = seen
@@ -67,6 +91,10 @@ def lab_step(x, u, p, y, dt):
     law_p = (cm, T_base, signs, T_n1_n2, T_b1_r, w_b2, park_q, joint_p[0], joint_p[1])
     view = (cx1, cv1, cR1, cRd1, cx2, cv2, cR2, cRd2)
     _, joint_cmd = comau_law((), (comau_mode, q, v_cmd, offset, view), law_p, dt)
+    world = guard_world(guard_p, T_n1_n2, T_b1_r, cx1, cR1, cx2, cR2)
+    _, (joint_cmd, report) = comau_guard((), (joint_cmd, q, qd, world), (cm, guard_p[0], joint_p, guard_p[5]), dt)
+    for i in range(5):
+        hazard[i] = report[i]
     drives_block((q, qd, qdd, at_limit), joint_cmd, joint_p, dt)
     # ---- the tool point (eqs. 54–57)
     pt, vt, at = tool_on_platform(cm, T_b1_r, (x1, v1, a1), (R1, Rd1, Rdd1), joints)
@@ -129,9 +157,17 @@ def warm_up_steps() -> list:
         geometry = (cm, eye, signs, eye, eye, eye, eye, o3, z3, a_n, b_b, a_n, b_b)
         joints = (vec(3, -3.0), vec(3, 3.0), o3, o3, o3, 0.05)
         wire = (vec(1, 0.3), vec(1, 2.5), vec(1, 0.5), vec(1, 1.5), 0.05)
-        p = (geometry, joints, wire, (0.1, 9.81))
+        guard = (
+            o3,
+            np.array([0.0, 0.0, 1.0, -1.0]),
+            np.zeros((2, 3)),
+            vec(1, 0.2),
+            vec(1, 0.8),
+            np.array([0.15, 0.02, 0.5]),
+        )
+        p = (geometry, joints, wire, (0.1, 9.81), guard)
         y = (np.zeros((2, 3, 3, 3)), *(vec(3) for _ in range(4)), np.zeros(4, dtype=np.bool_))
-        y = y + (vec(3), vec(3), vec(3), vec(6), vec(6))
+        y = y + (vec(3), vec(3), vec(3), vec(6), vec(6), vec(5))
         lab_step(x, u, p, y, 0.01)
 
     return [step]

@@ -421,7 +421,7 @@ def _swing_step(lab_rec, swing, run, s, z5, wire, dt):
 def transfer_steps(lab, platforms, load, swing, run, given, rows, s):
     """Up to ``len(V)`` steps of the lab's transfer (module text), ``given`` = (V, Z); the number taken."""
     V, Z = given
-    state, (geometry, joint_p, wire_p, load_p), y = lab
+    state, (geometry, joint_p, wire_p, load_p, guard_p), y = lab
     (q, qd, qdd), (wl, wv, wa), target, tool_cmd, shift, shift_rate, _, _, (tool_p, tool_v), _, _, _ = state
     p_t_g, v_t_g, a_t_g = y[2], y[3], y[4]
     flags, cmd, land, R_g_n2, R_g_n1, dt, R_r_n2 = run[0], run[1], run[2], run[3], run[4], run[8], run[17]
@@ -475,7 +475,7 @@ def transfer_steps(lab, platforms, load, swing, run, given, rows, s):
                                                      s[S_WINCH_SPEED]))  # fmt: skip
         had = s[S_HAS_TARGET] != 0.0
         has, s[S_ALPHA], s[S_BETA], s[S_ALPHA_DOT], s[S_BETA_DOT], s[S_H_ERR] = lab_step(
-            x, u, (geometry, joint_p, wire_p, load_p), y, dt
+            x, u, (geometry, joint_p, wire_p, load_p, guard_p), y, dt
         )
         s[S_HAS_TARGET] = 1.0 if has else 0.0
         s[S_SAMPLE_ALPHA], s[S_SAMPLE_BETA] = s[S_ALPHA], s[S_BETA]
@@ -540,8 +540,10 @@ def warm_up_records(n: int = 0) -> tuple:
         (vec(3), vec(3)), vec(3), (vec(3), vec(3)), vec(3),
     )  # fmt: skip
     y = (np.zeros((2, 3, 3, 3)), vec(3), vec(3), vec(3), vec(3), np.zeros(4, dtype=np.bool_))
-    y += (vec(3), vec(3), vec(3), vec(6), vec(6))
-    lab = (state, (geometry, joint_p, wire_p, (0.1, 9.81)), y)
+    y += (vec(3), vec(3), vec(3), vec(6), vec(6), vec(5))
+    guard = (vec(3, 0.1), np.array([0.0, 0.0, 1.0, -1.0]), np.zeros((2, 3)), vec(1, 0.2), vec(1, 0.8),
+             np.array([0.15, 0.02, 0.5]))  # fmt: skip
+    lab = (state, (geometry, joint_p, wire_p, (0.1, 9.81), guard), y)
     w = np.array([0.5, 0.6])
     parts = tuple(np.zeros((6, 2)) for _ in range(4))
     platforms = tuple(

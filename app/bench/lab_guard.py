@@ -1,0 +1,214 @@
+"""The Comau's guard under random sticks in the Motion-Lab (issue 32, item 5's acceptance for the lab scene):
+seeded random stick streams drive the lab's Comau in REMOTE into EM8000's deck, its pedestal and EM1500's deck,
+and every 5 ms step is checked.
+
+Each stream:
+
+* the Comau on the robot file's (data sheet) joint limits, where it reaches both decks and its pedestal (the
+  lab's own program limits keep it 0.4 m above its base: nothing to guard there);
+* both platforms held still at a random pose inside their command boxes, uniform per degree of freedom;
+* the arm starting at a random configuration with every clearance outside the guard's zone;
+* 6–12 segments; half of them for 0.5–3 s a stick deflection uniform in [−1, 1]³ with a third of the axes at
+  full deflection, the other half for 2–8 s a full stick aimed, as the segment starts, from the tool point at a
+  random point of a random obstacle (:func:`aimed_stick`: random sticks alone seldom reach them); as the lab
+  engine maps a stick: the tool's velocity in {r}, REMOTE_TOOL_SPEED at full stick;
+* then the stick centred for 1 s.
+
+Measured at the actual joints (the drives', after each step) against the true platforms:
+
+* ``penetration`` [m]: the deepest capsule overlap with an obstacle (minus the least clearance when negative);
+* ``limit_excess``: the farthest a joint went past its limit [rad];
+* ``opening`` ticks: the law's command opens (or keeps) every clearance in the guard's zone, judged by the
+  clearances' own values over a 10⁻⁷ rad step along it, not the guard's gradients; and of them the least ratio of
+  one drive step with the guarded command to one with the command as the law gave it (1: never slowed; the
+  acceptance asks ≥ 0.9);
+* ``slowed`` ticks and the least clearance reached.
+
+The platforms stand still because the guard never moves the arm by itself (nothing moves without the operator's
+command): a platform that drives its deck into a resting arm is the platforms' command boxes' to prevent, not the
+arm's guard — the stream measures what the guard can answer for.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.control import lab_kernels as ck
+from app.models.lab import load_lab
+from app.models.lab_kernels import comau_tool, lstsq3
+from app.scenes.lab import REMOTE_TOOL_SPEED, MotionLab
+from app.sim.kernels import motion_filter_update
+
+DIRECTION_STEP = 1e-7  # [rad]: a command's direction is judged by the clearances' change over this step along it
+DT = 0.005  # [s]: the lab PLC's cycle
+
+
+@dataclass(frozen=True)
+class LabGuardRun:
+    seed: int
+    ticks: int
+    penetration: float  # [m], ≥ 0
+    least_clearance: float  # [m]
+    limit_excess: float  # [rad], ≥ 0
+    opening: int  # ticks whose command opened every clearance in the zone (at least one in it)
+    min_opening_speed: float  # the least drive-step ratio (guarded/as asked) over them (1: never slowed)
+    opening_slow: int  # of them, those kept under 90 %
+    slowed: int  # ticks the guard slowed the command
+    near: dict  # obstacle → ticks with it the nearest in the zone
+
+
+def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray | None, float]]:
+    """6–12 (stick, seconds) segments: random sticks for 0.5–3 s, or (None) one aimed when its segment starts, for
+    2–8 s (see the module's text)."""
+    out: list[tuple[np.ndarray | None, float]] = []
+    for _ in range(int(rng.integers(6, 13))):
+        s = rng.uniform(-1.0, 1.0, 3)
+        full = rng.random(3) < 1 / 3
+        s[full] = np.sign(s[full] + 1e-9)
+        aimed = rng.random() < 0.5
+        out.append((None if aimed else s, float(rng.uniform(2.0, 8.0) if aimed else rng.uniform(0.5, 3.0))))
+    return out
+
+
+def aimed_stick(rng: np.random.Generator, lab: MotionLab, world: tuple, tool: np.ndarray) -> np.ndarray:
+    """A full stick from the tool point towards a random point of a random obstacle (in {r}): EM8000's deck within
+    3 m of the pedestal's foot, the pedestal's axis, or EM1500's deck; a little off line (±0.2 per axis)."""
+    deck1, ped, _, deck2 = world
+    which = int(rng.integers(3))
+    if which == 1:
+        target = ped[0] + (ped[1] - ped[0]) * rng.uniform()
+    else:
+        n = deck1[:3] if which == 0 else deck2[3:6]
+        centre = ped[0] if which == 0 else deck2[:3]
+        radius = 3.0 if which == 0 else deck2[6]
+        e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(n, e1)
+        r, a = radius * math.sqrt(rng.uniform()), rng.uniform(0.0, 2 * math.pi)
+        target = centre + r * (math.cos(a) * e1 + math.sin(a) * e2)
+    d = target - tool + rng.uniform(-0.2, 0.2, 3) * np.linalg.norm(target - tool)
+    return d / max(float(np.abs(d).max()), 1e-9)
+
+
+class _Clearances:
+    """The guard's clearances at a configuration (:func:`app.control.lab_kernels.guard_hazards`)."""
+
+    def __init__(self, lab: MotionLab) -> None:
+        self.cm, self.radii = lab._comau, lab.guard.radii
+        self.G, self.val = np.zeros((ck.ROWS, 3)), np.zeros(ck.ROWS)
+        self.kind, self.cap = np.zeros(ck.ROWS, np.int64), np.zeros(ck.ROWS, np.int64)
+
+    def __call__(self, world, q) -> np.ndarray:
+        ck.guard_hazards(self.cm, self.radii, world, np.ascontiguousarray(q), self.G, self.val, self.kind, self.cap)
+        return self.val.copy()
+
+
+def _world(lab: MotionLab) -> tuple:
+    (e1, _, _, (R1, _, _)), (e2, _, _, (R2, _, _)) = lab._view(0), lab._view(1)
+    return lab._guard_world(e1, R1, e2, R2)
+
+
+def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
+    """One seeded stream on a fresh Motion-Lab (see the module's text)."""
+    rng = np.random.default_rng([seed, 3205])
+    lab = MotionLab(load_lab(lab_name), comau_profile="datasheet")
+    for p in lab.platforms:  # held still at a random pose inside its command box
+        lo, hi = p.command_box
+        p.place_at_neutral()
+        p.filter.reset(rng.uniform(lo, hi))
+        p.estop()
+    lab.set_comau_mode("remote")
+    clear = _Clearances(lab)
+    f = lab.joints
+    lo, hi = f.lower, f.upper
+    world = _world(lab)
+    zone = lab.guard.zone
+    for _ in range(10_000):  # a start with every clearance outside the zone
+        q = rng.uniform(lo, hi)
+        if clear(world, q).min() > zone:
+            break
+    f.reset(q)
+    lab.refresh()
+    cm = lab._comau
+    guard_p = (cm, lab._guard_p[0], f.limits(), lab._guard_p[5])
+    limits = f.limits()
+    ticks = opening = slowed = opening_slow = 0
+    least, excess, min_open = math.inf, 0.0, 1.0
+    near = {"EM8000 deck": 0, "pedestal": 0, "EM1500 deck": 0}
+    names = tuple(near)
+    segments = stick_stream(rng) + [(np.zeros(3), 1.0)]
+    for stick, seconds in segments:
+        if stick is None:
+            stick = aimed_stick(rng, lab, world, comau_tool(cm, f.x, np.zeros(3), np.zeros(3))[0])
+        v_cmd = np.ascontiguousarray(REMOTE_TOOL_SPEED * stick)
+        for _ in range(max(1, round(seconds / DT))):
+            q, qd = f.x.copy(), f.v.copy()
+            # the law's command and the guard's answer, as lab_step will make them this step
+            rate = lstsq3(comau_tool(cm, q, np.zeros(3), np.zeros(3))[3], v_cmd)
+            asked = (np.bool_(False), q + rate * DT, rate, np.bool_(True), 1.0)
+            _, (got, report) = ck.comau_guard((), (asked, q, qd, world), guard_p, DT)
+            vals = clear(world, q)
+            inzone = vals < zone
+            if inzone.any():
+                near[names[int(report[0])]] += 1
+                v0 = np.clip((asked[1] - q) / max(f.tau, DT) + rate, -f.speed, f.speed)
+                norm = float(np.linalg.norm(v0))
+                if norm > 0.0:
+                    ahead = clear(world, q + DIRECTION_STEP * v0 / norm)
+                    if np.all(ahead[inzone] >= vals[inzone] - 1e-15):
+                        opening += 1
+                        moved = []
+                        for cmd in (asked, got):
+                            x = (q.copy(), qd.copy(), np.zeros(3))
+                            motion_filter_update(x, cmd[1:], limits, DT)
+                            moved.append(float(np.linalg.norm(x[0] - q)))
+                        kept = moved[1] / moved[0] if moved[0] > 0.0 else 1.0
+                        min_open = min(min_open, kept)
+                        opening_slow += kept < 0.9
+            lab.tool_velocity_cmd = v_cmd
+            lab.step(DT)
+            slowed += bool(lab.guard_report[4])
+            ticks += 1
+            q = f.x
+            least = min(least, float(clear(world, q).min()))
+            excess = max(excess, float(np.max(np.maximum(lo - q, q - hi))))
+    return LabGuardRun(
+        seed=seed, ticks=ticks, penetration=max(0.0, -least), least_clearance=least, limit_excess=max(excess, 0.0),
+        opening=opening, min_opening_speed=min_open, opening_slow=opening_slow, slowed=slowed, near=near,
+    )  # fmt: skip
+
+
+def _chunk(task) -> tuple[str, list[LabGuardRun]]:
+    first, n = task
+    return "motionlab", [run_stream(k) for k in range(first, first + n)]
+
+
+def summarise(runs: list[LabGuardRun]) -> dict:
+    near = {k: sum(r.near[k] for r in runs) for k in runs[0].near} if runs else {}
+    return {
+        "scene": "motionlab (Comau REMOTE, data-sheet limits)",
+        "streams": len(runs),
+        "ticks": sum(r.ticks for r in runs),
+        "max_penetration_m": max(r.penetration for r in runs),
+        "least_clearance_m": min(r.least_clearance for r in runs),
+        "max_limit_excess": max(r.limit_excess for r in runs),
+        "opening_ticks": sum(r.opening for r in runs),
+        "min_opening_speed": min(r.min_opening_speed for r in runs),
+        "opening_slow_ticks": sum(r.opening_slow for r in runs),
+        "slowed_ticks": sum(r.slowed for r in runs),
+        "streams_slowed": sum(r.slowed > 0 for r in runs),
+        "nearest_in_zone_ticks": near,
+    }
+
+
+def bench_lab_guard(streams: int, workers: int = 1, progress=None) -> dict:
+    """``streams`` seeded streams on ``workers`` processes, summarised (:func:`summarise`)."""
+    from app.bench.pool import gather
+
+    chunk = 10
+    tasks = [(k, min(chunk, streams - k)) for k in range(0, streams, chunk)]
+    runs = gather(_chunk, tasks, ["motionlab"], streams, workers, progress)
+    return summarise(runs["motionlab"])
