@@ -173,7 +173,7 @@ def _segment_disc(a, b, c, n, R):
     """As the kernel: a golden-section search for the least disc clearance on a–b, then the ends."""
     golden = 0.5 * (math.sqrt(5.0) - 1.0)
     lo, hi = 0.0, 1.0
-    for _ in range(40):
+    for _ in range(lab_kernels.GOLDEN_STEPS):
         m1, m2 = hi - golden * (hi - lo), lo + golden * (hi - lo)
         if _disc_gap(a + (b - a) * m1, c, n, R)[0] <= _disc_gap(a + (b - a) * m2, c, n, R)[0]:
             hi = m2
@@ -222,7 +222,11 @@ def guard_hazards_reference(cm, radii, world, q):
                 rows.append((away(k, s, a + (b - a) * s, o, dist), dist - r - ped_r[0], 1, k))
         for which in range(3):
             if which == 0:
-                d, s, e = _segment_disc(a, b, deck2[0:3], deck2[3:6], deck2[6])
+                lb, s, _ = _segments_closest(a, b, deck2[0:3], deck2[0:3])
+                if lb - deck2[6] - r > lab_kernels.FAR:  # far: the kernel's lower bound
+                    d, e = lb - deck2[6], (a + (b - a) * s - deck2[0:3]) / lb
+                else:
+                    d, s, e = _segment_disc(a, b, deck2[0:3], deck2[3:6], deck2[6])
             else:
                 s = 0.0 if which == 1 else 1.0
                 d, e = _disc_gap(a if which == 1 else b, deck2[0:3], deck2[3:6], deck2[6])

@@ -128,6 +128,8 @@ def winch_law(x, u, p, dt):
 #: EM1500's deck; and the report's −1: none in its zone
 DECK1, PEDESTAL, DECK2 = 0, 1, 2
 GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+GOLDEN_STEPS = 30  # the search's bracket shrinks to 0.618³⁰ = 5·10⁻⁷ of the segment: a micrometre on the extension arm
+FAR = 1.5  # [m]: a disc row this far (by a lower bound; ten zones) takes the bound, not the search
 CONTRIBUTES = 1e-6  # [m/s]: the least part of a clearance's rate a joint must carry to count as closing or opening it
 BRAKE_SLACK = 0.002  # [m]: how far below the stop distance the check lets braking end before it brakes (at the stop,
 #: an opening command's first step may still close by a fraction of a millimetre: that is not worth braking it for)
@@ -182,7 +184,7 @@ def _segment_disc(a, b, c, n, R):
     the ends and a golden-section search between them (the distance to a convex set is convex along a line)."""
     x = np.empty(3)
     lo, hi = 0.0, 1.0
-    for _ in range(40):
+    for _ in range(GOLDEN_STEPS):
         m1 = hi - GOLDEN * (hi - lo)
         m2 = lo + GOLDEN * (hi - lo)
         for i in range(3):
@@ -241,7 +243,8 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
     3)), with each one's obstacle (:data:`DECK1`, :data:`PEDESTAL`, :data:`DECK2`) and capsule (0 upper arm,
     1 forearm, 2 extension arm: arm points k to k + 1 of :func:`arm_points`); returns how many (:data:`ROWS`).
     For each capsule and obstacle: the nearest point's clearance and each end's (EM8000's deck, a plane: the ends'
-    only, one of them the nearest).
+    only, one of them the nearest); EM1500's deck, when a lower bound (the segment's distance to its centre less
+    its radius) puts it :data:`FAR` away, takes that bound for its nearest point.
 
     ``world`` = (deck1 (4,): EM8000's deck n·x = h in {r}; pedestal (2, 3): its axis from the deck to the column's
     top, and its radius (1,); deck2 (7,): EM1500's deck centre, up normal and radius in {r}).  The capsules'
@@ -279,7 +282,15 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
         # EM1500's deck: a disc; the segment's nearest point, then each end
         for which in range(3):
             if which == 0:
-                d, s, e0, e1, e2 = _segment_disc(a, b, c2, n2, deck2[6])
+                # a lower bound first: the segment's distance to the disc's centre less its radius
+                lb, s, _ = _segment_closest(a, b, c2, c2)
+                if lb - deck2[6] - r > FAR:
+                    for i in range(3):
+                        o[i] = a[i] + (b[i] - a[i]) * s - c2[i]
+                    e0, e1, e2 = o[0] / lb, o[1] / lb, o[2] / lb
+                    d = lb - deck2[6]  # far: the bound (and its direction) stand for the clearance
+                else:
+                    d, s, e0, e1, e2 = _segment_disc(a, b, c2, n2, deck2[6])
             else:
                 s = 0.0 if which == 1 else 1.0
                 d, e0, e1, e2 = _disc_gap(a if which == 1 else b, c2, n2, deck2[6])
