@@ -305,3 +305,14 @@ def test_random_sticks_on_the_crane_head_never_leave_its_range_and_never_slow_an
                     assert 0.0 <= got[i] / want[i] <= 1.0 + 1e-12
                     outward += 1
     assert inward > 100 and outward > 100
+
+
+def test_crane_head_streams_never_pass_the_range_and_keep_inward_steps_whole():
+    """The crane-head scene's share of the acceptance (``bosun bench guard --scene crane``): the TCP's target never
+    passes its mode's range, and a step with no outward part in the zone is kept whole."""
+    from app.bench.crane_guard import run_stream as crane_stream
+
+    runs = [crane_stream(seed) for seed in (0, 1, 2)]  # tac, cooperative, tac
+    assert sum(r.opening for r in runs) > 100 and sum(r.slowed for r in runs) > 100
+    for r in runs:
+        assert r.excess <= 1e-12 and r.min_opening_speed >= 1.0 - 1e-9, r

@@ -177,11 +177,49 @@ def _bench_lab_guard(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_crane_guard(args: argparse.Namespace) -> int:
+    """``bosun bench guard --scene crane``: the crane head's range guard (app/bench/crane_guard.py)."""
+    from app.bench.crane_guard import bench_crane_guard
+
+    if args.robots is not None:
+        raise BosunError("--robots is for the teleop scene; the crane head's is its scene's (--scene crane takes none)")
+    row = bench_crane_guard(args.streams, workers=args.workers, progress=_progress_bar("guard", unit="stream"))
+    if args.json:
+        _print_bench_json("guard", {"scene": "crane", "results": [row]})
+        return 0
+    print(
+        f"bosun bench guard --scene crane: {args.streams} seeded stick streams through the crane-head engine (50 Hz), "
+        "tac and cooperative by turns, Hs 1 m beam"
+    )
+    print("past its range: how far the TCP's target went past its mode's range; opening: ticks whose step has no")
+    print("outward part on an axis in the outer quarter, and the least share of it kept (the acceptance: ≥ 0.9)")
+    print(
+        _table(
+            ["streams", "ticks", "past its range [mm]", "opening ticks", "least kept", "under 90 %", "slowed ticks"],
+            [
+                [
+                    str(row["streams"]),
+                    str(row["ticks"]),
+                    f"{row['max_excess_m'] * 1e3:.2f}",
+                    str(row["opening_ticks"]),
+                    f"{row['min_opening_speed']:.3f}",
+                    str(row["opening_slow_ticks"]),
+                    str(row["slowed_ticks"]),
+                ]
+            ],
+        )
+    )
+    print(_machine_line())
+    return 0
+
+
 def cmd_bench_guard(args: argparse.Namespace) -> int:
     from app.bench import guard as bench
 
     if args.scene == "lab":
         return _bench_lab_guard(args)
+    if args.scene == "crane":
+        return _bench_crane_guard(args)
     robots = _serial_robots(args.robots)
     if not 10.0 <= args.rate <= 1000.0:
         raise BosunError(f"--rate must be between 10 and 1000 Hz, got {args.rate:g}")
@@ -460,8 +498,9 @@ def register(sub) -> None:
     with command(bench, "guard", cmd_bench_guard, help=guard_help) as b:
         b.add_argument("--streams", type=_positive_int, default=1000, help="streams per robot (default 1000)")
         b.add_argument(
-            "--scene", choices=["teleop", "lab"], default="teleop",
-            help="teleop: the library arms (default); lab: the Motion-Lab's Comau against the platforms",
+            "--scene", choices=["teleop", "lab", "crane"], default="teleop",
+            help="teleop: the library arms (default); lab: the Motion-Lab's Comau against the platforms; crane: the "
+            "crane head's TCP target against its range",
         )  # fmt: skip
         b.add_argument("--robots", nargs="+", default=None, help="robots (default: every serial robot)")
         b.add_argument("--rate", type=float, default=250.0, help="engine rate [Hz] (default 250)")
