@@ -181,3 +181,19 @@ def test_the_lab_engine_names_the_hazard_and_raises_the_alarm():
     alarms = {a.key: a for a in s.snapshot().alarms if a.active}
     assert "hazard_slowed" in alarms and "EM8000 deck" in alarms["hazard_slowed"].text
     assert float(_clearances(s.lab, s.lab.joints.x).min()) >= s.lab.guard.stop - 1e-3
+
+
+def test_the_profile_is_chosen_on_the_command_line_and_kept_for_a_replay():
+    import argparse
+
+    from app.cli.engine import _make_session
+    from app.engine.replay import _scene
+    from app.errors import BosunError
+
+    args = argparse.Namespace(plant="lab", comau_limits="datasheet", plc=None, plc_host=None, plc_local_id=None)
+    ses = _make_session(args)
+    assert ses.lab.profile.name == "datasheet" and ses.replay_args()["comau_profile"] == "datasheet"
+    assert _scene("lab", ses.replay_args(), 0).lab.profile.name == "datasheet"
+    assert _scene("lab", {"plc": False}, 0).lab.profile.name == "lab"  # a recording from before: the default
+    with pytest.raises(BosunError, match="add --plant lab"):
+        _make_session(argparse.Namespace(plant="tac", comau_limits="datasheet"))

@@ -17,6 +17,8 @@ from app.errors import BosunError, require
 
 
 def _make_session(args: argparse.Namespace):
+    if getattr(args, "comau_limits", None) is not None and getattr(args, "plant", "teleop") != "lab":
+        raise BosunError("--comau-limits is for the Motion-Lab's Comau: add --plant lab")
     if getattr(args, "plant", "teleop") == "tac":
         from app.engine.tac_session import TacSession
 
@@ -24,7 +26,7 @@ def _make_session(args: argparse.Namespace):
     if getattr(args, "plant", "teleop") == "lab":
         from app.engine.lab_session import LabSession
 
-        return LabSession(plc=_plc_target(args))
+        return LabSession(plc=_plc_target(args), comau_profile=getattr(args, "comau_limits", None))
     from app.engine.session import Session
 
     folders = list(getattr(args, "robots_dir", None) or [])
@@ -391,6 +393,11 @@ def register(sub) -> None:
         metavar="AMS_NET_ID",
         help="this machine's AMS Net ID, if the PLC's route to it names another (default: the ADS library's)",
     )
+    p.add_argument(
+        "--comau-limits", default=None, metavar="PROFILE",
+        help="with --plant lab: the Comau's joint-limit profile, lab (the lab's program limits, the layout's default) "
+        "or datasheet (the robot file's: the arm then reaches its platform and pedestal, guarded)",
+    )  # fmt: skip
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.add_argument(
         "--record", default=None, metavar="FILE.mcap",
@@ -411,6 +418,11 @@ def register(sub) -> None:
     p.add_argument("--server-key", default=None, metavar="FILE", help="the engine's CURVE public key")
     p.add_argument("--device", default=None, help="use the first joystick whose name contains this")
     p.add_argument("--rate", type=_positive_float, default=100.0, help="input messages per second (default 100)")
+    p.add_argument(
+        "--comau-limits", default=None, metavar="PROFILE",
+        help="with --plant lab: the Comau's joint-limit profile, lab (the lab's program limits, the layout's default) "
+        "or datasheet (the robot file's: the arm then reaches its platform and pedestal, guarded)",
+    )  # fmt: skip
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.add_argument("--virtual", action="store_true", help="attach an SDL virtual joystick (no hardware needed)")
     p.set_defaults(func=cmd_joystick)

@@ -137,8 +137,9 @@ class LabSession(Scene):
             self.note("info", f"Motion-Lab on its PLC at {self.plc}: connecting; the machines as the PLC reports them")
 
     def replay_args(self) -> dict:
-        """What builds this scene again for a replay (app/engine/replay.py): whether it drove the real lab."""
-        return {"plc": self.plc is not None}
+        """What builds this scene again for a replay (app/engine/replay.py): whether it drove the real lab, and the
+        Comau's joint-limit profile."""
+        return {"plc": self.plc is not None, "comau_profile": self.lab.profile.name}
 
     def _platform(self, name: str) -> int:
         if name not in self.names:

@@ -96,7 +96,7 @@ def _scene(kind: str, scene: dict, seed: int):
             raise ReplayError("the recording drove the real Motion-Lab through its PLC: a replay cannot")
         from app.engine.lab_session import LabSession
 
-        return LabSession()
+        return LabSession(comau_profile=scene.get("comau_profile"))  # None (an older recording): the layout's
     raise ReplayError(f"the recording's engine kind '{kind}' has no replay")
 
 
