@@ -392,3 +392,38 @@ def test_the_lab_s_delay_and_prediction_reach_the_engine_and_are_held_under_vvmc
     qtbot.waitUntil(lambda: any("set_lab_delay refused" in n for n in notices), timeout=GUI_WAIT)
     assert "while VVMC is off" in notices[-1]
     assert page.delay.value() == 0.3 and page.predict.isChecked() and ses.delay == 0.3
+
+
+def test_the_comau_page_names_the_platform_it_slows_for(qtbot, serve, tmp_path):
+    """Issue 32, item 5 (H115) as the operator sees it: the lab engine on the Comau's data-sheet limits, the stick
+    held down (Shift and Page Down) on the Comau & winch page: the readout names the extension arm and EM8000's
+    deck with its clearance, amber while it slows, and the alarm list has "Slowed near"; released, the arm holds
+    clear of the deck."""
+    from PyQt5.QtCore import Qt
+
+    teleop, _ = serve(Session(robot_name="comau_smart5_3dof"), rate=200, publish_rate=25)
+    ses = LabSession(comau_profile="datasheet")
+    lab, _ = serve(ses, rate=50, publish_rate=25)
+    win = main_window(teleop.url, tmp_path / "s.ini", lab_link_factory=lambda: EngineLink(lab.url, name="gui-lab"))
+    qtbot.addWidget(win)
+    win.resize(1280, 900)
+    win.show()
+    tab = win.motion_lab
+    win.tabs.setCurrentWidget(tab)
+    tab.tabs.setCurrentIndex(2)
+    qtbot.waitUntil(lambda: tab.state is not None and tab.state.comau.mode == "remote", timeout=GUI_WAIT)
+    qtbot.wait(300)  # the stick seen at neutral with enable released
+    tab.stick.key(Qt.Key_Shift, True)
+    qtbot.waitUntil(lambda: tab.state.flags.armed, timeout=GUI_WAIT)
+    tab.stick.key(Qt.Key_PageDown, True)
+    qtbot.waitUntil(lambda: tab.state.hazard.slowed, timeout=60_000)
+    qtbot.waitUntil(lambda: "slowing" in tab.comau.readout.text(), timeout=GUI_WAIT)
+    text = tab.comau.readout.text()
+    assert "extension arm ↔ EM8000 deck: clearance" in text and "#b06000" in text, text
+    qtbot.waitUntil(lambda: any(a.key == "hazard_slowed" and a.active for a in tab.state.alarms), timeout=GUI_WAIT)
+    tab.comau.readout.grab().save(str(tmp_path / "lab_guard.png"))
+    tab.stick.key(Qt.Key_PageDown, False)
+    tab.stick.key(Qt.Key_Shift, False)
+    qtbot.wait(1500)
+    assert ses.lab.guard_report[0] < 0 or ses.lab.guard_report[2] >= ses.lab.guard.stop - 1e-3
+    win.close()
