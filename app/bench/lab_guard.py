@@ -19,7 +19,8 @@ Measured at the actual joints (the drives', after each step) against the true pl
 * ``penetration`` [m]: the deepest capsule overlap with an obstacle (minus the least clearance when negative);
 * ``limit_excess``: the farthest a joint went past its limit [rad];
 * ``opening`` ticks: the law's command opens (or keeps) every clearance in the guard's zone, judged by the
-  clearances' own values over a 10⁻⁷ rad step along it, not the guard's gradients; and of them the least ratio of
+  clearances' own values over a 10⁻⁷ rad step along what the drives can do of it (a joint at its limit stays),
+  not the guard's gradients; and of them the least ratio of
   one drive step with the guarded command to one with the command as the law gave it (1: never slowed; the
   acceptance asks ≥ 0.9);
 * ``slowed`` ticks and the least clearance reached.
@@ -154,7 +155,10 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
             inzone = vals < zone
             if inzone.any():
                 near[names[int(report[0])]] += 1
-                v0 = np.clip((asked[1] - q) / max(f.tau, DT) + rate, -f.speed, f.speed)
+                up, down = np.maximum(f.upper - q, 0.0), np.maximum(q - f.lower, 0.0)  # the drives' reach this step
+                hi_v = np.minimum(f.speed, np.minimum(np.sqrt(2.0 * f.brake * up), up / DT))
+                lo_v = -np.minimum(f.speed, np.minimum(np.sqrt(2.0 * f.brake * down), down / DT))
+                v0 = np.clip((asked[1] - q) / max(f.tau, DT) + rate, lo_v, hi_v)
                 norm = float(np.linalg.norm(v0))
                 if norm > 0.0:
                     ahead = clear(world, q + DIRECTION_STEP * v0 / norm)

@@ -235,6 +235,22 @@ def guard_hazards_reference(cm, radii, world, q):
     return G, np.array([r[1] for r in rows]), np.array([r[2] for r in rows]), np.array([r[3] for r in rows])
 
 
+def _correct(g, bound, out, lo_v, hi_v):
+    """The reference of :func:`app.control.lab_kernels._correct` (an active set over the joints' bounds)."""
+    out, free = out.copy(), np.ones(3, dtype=bool)
+    for _ in range(3):
+        r, gg = float(g @ out), float(np.sum(g[free] ** 2))
+        if r >= bound - 1e-15 or gg <= 1e-24:
+            break
+        t = np.where(free, out + (bound - r) / gg * g, out)
+        over, under = free & (t > hi_v), free & (t < lo_v)
+        out = np.where(over, hi_v, np.where(under, lo_v, t))
+        if not (over | under).any():
+            break
+        free &= ~(over | under)
+    return out
+
+
 def _least(rate):
     """The least part of a clearance's ``rate`` a joint must carry to count as closing or opening it (the kernel's)."""
     return np.maximum(lab_kernels.CONTRIBUTES, lab_kernels.CONTRIBUTES_SHARE * np.abs(rate))[..., None]
@@ -250,10 +266,10 @@ def _guard_reference(x, u, p, dt):
         return x, (command, report)
     G, val, kind, cap = guard_hazards_reference(cm, radii, world, q)
     clear = val.copy()
-    v0 = np.clip((q_ref - q) / max(tau, dt) + (v_ref if use_v else 0.0), -speed * scale, speed * scale)
     up, down = np.maximum(upper - q, 0.0), np.maximum(q - lower, 0.0)
     hi_v = np.minimum(speed * scale, np.minimum(np.sqrt(2.0 * limit_brake * up), up / dt))
     lo_v = -np.minimum(speed * scale, np.minimum(np.sqrt(2.0 * limit_brake * down), down / dt))
+    v0 = np.clip((q_ref - q) / max(tau, dt) + (v_ref if use_v else 0.0), lo_v, hi_v)  # what the drives can do
     gg = np.einsum("ij,ij->i", G, G)
     A = kappa * float(np.min(accel)) * np.sqrt(gg)
     C = G * qd  # each joint's part of each clearance's rate
@@ -272,49 +288,53 @@ def _guard_reference(x, u, p, dt):
     bound = np.where(gg <= 1e-24, -np.inf, bound)
     check = active & np.isfinite(bound)
     out, slowed = v0.copy(), np.zeros(len(val), dtype=bool)
-    if active.any():
+    violated = check & (G @ v0 < bound - 1e-15)
+    if violated.any():  # the next step's speeds planned within what the drives reach in it (the kernel's text)
+        r_hi = np.maximum(np.minimum(hi_v, qd + accel * dt), lo_v)
+        r_lo = np.minimum(np.maximum(lo_v, qd - accel * dt), r_hi)
+        out = np.clip(v0, r_lo, r_hi)
         for _ in range(4):
             changed = False
             for i in np.flatnonzero(check):
-                r = float(G[i] @ out)
-                if r < bound[i] - 1e-15:
-                    out = np.clip(out + (bound[i] - r) / gg[i] * G[i], np.minimum(lo_v, v0), np.maximum(hi_v, v0))
-                    slowed[i] = changed = True
+                if float(G[i] @ out) < bound[i] - 1e-15:
+                    out = _correct(G[i], bound[i], out, r_lo, r_hi)
+                    changed = True
             if not changed:
                 break
-        alpha = 1.0
-        for i in np.flatnonzero(check):
-            r = float(G[i] @ out)
-            if r < bound[i] - 1e-12:
-                slowed[i] = True
-                alpha = min(alpha, bound[i] / r) if r < 0.0 else 0.0
-        if alpha < 1.0:
-            out = out * max(alpha, 0.0)
+        slowed = violated.copy()
     # the safe-braking check on the command's outcome (the kernel's text)
-    steps = int(min(np.max(np.ceil(np.abs(out - qd) / (accel * dt) - 1e-9), initial=0.0), lab_kernels.ROLLOUT))
+    reach = np.abs(out - qd) / (accel * dt) + np.abs(out) / (kappa * accel * dt)  # the kernel's horizon
+    steps = int(min(np.max(np.ceil(reach - 1e-9), initial=0.0), lab_kernels.ROLLOUT))
     closing = np.zeros(len(clear), dtype=bool)
     for i in np.flatnonzero(active):
-        v, qr, d = qd.copy(), q.copy(), float(clear[i])
+        v, qr, d, g = qd.copy(), q.copy(), float(clear[i]), G[i].copy()
         lowest = d
-        for _ in range(steps):
+        for k in range(steps):
             v = v + np.clip(out - v, -accel * dt, accel * dt)
             up = np.sqrt(2.0 * limit_brake * np.maximum(upper - qr, 0.0))
             v = np.clip(v, -np.sqrt(2.0 * limit_brake * np.maximum(qr - lower, 0.0)), up)
             qr = qr + v * dt
-            d += float(G[i] @ v) * dt
+            if k % lab_kernels.RESAMPLE == lab_kernels.RESAMPLE - 1:
+                Gr, vr, _, _ = guard_hazards_reference(cm, radii, world, qr)
+                d, g = float(vr[i]), Gr[i]
+            else:
+                d += float(g @ v) * dt
             lowest = min(lowest, d)
-        now = float(G[i] @ v)
+        now = float(g @ v)
         if now < 0.0:
-            Am = kappa * float(np.where(G[i] * v < -_least(now)[0], np.abs(G[i]) * accel, 0.0).sum())
+            Am = kappa * float(np.where(g * v < -_least(now)[0], np.abs(g) * accel, 0.0).sum())
             lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
         closing[i] = lowest < stop - lab_kernels.BRAKE_SLACK and lowest < clear[i]
     for i in np.flatnonzero(closing):
         least = float(_least(G[i] @ qd)[0])
         for j in range(3):
-            if G[i, j] * qd[j] < -least and out[j] * qd[j] > 0.0:
+            now_j, cmd_j = G[i, j] * qd[j], G[i, j] * out[j]
+            if now_j < -least and out[j] * qd[j] > 0.0:
                 out[j] = 0.0
-            elif G[i, j] * qd[j] > least and out[j] * qd[j] < qd[j] * qd[j]:
+            elif now_j > least and out[j] * qd[j] < qd[j] * qd[j]:
                 out[j] = min(max(qd[j], lo_v[j]), hi_v[j])  # one that opens the gap keeps its speed
+            elif -least <= now_j <= least and cmd_j < -least:
+                out[j] = 0.0  # still, and the command would start it closing
             else:
                 continue
             slowed[i] = active[i] = True

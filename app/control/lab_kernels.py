@@ -134,6 +134,7 @@ CONTRIBUTES = 1e-6  # [m/s]: the least part of a clearance's rate a joint must c
 BRAKE_SLACK = 0.002  # [m]: how far below the stop distance the check lets braking end before it brakes (at the stop,
 #: an opening command's first step may still close by a fraction of a millimetre: that is not worth braking it for)
 ROLLOUT = 400  # steps: the longest the check follows the drives to the command (2 s at the lab's 5 ms)
+RESAMPLE = 20  # steps: the check takes the clearance anew where the arm has got to (0.1 s; first order between)
 CONTRIBUTES_SHARE = 0.05  # … and the least share of the rate (a joint that barely moves a gap is not braked for it)
 
 
@@ -301,6 +302,36 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
 
 
 @_jit
+def _correct(g, bound, out, lo_v, hi_v):
+    """``out`` moved along ``g`` until g·out reaches ``bound``, each joint within [lo_v, hi_v]: a joint that reaches
+    its bound keeps it and the rest of the correction goes to the others (an active set; none left: as far as they
+    went)."""
+    free = np.ones(3, np.bool_)
+    for _ in range(3):
+        r = g[0] * out[0] + g[1] * out[1] + g[2] * out[2]
+        gg = 0.0
+        for j in range(3):
+            if free[j]:
+                gg += g[j] * g[j]
+        if r >= bound - 1e-15 or gg <= 1e-24:
+            return
+        c = (bound - r) / gg
+        clamped = False
+        for j in range(3):
+            if not free[j]:
+                continue
+            t = out[j] + c * g[j]
+            if t > hi_v[j]:
+                out[j], free[j], clamped = hi_v[j], False, True
+            elif t < lo_v[j]:
+                out[j], free[j], clamped = lo_v[j], False, True
+            else:
+                out[j] = t
+        if not clamped:
+            return
+
+
+@_jit
 def comau_guard(x, u, p, dt):
     """The Comau's joint command scaled along the directions that bring it nearer an obstacle (issue 32, item 5:
     :mod:`app.control.guard`'s velocity damper, Faverjon & Tournassoud 1987; Kanoun, Lamiraux & Wieber 2011 eq. 10,
@@ -310,7 +341,9 @@ def comau_guard(x, u, p, dt):
     Inputs (command, q, q̇, world): the law's command (brake, q_ref, q̇_ref, use q̇_ref, speed scale), the joints and
     their rates, the obstacles in {r} (:func:`guard_hazards`).  Parameters (cm, radii, drives (lower, upper, speed,
     accel, the limits' braking b, τ: the drives' own), settings (zone, stop, braking share κ)).  The drives would
-    move at v = (q_ref − q)/τ (+ q̇_ref), within speed × scale (:func:`app.sim.kernels.motion_filter_update`).
+    move at v = (q_ref − q)/τ (+ q̇_ref), within speed × scale and the braking to each joint's limit
+    (:func:`app.sim.kernels.motion_filter_update`): the rate judged and corrected is that one (a joint at its
+    limit does not move, whatever the command asks of it).
 
     1. Each clearance d is first taken as what braking from the arm's own approach g·q̇ < 0 would leave,
        d − (g·q̇)²/(2A'), A' = κ Σ |g_j| a_j over the joints that close it (each braking at its limit a_j, κ a
@@ -323,14 +356,18 @@ def comau_guard(x, u, p, dt):
        A = κ a_min |g| (the approach's deceleration when the joints change along g, as the correction does), and
        only the component along g is removed (a few passes, then the whole rate scaled down if a bound still
        fails: zero meets every bound); a correction never takes a joint faster towards its limit than the drives'
-       own braking there allows (√(2 b (q_max − q)), Flacco et al. eq. 13: a joint at its limit cannot open a gap).
-    3. The command's outcome is checked, each clearance in its zone to first order: where the drives, following
+       own braking there allows (√(2 b (q_max − q)), Flacco et al. eq. 13: a joint at its limit cannot open a
+       gap): the part it cannot take goes to the other joints (:func:`_correct`).
+    3. The command's outcome is checked, each clearance in its zone (to first order, taken anew every
+       :data:`RESAMPLE` steps where the arm has got to), until the drives have the command and as long again as
+       they would take to stop from it: where the drives, following
        the rate until they have it (each joint's speed changing by a_j dt a step, braking to its limit as the
        drives' velocity bound does: a joint that opens a gap stops at its limit), would pass below the stop
        distance (:data:`BRAKE_SLACK` under it), or leave the arm closing faster than it could then brake short of
        it (with A'), the joints that close that gap are commanded to rest (the drives brake them at their limits;
-       a joint the command already turns back keeps its command) and the joints that open it keep their speed, as
-       A' assumes (slowing them would close it too).
+       a joint the command already turns back keeps its command), a joint at rest that the command would start
+       closing it stays, and the joints that open it keep their speed, as A' assumes (slowing them would close it
+       too).
 
     A rate that opens every hazard, with the arm not closing on one too fast, or a BRAKE is returned as it came,
     bit for bit; a slowed one as a pure rate (q_ref = q, q̇_ref = v).
@@ -363,7 +400,7 @@ def comau_guard(x, u, p, dt):
         hi_v[j] = min(lim, min(math.sqrt(2.0 * limit_brake[j] * up), up / dt))
         lo_v[j] = -min(lim, min(math.sqrt(2.0 * limit_brake[j] * down), down / dt))
         v = (q_ref[j] - q[j]) / t + (v_ref[j] if use_v else 0.0)
-        v0[j] = min(max(v, -lim), lim)
+        v0[j] = min(max(v, lo_v[j]), hi_v[j])  # what the drives can do: a joint at its limit stays there
     active = np.zeros(ROWS, np.bool_)
     bound = np.zeros(ROWS)
     slowed = np.zeros(ROWS, np.bool_)
@@ -406,63 +443,74 @@ def comau_guard(x, u, p, dt):
         else:
             bound[i] = 0.0  # not approaching: never slowed, and no correction may turn it into an approach
     out = v0.copy()
-    if any_active:
+    violated = False
+    for i in range(m):
+        if active[i] and bound[i] != -math.inf:
+            violated = violated or G[i, 0] * v0[0] + G[i, 1] * v0[1] + G[i, 2] * v0[2] < bound[i] - 1e-15
+    if violated:
+        # the correction plans the next step's speeds: each joint within a_j dt of its speed now (what the drives
+        # reach in one step) and within its limits' reach; the bounds met there, or as near as those allow
+        r_lo, r_hi = np.empty(3), np.empty(3)
+        for j in range(3):
+            r_hi[j] = max(min(hi_v[j], qd[j] + accel[j] * dt), lo_v[j])
+            r_lo[j] = min(max(lo_v[j], qd[j] - accel[j] * dt), r_hi[j])
+            out[j] = min(max(v0[j], r_lo[j]), r_hi[j])
         for _ in range(4):
             changed = False
             for i in range(m):
                 if not active[i] or bound[i] == -math.inf:
                     continue
                 r = G[i, 0] * out[0] + G[i, 1] * out[1] + G[i, 2] * out[2]
-                gg = G[i, 0] * G[i, 0] + G[i, 1] * G[i, 1] + G[i, 2] * G[i, 2]
                 if r < bound[i] - 1e-15:
-                    c = (bound[i] - r) / gg
-                    for j in range(3):  # a joint at its limit cannot take the correction
-                        out[j] = min(max(out[j] + c * G[i, j], min(lo_v[j], v0[j])), max(hi_v[j], v0[j]))
-                    slowed[i] = True
+                    _correct(G[i], bound[i], out, r_lo, r_hi)
                     changed = True
             if not changed:
                 break
-        alpha = 1.0
-        for i in range(m):
-            if not active[i] or bound[i] == -math.inf:
-                continue
-            r = G[i, 0] * out[0] + G[i, 1] * out[1] + G[i, 2] * out[2]
-            if r < bound[i] - 1e-12:
-                slowed[i] = True
-                alpha = min(alpha, bound[i] / r) if r < 0.0 else 0.0
-        if alpha < 1.0:
-            for j in range(3):
-                out[j] *= max(alpha, 0.0)
+        for i in range(m):  # the hazards the command closed on too fast
+            if active[i] and bound[i] != -math.inf:
+                slowed[i] = G[i, 0] * v0[0] + G[i, 1] * v0[1] + G[i, 2] * v0[2] < bound[i] - 1e-15
     # 3. the safe-braking check on the command's outcome (the text's third step)
-    steps = 0
+    steps = 0  # until the drives have the command, and long enough after to have stopped from it (κ)
     for j in range(3):
-        steps = max(steps, int(math.ceil(abs(out[j] - qd[j]) / (accel[j] * dt) - 1e-9)))  # noqa: RUF046 (numba)
+        reach = abs(out[j] - qd[j]) / (accel[j] * dt)
+        steps = max(steps, int(math.ceil(reach + abs(out[j]) / (kappa * accel[j] * dt) - 1e-9)))  # noqa: RUF046
     steps = min(steps, ROLLOUT)
     v = np.empty(3)
     qr = np.empty(3)
+    g = np.empty(3)
+    Gt = np.empty((ROWS, 3))
+    vt = np.empty(ROWS)
+    kt = np.empty(ROWS, np.int64)
+    ct = np.empty(ROWS, np.int64)
     for i in range(m):
         if not active[i]:
-            continue  # outside its zone, braking from its approach included: the first-order model is not for far
+            continue  # outside its zone, braking from its approach included
         for j in range(3):
-            v[j], qr[j] = qd[j], q[j]
+            v[j], qr[j], g[j] = qd[j], q[j], G[i, j]
         d = clear[i]
         lowest = d
-        for _ in range(steps):
+        for k in range(steps):
             for j in range(3):  # the drives: toward the command at the acceleration limit, braking at the joint limits
                 vj = v[j] + min(max(out[j] - v[j], -accel[j] * dt), accel[j] * dt)
                 up = math.sqrt(2.0 * limit_brake[j] * max(upper[j] - qr[j], 0.0))
                 down = math.sqrt(2.0 * limit_brake[j] * max(qr[j] - lower[j], 0.0))
                 v[j] = min(max(vj, -down), up)
                 qr[j] += v[j] * dt
-            d += (G[i, 0] * v[0] + G[i, 1] * v[1] + G[i, 2] * v[2]) * dt
+            if k % RESAMPLE == RESAMPLE - 1:  # the clearance and its gradient where the arm has got to
+                guard_hazards(cm, radii, world, qr, Gt, vt, kt, ct)
+                d = vt[i]
+                for j in range(3):
+                    g[j] = Gt[i, j]
+            else:
+                d += (g[0] * v[0] + g[1] * v[1] + g[2] * v[2]) * dt
             lowest = min(lowest, d)
-        now = G[i, 0] * v[0] + G[i, 1] * v[1] + G[i, 2] * v[2]
+        now = g[0] * v[0] + g[1] * v[1] + g[2] * v[2]
         if now < 0.0:
             Am = 0.0
             least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
             for j in range(3):
-                if G[i, j] * v[j] < -least:
-                    Am += kappa * abs(G[i, j]) * accel[j]
+                if g[j] * v[j] < -least:
+                    Am += kappa * abs(g[j]) * accel[j]
             lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
         if lowest < stop - BRAKE_SLACK and lowest < clear[i]:
             closing[i] = True
@@ -471,14 +519,21 @@ def comau_guard(x, u, p, dt):
             continue
         least = max(CONTRIBUTES, CONTRIBUTES_SHARE * abs(G[i, 0] * qd[0] + G[i, 1] * qd[1] + G[i, 2] * qd[2]))
         for j in range(3):
-            if G[i, j] * qd[j] < -least and out[j] * qd[j] > 0.0:
+            now_j, cmd_j = G[i, j] * qd[j], G[i, j] * out[j]
+            if now_j < -least:  # closing it: to rest, unless the command already turns it back
+                if out[j] * qd[j] <= 0.0:
+                    continue
                 out[j] = 0.0
-                slowed[i] = True
-                active[i] = True
-            elif G[i, j] * qd[j] > least and out[j] * qd[j] < qd[j] * qd[j]:
-                out[j] = min(max(qd[j], lo_v[j]), hi_v[j])  # one that opens the gap keeps its speed (to a limit)
-                slowed[i] = True
-                active[i] = True
+            elif now_j > least:  # opening it: keeps its speed (to its limit)
+                if out[j] * qd[j] >= qd[j] * qd[j]:
+                    continue
+                out[j] = min(max(qd[j], lo_v[j]), hi_v[j])
+            elif cmd_j < -least:  # still, and the command would start it closing: it stays
+                out[j] = 0.0
+            else:
+                continue
+            slowed[i] = True
+            active[i] = True
     any_slowed = False
     for i in range(m):
         any_slowed = any_slowed or slowed[i]
