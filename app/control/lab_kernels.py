@@ -405,7 +405,6 @@ def comau_guard(x, u, p, dt):
     bound = np.zeros(ROWS)
     slowed = np.zeros(ROWS, np.bool_)
     closing = np.zeros(ROWS, np.bool_)
-    any_active = False
     for i in range(m):
         gg = G[i, 0] * G[i, 0] + G[i, 1] * G[i, 1] + G[i, 2] * G[i, 2]
         A = kappa * a_min * math.sqrt(gg)  # the approach's deceleration when the joints change along g, a margin
@@ -432,7 +431,6 @@ def comau_guard(x, u, p, dt):
         if val[i] >= zone:
             continue
         active[i] = True
-        any_active = True
         r0 = G[i, 0] * v0[0] + G[i, 1] * v0[1] + G[i, 2] * v0[2]
         room = max(val[i] - stop, 0.0)
         if gg <= 1e-24:
