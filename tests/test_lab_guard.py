@@ -147,7 +147,9 @@ def test_the_lab_profile_keeps_the_arm_clear_and_the_guard_quiet():
 
 
 def test_random_streams_never_penetrate_and_never_slow_an_opening_command():
-    runs = [run_stream(seed) for seed in (1, 15, 19, 29)]  # streams that came near (29 near its pedestal at speed)
+    # streams that went through in the benchmark's first runs: 19 and 29 (the extension arm's far end swinging onto
+    # the pedestal at speed), 324 and 612 (an opening joint reaching its own limit while another closed the gap)
+    runs = [run_stream(seed) for seed in (19, 29, 324, 612)]
     assert all(r.slowed > 0 for r in runs)
     for r in runs:
         assert r.penetration <= 1e-3 and r.limit_excess <= 1e-9, r
