@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.bench.guard import stick_stream
 from app.engine.tac_session import TacSession
 from app.scenarios.tac import TacScenario
 from app.teleop.devices import InputSample
@@ -73,13 +74,7 @@ def run_stream(seed: int) -> CraneGuardRun:
     limit = np.asarray(ses.target_range[mode], dtype=float)
     ticks = opening = slowed = opening_slow = 0
     excess, min_open = 0.0, 1.0
-    segments = []
-    for _ in range(int(rng.integers(6, 13))):
-        s = rng.uniform(-1.0, 1.0, 3)
-        full = rng.random(3) < 1 / 3
-        s[full] = np.sign(s[full] + 1e-9)
-        segments.append((s, float(rng.uniform(0.5, 3.0))))
-    segments.append((np.zeros(3), 0.5))
+    segments = stick_stream(rng, 0.5, 3.0) + [(np.zeros(3), 0.5)]
     for s, seconds in segments:
         for _ in range(max(1, round(seconds / DT))):
             off0 = np.array(ses.sim.p_d_n) - ses.sim.p_d_n0

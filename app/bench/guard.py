@@ -113,14 +113,16 @@ class _Watch:
         return new, rep, action
 
 
-def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray, float]]:
-    """6–12 random (stick, seconds) segments of 0.2–1 s (see the module's text)."""
+def stick_stream(
+    rng: np.random.Generator, shortest: float = 0.2, longest: float = 1.0
+) -> list[tuple[np.ndarray, float]]:
+    """6–12 random (stick, seconds) segments of ``shortest``–``longest`` s (see the module's text)."""
     out = []
     for _ in range(int(rng.integers(6, 13))):
         s = rng.uniform(-1.0, 1.0, 3)
         full = rng.random(3) < 1 / 3
         s[full] = np.sign(s[full] + 1e-9)
-        out.append((s, float(rng.uniform(0.2, 1.0))))
+        out.append((s, float(rng.uniform(shortest, longest))))
     return out
 
 
@@ -171,9 +173,10 @@ def _chunk(task) -> tuple[str, list[GuardRun]]:
     return robot, [run_stream(robot, k, rate, speed) for k in range(first, first + n)]
 
 
-def summarise(robot: str, runs: list[GuardRun]) -> dict:
+def totals(runs: list) -> dict:
+    """The figures every scene's guard streams report (runs with ticks, penetration, least_clearance, limit_excess,
+    opening, min_opening_speed, opening_slow, slowed)."""
     return {
-        "robot": robot,
         "streams": len(runs),
         "ticks": sum(r.ticks for r in runs),
         "max_penetration_m": max(r.penetration for r in runs),
@@ -181,11 +184,18 @@ def summarise(robot: str, runs: list[GuardRun]) -> dict:
         "max_limit_excess": max(r.limit_excess for r in runs),
         "opening_ticks": sum(r.opening for r in runs),
         "min_opening_speed": min(r.min_opening_speed for r in runs),
+        "opening_slow_ticks": sum(r.opening_slow for r in runs),
         "slowed_ticks": sum(r.slowed for r in runs),
+        "streams_slowed": sum(r.slowed > 0 for r in runs),
+    }
+
+
+def summarise(robot: str, runs: list[GuardRun]) -> dict:
+    return {
+        "robot": robot,
+        **totals(runs),
         "braked_ticks": sum(r.braked for r in runs),
         "opening_braked_ticks": sum(r.opening_braked for r in runs),
-        "opening_slow_ticks": sum(r.opening_slow for r in runs),
-        "streams_slowed": sum(r.slowed > 0 for r in runs),
     }
 
 

@@ -191,21 +191,10 @@ def _chunk(task) -> tuple[str, list[LabGuardRun]]:
 
 
 def summarise(runs: list[LabGuardRun]) -> dict:
+    from app.bench.guard import totals
+
     near = {k: sum(r.near[k] for r in runs) for k in runs[0].near} if runs else {}
-    return {
-        "scene": "motionlab (Comau REMOTE, data-sheet limits)",
-        "streams": len(runs),
-        "ticks": sum(r.ticks for r in runs),
-        "max_penetration_m": max(r.penetration for r in runs),
-        "least_clearance_m": min(r.least_clearance for r in runs),
-        "max_limit_excess": max(r.limit_excess for r in runs),
-        "opening_ticks": sum(r.opening for r in runs),
-        "min_opening_speed": min(r.min_opening_speed for r in runs),
-        "opening_slow_ticks": sum(r.opening_slow for r in runs),
-        "slowed_ticks": sum(r.slowed for r in runs),
-        "streams_slowed": sum(r.slowed > 0 for r in runs),
-        "nearest_in_zone_ticks": near,
-    }
+    return {"scene": "motionlab (Comau REMOTE, data-sheet limits)", **totals(runs), "nearest_in_zone_ticks": near}
 
 
 def bench_lab_guard(streams: int, workers: int = 1, progress=None) -> dict:

@@ -127,88 +127,57 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
     return 0
 
 
-def _bench_lab_guard(args: argparse.Namespace) -> int:
-    """``bosun bench guard --scene lab``: the Comau's guard against the platforms (app/bench/lab_guard.py)."""
-    from app.bench.lab_guard import bench_lab_guard
-
-    if args.robots is not None:
-        raise BosunError("--robots is for the teleop scene; the lab's arm is its Comau (--scene lab takes none)")
-    row = bench_lab_guard(args.streams, workers=args.workers, progress=_progress_bar("guard", unit="stream"))
-    if args.json:
-        _print_bench_json("guard", {"scene": "lab", "results": [row]})
-        return 0
-    print(
+def _lab_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], list[str], list[str]]:
+    """``bosun bench guard --scene lab``'s header, columns and cells (app/bench/lab_guard.py)."""
+    head = [
         f"bosun bench guard --scene lab: {args.streams} seeded stick streams, the Comau in REMOTE on its data-sheet "
-        "limits, the platforms held at random poses, 5 ms steps"
-    )
-    print("penetration: the deepest overlap of the arm's capsules with EM8000's deck, its pedestal or EM1500's deck,")
-    print("at the actual joints; opening: steps whose command opens every clearance in the zone, and the least drive")
-    print("step kept on them (the acceptance: ≥ 0.9)")
-    near = row["nearest_in_zone_ticks"]
-    print(
-        _table(
-            [
-                "streams",
-                "steps",
-                "max penetration [mm]",
-                "least clearance [mm]",
-                "past a limit",
-                "opening steps",
-                "least step kept",
-                "slowed steps",
-                "in the zone: EM8000 deck / pedestal / EM1500 deck",
-            ],
-            [
-                [
-                    str(row["streams"]),
-                    str(row["ticks"]),
-                    f"{row['max_penetration_m'] * 1e3:.2f}",
-                    f"{row['least_clearance_m'] * 1e3:.1f}",
-                    f"{row['max_limit_excess']:.2g}",
-                    str(row["opening_ticks"]),
-                    f"{row['min_opening_speed']:.3f}",
-                    str(row["slowed_ticks"]),
-                    " / ".join(str(v) for v in near.values()),
-                ]
-            ],
-        )
-    )
-    print(_machine_line())
-    return 0
+        "limits, the platforms held at random poses, 5 ms steps",
+        "penetration: the deepest overlap of the arm's capsules with EM8000's deck, its pedestal or EM1500's deck,",
+        "at the actual joints; opening: steps whose command opens every clearance in the zone, and the least drive",
+        "step kept on them (the acceptance: ≥ 0.9)",
+    ]
+    columns = ["streams", "steps", "max penetration [mm]", "least clearance [mm]", "past a limit", "opening steps",
+               "least step kept", "slowed steps", "in the zone: EM8000 deck / pedestal / EM1500 deck"]  # fmt: skip
+    cells = [str(row["streams"]), str(row["ticks"]), f"{row['max_penetration_m'] * 1e3:.2f}",
+             f"{row['least_clearance_m'] * 1e3:.1f}", f"{row['max_limit_excess']:.2g}", str(row["opening_ticks"]),
+             f"{row['min_opening_speed']:.3f}", str(row["slowed_ticks"]),
+             " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values())]  # fmt: skip
+    return head, columns, cells
 
 
-def _bench_crane_guard(args: argparse.Namespace) -> int:
-    """``bosun bench guard --scene crane``: the crane head's range guard (app/bench/crane_guard.py)."""
-    from app.bench.crane_guard import bench_crane_guard
-
-    if args.robots is not None:
-        raise BosunError("--robots is for the teleop scene; the crane head's is its scene's (--scene crane takes none)")
-    row = bench_crane_guard(args.streams, workers=args.workers, progress=_progress_bar("guard", unit="stream"))
-    if args.json:
-        _print_bench_json("guard", {"scene": "crane", "results": [row]})
-        return 0
-    print(
+def _crane_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], list[str], list[str]]:
+    """``bosun bench guard --scene crane``'s header, columns and cells (app/bench/crane_guard.py)."""
+    head = [
         f"bosun bench guard --scene crane: {args.streams} seeded stick streams through the crane-head engine (50 Hz), "
-        "tac and cooperative by turns, Hs 1 m beam"
-    )
-    print("past its range: how far the TCP's target went past its mode's range; opening: ticks whose step has no")
-    print("outward part on an axis in the outer quarter, and the least share of it kept (the acceptance: ≥ 0.9)")
-    print(
-        _table(
-            ["streams", "ticks", "past its range [mm]", "opening ticks", "least kept", "under 90 %", "slowed ticks"],
-            [
-                [
-                    str(row["streams"]),
-                    str(row["ticks"]),
-                    f"{row['max_excess_m'] * 1e3:.2f}",
-                    str(row["opening_ticks"]),
-                    f"{row['min_opening_speed']:.3f}",
-                    str(row["opening_slow_ticks"]),
-                    str(row["slowed_ticks"]),
-                ]
-            ],
-        )
-    )
+        "tac and cooperative by turns, Hs 1 m beam",
+        "past its range: how far the TCP's target went past its mode's range; opening: ticks whose step has no",
+        "outward part on an axis in the outer quarter, and the least share of it kept (the acceptance: ≥ 0.9)",
+    ]
+    columns = ["streams", "ticks", "past its range [mm]", "opening ticks", "least kept", "under 90 %", "slowed ticks"]
+    cells = [str(row["streams"]), str(row["ticks"]), f"{row['max_excess_m'] * 1e3:.2f}", str(row["opening_ticks"]),
+             f"{row['min_opening_speed']:.3f}", str(row["opening_slow_ticks"]), str(row["slowed_ticks"])]  # fmt: skip
+    return head, columns, cells
+
+
+def _bench_scene_guard(args: argparse.Namespace) -> int:
+    """``bosun bench guard --scene lab|crane``: the scene's own guard under seeded streams, one row."""
+    if args.robots is not None:
+        raise BosunError(f"--robots is for the teleop scene; --scene {args.scene} drives its own machine")
+    if args.scene == "lab":
+        from app.bench.lab_guard import bench_lab_guard as run
+
+        table = _lab_guard_table
+    else:
+        from app.bench.crane_guard import bench_crane_guard as run
+
+        table = _crane_guard_table
+    row = run(args.streams, workers=args.workers, progress=_progress_bar("guard", unit="stream"))
+    if args.json:
+        _print_bench_json("guard", {"scene": args.scene, "results": [row]})
+        return 0
+    head, columns, cells = table(args, row)
+    print("\n".join(head))
+    print(_table(columns, [cells]))
     print(_machine_line())
     return 0
 
@@ -216,10 +185,8 @@ def _bench_crane_guard(args: argparse.Namespace) -> int:
 def cmd_bench_guard(args: argparse.Namespace) -> int:
     from app.bench import guard as bench
 
-    if args.scene == "lab":
-        return _bench_lab_guard(args)
-    if args.scene == "crane":
-        return _bench_crane_guard(args)
+    if args.scene != "teleop":
+        return _bench_scene_guard(args)
     robots = _serial_robots(args.robots)
     if not 10.0 <= args.rate <= 1000.0:
         raise BosunError(f"--rate must be between 10 and 1000 Hz, got {args.rate:g}")
