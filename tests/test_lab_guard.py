@@ -28,13 +28,8 @@ def _lab(**kw) -> MotionLab:
     return lab
 
 
-def _world(lab: MotionLab) -> tuple:
-    (e1, _, _, (R1, _, _)), (e2, _, _, (R2, _, _)) = lab._view(0), lab._view(1)
-    return lab._guard_world(e1, R1, e2, R2)
-
-
 def _clearances(lab: MotionLab, q) -> np.ndarray:
-    return guard_hazards_reference(lab._comau, lab.guard.radii, _world(lab), np.asarray(q, dtype=float))[1]
+    return guard_hazards_reference(lab._comau, lab.guard.radii, lab.guard_world(), np.asarray(q, dtype=float))[1]
 
 
 def test_the_arm_points_are_eq_3_and_its_jacobian_eq_5_at_the_tool():
@@ -53,7 +48,7 @@ def test_the_arm_points_are_eq_3_and_its_jacobian_eq_5_at_the_tool():
 
 def test_the_clearances_gradients_are_their_derivatives_and_the_kernel_is_the_reference():
     lab = _lab()
-    world = _world(lab)
+    world = lab.guard_world()
     rng = np.random.default_rng(32)
     G, val = np.zeros((ck.ROWS, 3)), np.zeros(ck.ROWS)
     kind, cap = np.zeros(ck.ROWS, np.int64), np.zeros(ck.ROWS, np.int64)
@@ -80,7 +75,7 @@ def test_the_clearances_gradients_are_their_derivatives_and_the_kernel_is_the_re
 def test_the_guard_kernel_is_its_reference_and_an_opening_command_passes_bit_for_bit():
     lab = _lab()
     f = lab.joints
-    world = _world(lab)
+    world = lab.guard_world()
     params = (lab._comau, lab.guard.radii, f.limits(), np.array([lab.guard.zone, lab.guard.stop, lab.guard.braking]))
     rng = np.random.default_rng(7)
     slowed = passed = 0

@@ -107,11 +107,6 @@ class _Clearances:
         return self.val.copy()
 
 
-def _world(lab: MotionLab) -> tuple:
-    (e1, _, _, (R1, _, _)), (e2, _, _, (R2, _, _)) = lab._view(0), lab._view(1)
-    return lab._guard_world(e1, R1, e2, R2)
-
-
 def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     """One seeded stream on a fresh Motion-Lab (see the module's text)."""
     rng = np.random.default_rng([seed, 3205])
@@ -125,7 +120,7 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     clear = _Clearances(lab)
     f = lab.joints
     lo, hi = f.lower, f.upper
-    world = _world(lab)
+    world = lab.guard_world()
     zone = lab.guard.zone
     for _ in range(10_000):  # a start with every clearance outside the zone
         q = rng.uniform(lo, hi)

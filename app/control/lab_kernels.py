@@ -285,13 +285,12 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
             if which == 0:
                 # a lower bound first: the segment's distance to the disc's centre less its radius
                 lb, s, _ = _segment_closest(a, b, c2, c2)
-                if lb - deck2[6] - r > FAR:
-                    for i in range(3):
-                        o[i] = a[i] + (b[i] - a[i]) * s - c2[i]
-                    e0, e1, e2 = o[0] / lb, o[1] / lb, o[2] / lb
-                    d = lb - deck2[6]  # far: the bound (and its direction) stand for the clearance
-                else:
-                    d, s, e0, e1, e2 = _segment_disc(a, b, c2, n2, deck2[6])
+                if lb - deck2[6] - r > FAR:  # far: the bound (and its direction) stand for the clearance
+                    val[m], kind[m], cap[m] = lb - deck2[6] - r, DECK2, k
+                    _away(J, k, s, a, b, c2, lb, G[m])
+                    m += 1
+                    continue
+                d, s, e0, e1, e2 = _segment_disc(a, b, c2, n2, deck2[6])
             else:
                 s = 0.0 if which == 1 else 1.0
                 d, e0, e1, e2 = _disc_gap(a if which == 1 else b, c2, n2, deck2[6])
@@ -353,11 +352,12 @@ def comau_guard(x, u, p, dt):
 
            g·v ≥ −min(s |g·v⁰|, (d − stop)/(2 dt), √(2 A (d − stop))),   s = (d − stop)/(zone − stop),
 
-       A = κ a_min |g| (the approach's deceleration when the joints change along g, as the correction does), and
-       only the component along g is removed (a few passes, then the whole rate scaled down if a bound still
-       fails: zero meets every bound); a correction never takes a joint faster towards its limit than the drives'
-       own braking there allows (√(2 b (q_max − q)), Flacco et al. eq. 13: a joint at its limit cannot open a
-       gap): the part it cannot take goes to the other joints (:func:`_correct`).
+       A = κ a_min |g| (the approach's deceleration when the joints change along g, as the correction does).  A
+       command that breaks a bound is corrected along g only, as the next step's speeds: each joint within what the
+       drives reach in one step (a_j dt of its speed now) and within its limit's braking (√(2 b (q_max − q)),
+       Flacco et al. eq. 13: a joint at its limit cannot open a gap), the part a joint cannot take going to the
+       others (:func:`_correct`), a few passes over the hazards; where those speeds cannot meet a bound, as near
+       as they allow (the drives' hardest braking along g).
     3. The command's outcome is checked, each clearance in its zone (to first order, taken anew every
        :data:`RESAMPLE` steps where the arm has got to), until the drives have the command and as long again as
        they would take to stop from it: where the drives, following
@@ -403,7 +403,7 @@ def comau_guard(x, u, p, dt):
         v0[j] = min(max(v, lo_v[j]), hi_v[j])  # what the drives can do: a joint at its limit stays there
     active = np.zeros(ROWS, np.bool_)
     bound = np.zeros(ROWS)
-    slowed = np.zeros(ROWS, np.bool_)
+    slowed = np.zeros(ROWS, np.bool_)  # the command closed on it too fast, or the braking check acted for it
     closing = np.zeros(ROWS, np.bool_)
     for i in range(m):
         gg = G[i, 0] * G[i, 0] + G[i, 1] * G[i, 1] + G[i, 2] * G[i, 2]
@@ -440,11 +440,11 @@ def comau_guard(x, u, p, dt):
             bound[i] = -min(s * -r0, min(room / (2.0 * dt), math.sqrt(2.0 * A * room)))
         else:
             bound[i] = 0.0  # not approaching: never slowed, and no correction may turn it into an approach
+        slowed[i] = r0 < bound[i] - 1e-15
     out = v0.copy()
     violated = False
     for i in range(m):
-        if active[i] and bound[i] != -math.inf:
-            violated = violated or G[i, 0] * v0[0] + G[i, 1] * v0[1] + G[i, 2] * v0[2] < bound[i] - 1e-15
+        violated = violated or slowed[i]
     if violated:
         # the correction plans the next step's speeds: each joint within a_j dt of its speed now (what the drives
         # reach in one step) and within its limits' reach; the bounds met there, or as near as those allow
@@ -464,29 +464,23 @@ def comau_guard(x, u, p, dt):
                     changed = True
             if not changed:
                 break
-        for i in range(m):  # the hazards the command closed on too fast
-            if active[i] and bound[i] != -math.inf:
-                slowed[i] = G[i, 0] * v0[0] + G[i, 1] * v0[1] + G[i, 2] * v0[2] < bound[i] - 1e-15
     # 3. the safe-braking check on the command's outcome (the text's third step)
     steps = 0  # until the drives have the command, and long enough after to have stopped from it (κ)
     for j in range(3):
         reach = abs(out[j] - qd[j]) / (accel[j] * dt)
         steps = max(steps, int(math.ceil(reach + abs(out[j]) / (kappa * accel[j] * dt) - 1e-9)))  # noqa: RUF046
     steps = min(steps, ROLLOUT)
-    v = np.empty(3)
-    qr = np.empty(3)
-    g = np.empty(3)
-    Gt = np.empty((ROWS, 3))
-    vt = np.empty(ROWS)
-    kt = np.empty(ROWS, np.int64)
-    ct = np.empty(ROWS, np.int64)
+    any_active = False
     for i in range(m):
-        if not active[i]:
-            continue  # outside its zone, braking from its approach included
-        for j in range(3):
-            v[j], qr[j], g[j] = qd[j], q[j], G[i, j]
-        d = clear[i]
-        lowest = d
+        any_active = any_active or active[i]
+    if any_active:  # one path of the drives for every hazard in its zone: what differs is each one's clearance
+        v = qd.copy()
+        qr = q.copy()
+        g = G.copy()
+        d = clear.copy()
+        lowest = clear.copy()
+        kt = np.empty(ROWS, np.int64)
+        ct = np.empty(ROWS, np.int64)
         for k in range(steps):
             for j in range(3):  # the drives: toward the command at the acceleration limit, braking at the joint limits
                 vj = v[j] + min(max(out[j] - v[j], -accel[j] * dt), accel[j] * dt)
@@ -494,24 +488,27 @@ def comau_guard(x, u, p, dt):
                 down = math.sqrt(2.0 * limit_brake[j] * max(qr[j] - lower[j], 0.0))
                 v[j] = min(max(vj, -down), up)
                 qr[j] += v[j] * dt
-            if k % RESAMPLE == RESAMPLE - 1:  # the clearance and its gradient where the arm has got to
-                guard_hazards(cm, radii, world, qr, Gt, vt, kt, ct)
-                d = vt[i]
-                for j in range(3):
-                    g[j] = Gt[i, j]
+            if k % RESAMPLE == RESAMPLE - 1:  # the clearances and their gradients where the arm has got to
+                guard_hazards(cm, radii, world, qr, g, d, kt, ct)
             else:
-                d += (g[0] * v[0] + g[1] * v[1] + g[2] * v[2]) * dt
-            lowest = min(lowest, d)
-        now = g[0] * v[0] + g[1] * v[1] + g[2] * v[2]
-        if now < 0.0:
-            Am = 0.0
-            least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
-            for j in range(3):
-                if g[j] * v[j] < -least:
-                    Am += kappa * abs(g[j]) * accel[j]
-            lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
-        if lowest < stop - BRAKE_SLACK and lowest < clear[i]:
-            closing[i] = True
+                for i in range(m):
+                    if active[i]:
+                        d[i] += (g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]) * dt
+            for i in range(m):
+                lowest[i] = min(lowest[i], d[i])
+        for i in range(m):
+            if not active[i]:
+                continue  # outside its zone, braking from its approach included
+            now = g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]
+            low = lowest[i]
+            if now < 0.0:
+                Am = 0.0
+                least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
+                for j in range(3):
+                    if g[i, j] * v[j] < -least:
+                        Am += kappa * abs(g[i, j]) * accel[j]
+                low = min(low, d[i] - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
+            closing[i] = low < stop - BRAKE_SLACK and low < clear[i]
     for i in range(m):
         if not closing[i]:
             continue

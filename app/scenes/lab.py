@@ -727,6 +727,11 @@ class MotionLab:
         self.pendulum.step(dt, R_G_D.T @ self.a_t_g, self.winch.length, self.winch.speed)
         return self._sample()
 
+    def guard_world(self) -> tuple:
+        """The Comau's obstacles in {r} now, as its controller sees the platforms (:meth:`_guard_world`)."""
+        (e1, _, _, (R1, _, _)), (e2, _, _, (R2, _, _)) = self._view(0), self._view(1)
+        return self._guard_world(e1, R1, e2, R2)
+
     def _guard_world(self, e1, R1, e2, R2) -> tuple:
         """The Comau's obstacles in {r} (the reference of :func:`app.scenes.lab_kernels.guard_world`): EM1500's deck
         where the controller sees it, through {n1} (eq. 39) and EM8000's body (eq. 54 inverted)."""
