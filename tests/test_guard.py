@@ -89,9 +89,58 @@ def test_a_step_that_opens_every_hazard_is_not_touched_and_one_that_approaches_l
             u = g / np.linalg.norm(g)
             assert np.linalg.norm(removed - (removed @ u) * u) <= 1e-6 * np.linalg.norm(removed)
             assert g @ out >= g @ dq - 1e-12  # slower approach, never a faster one
+            st = guard.settings  # … and exactly the damper's: −min(s |r⁰|, ½ (d − stop)), s the zone's share left
+            d = v0[active[0]]
+            share = (d - st.clear_stop) / (st.clear_zone - st.clear_stop)
+            assert g @ out == pytest.approx(-min(share * -rates[0], 0.5 * (d - st.clear_stop)), rel=1e-4)
             assert rep.slowed and rep.kind == "collision" and "floor" in rep.name
             approached += 1
     assert opened > 20 and approached > 20
+
+
+def test_inside_the_stop_a_command_carries_the_clearance_back_out_and_a_centred_stick_holds():
+    """A braking overshoot can leave a capsule inside the scaling's stop (between it and the safe-braking rule's
+    clearance). There the damper's bound turns positive (Kanoun et al. eq. 10 with d < d_s): a command along the
+    floor gains a lift of min(½(stop − d), ⅕ |g||dq|) along the clearance's gradient and keeps the rest as asked,
+    not reported as slowed; a centred stick (dq = 0) still holds (the Panda's stuck tool of `bosun bench guard`)."""
+    robot = load_robot("comau_smart5_6dof")
+    guard = HazardGuard.for_robot(robot)
+    q = _floor_pose(guard)
+    n, h = robot.n_joints, 1e-7
+    k = 1 + len(guard.pairs) + int(np.argmin(guard.values(q)[1 + len(guard.pairs) :]))  # the floor's row
+    for _ in range(20):  # Newton along the floor's gradient to a clearance of 3 mm (inside the 5 mm stop)
+        g = np.array([(guard.values(q + h * e)[k] - guard.values(q - h * e)[k]) / (2 * h) for e in np.eye(n)])
+        q = q - (guard.values(q)[k] - 0.003) * g / (g @ g)
+    d = guard.values(q)[k]
+    assert abs(d - 0.003) < 1e-9
+    g = np.array([(guard.values(q + h * e)[k] - guard.values(q - h * e)[k]) / (2 * h) for e in np.eye(n)])
+    rng = np.random.default_rng(2)
+    for scale in (1e-4, 1e-3, 1e-2):
+        dq = rng.normal(size=n)
+        dq = scale * (dq - (dq @ g) / (g @ g) * g) / np.linalg.norm(dq)  # along the floor
+        dq += 1e-6 * scale * g / np.linalg.norm(g)  # and a hair up (opening, beyond the gradients' rounding)
+        out, rep = guard.step(q, dq)
+        push = min(0.5 * (guard.settings.clear_stop - d), 0.2 * np.linalg.norm(g) * np.linalg.norm(dq))
+        assert g @ out == pytest.approx(push, rel=1e-5)  # lifted by exactly the recovery's rate
+        added = out - dq
+        assert np.linalg.norm(added - (added @ g) / (g @ g) * g) <= 1e-9 * np.linalg.norm(dq)  # only along g
+        assert not rep.slowed
+    out, rep = guard.step(q, np.zeros(n))
+    assert not out.any() and not rep.slowed  # a centred stick: nothing moves
+    out, _ = guard.step(q, -1e-3 * g / np.linalg.norm(g))  # straight down: the approach goes, the lift comes
+    assert g @ out > 0.0
+
+
+def test_a_tool_caught_on_the_floor_slides_out_at_the_sticks_speed():
+    """Two of the Panda's streams in `bosun bench guard` where a braking overshoot left the tool at the safe-braking
+    rule's 2.5 mm and the stick, along the floor and a hair up, moved it at 8–13 % of its speed for up to 0.8 s
+    (190 and 81 slow opening ticks): the reference's lead still pointed at the floor. Now a few ticks as the tool
+    arrives, each one where the arm, with the command as asked, would have gone on closing on the floor."""
+    for seed, before in ((349, 190), (427, 81)):
+        run = run_stream("franka_panda", seed, rate=250.0)
+        assert run.opening > 400 and run.opening_slow <= 10 < before, run
+        assert run.opening_slow_closing == run.opening_slow, run
+        assert run.penetration == 0.0 and run.limit_excess <= 1e-12, run
 
 
 def test_at_the_stop_an_approach_is_taken_out_and_a_retreat_is_kept():
@@ -316,3 +365,11 @@ def test_crane_head_streams_never_pass_the_range_and_keep_inward_steps_whole():
     assert sum(r.opening for r in runs) > 100 and sum(r.slowed for r in runs) > 100
     for r in runs:
         assert r.excess <= 1e-12 and r.min_opening_speed >= 1.0 - 1e-9, r
+
+
+def test_bench_guard_prints_the_opening_ticks_kept_under_90_percent(capsys):
+    from app.cli import main
+
+    assert main(["bench", "guard", "--streams", "1", "--robots", "franka_panda"]) == 0
+    out = capsys.readouterr().out
+    assert "under 90 %" in out and "closing as asked)" in out and "franka_panda" in out, out

@@ -379,6 +379,14 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     passes over the active hazards; if a bound still fails, the whole step is scaled down to meet every bound
     (dq = 0 meets them all: every bound is ≤ 0).
 
+    Inside the capsules' own stop (settings[5], where only a braking overshoot puts a capsule: the safe-braking
+    rule's clearance is half of it) the bound turns positive, as Kanoun et al.'s eq. 10 does for d < d_s: a
+    non-zero step gains a rate r_i ≥ min(½(stop − d_i), ⅕ |g_i||dq|) along g_i, motion away from the hazard at most
+    a fifth of the command's own, never a slowing (not reported as one, and not enforced by the last scaling).
+    A zero step stays zero: a centred stick holds.  Without it a tool caught at the safe-braking clearance slid
+    along the floor at 8–13 % of the stick's speed (the braking path of a tangential step dips below that
+    clearance, so the rule took gentler references): the Panda in ``bosun bench guard``.
+
     settings (10,): zone and stop of the joint limits [share of each joint's range], of the σ ratio, of the
     capsule clearances [m]; the σ ratio below which σ_min has no gradient (a kink: :func:`_sigma_grad`); passes;
     a margin [m] added to the capsules' zone and stop (how far the arm may be from ``q``:
@@ -401,17 +409,29 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     na = _active(robot, chain, model, limits, q, settings, G, (val, zone, stop, kind, index))
     passes = int(settings[7])
     out = dq.copy()
-    bound = np.zeros(na)
+    bound = np.zeros(na)  # the damper's bounds (≤ 0): a step slowed to meet one is reported as slowed
+    push = np.zeros(na)  # the recovery's (≥ 0): motion added away from a hazard, never a slowing
     slowed = np.zeros(na, np.bool_)
+    dq_norm = 0.0
+    for j in range(n):
+        dq_norm += dq[j] * dq[j]
+    dq_norm = math.sqrt(dq_norm)
     for i in range(na):
         r0 = 0.0
+        gg = 0.0
         for j in range(n):
             r0 += G[i, j] * dq[j]
+            gg += G[i, j] * G[i, j]
         if r0 < 0.0:
             s = min(max((val[i] - stop[i]) / (zone[i] - stop[i]), 0.0), 1.0)
             bound[i] = -min(s * -r0, 0.5 * max(val[i] - stop[i], 0.0))
         else:
             bound[i] = 0.0  # not approaching: never slowed, and no correction may turn it into an approach
+        if (kind[i] == PAIR or kind[i] == PLANE) and val[i] < settings[5] and dq_norm > 0.0:
+            # inside the capsules' own stop (a braking overshoot put it there): the damper's bound turns positive
+            # (Kanoun et al. eq. 10 with d < d_s), the command carries the clearance back out — at most a fifth of
+            # the command's own rate along the gradient, and only while the operator commands motion
+            push[i] = min(0.5 * (settings[5] - val[i]), 0.2 * math.sqrt(gg) * dq_norm)
     for _ in range(passes):
         changed = False
         for i in range(na):
@@ -420,11 +440,13 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
             for j in range(n):
                 r += G[i, j] * out[j]
                 gg += G[i, j] * G[i, j]
-            if r < bound[i] - 1e-15 and gg > 0.0:
-                c = (bound[i] - r) / gg
+            want = bound[i] if push[i] <= 0.0 else max(bound[i], push[i])  # a push only where one is due
+            if r < want - 1e-15 and gg > 0.0:
+                c = (want - r) / gg
                 for j in range(n):
                     out[j] += c * G[i, j]
-                slowed[i] = True
+                if r < bound[i] - 1e-15:
+                    slowed[i] = True
                 changed = True
         if not changed:
             break

@@ -75,8 +75,11 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     can be from the reference: Σ lever |q_ref − q_stop| (q_stop the joints' stopping point).  The supervision
     (safe braking): the new reference is kept if, after one servo step towards it, the joints can still brake to
     rest with every capsule clearance at least ``hard`` (settings[9]) — or, where the braking the joints can do now
-    leaves less, at least that; else the reference nearer the stopping point that the servo follows in proportion
-    (each joint's change of speed within its acceleration limit) if it passes the same test; else the stopping
+    leaves less, at least that; else the command planned within the servo's reach (every joint's speed moved
+    towards the command's by one share, the largest one tick of acceleration allows each, and the reference
+    q + τ·v that asks the servo for exactly that speed) if it passes the same test; else the reference nearer
+    the stopping point that the servo follows in proportion (each joint's change of speed within its acceleration
+    limit) if it passes; else the stopping
     point (the joints brake now; the caller holds that reference while they brake: recomputed each tick it would
     move a tick's travel ahead of a servo that brakes towards it).  The check is skipped when every clearance now
     exceeds the zone by twice the joints' reach this tick and in braking (the levers' Lipschitz bound).
@@ -133,6 +136,29 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     if worst_c < 0 or worst >= -1e-9:
         return new
     report[7] = float(worst_c)
+    # the command planned within the servo's reach: every joint's speed moved towards the command's by the same
+    # share of its change, the largest one tick of each joint's acceleration allows, and the reference that asks
+    # the servo for exactly that (e = τ·v: the servo's proportional law).  Not the command's reference, whose lead
+    # still carries the arm's last motion (into the floor, sliding along it: the Panda's stuck tool of the bench)
+    share = 1.0
+    for i in range(n):
+        change = abs((new[i] - q_ref[i]) / dt - qdot[i])
+        if change > 0.0 and np.isfinite(accel[i]):
+            share = min(share, accel[i] * dt / change)
+    planned = np.empty(n)
+    for i in range(n):
+        v1 = qdot[i] + share * ((new[i] - q_ref[i]) / dt - qdot[i])
+        v1 = min(max(v1, -speed[i]), speed[i])
+        planned[i] = min(max(q[i] + tau * v1, lower[i]), upper[i])
+    (q1, v1s, _), _ = actuator_block(x, (planned,), p, dt)
+    _braking_least(robot, model, q1, v1s, accel, pts, buf, after)
+    good = True
+    for c in range(m):
+        if after[c] < floor[c] - 1e-9:
+            good = False
+    if good:
+        report[6] = 1.0
+        return planned
     # nearer the stopping point: the reference the servo follows in proportion
     alpha = 1.0
     for i in range(n):
