@@ -49,6 +49,7 @@ class GuardRun:
     braked: int = 0  # ticks the safe-braking rule braked the joints (scenes.teleop_guard)
     opening_braked: int = 0  # of the opening ticks, those it braked (counted as speed 0 kept)
     opening_slow: int = 0  # of the opening ticks, those kept under 90 % of their speed (braked ones included)
+    opening_slow_closing: int = 0  # of those, the ticks whose arm, with the command as asked, closed on a hazard
 
 
 class _Watch:
@@ -62,6 +63,7 @@ class _Watch:
         self.slowed = 0
         self.opening_braked = 0
         self.opening_slow = 0  # opening ticks kept under 90 % of their speed
+        self.opening_slow_closing = 0  # … whose arm, with the command as asked, would have closed on a hazard
 
     def __getattr__(self, name):
         return getattr(self.guard, name)
@@ -103,13 +105,18 @@ class _Watch:
                 p0 = r.position(act.q)
                 want = float(np.linalg.norm(r.position(q_full) - p0))
                 got = float(np.linalg.norm(r.position(q_new) - p0))
+                slow = action == 2 or (want > 1e-12 and got < 0.9 * want)
                 if action == 2:
                     self.opening_braked += 1
-                    self.opening_slow += 1
                     self.min_opening_speed = 0.0
                 elif want > 1e-12:
                     self.min_opening_speed = min(self.min_opening_speed, got / want)
-                    self.opening_slow += got < 0.9 * want
+                if slow:
+                    self.opening_slow += 1
+                    # the command opens at the reference, but the arm lags it: its servo step as asked would still
+                    # close a clearance in its zone (the reference's lead points at the hazard)
+                    a0, a1 = self.guard.values(act.q), self.guard.values(q_full)
+                    self.opening_slow_closing += bool(np.any((a1 < a0)[1:] & (a0 < self.s.clear_zone + margin)[1:]))
         return new, rep, action
 
 
@@ -165,6 +172,7 @@ def run_stream(robot: str, seed: int, rate: float = 250.0, speed: float | None =
         least_clearance=least, limit_excess=max(excess, 0.0), opening=watch.opening,
         min_opening_speed=watch.min_opening_speed, slowed=watch.slowed, braked=ses.braked,
         opening_braked=watch.opening_braked, opening_slow=watch.opening_slow,
+        opening_slow_closing=watch.opening_slow_closing,
     )  # fmt: skip
 
 
@@ -196,6 +204,7 @@ def summarise(robot: str, runs: list[GuardRun]) -> dict:
         **totals(runs),
         "braked_ticks": sum(r.braked for r in runs),
         "opening_braked_ticks": sum(r.opening_braked for r in runs),
+        "opening_slow_closing_ticks": sum(r.opening_slow_closing for r in runs),
     }
 
 

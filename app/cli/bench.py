@@ -215,6 +215,7 @@ def cmd_bench_guard(args: argparse.Namespace) -> int:
                 "past a limit",
                 "opening ticks",
                 "least speed kept",
+                "under 90 %",
                 "slowed ticks",
                 "braked ticks",
             ],
@@ -227,6 +228,7 @@ def cmd_bench_guard(args: argparse.Namespace) -> int:
                     f"{r['max_limit_excess']:.2g}",
                     str(r["opening_ticks"]),
                     f"{r['min_opening_speed']:.3f}",
+                    f"{r['opening_slow_ticks']} ({r['opening_slow_closing_ticks']} closing as asked)",
                     str(r["slowed_ticks"]),
                     f"{r['braked_ticks']} ({r['opening_braked_ticks']} opening)",
                 ]
