@@ -66,6 +66,18 @@ def _braking_least(robot, model, q, v, accel, pts, buf, least):
 
 
 @_jit
+def _keeps_clear(robot, model, x, p, dt, ref, accel, pts, buf, after, floor):
+    """Whether, after one servo step towards ``ref`` from the state ``x``, the joints can still brake to rest with
+    every clearance at least ``floor`` (its least over the braking path into ``after``)."""
+    (q1, v1, _), _ = actuator_block(x, (ref,), p, dt)
+    _braking_least(robot, model, q1, v1, accel, pts, buf, after)
+    for c in range(after.shape[0]):  # noqa: SIM110 (a loop: numba compiles no generator, and NaN passes as before)
+        if after[c] < floor[c] - 1e-9:
+            return False
+    return True
+
+
+@_jit
 def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     """One tick of the teleop engine's hazard guard (``Session._guarded``) in one call: the joint reference
     ``q_ref`` moved by the step ``dq``, scaled (:func:`guard_step`) and supervised, returned.
@@ -150,13 +162,7 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
         v1 = qdot[i] + share * ((new[i] - q_ref[i]) / dt - qdot[i])
         v1 = min(max(v1, -speed[i]), speed[i])
         planned[i] = min(max(q[i] + tau * v1, lower[i]), upper[i])
-    (q1, v1s, _), _ = actuator_block(x, (planned,), p, dt)
-    _braking_least(robot, model, q1, v1s, accel, pts, buf, after)
-    good = True
-    for c in range(m):
-        if after[c] < floor[c] - 1e-9:
-            good = False
-    if good:
+    if _keeps_clear(robot, model, x, p, dt, planned, accel, pts, buf, after, floor):
         report[6] = 1.0
         return planned
     # nearer the stopping point: the reference the servo follows in proportion
@@ -169,13 +175,7 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
         gentle = np.empty(n)
         for i in range(n):
             gentle[i] = q_stop[i] + alpha * (new[i] - q_stop[i])
-        (q1, v1, _), _ = actuator_block(x, (gentle,), p, dt)
-        _braking_least(robot, model, q1, v1, accel, pts, buf, after)
-        good = True
-        for c in range(m):
-            if after[c] < floor[c] - 1e-9:
-                good = False
-        if good:
+        if _keeps_clear(robot, model, x, p, dt, gentle, accel, pts, buf, after, floor):
             report[6] = 1.0
             return gentle
     report[6] = 2.0
