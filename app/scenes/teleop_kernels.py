@@ -66,9 +66,12 @@ def _braking_least(robot, model, q, v, accel, pts, buf, least):
 
 
 @_jit
-def _keeps_clear(robot, model, x, p, dt, ref, accel, pts, buf, after, floor):
-    """Whether, after one servo step towards ``ref`` from the state ``x``, the joints can still brake to rest with
-    every clearance at least ``floor`` (its least over the braking path into ``after``)."""
+def _keeps_clear(robot, model, plant, ref, work, floor):
+    """Whether, after one servo step towards ``ref`` (plant: the servo's state x, parameters p, dt and the joints'
+    accelerations), the joints can still brake to rest with every clearance at least ``floor`` (work: scratch
+    points and clearances, and ``after``, which gets each clearance's least over the braking path)."""
+    x, p, dt, accel = plant
+    pts, buf, after = work
     (q1, v1, _), _ = actuator_block(x, (ref,), p, dt)
     _braking_least(robot, model, q1, v1, accel, pts, buf, after)
     for c in range(after.shape[0]):  # noqa: SIM110 (a loop: numba compiles no generator, and NaN passes as before)
@@ -162,7 +165,7 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
         v1 = qdot[i] + share * ((new[i] - q_ref[i]) / dt - qdot[i])
         v1 = min(max(v1, -speed[i]), speed[i])
         planned[i] = min(max(q[i] + tau * v1, lower[i]), upper[i])
-    if _keeps_clear(robot, model, x, p, dt, planned, accel, pts, buf, after, floor):
+    if _keeps_clear(robot, model, (x, p, dt, accel), planned, (pts, buf, after), floor):
         report[6] = 1.0
         return planned
     # nearer the stopping point: the reference the servo follows in proportion
@@ -175,7 +178,7 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
         gentle = np.empty(n)
         for i in range(n):
             gentle[i] = q_stop[i] + alpha * (new[i] - q_stop[i])
-        if _keeps_clear(robot, model, x, p, dt, gentle, accel, pts, buf, after, floor):
+        if _keeps_clear(robot, model, (x, p, dt, accel), gentle, (pts, buf, after), floor):
             report[6] = 1.0
             return gentle
     report[6] = 2.0
