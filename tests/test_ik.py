@@ -353,3 +353,41 @@ def test_jacobian_restarts_from_the_nearest_seed_shorten_the_cold_tail(name):
         assert res.success and res.error < 1e-3
         iterations.append(res.iterations)
     assert np.percentile(iterations, 99) <= 200
+
+
+@pytest.mark.parametrize("solver_name", ["ga", "ga-restart", "jacobian", "analytic"])
+def test_a_replayed_budget_takes_the_recorded_steps_on_any_clock(solver_name):
+    """Issue 32, item 6 (GA sessions were not replayable): a solve with a time budget keeps its clock decisions
+    (:meth:`Solver.take_work`: time up or not, how many generations fit); a twin solver given them as a
+    :class:`Replayed` budget returns the same answer, generations and reason, solve after solve — position and
+    velocity, reachable and out-of-reach targets (where the Jacobian's restarts run out of time), budgets the
+    searches overrun."""
+    from app.ik import Replayed
+
+    robot = load_robot("comau_smart5_3dof")
+    live, twin = make_solver(solver_name, robot, seed=7), make_solver(solver_name, robot, seed=7)
+    rng = np.random.default_rng(11)
+    q = 0.5 * (robot.lower + robot.upper)
+    ran_out = decided = 0  # solves whose time was up (their last decision); solves that took a decision
+    for i in range(60):
+        x = robot.position(rng.uniform(robot.lower, robot.upper)) * (2.0 if i % 3 == 0 else 1.0)  # a third out of reach
+        xdot = rng.uniform(-0.5, 0.5, 3)
+        budget = 2e-5 if i % 2 else 3e-4
+        velocity = bool(i % 2) and solver_name.startswith("ga")
+
+        def solve(s, b, x=x, xdot=xdot, velocity=velocity):
+            if velocity:
+                return s.solve_velocity(q, xdot, 0.001, time_budget=b)
+            return s.solve_position(x, q, time_budget=b)
+
+        a = solve(live, budget)
+        work = live.take_work()
+        b = solve(twin, Replayed(budget, tuple(map(tuple, work))))
+        assert np.array_equal(a.q, b.q) and (a.iterations, a.reason) == (b.iterations, b.reason), (i, a, b)
+        assert twin.take_work() == []  # a replayed solve reads no clock, so keeps nothing
+        ran_out += any(d and d[-1] == 1 for d in work)
+        decided += any(work)
+    if solver_name == "analytic":  # its refiner (out of reach) gets a millisecond at least: its decisions, kept
+        assert decided >= 10
+    else:
+        assert ran_out >= 10  # the clock did end searches: the replay had them to follow

@@ -160,29 +160,61 @@ def test_a_recorded_session_replays_to_every_published_state(tmp_path, capsys):
     assert out["differing"] == 1 and ", q[0]: recorded" in out["first"], out
 
 
-def _alter_one_state(src, dst):
-    """The recording copied, with the 10th state's first joint moved by 1e-9 rad."""
+def test_a_recorded_ga_session_replays_to_every_published_state(tmp_path):
+    """The GA's time budget on record (issue 32, item 6: GA sessions were not replayable): its solves take their
+    decisions from the clock (time up or not, how many generations fit), which the recording keeps with each tick
+    (``/tick``'s ``work``) and the replay gives back instead of the clock.  A GA session at 500 Hz (0.8 ms a
+    solve), driven in velocity then position mode, replays to every published state; without them (the clock
+    read again) it does not."""
+    from app.engine.replay import replay
+
+    session = Session(robot_name="comau_smart5_3dof", solver_name="ga", mode="velocity")
+    path = _record(tmp_path, session, 500, extra=lambda op: op.request("set_mode", mode="position"))
+    _, msgs = _read(path)
+    solves = [d for _, m in msgs["/tick"] for d in m["work"]]
+    assert len(solves) > 100 and any(d and d[-1] == 1 and len(d) >= 3 for d in solves)  # time ran out, mid-search
+    report = replay(path)
+    assert report.states > 20 and report.equal, report.first
+    stripped = tmp_path / "no-work.mcap"
+    _copy(path, stripped, lambda topic, data: json.dumps({**json.loads(data), "work": []}).encode()
+          if topic == "/tick" else data)  # fmt: skip
+    assert not replay(stripped).equal
+
+
+def _copy(src, dst, change):
+    """The recording copied message by message, each one's data through ``change(topic, data)`` (None: left out)."""
     from mcap.writer import Writer
 
     with open(src, "rb") as f, open(dst, "wb") as g:
         reader = mcap_reader.make_reader(f)
         w = Writer(g)
         w.start()
-        schemas, channels, n = {}, {}, 0
+        schemas, channels = {}, {}
         for schema, channel, message in reader.iter_messages(log_time_order=False):
             if schema.id not in schemas:
                 schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
             if channel.id not in channels:
                 channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding, schemas[schema.id])
-            data = message.data
-            if channel.topic == "/state":
-                n += 1
-                if n == 10:
-                    m = json.loads(data)
-                    m["q"][0] += 1e-9
-                    data = json.dumps(m).encode()
-            w.add_message(channels[channel.id], message.log_time, data, message.publish_time, message.sequence)
+            data = change(channel.topic, message.data)
+            if data is not None:
+                w.add_message(channels[channel.id], message.log_time, data, message.publish_time, message.sequence)
         w.finish()
+
+
+def _alter_one_state(src, dst):
+    """The recording copied, with the 10th state's first joint moved by 1e-9 rad."""
+    n = [0]
+
+    def change(topic, data):
+        if topic == "/state":
+            n[0] += 1
+            if n[0] == 10:
+                m = json.loads(data)
+                m["q"][0] += 1e-9
+                return json.dumps(m).encode()
+        return data
+
+    _copy(src, dst, change)
 
 
 def test_a_replay_refuses_what_it_cannot_reproduce_in_one_line(tmp_path):

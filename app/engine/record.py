@@ -6,8 +6,9 @@ every field):
 
 * ``/session`` (once): the engine's kind, its rate and publication rate, seed, version and command line;
 * ``/description``: the scene's description, at the start and whenever it changes;
-* ``/tick``: every control tick, after its inputs and commands: the loop's clock, Δt, the input receiver's
-  listening time and the solver's budget (what a replay steps with);
+* ``/tick``: every control tick, after its inputs, commands and control step, before its state: the loop's clock,
+  Δt, the input receiver's listening time, the solver's budget and the solver's clock decisions in it (what a
+  replay steps with: a GA or a Jacobian that ran out of time takes the same steps again);
 * ``/health``: the loop's own health alarms after each tick (measured on the machine: a replay sets them);
 * ``/input``: every input sample fed to the scene (axes, buttons, device, its time; a lost device as
   ``device_lost``), in the order the loop applied it;
@@ -84,6 +85,7 @@ class _Tick:
     dt: float
     listened: float | None
     solve_budget: float
+    work: list[list[int]]
 
 
 @dataclasses.dataclass
@@ -199,12 +201,18 @@ class SessionRecorder:
     def description(self, wire: dict) -> None:
         self._write("/description", wire)
 
-    def on_tick(self, tick: int, now: float, dt: float, listened: float | None, budget: float) -> None:
-        """A control tick about to run: its number, the loop's clock ``now`` (monotonic), Δt, the input
-        receiver's last listening time and the solver's budget — what a replay gives the scene."""
+    def on_tick(
+        self, tick: int, now: float, dt: float, listened: float | None, budget: float, work: list[list[int]]
+    ) -> None:
+        """A control tick just run, after the inputs and commands it took and before the state it published: its
+        number, the loop's clock ``now`` (monotonic), Δt, the input receiver's last listening time, the solver's
+        budget, and the solver's clock decisions in it (``work``, one list per solve: whether its time was up, how
+        many GA generations fitted; a replay takes them instead of reading the clock, :class:`app.ik.Replayed`) —
+        what a replay gives the scene."""
         self.tick = tick
         self.t = tick * dt  # the messages' time: the loop's own, from the recording's start
-        self._write("/tick", {"tick": tick, "now": now, "dt": dt, "listened": listened, "solve_budget": budget})
+        self._write("/tick", {"tick": tick, "now": now, "dt": dt, "listened": listened, "solve_budget": budget,
+                              "work": work})  # fmt: skip
 
     def on_health(self, now: float, health: list) -> None:
         """The loop's health alarms after a tick (``loop_stall``, ``engine_slow``): measured, not replayable."""

@@ -11,8 +11,9 @@ relative to their size above 1; what times the machine, not the scene, left out:
 What a replay cannot reproduce is refused or reported, never hidden: a command whose work ran off the loop
 (a ``Deferred``: the crane head's new sea, a study) returns its result on a later tick that the machine's speed
 chose, so a recording that holds one is refused in one line; a solver with a time budget (the GA, a Jacobian
-that ran out of its budget) may take another number of steps on another run, and the first state that differs
-is reported with its tick and field.
+that ran out of its budget) takes its decisions from the clock (whether its time is up, how many generations
+still fit), so the recording keeps them (each ``/tick``'s ``work``) and the replay gives the
+solver those instead of the clock (:class:`app.ik.Replayed`): the same generations on any machine.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from app.engine.jobs import Deferred
 from app.engine.scene import CommandError
 from app.engine.server import apply_command, apply_health
 from app.errors import BosunError
+from app.ik import Replayed
 from app.net.codec import build
 from app.net.recording import RecordingError, read_recording
 from app.net.snapshots import to_wire
@@ -205,7 +207,10 @@ class Replayer:
             inp = getattr(session, "input", None)
             if inp is not None and m.get("listened") is not None:
                 inp.listened = m["listened"]
-            self._tick(m["now"], m["dt"], solve_budget=m["solve_budget"])
+            budget = m["solve_budget"]
+            if m.get("work"):  # the solver's clock decisions in the tick (none: it read no clock)
+                budget = Replayed(float(budget), tuple(tuple(int(v) for v in d) for d in m["work"]))
+            self._tick(m["now"], m["dt"], solve_budget=budget)
             report.ticks += 1
         elif topic == "/state":
             report.states += 1

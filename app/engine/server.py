@@ -469,14 +469,18 @@ class EngineServer:
         if inp is not None:
             inp.listened = self.inbox.listened  # input ages on the receiver's clock (issue 26, item 9)
         budget = 0.4 * self.dt
-        if self.recorder is not None:  # after the tick's inputs and commands, before its control step
-            self.recorder.on_tick(self.stats.ticks, now, self.dt, getattr(inp, "listened", None), budget)
+        work = getattr(self.session, "take_solver_work", None) if self.recorder is not None else None
+        if work is not None:
+            work()  # what solved before this tick is not this tick's
+        listened = getattr(inp, "listened", None)
         try:
             self.session.tick(now, self.dt, solve_budget=budget)
         except Exception as err:  # a failing control step stops the machines and says so; the loop goes on
             with contextlib.suppress(Exception):
                 self.session.estop(source=f"the engine itself ({type(err).__name__} in the control step)")
             self._log_limited("tick", f"control step failed: {type(err).__name__}: {err}; E-STOP latched")
+        if self.recorder is not None:  # after the tick's inputs, commands and control step, before its state
+            self.recorder.on_tick(self.stats.ticks, now, self.dt, listened, budget, work() if work is not None else [])
         if self._pending_latency is not None:
             self.stats.latencies.append(time.monotonic() - self._pending_latency)
             self._pending_latency = None

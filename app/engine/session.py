@@ -28,7 +28,7 @@ from app.engine.alarms import AlarmList
 from app.engine.scene import CommandError, LogEntry, Scene, command
 from app.engine.studies import STUDIES, StudyError, StudyRunner
 from app.errors import BosunError, error_line, one_line, printable_path
-from app.ik import DEFAULT, GaTask, make_solver, solvers_for
+from app.ik import DEFAULT, GaTask, Replayed, make_solver, solvers_for
 from app.models.registry import (
     allowed_dirs,
     list_robots,
@@ -405,8 +405,14 @@ class Session(Scene):
         reach = self.robot.speed * dt
         self._guarded(np.clip(self.q_goal - self.q_ref, -reach, reach))
 
-    def tick(self, now: float, dt: float, solve_budget: float | None = None) -> None:
-        """One control step of length dt [s] at engine time ``now`` [s]."""
+    def take_solver_work(self) -> list[list[int]]:
+        """The solver's clock decisions since the last call, one list per solve (:meth:`app.ik.base.Solver.take_work`:
+        what a recording keeps so that a replay's GA takes the same generations)."""
+        return self.solver.take_work()
+
+    def tick(self, now: float, dt: float, solve_budget: float | Replayed | None = None) -> None:
+        """One control step of length dt [s] at engine time ``now`` [s] (``solve_budget``: the solver's time budget
+        [s], or a replay's recorded decisions)."""
         self.ticks += 1
         self.sim_time += dt
         self.dt_last = dt

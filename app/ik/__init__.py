@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from app.ik.analytic import AnalyticSolver
-from app.ik.base import DEFAULT, IKError, IKResult, Solver
+from app.ik.base import DEFAULT, IKError, IKResult, Replayed, Solver
 from app.ik.genetic import GaTask, GeneticSolver, RestartGeneticSolver
 from app.ik.jacobian import JacobianSolver
 
@@ -73,6 +73,7 @@ __all__ = [
     "IKError",
     "IKResult",
     "JacobianSolver",
+    "Replayed",
     "RestartGeneticSolver",
     "Solver",
     "make_solver",

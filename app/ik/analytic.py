@@ -22,7 +22,7 @@ from typing import Unpack
 import numpy as np
 from numpy.typing import NDArray
 
-from app.ik.base import DEFAULT, IKError, IKResult, SearchOutcome, Solver, SolverOptions
+from app.ik.base import DEFAULT, IKError, IKResult, Replayed, SearchOutcome, Solver, SolverOptions
 from app.ik.jacobian import JacobianSolver
 from app.models import kernels
 from app.models.closed_form import find_family
@@ -115,7 +115,13 @@ class AnalyticSolver(Solver):
                 self.robot, time_budget=None, rng=self.rng, restarts=4, tolerance=self.tolerance
             )
         remaining = None if math.isinf(deadline) else max(1e-3, deadline - time.perf_counter())
-        refined = self._refiner.solve_position(x_t, q, time_budget=remaining)
+        if self._tape is not None:  # a replayed budget: the refiner takes this solve's recorded decisions
+            budget, self._tape = Replayed(0.0, (tuple(self._tape),)), []
+            refined = self._refiner.solve_position(x_t, q, time_budget=budget)
+        else:
+            refined = self._refiner.solve_position(x_t, q, time_budget=remaining)
+            for d in self._refiner.take_work():  # its clock decisions are this solve's
+                self._decisions.extend(d)
         why = "target out of reach" if not exact else "closed-form solution outside the joint limits"
         ok = refined.error <= self.tolerance
         return SearchOutcome(

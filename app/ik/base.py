@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import time
 from abc import ABC, abstractmethod
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, TypedDict
 
@@ -27,6 +28,22 @@ from app.models.workspace import WorkspaceBox, workspace_box
 
 #: "use the solver's own time budget" (None means no limit, so it cannot be the default marker)
 DEFAULT: Any = object()
+
+
+#: solves whose clock decisions are kept for a recording (:meth:`Solver.take_work`): a bound, so nothing grows
+#: where nobody takes them
+WORK_KEPT = 64
+
+
+@dataclass(frozen=True)
+class Replayed:
+    """A time budget replayed (issue 32, item 6): each solve's clock decisions as a recording holds them
+    (:meth:`Solver.take_work`), one list per solve in the order they ran.  Passed as ``time_budget``, it stands
+    for the clock: each decision a solve would take from it (spent or not; how many generations fit) is the
+    recorded one, so a GA or a Jacobian with restarts takes the same steps on any machine."""
+
+    seconds: float
+    solves: tuple[tuple[int, ...], ...]
 
 
 class IKError(BosunError):
@@ -129,6 +146,11 @@ class Solver(ABC):
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self.box: WorkspaceBox = workspace_box(robot)
         self._revolute = np.array([k == "revolute" for k in robot.joint_kinds])
+        #: each recent solve's clock decisions, oldest first (:meth:`take_work`)
+        self.work: deque[list[int]] = deque(maxlen=WORK_KEPT)
+        self._decisions: list[int] = []  # this solve's, as they are taken
+        self._tape: list[int] | None = None  # a replayed solve's, still to take
+        self._replayed: list[tuple[int, ...]] = []  # a replayed budget's solves still to run
 
     # ---------------------------------------------------------------- helpers
     def check_target(self, target: ArrayLike) -> NDArray[np.float64]:
@@ -187,9 +209,47 @@ class Solver(ABC):
                 q[i] = cand
         return q
 
-    def _deadline(self, time_budget: float | None) -> float:
+    def _deadline(self, time_budget: float | Replayed | None) -> float:
+        """The solve's deadline (a perf_counter time; inf: none), called once as each solve starts.  A finite
+        budget's solve keeps its clock decisions (:attr:`work`); a :class:`Replayed` budget's solve takes the
+        recorded ones instead of reading the clock (its deadline is then inf: only the decisions end it)."""
         budget = self.time_budget if time_budget is DEFAULT else time_budget
-        return math.inf if budget is None else time.perf_counter() + budget
+        self._tape = None
+        if isinstance(budget, Replayed):
+            if self._replayed_of is not budget:  # the budget's first solve: its solves to run, in order
+                self._replayed_of, self._replayed = budget, [list(d) for d in budget.solves]
+            self._tape = self._replayed.pop(0) if self._replayed else []
+            return math.inf
+        self._decisions = []  # an unbudgeted solve's are kept nowhere: it reads no clock that could differ
+        if budget is None:
+            return math.inf
+        self.work.append(self._decisions)
+        return time.perf_counter() + budget
+
+    _replayed_of: Replayed | None = None
+
+    def _decide(self, measure, spent: int = 0) -> int:
+        """One decision a solve takes from the clock (``measure()``: an int, a bool as 0/1): the replayed one
+        where the budget is replayed (none left: ``spent``, the clock's answer once time is up), else measured
+        and kept."""
+        if self._tape is not None:
+            return self._tape.pop(0) if self._tape else spent
+        value = int(measure())
+        self._decisions.append(value)
+        return value
+
+    def _expired(self, deadline: float) -> bool:
+        """Whether the solve's time is up (a decision, :meth:`_decide`)."""
+        if math.isinf(deadline) and self._tape is None:
+            return False
+        return self._decide(lambda: time.perf_counter() >= deadline, spent=1) != 0
+
+    def take_work(self) -> list[list[int]]:
+        """The clock decisions of the solves since the last call, oldest first (what a recording keeps, for
+        :class:`Replayed`), and forgets them."""
+        out = list(self.work)
+        self.work.clear()
+        return out
 
     # ---------------------------------------------------------------- interface
     def solve_position(

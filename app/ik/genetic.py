@@ -26,7 +26,9 @@ As published:
 The whole population's FK runs as one batch.  Operators are module functions so each
 can be tested against its rule.  With a time budget the number of generations depends
 on the machine's speed; ``max_generations`` with ``time_budget=None`` makes a run
-reproducible from its seed.
+reproducible from its seed, and so does a recorded run's clock: each solve keeps the decisions
+it took from the clock (time up or not, the generations of each batch; :meth:`Solver.take_work`),
+and a :class:`~app.ik.base.Replayed` budget gives them back (``bosun replay``).
 
 Compiled loop (issue 14).  Steps 5–8 (selection, crossover, mutation, elitism, cost, stop)
 run as numba kernels, :mod:`app.ik.ga_kernels`, unless ``robot.use_kernels`` is False; then
@@ -87,6 +89,7 @@ two modes keep separate populations.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -415,7 +418,7 @@ class GeneticSolver(Solver):
         generations = 0
         reason = "time budget spent"
         cap = self.max_generations
-        if cap is None and math.isinf(deadline):
+        if cap is None and math.isinf(deadline) and self._tape is None:  # (a replayed budget ends as recorded)
             cap = HARD_GENERATION_CAP
         # A generation costs at least one population evaluation: the first estimate of its time.
         per_generation = time.perf_counter() - start
@@ -427,13 +430,15 @@ class GeneticSolver(Solver):
                 reason = "converged"
                 break
             now = time.perf_counter()
-            if now >= deadline:
+            if self._expired(deadline):
                 break
             if cap is not None and generations >= cap:
                 reason = "generation limit"
                 break
             left = None if cap is None else cap - generations
-            k = self._batch(now, deadline, per_generation, left)
+            k = self._decide(functools.partial(self._batch, now, deadline, per_generation, left))
+            if k <= 0:  # a replayed budget spent
+                break
             pop, cost, ran = self._evolve_position(pop, cost, x_t, k if stall is None else min(k, stall))
             generations += ran
             per_generation = (time.perf_counter() - now) / ran
@@ -573,7 +578,7 @@ class GeneticSolver(Solver):
         target = self.velocity_target(q_a, dt, x_t, u)
         cost = self.velocity_cost(pop, target)  # eq. (5) about x_t, metres
         cap = self.max_generations
-        if cap is None and math.isinf(deadline):
+        if cap is None and math.isinf(deadline) and self._tape is None:  # (a replayed budget ends as recorded)
             cap = VELOCITY_GENERATION_CAP
         # A generation costs at least one population evaluation: the first estimate of its time.
         generations, reason, per_generation = 0, "time budget spent", time.perf_counter() - start
@@ -582,12 +587,15 @@ class GeneticSolver(Solver):
                 reason = "converged"
                 break
             now = time.perf_counter()
-            if now + per_generation >= deadline:  # do not start a generation that would overrun the budget
+            if self._expired(deadline - per_generation):  # do not start a generation that would overrun the budget
                 break
             if cap is not None and generations >= cap:
                 reason = "generation limit"
                 break
-            k = self._batch(now, deadline, per_generation, None if cap is None else cap - generations)
+            left = None if cap is None else cap - generations
+            k = self._decide(functools.partial(self._batch, now, deadline, per_generation, left))
+            if k <= 0:  # a replayed budget spent
+                break
             pop, cost, ran = self._evolve_velocity(pop, cost, target, (lo, hi), (float(tol), k))
             generations += ran
             per_generation = (time.perf_counter() - now) / ran

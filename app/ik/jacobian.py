@@ -188,7 +188,7 @@ class JacobianSolver(Solver):
                 best_q, best_err = q, err
             else:
                 stall += 1
-            if err <= self.tolerance or stall > 15 or time.perf_counter() >= deadline:
+            if err <= self.tolerance or stall > 15 or self._expired(deadline):
                 break
             q = self.robot.clip(q + self.damped_step(J, e, q))
         return best_q, best_err, iterations
@@ -226,7 +226,7 @@ class JacobianSolver(Solver):
             if best_err <= self.tolerance:
                 reason = "converged"
                 break
-            if time.perf_counter() >= deadline:
+            if self._expired(deadline):
                 reason = "time budget spent"
                 break
             if attempt >= self.restarts:
