@@ -12,11 +12,20 @@ Each stream:
   full deflection, the other half for 2–8 s a full stick aimed, as the segment starts, from the tool point at a
   random point of a random obstacle (:func:`aimed_stick`: random sticks alone seldom reach them); as the lab
   engine maps a stick: the tool's velocity in {r}, REMOTE_TOOL_SPEED at full stick;
-* then the stick centred for 1 s.
+* in half the segments, the winch in REMOTE paying out or hauling in at a speed uniform in ±its 0.2 m/s (from its
+  1.8 m of wire, within its 0.3–4 m);
+* then the stick centred and the winch still for 1 s.
 
-Measured at the actual joints (the drives', after each step) against the true platforms:
+A stream whose load swings past its model (level with the tool point: H118) stops the lab there, as the engine
+does; ``load_model_lost`` counts them.
 
-* ``penetration`` [m]: the deepest capsule overlap with an obstacle (minus the least clearance when negative);
+The load hangs from the tool point on the winch's wire, and swings as the arm moves it.
+
+Measured at the actual joints (the drives', after each step) against the true platforms, the load where it hangs:
+
+* ``penetration`` [m]: the deepest capsule overlap with an obstacle (minus the least clearance when negative), the
+  wire's and the load's among them (``load_least``: theirs alone; ``load_near``: steps the guard's nearest hazard
+  in its zone was the wire or the load's swing envelope);
 * ``limit_excess``: the farthest a joint went past its limit [rad];
 * ``opening`` ticks: the law's command opens (or keeps) every clearance in the guard's zone, judged by the
   clearances' own values over a 10⁻⁷ rad step along what the drives can do of it (a joint at its limit stays),
@@ -59,6 +68,9 @@ class LabGuardRun:
     opening_slow: int  # of them, those kept under 90 %
     slowed: int  # ticks the guard slowed the command
     near: dict  # obstacle → ticks with it the nearest in the zone
+    load_near: int = 0  # of those, ticks the wire or the load (its swing's envelope) was the nearest
+    load_least: float = math.inf  # [m]: the least clearance of the wire and the load (where it hangs)
+    load_model_lost: bool = False  # the swing left its model and the lab stopped itself (H118)
 
 
 def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray | None, float]]:
@@ -77,7 +89,7 @@ def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray | None, floa
 def aimed_stick(rng: np.random.Generator, lab: MotionLab, world: tuple, tool: np.ndarray) -> np.ndarray:
     """A full stick from the tool point towards a random point of a random obstacle (in {r}): EM8000's deck within
     3 m of the pedestal's foot, the pedestal's axis, or EM1500's deck; a little off line (±0.2 per axis)."""
-    deck1, ped, _, deck2 = world
+    deck1, ped, _, deck2, _ = world
     which = int(rng.integers(3))
     if which == 1:
         target = ped[0] + (ped[1] - ped[0]) * rng.uniform()
@@ -107,6 +119,13 @@ class _Clearances:
         return self.val.copy()
 
 
+def actual(world: tuple) -> tuple:
+    """The guard's world with the load where it is (the guard's own takes the sphere its swing can reach)."""
+    hang = world[4].copy()
+    hang[3:6], hang[6] = hang[0:3], 0.0
+    return (*world[:4], hang)
+
+
 def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     """One seeded stream on a fresh Motion-Lab (see the module's text)."""
     rng = np.random.default_rng([seed, 3205])
@@ -131,16 +150,21 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     cm = lab._comau
     guard_p = (cm, lab._guard_p[0], f.limits(), lab._guard_p[5])
     limits = f.limits()
-    ticks = opening = slowed = opening_slow = 0
+    ticks = opening = slowed = opening_slow = load_near = 0
+    load_least = math.inf
     least, excess, min_open = math.inf, 0.0, 1.0
     near = {"EM8000 deck": 0, "pedestal": 0, "EM1500 deck": 0}
     names = tuple(near)
     segments = stick_stream(rng) + [(np.zeros(3), 1.0)]
-    for stick, seconds in segments:
+    winch = [float(rng.uniform(-1.0, 1.0)) if rng.random() < 0.5 else 0.0 for _ in segments[:-1]] + [0.0]
+    lab.set_winch_mode("remote")
+    for (stick, seconds), pay_out in zip(segments, winch, strict=True):
+        lab.winch.speed_command = pay_out * lab.winch.spec["speed"]
         if stick is None:
             stick = aimed_stick(rng, lab, world, comau_tool(cm, f.x, np.zeros(3), np.zeros(3))[0])
         v_cmd = np.ascontiguousarray(REMOTE_TOOL_SPEED * stick)
         for _ in range(max(1, round(seconds / DT))):
+            world = lab.guard_world()  # the platforms stand still; the load hangs where it swings
             q, qd = f.x.copy(), f.v.copy()
             # the law's command and the guard's answer, as lab_step will make them this step
             rate = lstsq3(comau_tool(cm, q, np.zeros(3), np.zeros(3))[3], v_cmd)
@@ -150,6 +174,7 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
             inzone = vals < zone
             if inzone.any():
                 near[names[int(report[0])]] += 1
+                load_near += int(report[1]) >= ck.WIRE
                 up, down = np.maximum(f.upper - q, 0.0), np.maximum(q - f.lower, 0.0)  # the drives' reach this step
                 hi_v = np.minimum(f.speed, np.minimum(np.sqrt(2.0 * f.brake * up), up / DT))
                 lo_v = -np.minimum(f.speed, np.minimum(np.sqrt(2.0 * f.brake * down), down / DT))
@@ -172,11 +197,14 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
             slowed += bool(lab.guard_report[4])
             ticks += 1
             q = f.x
-            least = min(least, float(clear(world, q).min()))
+            now = clear(actual(lab.guard_world()), q)
+            least = min(least, float(now.min()))
+            load_least = min(load_least, float(now[ck.ROWS - 4 :].min()))
             excess = max(excess, float(np.max(np.maximum(lo - q, q - hi))))
     return LabGuardRun(
         seed=seed, ticks=ticks, penetration=max(0.0, -least), least_clearance=least, limit_excess=max(excess, 0.0),
         opening=opening, min_opening_speed=min_open, opening_slow=opening_slow, slowed=slowed, near=near,
+        load_near=load_near, load_least=load_least, load_model_lost=bool(lab.load_model_lost),
     )  # fmt: skip
 
 
@@ -189,7 +217,10 @@ def summarise(runs: list[LabGuardRun]) -> dict:
     from app.bench.guard import totals
 
     near = {k: sum(r.near[k] for r in runs) for k in runs[0].near} if runs else {}
-    return {"scene": "motionlab (Comau REMOTE, data-sheet limits)", **totals(runs), "nearest_in_zone_ticks": near}
+    return {"scene": "motionlab (Comau REMOTE, data-sheet limits)", **totals(runs), "nearest_in_zone_ticks": near,
+            "load_nearest_ticks": sum(r.load_near for r in runs),
+            "load_least_clearance_m": min((r.load_least for r in runs), default=math.inf),
+            "streams_load_model_lost": sum(r.load_model_lost for r in runs)}  # fmt: skip
 
 
 def bench_lab_guard(streams: int, workers: int = 1, progress=None) -> dict:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from app.cli.args import command, group
 from app.cli.common import _kernels_on, _machine, _positive_float, _positive_int, _print_json, _progress_bar, _table
@@ -132,16 +133,20 @@ def _lab_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], li
     head = [
         f"bosun bench guard --scene lab: {args.streams} seeded stick streams, the Comau in REMOTE on its data-sheet "
         "limits, the platforms held at random poses, 5 ms steps",
-        "penetration: the deepest overlap of the arm's capsules with EM8000's deck, its pedestal or EM1500's deck,",
-        "at the actual joints; opening: steps whose command opens every clearance in the zone, and the least drive",
-        "step kept on them (the acceptance: ≥ 0.9)",
+        "penetration: the deepest overlap of the arm's capsules, the winch's wire or the hanging load with EM8000,",
+        "its pedestal or EM1500's deck, at the actual joints; opening: steps whose command opens every clearance in",
+        "the zone, and the least drive step kept on them (the acceptance: ≥ 0.9)",
     ]
-    columns = ["streams", "steps", "max penetration [mm]", "least clearance [mm]", "past a limit", "opening steps",
-               "least step kept", "slowed steps", "in the zone: EM8000 deck / pedestal / EM1500 deck"]  # fmt: skip
+    columns = ["streams", "steps", "max penetration [mm]", "least clearance [mm]", "wire and load: least [mm]",
+               "past a limit", "opening steps", "least step kept", "under 90 %", "slowed steps",
+               "in the zone: EM8000 deck / pedestal / EM1500 deck", "of them the wire or load",
+               "streams stopped: load model lost"]  # fmt: skip
     cells = [str(row["streams"]), str(row["ticks"]), f"{row['max_penetration_m'] * 1e3:.2f}",
-             f"{row['least_clearance_m'] * 1e3:.1f}", f"{row['max_limit_excess']:.2g}", str(row["opening_ticks"]),
-             f"{row['min_opening_speed']:.3f}", str(row["slowed_ticks"]),
-             " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values())]  # fmt: skip
+             f"{row['least_clearance_m'] * 1e3:.1f}", f"{row.get('load_least_clearance_m', math.inf) * 1e3:.1f}",
+             f"{row['max_limit_excess']:.2g}", str(row["opening_ticks"]), f"{row['min_opening_speed']:.3f}",
+             str(row["opening_slow_ticks"]), str(row["slowed_ticks"]),
+             " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values()),
+             str(row.get("load_nearest_ticks", 0)), str(row.get("streams_load_model_lost", 0))]  # fmt: skip
     return head, columns, cells
 
 

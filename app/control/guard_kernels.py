@@ -412,6 +412,7 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     bound = np.zeros(na)  # the damper's bounds (≤ 0): a step slowed to meet one is reported as slowed
     push = np.zeros(na)  # the recovery's (≥ 0): motion added away from a hazard, never a slowing
     slowed = np.zeros(na, np.bool_)
+    norm2 = np.zeros(na)  # |g|² of each row
     dq_norm = 0.0
     for j in range(n):
         dq_norm += dq[j] * dq[j]
@@ -422,6 +423,7 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
         for j in range(n):
             r0 += G[i, j] * dq[j]
             gg += G[i, j] * G[i, j]
+        norm2[i] = gg
         if r0 < 0.0:
             s = min(max((val[i] - stop[i]) / (zone[i] - stop[i]), 0.0), 1.0)
             bound[i] = -min(s * -r0, 0.5 * max(val[i] - stop[i], 0.0))
@@ -436,11 +438,10 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
         changed = False
         for i in range(na):
             r = 0.0
-            gg = 0.0
             for j in range(n):
                 r += G[i, j] * out[j]
-                gg += G[i, j] * G[i, j]
-            want = bound[i] if push[i] <= 0.0 else max(bound[i], push[i])  # a push only where one is due
+            gg = norm2[i]
+            want = push[i] if push[i] > 0.0 else bound[i]  # a push only where one is due (bounds are ≤ 0)
             if r < want - 1e-15 and gg > 0.0:
                 c = (want - r) / gg
                 for j in range(n):

@@ -79,7 +79,12 @@ COMAU_LAW = Block(
 
 
 # ---------------------------------------------------------------------------------------------- the Comau's guard
-CAPSULES = ("upper arm", "forearm", "extension arm")
+CAPSULES = ("upper arm", "forearm", "extension arm", "wire", "load")
+#: the wire's radius [m]: the lab winch's 3 mm steel wire rope (:mod:`app.scenes.lab_load`'s assumed value)
+WIRE_RADIUS = 0.0015
+#: the load's radius [m]: the sphere round the cube of 0.12 m edge the lab's drawing gives the payload
+#: (:func:`app.models.drawing.scenes.lab_meshes`' ``load_size``), 0.06·√3
+LOAD_RADIUS = 0.06 * math.sqrt(3.0)
 OBSTACLES = ("EM8000 deck", "pedestal", "EM1500 deck")
 
 
@@ -89,12 +94,17 @@ class ComauGuard:
 
     Capsules: the upper arm (shoulder–elbow), the forearm (elbow–wrist) and the extension arm (wrist–tool point),
     with the radii the lab's drawing gives them (:func:`app.models.drawing.machines.link_radius`, tapered along the
-    chain as :class:`app.control.guard.HazardGuard`'s; a link's ``<collision radius>`` where the file gives one).
-    Obstacles: EM8000's deck (the plane z = 0 of {b1}, under the robot: its edge is not modelled, so beyond it the
-    deck's plane still counts), the pedestal from that deck to the robot's column top (0, 0, d1) with the
-    drawing's pedestal radius, and EM1500's deck (a disc of its upper joints' radius, as the load lands on it:
-    :mod:`app.scenes.lab_load`).  Zone and stop [m] (0.15, 0.02: the arm's lag at its 30°/s is ~0.1 m of
-    extension-arm travel over the drives' 0.05 s and their braking), the braking share κ of the braking bound."""
+    chain as :class:`app.control.guard.HazardGuard`'s; a link's ``<collision radius>`` where the file gives one);
+    then the winch's wire from the tool point to the load (:data:`WIRE_RADIUS`) and the load (:data:`LOAD_RADIUS`).
+    Obstacles: EM8000's deck (the plane z = 0 of {b1}, under the robot: for the arm its edge is not modelled, so
+    beyond it the deck's plane still counts; for the wire and the load, which hang beyond it and below its plane
+    over EM1500, the solid under the disc of its upper joints' radius, or out past the pedestal that stands on it
+    where that is further: the lab's data give no size of the deck itself), the pedestal from that deck to the
+    robot's column top (0, 0, d1) with the drawing's pedestal radius, and EM1500's deck (a disc of its upper
+    joints' radius, as the load lands on it: :mod:`app.scenes.lab_load`; the arm's only).  Zone and stop [m]
+    (0.15, 0.02: the arm's lag at its 30°/s is ~0.1 m of extension-arm travel over the drives' 0.05 s and their
+    braking), the braking share κ of the braking bound.  ``deck1`` = (n, h, centre, radius): the plane n·x = h
+    and the disc on it."""
 
     radii: NDArray[np.float64]
     deck1: NDArray[np.float64]
@@ -106,7 +116,9 @@ class ComauGuard:
     braking: float = 0.5
 
     @classmethod
-    def for_lab(cls, robot, cm: NDArray[np.float64], T_b1_r: NDArray[np.float64], deck2_radius: float) -> ComauGuard:
+    def for_lab(cls, robot, cm: NDArray[np.float64], T_b1_r: NDArray[np.float64], models: tuple) -> ComauGuard:
+        """The lab's guard; ``models``: EM8000's and EM1500's (their decks' radii: their upper joints')."""
+        deck_radii = [float(np.max(np.linalg.norm(m.b_b[:, :2], axis=1))) for m in models]
         from app.models.drawing.machines import link_radius  # the drawing's sizes (no Qt: pure geometry)
 
         links = robot.links
@@ -115,13 +127,17 @@ class ComauGuard:
         radii = [
             float(links[i].radius) if getattr(links[i], "radius", None) is not None else drawn[k]
             for k, i in enumerate((1, 2, 3))
-        ]
+        ] + [WIRE_RADIUS, LOAD_RADIUS]
         R_r, p_r = T_b1_r[:3, :3], T_b1_r[:3, 3]
         up = R_r.T @ np.array([0.0, 0.0, -1.0])  # {b1} is z down
         h = float(p_r[2])  # n·x = h for the deck's points (−R_rᵀ p_r among them): n·(−R_rᵀ p_r) = p_r[2]
         foot = h * up  # the deck's point under the robot's base
         pedestal = np.array([foot, [0.0, 0.0, float(cm[1])]])
-        return cls(np.array(radii), np.array([*up, h]), pedestal, 1.6 * r0, float(deck2_radius))
+        # EM8000's deck: round {b1}'s origin, out to its upper joints or past the pedestal standing on it
+        centre = -R_r.T @ p_r
+        reach = float(np.linalg.norm((foot - centre) - ((foot - centre) @ up) * up)) + 1.6 * r0
+        deck1 = np.array([*up, h, *centre, max(float(deck_radii[0]), reach)])
+        return cls(np.array(radii), deck1, pedestal, 1.6 * r0, float(deck_radii[1]))
 
     def record(self) -> tuple:
         """The guard's parameters as :func:`app.scenes.lab_kernels.lab_step` takes them."""
@@ -169,22 +185,32 @@ def _disc_gap(x, c, n, R):
     return (0.0, n) if d <= 0.0 else (d, e / d)
 
 
-def _segment_disc(a, b, c, n, R):
-    """As the kernel: a golden-section search for the least disc clearance on a–b, then the ends."""
+def _solid_gap(x, c, n, R):
+    """The reference of :func:`app.control.lab_kernels._solid_gap` (the solid cylinder under the disc)."""
+    h = float(n @ (x - c))
+    w = x - c - h * n
+    rho = float(np.linalg.norm(w))
+    if h >= 0.0 or (rho <= R and -h <= R - rho):
+        return _disc_gap(x, c, n, R)
+    return (h, n) if rho <= 0.0 else (rho - R, w / rho)
+
+
+def _segment_disc(a, b, c, n, R, steps=lab_kernels.GOLDEN_STEPS, gap=_disc_gap):
+    """As the kernel: a golden-section search for the least clearance (``gap``) on a–b, then the ends."""
     golden = 0.5 * (math.sqrt(5.0) - 1.0)
     lo, hi = 0.0, 1.0
-    for _ in range(lab_kernels.GOLDEN_STEPS):
+    for _ in range(steps):
         m1, m2 = hi - golden * (hi - lo), lo + golden * (hi - lo)
-        if _disc_gap(a + (b - a) * m1, c, n, R)[0] <= _disc_gap(a + (b - a) * m2, c, n, R)[0]:
+        if gap(a + (b - a) * m1, c, n, R)[0] <= gap(a + (b - a) * m2, c, n, R)[0]:
             hi = m2
         else:
             lo = m1
-    best_s, best = 0.0, _disc_gap(a, c, n, R)[0]
+    best_s, best = 0.0, gap(a, c, n, R)[0]
     for s in (1.0, 0.5 * (lo + hi)):
-        f = _disc_gap(a + (b - a) * s, c, n, R)[0]
+        f = gap(a + (b - a) * s, c, n, R)[0]
         if f < best:
             best_s, best = s, f
-    d, e = _disc_gap(a + (b - a) * best_s, c, n, R)
+    d, e = gap(a + (b - a) * best_s, c, n, R)
     return d, best_s, e
 
 
@@ -198,8 +224,9 @@ def _segments_closest(p1, q1, p2, q2):
 def guard_hazards_reference(cm, radii, world, q):
     """The reference of :func:`app.control.lab_kernels.guard_hazards`: (G (m, 3), values, obstacles, capsules), for
     each capsule and obstacle the nearest point's row and each end's, in the kernel's order."""
-    deck1, ped, ped_r, deck2 = world
+    deck1, ped, ped_r, deck2, hang = world
     P, J = _arm_points(cm, q)
+    P, J = np.vstack([P, P[3] + hang[:3]]), np.concatenate([J, J[3:4]])  # the load, moving with the tool point
     rows = []
 
     def away(k, s, p, o, dist):
@@ -231,6 +258,20 @@ def guard_hazards_reference(cm, radii, world, q):
                 s = 0.0 if which == 1 else 1.0
                 d, e = _disc_gap(a if which == 1 else b, deck2[0:3], deck2[3:6], deck2[6])
             rows.append((e @ Jk(s), d - r, 2, k))
+    # the wire and the load's swing envelope (the kernel's text): EM8000 as the solid under its deck, then the
+    # pedestal; both move with the tool point
+    a, b, Jt = P[3], P[4], J[3]
+    c1, n1, R1 = deck1[4:7], deck1[0:3], deck1[7]
+    r_w, r_l = radii[lab_kernels.WIRE], radii[lab_kernels.LOAD] + hang[6]
+    env = a + hang[3:6]
+    d, s, e = _segment_disc(a, b, c1, n1, R1, lab_kernels.WIRE_GOLDEN_STEPS, _solid_gap)
+    rows.append((e @ Jt, d - r_w, 0, lab_kernels.WIRE))
+    d, e = _solid_gap(env, c1, n1, R1)
+    rows.append((e @ Jt, d - r_l, 0, lab_kernels.LOAD))
+    for which, (p1, p2), r in ((0, (a, b), r_w), (1, (env, env), r_l)):
+        dist, s, t = _segments_closest(p1, p2, ped[0], ped[1])
+        o, p = ped[0] + (ped[1] - ped[0]) * t, p1 + (p2 - p1) * s
+        rows.append(((p - o) / dist @ Jt if dist > 1e-12 else np.zeros(3), dist - r - ped_r[0], 1, 3 + which))
     G = np.array([r[0] for r in rows])
     return G, np.array([r[1] for r in rows]), np.array([r[2] for r in rows]), np.array([r[3] for r in rows])
 
@@ -254,6 +295,37 @@ def _correct(g, bound, out, lo_v, hi_v):
 def _least(rate):
     """The least part of a clearance's ``rate`` a joint must carry to count as closing or opening it (the kernel's)."""
     return np.maximum(lab_kernels.CONTRIBUTES, lab_kernels.CONTRIBUTES_SHARE * np.abs(rate))[..., None]
+
+
+def _outcome_reference(model, plant, rows, settings, out):
+    """The reference of :func:`app.control.lab_kernels._outcome`: which hazards the command ``out`` would close."""
+    cm, radii, world = model
+    q, qd, (lower, upper, _, accel, limit_brake, _), dt = plant
+    G, clear, active = rows
+    _, stop, kappa = settings
+    reach = np.abs(out - qd) / (accel * dt) + np.abs(out) / (kappa * accel * dt)  # the kernel's horizon
+    steps = int(min(np.max(np.ceil(reach - 1e-9), initial=0.0), lab_kernels.ROLLOUT))
+    closing = np.zeros(len(clear), dtype=bool)
+    for i in np.flatnonzero(active):
+        v, qr, d, g = qd.copy(), q.copy(), float(clear[i]), G[i].copy()
+        lowest = d
+        for k in range(steps):
+            v = v + np.clip(out - v, -accel * dt, accel * dt)
+            up = np.sqrt(2.0 * limit_brake * np.maximum(upper - qr, 0.0))
+            v = np.clip(v, -np.sqrt(2.0 * limit_brake * np.maximum(qr - lower, 0.0)), up)
+            qr = qr + v * dt
+            if k % lab_kernels.RESAMPLE == lab_kernels.RESAMPLE - 1:
+                Gr, vr, _, _ = guard_hazards_reference(cm, radii, world, qr)
+                d, g = float(vr[i]), Gr[i]
+            else:
+                d += float(g @ v) * dt
+            lowest = min(lowest, d)
+        now = float(g @ v)
+        if now < 0.0:
+            Am = kappa * float(np.where(g * v < -_least(now)[0], np.abs(g) * accel, 0.0).sum())
+            lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
+        closing[i] = lowest < stop - lab_kernels.BRAKE_SLACK and lowest < clear[i]
+    return closing
 
 
 def _guard_reference(x, u, p, dt):
@@ -303,41 +375,24 @@ def _guard_reference(x, u, p, dt):
                 break
         slowed = violated.copy()
     # the safe-braking check on the command's outcome (the kernel's text)
-    reach = np.abs(out - qd) / (accel * dt) + np.abs(out) / (kappa * accel * dt)  # the kernel's horizon
-    steps = int(min(np.max(np.ceil(reach - 1e-9), initial=0.0), lab_kernels.ROLLOUT))
-    closing = np.zeros(len(clear), dtype=bool)
-    for i in np.flatnonzero(active):
-        v, qr, d, g = qd.copy(), q.copy(), float(clear[i]), G[i].copy()
-        lowest = d
-        for k in range(steps):
-            v = v + np.clip(out - v, -accel * dt, accel * dt)
-            up = np.sqrt(2.0 * limit_brake * np.maximum(upper - qr, 0.0))
-            v = np.clip(v, -np.sqrt(2.0 * limit_brake * np.maximum(qr - lower, 0.0)), up)
-            qr = qr + v * dt
-            if k % lab_kernels.RESAMPLE == lab_kernels.RESAMPLE - 1:
-                Gr, vr, _, _ = guard_hazards_reference(cm, radii, world, qr)
-                d, g = float(vr[i]), Gr[i]
-            else:
-                d += float(g @ v) * dt
-            lowest = min(lowest, d)
-        now = float(g @ v)
-        if now < 0.0:
-            Am = kappa * float(np.where(g * v < -_least(now)[0], np.abs(g) * accel, 0.0).sum())
-            lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
-        closing[i] = lowest < stop - lab_kernels.BRAKE_SLACK and lowest < clear[i]
+    plant = (q, qd, (lower, upper, speed, accel, limit_brake, tau), dt)
+    closing = _outcome_reference((cm, radii, world), plant, (G, clear, active), (zone, stop, kappa), out)
+    hold, keep = np.zeros(3, dtype=bool), np.zeros(3, dtype=bool)
     for i in np.flatnonzero(closing):
         least = float(_least(G[i] @ qd)[0])
         for j in range(3):
             now_j, cmd_j = G[i, j] * qd[j], G[i, j] * out[j]
             if now_j < -least and out[j] * qd[j] > 0.0:
-                out[j] = 0.0
+                hold[j] = True
             elif now_j > least and out[j] * qd[j] < qd[j] * qd[j]:
-                out[j] = min(max(qd[j], lo_v[j]), hi_v[j])  # one that opens the gap keeps its speed
+                keep[j] = True  # one that opens the gap keeps its speed, unless it closes another
             elif -least <= now_j <= least and cmd_j < -least:
-                out[j] = 0.0  # still, and the command would start it closing
+                hold[j] = True  # still, and the command would start it closing
             else:
                 continue
             slowed[i] = active[i] = True
+    held = np.where(hold, 0.0, np.where(keep, np.clip(qd, lo_v, hi_v), out))
+    out = held
     pick = active & (slowed if slowed.any() else True)
     if pick.any():
         left = np.where(pick, (val - stop) / (zone - stop), np.inf)
@@ -347,6 +402,91 @@ def _guard_reference(x, u, p, dt):
         return x, (command, report)
     report[4] = 1.0
     return x, ((brake, q.copy(), out, True, scale), report)
+
+
+def swing_hang_reference(frames, swing) -> NDArray[np.float64]:
+    """The reference of :func:`app.control.lab_kernels.swing_hang`: the wire, the swing envelope's centre from the
+    tool point and its radius, in {r}."""
+    T_g_n1, R1, T_b1_r = frames
+    alpha, beta, alpha_dot, beta_dot, L, g = swing
+    known = math.isfinite(alpha + beta + alpha_dot + beta_dot)  # else anywhere within L of the tool point
+    if not known:
+        alpha = beta = alpha_dot = beta_dot = 0.0
+    sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
+    to_r = T_b1_r[:3, :3].T @ R1.T @ T_g_n1[:3, :3].T  # {g} axes into {r}
+    e = g * L * (1.0 - ca * cb) + 0.5 * L * L * (alpha_dot**2 + (ca * beta_dot) ** 2)  # the swing's energy
+    k = (1.0 - e / (g * L) if L > 0.0 else 1.0) if known else -1.0
+    depth, radius = (L * k, L * math.sqrt(max(0.0, 1.0 - k * k))) if k > 0.0 else (0.0, L)
+    return np.array([*(to_r @ (L * np.array([-sa, -ca * sb, -ca * cb]))), *(to_r @ [0.0, 0.0, -depth]), radius])
+
+
+def guard_world_reference(guard_p, frames, e1, R1, e2, R2, swing) -> tuple:
+    """The reference of :func:`app.scenes.lab_kernels.guard_world`: EM1500's deck where the controller sees it,
+    through {n1} (eq. 39) and EM8000's body (eq. 54 inverted), and the hanging load (:func:`swing_hang_reference`)
+    turned into {r} the same way."""
+    _, deck1, ped, ped_r, deck_r, _ = guard_p
+    T_g_n1, T12, Tr = frames
+    c_n1 = T12[:3, 3] + T12[:3, :3] @ e2[:3]
+    n_n1 = T12[:3, :3] @ (R2 @ np.array([0.0, 0.0, -1.0]))
+    c = Tr[:3, :3].T @ (R1.T @ (c_n1 - e1[:3]) - Tr[:3, 3])
+    n = Tr[:3, :3].T @ (R1.T @ n_n1)
+    return deck1, ped, ped_r, np.array([*c, *n, deck_r[0]]), swing_hang_reference((T_g_n1, R1, Tr), swing)
+
+
+def _winch_guard_reference(x, u, p, dt):
+    """The NumPy reference of :func:`app.control.lab_kernels.winch_guard`."""
+    (ref, ref_v), (wl, wv), (q, va), world, frames, swing = u
+    cm, radii, (_, _, w_speed, w_accel, w_tau), (zone, stop, kappa) = p
+    report = np.array([-1.0, -1.0, math.nan, math.nan, 0.0])
+    L = float(wl[0])
+    v0 = float(np.clip((ref[0] - L) / max(w_tau, dt) + ref_v[0], -w_speed[0], w_speed[0]))
+    if v0 == 0.0:
+        return x, ((ref, ref_v), report)
+    G, val, kind, cap = guard_hazards_reference(cm, radii, world, q)
+    rows = range(len(val) - 4, len(val))  # the wire's and the load's
+    if not any(val[i] < zone for i in rows):
+        return x, ((ref, ref_v), report)
+    alpha, beta, alpha_dot, beta_dot, g = swing
+    hang = swing_hang_reference(frames, (alpha, beta, alpha_dot, beta_dot, L + lab_kernels.PAYOUT_STEP, g))
+    val2 = guard_hazards_reference(cm, radii, (*world[:4], hang), q)[1]
+    v, best, best_share = v0, -1, math.inf
+    for i in rows:
+        c = (val2[i] - val[i]) / lab_kernels.PAYOUT_STEP
+        if c * v0 >= 0.0 or c == 0.0:
+            continue
+        A = kappa * float(w_accel[0]) * abs(c)
+        own = c * float(wv[0])
+        d = val[i] - (own * own / (2.0 * A) if own < 0.0 else 0.0)
+        if d >= zone:
+            continue
+        ra = float(G[i] @ va)
+        r0 = ra + c * v0
+        room = max(d - stop, 0.0)
+        share = min(max(room / (zone - stop), 0.0), 1.0)
+        bound = -min(share * max(-r0, 0.0), min(room / (2.0 * dt), math.sqrt(2.0 * A * room)))
+        if r0 >= bound - 1e-15:
+            continue
+        allowed = (bound - ra) / c
+        allowed = max(0.0, min(v0, allowed)) if v0 > 0.0 else min(0.0, max(v0, allowed))
+        v = allowed if abs(allowed) < abs(v) else v
+        if (d - stop) / (zone - stop) < best_share:
+            best, best_share = i, (d - stop) / (zone - stop)
+    if best < 0:
+        return x, ((ref, ref_v), report)
+    report[:] = kind[best], cap[best], val[best], best_share, 1.0
+    return x, ((np.array([L]), np.array([v])), report)
+
+
+#: the winch's guard between its law and its drum: the pay-out slowed along the wire's and the load's approaches
+WINCH_GUARD = Block(
+    "winch guard (the wire and the load against EM8000 and the pedestal)",
+    state=(),
+    inputs=("wire_ref", "wire", "arm", "world", "frames", "swing"),
+    outputs=("wire_ref", "report"),
+    params=("cm", "radii", "drum", "settings"),
+    reference=_winch_guard_reference,
+    kernel=lab_kernels.winch_guard,
+)
 
 
 #: the Comau's guard between its law and its drives: the command slowed along the approaches to an obstacle

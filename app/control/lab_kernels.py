@@ -12,11 +12,24 @@ import math
 
 import numpy as np
 
-from app.control.guard_kernels import _segment_closest
+from app.control.lab_clearance_kernels import (  # noqa: F401 (the guard's geometry, named here as before)
+    DECK1,
+    DECK2,
+    FAR,
+    GOLDEN_STEPS,
+    LOAD,
+    PEDESTAL,
+    ROWS,
+    WIRE,
+    WIRE_GOLDEN_STEPS,
+    arm_points,
+    guard_hazards,
+    swing_hang,
+)
 from app.models.kernels import _jit
 from app.models.lab_kernels import comau_ik, comau_tool, lstsq3, mtv, mv
 
-__all__ = ["arm_points", "comau_guard", "comau_law", "guard_hazards", "winch_law"]
+__all__ = ["arm_points", "comau_guard", "comau_law", "guard_hazards", "swing_hang", "winch_guard", "winch_law"]
 
 SETTLED, REMOTE, MOTION_COMP, BRAKE = 0, 1, 2, 3  # the Comau's modes in comau_law (HOLD and E-STOP brake alike)
 
@@ -124,180 +137,12 @@ def winch_law(x, u, p, dt):
 
 
 # ---------------------------------------------------------------------------------------------- the Comau's guard
-#: the guard's obstacles (the report's kind): EM8000's deck under the robot, the robot's pedestal and column,
-#: EM1500's deck; and the report's −1: none in its zone
-DECK1, PEDESTAL, DECK2 = 0, 1, 2
-GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
-GOLDEN_STEPS = 30  # the search's bracket shrinks to 0.618³⁰ = 5·10⁻⁷ of the segment: a micrometre on the extension arm
-FAR = 1.5  # [m]: a disc row this far (by a lower bound; ten zones) takes the bound, not the search
 CONTRIBUTES = 1e-6  # [m/s]: the least part of a clearance's rate a joint must carry to count as closing or opening it
 BRAKE_SLACK = 0.002  # [m]: how far below the stop distance the check lets braking end before it brakes (at the stop,
 #: an opening command's first step may still close by a fraction of a millimetre: that is not worth braking it for)
 ROLLOUT = 400  # steps: the longest the check follows the drives to the command (2 s at the lab's 5 ms)
 RESAMPLE = 20  # steps: the check takes the clearance anew where the arm has got to (0.1 s; first order between)
 CONTRIBUTES_SHARE = 0.05  # … and the least share of the rate (a joint that barely moves a gap is not braked for it)
-
-
-@_jit
-def arm_points(cm, q, P, J):
-    """The Comau's shoulder, elbow, wrist and tool point in {r} into ``P`` (4, 3), and their Jacobians ∂p/∂q into
-    ``J`` (4, 3, 3).  In the arm's plane (radial u, height z) eq. (3) is a sum of the links' own vectors —
-    shoulder (a1, d1), upper arm a2 (s2, c2), forearm a3 (−c3, −s3), extension L (−s3, c3) — and a point is
-    (c1 u, −s1 u, z): the tool's row is eq. (3)'s p_t^r and its Jacobian eq. (5)'s."""
-    a1, d1, a2, a3, L = cm[0], cm[1], cm[2], cm[3], cm[4]
-    s1, c1 = math.sin(q[0]), math.cos(q[0])
-    s2, c2 = math.sin(q[1]), math.cos(q[1])
-    s3, c3 = math.sin(q[2]), math.cos(q[2])
-    u = (a1, a1 + a2 * s2, a1 + a2 * s2 - a3 * c3, a1 + a2 * s2 - a3 * c3 - L * s3)
-    z = (d1, d1 + a2 * c2, d1 + a2 * c2 - a3 * s3, d1 + a2 * c2 - a3 * s3 + L * c3)
-    u2 = (0.0, a2 * c2, a2 * c2, a2 * c2)
-    z2 = (0.0, -a2 * s2, -a2 * s2, -a2 * s2)
-    u3 = (0.0, 0.0, a3 * s3, a3 * s3 - L * c3)
-    z3 = (0.0, 0.0, -a3 * c3, -a3 * c3 - L * s3)
-    for k in range(4):
-        P[k, 0], P[k, 1], P[k, 2] = c1 * u[k], -s1 * u[k], z[k]
-        J[k, 0, 0], J[k, 1, 0], J[k, 2, 0] = -s1 * u[k], -c1 * u[k], 0.0
-        J[k, 0, 1], J[k, 1, 1], J[k, 2, 1] = c1 * u2[k], -s1 * u2[k], z2[k]
-        J[k, 0, 2], J[k, 1, 2], J[k, 2, 2] = c1 * u3[k], -s1 * u3[k], z3[k]
-
-
-@_jit
-def _disc_gap(x, c, n, R):
-    """Clearance of the point x from the disc (centre c, unit normal n, radius R) and the unit direction from the
-    disc's nearest point to x: over the disc the signed height (negative: through it) along n, beyond its rim the
-    distance to the rim."""
-    h = n[0] * (x[0] - c[0]) + n[1] * (x[1] - c[1]) + n[2] * (x[2] - c[2])
-    w0, w1, w2 = x[0] - c[0] - h * n[0], x[1] - c[1] - h * n[1], x[2] - c[2] - h * n[2]
-    rho = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    if rho <= R:
-        return h, n[0], n[1], n[2]
-    k = (rho - R) / rho
-    e0, e1, e2 = w0 * k + h * n[0], w1 * k + h * n[1], w2 * k + h * n[2]
-    d = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-    if d <= 0.0:
-        return 0.0, n[0], n[1], n[2]
-    return d, e0 / d, e1 / d, e2 / d
-
-
-@_jit
-def _segment_disc(a, b, c, n, R):
-    """The least clearance of the segment a–b from the disc (:func:`_disc_gap`) and where on it (s in [0, 1]):
-    the ends and a golden-section search between them (the distance to a convex set is convex along a line)."""
-    x = np.empty(3)
-    lo, hi = 0.0, 1.0
-    for _ in range(GOLDEN_STEPS):
-        m1 = hi - GOLDEN * (hi - lo)
-        m2 = lo + GOLDEN * (hi - lo)
-        for i in range(3):
-            x[i] = a[i] + (b[i] - a[i]) * m1
-        f1 = _disc_gap(x, c, n, R)[0]
-        for i in range(3):
-            x[i] = a[i] + (b[i] - a[i]) * m2
-        f2 = _disc_gap(x, c, n, R)[0]
-        if f1 <= f2:
-            hi = m2
-        else:
-            lo = m1
-    best_s, best = 0.0, _disc_gap(a, c, n, R)[0]
-    for s in (1.0, 0.5 * (lo + hi)):
-        for i in range(3):
-            x[i] = a[i] + (b[i] - a[i]) * s
-        f = _disc_gap(x, c, n, R)[0]
-        if f < best:
-            best_s, best = s, f
-    for i in range(3):
-        x[i] = a[i] + (b[i] - a[i]) * best_s
-    d, e0, e1, e2 = _disc_gap(x, c, n, R)
-    return d, best_s, e0, e1, e2
-
-
-@_jit
-def _grad(J, k, s, e0, e1, e2, g):
-    """g = eᵀ ∂p/∂q at the point s of capsule k (between arm points k and k + 1: a point at a fixed share of a rigid
-    segment moves as the share of its ends)."""
-    for j in range(3):
-        ja0 = J[k, 0, j] + s * (J[k + 1, 0, j] - J[k, 0, j])
-        ja1 = J[k, 1, j] + s * (J[k + 1, 1, j] - J[k, 1, j])
-        ja2 = J[k, 2, j] + s * (J[k + 1, 2, j] - J[k, 2, j])
-        g[j] = e0 * ja0 + e1 * ja1 + e2 * ja2
-
-
-#: the guard's rows: for each capsule and obstacle the nearest point and each end (a capsule sweeping round can
-#: close on an obstacle at its far end while its nearest point still recedes): EM8000's deck 3 × 2 (its ends), the
-#: pedestal 2 × 3, EM1500's deck 3 × 3
-ROWS = 21
-
-
-@_jit
-def _away(J, k, s, a, b, o, dist, g):
-    """``g`` (a row of G): the gradient of |p − o| at the point p at s of capsule k (a–b), o fixed (zero if p = o)."""
-    if dist > 1e-12:
-        _grad(J, k, s, (a[0] + (b[0] - a[0]) * s - o[0]) / dist, (a[1] + (b[1] - a[1]) * s - o[1]) / dist,
-              (a[2] + (b[2] - a[2]) * s - o[2]) / dist, g)  # fmt: skip
-    else:
-        g[0], g[1], g[2] = 0.0, 0.0, 0.0
-
-
-@_jit
-def guard_hazards(cm, radii, world, q, G, val, kind, cap):
-    """The Comau's clearances [m] from its obstacles at q and their gradients ∂d/∂q (rows of ``G`` (:data:`ROWS`,
-    3)), with each one's obstacle (:data:`DECK1`, :data:`PEDESTAL`, :data:`DECK2`) and capsule (0 upper arm,
-    1 forearm, 2 extension arm: arm points k to k + 1 of :func:`arm_points`); returns how many (:data:`ROWS`).
-    For each capsule and obstacle: the nearest point's clearance and each end's (EM8000's deck, a plane: the ends'
-    only, one of them the nearest); EM1500's deck, when a lower bound (the segment's distance to its centre less
-    its radius) puts it :data:`FAR` away, takes that bound for its nearest point.
-
-    ``world`` = (deck1 (4,): EM8000's deck n·x = h in {r}; pedestal (2, 3): its axis from the deck to the column's
-    top, and its radius (1,); deck2 (7,): EM1500's deck centre, up normal and radius in {r}).  The capsules'
-    ``radii`` (3,).  The upper arm is joined to the column at the shoulder: its pedestal pair is not checked."""
-    deck1, ped, ped_r, deck2 = world
-    P = np.empty((4, 3))
-    J = np.empty((4, 3, 3))
-    arm_points(cm, q, P, J)
-    c2 = deck2[0:3]
-    n2 = deck2[3:6]
-    o = np.empty(3)
-    m = 0
-    for k in range(3):
-        a, b, r = P[k], P[k + 1], radii[k]
-        # EM8000's deck: a plane, each end's height
-        for s in (0.0, 1.0):
-            e = a if s == 0.0 else b
-            val[m], kind[m], cap[m] = deck1[0] * e[0] + deck1[1] * e[1] + deck1[2] * e[2] - deck1[3] - r, DECK1, k
-            _grad(J, k, s, deck1[0], deck1[1], deck1[2], G[m])
-            m += 1
-        # the pedestal and column: the segments' nearest points, then each end's nearest point on the pedestal
-        if k > 0:
-            for which in range(3):
-                if which == 0:
-                    dist, s, t = _segment_closest(a, b, ped[0], ped[1])
-                else:
-                    s = 0.0 if which == 1 else 1.0
-                    e = a if which == 1 else b
-                    dist, _, t = _segment_closest(e, e, ped[0], ped[1])
-                for i in range(3):
-                    o[i] = ped[0, i] + (ped[1, i] - ped[0, i]) * t
-                val[m], kind[m], cap[m] = dist - r - ped_r[0], PEDESTAL, k
-                _away(J, k, s, a, b, o, dist, G[m])
-                m += 1
-        # EM1500's deck: a disc; the segment's nearest point, then each end
-        for which in range(3):
-            if which == 0:
-                # a lower bound first: the segment's distance to the disc's centre less its radius
-                lb, s, _ = _segment_closest(a, b, c2, c2)
-                if lb - deck2[6] - r > FAR:  # far: the bound (and its direction) stand for the clearance
-                    val[m], kind[m], cap[m] = lb - deck2[6] - r, DECK2, k
-                    _away(J, k, s, a, b, c2, lb, G[m])
-                    m += 1
-                    continue
-                d, s, e0, e1, e2 = _segment_disc(a, b, c2, n2, deck2[6])
-            else:
-                s = 0.0 if which == 1 else 1.0
-                d, e0, e1, e2 = _disc_gap(a if which == 1 else b, c2, n2, deck2[6])
-            val[m], kind[m], cap[m] = d - r, DECK2, k
-            _grad(J, k, s, e0, e1, e2, G[m])
-            m += 1
-    return m
 
 
 @_jit
@@ -328,6 +173,65 @@ def _correct(g, bound, out, lo_v, hi_v):
                 out[j] = t
         if not clamped:
             return
+
+
+@_jit
+def _outcome(model, plant, rows, settings, out, closing):
+    """Step 3 of :func:`comau_guard`: ``closing[i]`` for each hazard in its zone where the drives, following the
+    rate ``out`` until they have it and as long again as they would take to stop from it, pass below the stop
+    distance (:data:`BRAKE_SLACK` under it, and under the clearance now) or are left closing faster than they could
+    then brake short of it.  model (cm, radii, world); plant (q, q̇, drives, dt); rows (G, clearances now, in the
+    zone, how many); settings (zone, stop, κ)."""
+    cm, radii, world = model
+    q, qd, drives, dt = plant
+    G, clear, active, m = rows
+    lower, upper, _, accel, limit_brake, _ = drives
+    stop, kappa = settings[1], settings[2]
+    steps = 0  # until the drives have the command, and long enough after to have stopped from it (κ)
+    for j in range(3):
+        reach = abs(out[j] - qd[j]) / (accel[j] * dt)
+        steps = max(steps, int(math.ceil(reach + abs(out[j]) / (kappa * accel[j] * dt) - 1e-9)))  # noqa: RUF046
+    steps = min(steps, ROLLOUT)
+    any_active = False
+    for i in range(m):
+        any_active = any_active or active[i]
+    if not any_active:
+        return
+    v = qd.copy()  # one path of the drives for every hazard in its zone: what differs is each one's clearance
+    qr = q.copy()
+    g = G.copy()
+    d = clear.copy()
+    lowest = clear.copy()
+    kt = np.empty(ROWS, np.int64)
+    ct = np.empty(ROWS, np.int64)
+    for k in range(steps):
+        for j in range(3):  # the drives: toward the command at the acceleration limit, braking at the joint limits
+            vj = v[j] + min(max(out[j] - v[j], -accel[j] * dt), accel[j] * dt)
+            up = math.sqrt(2.0 * limit_brake[j] * max(upper[j] - qr[j], 0.0))
+            down = math.sqrt(2.0 * limit_brake[j] * max(qr[j] - lower[j], 0.0))
+            v[j] = min(max(vj, -down), up)
+            qr[j] += v[j] * dt
+        if k % RESAMPLE == RESAMPLE - 1:  # the clearances and their gradients where the arm has got to
+            guard_hazards(cm, radii, world, qr, g, d, kt, ct)
+        else:
+            for i in range(m):
+                if active[i]:
+                    d[i] += (g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]) * dt
+        for i in range(m):
+            lowest[i] = min(lowest[i], d[i])
+    for i in range(m):
+        if not active[i]:
+            continue  # outside its zone, braking from its approach included
+        now = g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]
+        low = lowest[i]
+        if now < 0.0:
+            Am = 0.0
+            least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
+            for j in range(3):
+                if g[i, j] * v[j] < -least:
+                    Am += kappa * abs(g[i, j]) * accel[j]
+            low = min(low, d[i] - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
+        closing[i] = low < stop - BRAKE_SLACK and low < clear[i]
 
 
 @_jit
@@ -367,7 +271,8 @@ def comau_guard(x, u, p, dt):
        it (with A'), the joints that close that gap are commanded to rest (the drives brake them at their limits;
        a joint the command already turns back keeps its command), a joint at rest that the command would start
        closing it stays, and the joints that open it keep their speed, as A' assumes (slowing them would close it
-       too).
+       too) — unless they close another gap the check acts for: then they rest (a joint opening a swinging load's
+       envelope must not carry the arm into the deck).
 
     A rate that opens every hazard, with the arm not closing on one too fast, or a BRAKE is returned as it came,
     bit for bit; a slowed one as a pure rate (q_ref = q, q̇_ref = v).
@@ -465,50 +370,11 @@ def comau_guard(x, u, p, dt):
             if not changed:
                 break
     # 3. the safe-braking check on the command's outcome (the text's third step)
-    steps = 0  # until the drives have the command, and long enough after to have stopped from it (κ)
-    for j in range(3):
-        reach = abs(out[j] - qd[j]) / (accel[j] * dt)
-        steps = max(steps, int(math.ceil(reach + abs(out[j]) / (kappa * accel[j] * dt) - 1e-9)))  # noqa: RUF046
-    steps = min(steps, ROLLOUT)
-    any_active = False
-    for i in range(m):
-        any_active = any_active or active[i]
-    if any_active:  # one path of the drives for every hazard in its zone: what differs is each one's clearance
-        v = qd.copy()
-        qr = q.copy()
-        g = G.copy()
-        d = clear.copy()
-        lowest = clear.copy()
-        kt = np.empty(ROWS, np.int64)
-        ct = np.empty(ROWS, np.int64)
-        for k in range(steps):
-            for j in range(3):  # the drives: toward the command at the acceleration limit, braking at the joint limits
-                vj = v[j] + min(max(out[j] - v[j], -accel[j] * dt), accel[j] * dt)
-                up = math.sqrt(2.0 * limit_brake[j] * max(upper[j] - qr[j], 0.0))
-                down = math.sqrt(2.0 * limit_brake[j] * max(qr[j] - lower[j], 0.0))
-                v[j] = min(max(vj, -down), up)
-                qr[j] += v[j] * dt
-            if k % RESAMPLE == RESAMPLE - 1:  # the clearances and their gradients where the arm has got to
-                guard_hazards(cm, radii, world, qr, g, d, kt, ct)
-            else:
-                for i in range(m):
-                    if active[i]:
-                        d[i] += (g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]) * dt
-            for i in range(m):
-                lowest[i] = min(lowest[i], d[i])
-        for i in range(m):
-            if not active[i]:
-                continue  # outside its zone, braking from its approach included
-            now = g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]
-            low = lowest[i]
-            if now < 0.0:
-                Am = 0.0
-                least = max(CONTRIBUTES, CONTRIBUTES_SHARE * -now)
-                for j in range(3):
-                    if g[i, j] * v[j] < -least:
-                        Am += kappa * abs(g[i, j]) * accel[j]
-                low = min(low, d[i] - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
-            closing[i] = low < stop - BRAKE_SLACK and low < clear[i]
+    rows = (G, clear, active, m)
+    plant = (q, qd, drives, dt)
+    _outcome((cm, radii, world), plant, rows, settings, out, closing)
+    hold = np.zeros(3, np.bool_)  # a joint that closes a gap the check acts for: to rest
+    keep = np.zeros(3, np.bool_)  # one that opens one: keeps its speed, unless it closes another
     for i in range(m):
         if not closing[i]:
             continue
@@ -518,17 +384,25 @@ def comau_guard(x, u, p, dt):
             if now_j < -least:  # closing it: to rest, unless the command already turns it back
                 if out[j] * qd[j] <= 0.0:
                     continue
-                out[j] = 0.0
+                hold[j] = True
             elif now_j > least:  # opening it: keeps its speed (to its limit)
                 if out[j] * qd[j] >= qd[j] * qd[j]:
                     continue
-                out[j] = min(max(qd[j], lo_v[j]), hi_v[j])
+                keep[j] = True
             elif cmd_j < -least:  # still, and the command would start it closing: it stays
-                out[j] = 0.0
+                hold[j] = True
             else:
                 continue
             slowed[i] = True
             active[i] = True
+    held = out.copy()
+    for j in range(3):
+        if hold[j]:
+            held[j] = 0.0
+        elif keep[j]:
+            held[j] = min(max(qd[j], lo_v[j]), hi_v[j])
+    for j in range(3):
+        out[j] = held[j]
     any_slowed = False
     for i in range(m):
         any_slowed = any_slowed or slowed[i]
@@ -547,6 +421,92 @@ def comau_guard(x, u, p, dt):
     return x, ((brake, q.copy(), out, np.bool_(True), scale), report)
 
 
+#: [m]: the step of the wire's length over which the winch's guard takes each clearance's change with it
+PAYOUT_STEP = 1e-4
+
+
+@_jit
+def winch_guard(x, u, p, dt):
+    """The winch's pay-out slowed along the approaches of the wire and the load to an obstacle (issue 32, item 5):
+    a velocity damper in one dimension, the wire's length, beside :func:`comau_guard`'s in the joints; no state.
+
+    Inputs (wire_ref (L_ref, L̇_ref) of :func:`winch_law`, wire (L, L̇), arm (q, q̇: the joints after their drives'
+    step), world (:func:`guard_hazards`'), frames and swing of :func:`swing_hang` (α, β, α̇, β̇, g: the length is
+    the wire's)).  Parameters (cm, radii, the drum's (lower, upper, speed, accel, τ), settings (zone, stop, κ)).
+    The drum would pay out at v = (L_ref − L)/τ + L̇_ref (within its speed).
+
+    For the wire's and the load's rows in their zone, with c = ∂d/∂L (over :data:`PAYOUT_STEP` of wire: the wire
+    end and the swing's envelope follow it) and the arm's rate r_a = g·q̇ (as its guard left it): where the
+    pay-out closes the clearance (c v < 0), the total rate r = r_a + c v is bounded as the arm's guard bounds its
+    own, r ≥ −min(s |r⁰|, (d − stop)/(2 dt), √(2 A (d − stop))), A = κ a_w |c| (the drum's braking along it), d
+    taken less what braking the drum's own approach now would leave; the pay-out alone gives way, down to rest —
+    never reversed (nothing moves that the operator did not ask for).  A pay-out that opens every such clearance
+    or is not in a zone is returned as it came, bit for bit; a slowed one as a pure rate (L_ref = L, L̇_ref = v).
+
+    y = (wire_ref, report (5,): as :func:`comau_guard`'s, of the row that slowed it most)."""
+    (ref, ref_v), (wl, wv), (q, va), world, frames, swing = u
+    cm, radii, drum, settings = p
+    report = np.empty(5)
+    report[0], report[1], report[2], report[3], report[4] = -1.0, -1.0, math.nan, math.nan, 0.0
+    _, _, w_speed, w_accel, w_tau = drum
+    zone, stop, kappa = settings[0], settings[1], settings[2]
+    L = wl[0]
+    v0 = min(max((ref[0] - L) / max(w_tau, dt) + ref_v[0], -w_speed[0]), w_speed[0])
+    if v0 == 0.0:
+        return x, ((ref, ref_v), report)
+    G = np.zeros((ROWS, 3))
+    val = np.zeros(ROWS)
+    kind = np.zeros(ROWS, np.int64)
+    cap = np.zeros(ROWS, np.int64)
+    m = guard_hazards(cm, radii, world, q, G, val, kind, cap)
+    first = m - 4  # the wire's and the load's rows
+    near = False
+    for i in range(first, m):
+        near = near or val[i] < zone
+    if not near:
+        return x, ((ref, ref_v), report)
+    alpha, beta, alpha_dot, beta_dot, g = swing
+    longer = (world[0], world[1], world[2], world[3],
+              swing_hang(frames, (alpha, beta, alpha_dot, beta_dot, L + PAYOUT_STEP, g)))  # fmt: skip
+    G2 = np.zeros((ROWS, 3))
+    val2 = np.zeros(ROWS)
+    guard_hazards(cm, radii, longer, q, G2, val2, kind, cap)
+    v = v0
+    best, best_share = -1, math.inf
+    for i in range(first, m):
+        c = (val2[i] - val[i]) / PAYOUT_STEP
+        if c * v0 >= 0.0 or c == 0.0:
+            continue  # the pay-out does not close it
+        d = val[i]
+        own = c * wv[0]
+        A = kappa * w_accel[0] * abs(c)
+        if own < 0.0:
+            d -= own * own / (2.0 * A)  # what braking the drum's own approach now would leave
+        if d >= zone:
+            continue
+        ra = G[i, 0] * va[0] + G[i, 1] * va[1] + G[i, 2] * va[2]
+        r0 = ra + c * v0
+        room = max(d - stop, 0.0)
+        share = min(max(room / (zone - stop), 0.0), 1.0)
+        bound = -min(share * max(-r0, 0.0), min(room / (2.0 * dt), math.sqrt(2.0 * A * room)))
+        if r0 >= bound - 1e-15:
+            continue
+        allowed = (bound - ra) / c  # the pay-out that meets the bound with the arm as it is
+        allowed = max(0.0, min(v0, allowed)) if v0 > 0.0 else min(0.0, max(v0, allowed))
+        if abs(allowed) < abs(v):
+            v = allowed
+        left = (d - stop) / (zone - stop)
+        if left < best_share:
+            best, best_share = i, left
+    if best < 0:
+        return x, ((ref, ref_v), report)
+    report[0], report[1], report[2], report[3] = float(kind[best]), float(cap[best]), val[best], best_share
+    report[4] = 1.0
+    out_ref, out_v = np.empty(1), np.empty(1)
+    out_ref[0], out_v[0] = L, v
+    return x, ((out_ref, out_v), report)
+
+
 def warm_up_steps() -> list:
     """Zero-argument calls that compile (or load) the laws as their blocks call them from Python (for
     :func:`app.warmup.warm_up`; the lab's step compiles them into its own code)."""
@@ -555,11 +515,16 @@ def warm_up_steps() -> list:
     view = (z6, z6, eye3, eye3, z6, z6, eye3, eye3)
     law_p = (cm, eye4, np.array([1.0, -1.0]), eye4, eye4, o3, z3, -o3, o3)
     winch_u = (np.bool_(True), 0.0, np.ones(1), (0.0, 0.0), (z3, z3), (eye4, eye3, z6))
-    world = (np.array([0.0, 0.0, 1.0, -1.0]), np.zeros((2, 3)), np.ones(1), np.array([2.0, 0, 0, 0, 0, 1, 0.8]))
+    deck1 = np.array([0.0, 0.0, 1.0, -1.0, 0.0, 0.0, -1.0, 2.0])
+    world = (deck1, np.zeros((2, 3)), np.ones(1), np.array([2.0, 0, 0, 0, 0, 1, 0.8]), np.array([0.0, 0.0, -1.0]))
     command = (np.bool_(False), z3, z3, np.bool_(True), 1.0)
-    guard_p = (cm, o3, (-o3, o3, o3, o3, o3, 0.05), np.array([0.15, 0.02, 0.5]))
+    guard_p = (cm, np.ones(5), (-o3, o3, o3, o3, o3, 0.05), np.array([0.15, 0.02, 0.5]))
+    one = np.ones(1)
+    drum = (one * 0.3, one * 4.0, one, one, 0.05)
+    winch_guard_u = ((one, one), (one, one), (z3, z3), world, (eye4, eye3, eye4), (0.0, 0.0, 0.0, 0.0, 9.81))
     return [
         lambda: comau_law((), (MOTION_COMP, z3, z3, (z3, z3, z3, z3), view), law_p, 0.01),
         lambda: comau_guard((), (command, z3, z3, world), guard_p, 0.01),
+        lambda: winch_guard((), winch_guard_u, (cm, np.ones(5), drum, np.array([0.15, 0.02, 0.5])), 0.01),
         lambda: winch_law((np.zeros(3), np.bool_(False)), winch_u, (eye4, np.ones(1)), 0.01),
     ]

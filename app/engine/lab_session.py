@@ -507,6 +507,11 @@ class LabSession(Scene):
         al.set("rehit", rehit, text=f"Re-hit: the load struck EM1500's deck again ({contacts} since touchdown)")
         al.set("sideways_contact", sideways, text="The load touched EM1500's deck while sliding sideways")
         amp = self._swing_amplitude()
+        al.set(
+            "load_model_lost",
+            self.lab.load_model_lost,
+            text="The load's swing left its model (level with the tool point): Comau and winch stopped",
+        )
         al.set("load_swing", value=math.degrees(amp), text=f"Load swinging {math.degrees(amp):.1f}° from the vertical")
         self._check_link()
 
@@ -590,6 +595,8 @@ class LabSession(Scene):
         self._carry -= n * STEP
         self._apply_input(now)
         self.plant.step(STEP, min(n, 50))  # never more than 0.5 s of catch-up in one tick
+        if self.lab.load_model_lost and not self.estop_latched:  # the lab stopped itself (H118): latched here too
+            self.estop(source="the load's model: its swing passed level with the tool point")
         self._check_alarms(now)
 
     def close(self) -> None:

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from app.control.guard import scale_in_box
-from app.control.lab import BRAKE, COMAU_GUARD, COMAU_LAW, WINCH_LAW, ComauGuard
+from app.control.lab import BRAKE, COMAU_GUARD, COMAU_LAW, WINCH_GUARD, WINCH_LAW, ComauGuard, guard_world_reference
 from app.errors import BosunError
 from app.models import lab_kernels as model_kernels
 from app.models.closed_form import ComauArm
@@ -177,28 +177,25 @@ class MotionLab:
         self._target = np.zeros(3)
         self._out = tuple(np.zeros(n) for n in (3, 3, 3, 6, 6))  # e_t_b2, p_w_g, p_p_g, legs1, legs2
         # the Comau's guard against the platforms (issue 32, item 5) and its report of the last step
-        deck2_radius = float(np.max(np.linalg.norm(m2.b_b[:, :2], axis=1)))  # EM1500's deck, as the load's
-        self.guard = ComauGuard.for_lab(self.robot, self._comau, layout.T_b1_r, deck2_radius)
+        self.guard = ComauGuard.for_lab(self.robot, self._comau, layout.T_b1_r, (m1, m2))
         self._guard_p = self.guard.record()
         self.guard_report = np.array([-1.0, -1.0, np.nan, np.nan, 0.0])
         self._use_kernels = False  # the set-up below runs the reference; the flag is set at the end
         self.payload_target_b2: NDArray[np.float64] | None = None
-        # what the controllers see of the platforms: None, the true states; else one streaming sensor per
-        # platform (app/marine/sensors.py: MRU or tracker), measured after the platforms' step
+        # what the controllers see of the platforms: None, true; else a sensor per platform (MRU or tracker)
         self.sensors: tuple | None = None
         self.measured: tuple[tuple[NDArray, NDArray, NDArray], ...] | None = None
-        # an offset (position, velocity in {n1}) added to the work point the Comau tracks (anti-swing)
-        self.tool_offset = (np.zeros(3), np.zeros(3))
+        self.tool_offset = (np.zeros(3), np.zeros(3))  # added to the work point the Comau tracks (p, v in {n1})
         self.t = 0.0
         self.frozen = False
+        self.load_model_lost = False  # the swing left its model (H118): the lab stopped
         self.at_limit = np.zeros(4, dtype=bool)  # joints 1–3, winch: at a position or speed limit
         self.q_work = self.work_configuration()
         if at_work:
             self.joints.reset(self.q_work)
         self._rates = self._rotation_rates()
-        self.last: LabSample | None = None
         self._update_tool()
-        self.last = self._sample()
+        self.last: LabSample | None = self._sample()
         self.use_kernels = sim_kernels.ENABLED
 
     @property
@@ -414,6 +411,7 @@ class MotionLab:
         """After an E-STOP every machine holds where it stands until the operator commands it anew:
         platforms SETTLED stay so, others HOLDING; the Comau HOLD; the winch LOCAL at zero speed."""
         self.frozen = False
+        self.load_model_lost = False
         for p in self.platforms:
             p.reset()
         self.set_comau_mode("hold")
@@ -462,12 +460,21 @@ class MotionLab:
         self._measure()
         self._shift_work_point(dt)
         if self._engage is not None:  # the engagement at the step's end (the law's target is for the step's end)
-            e0, e0_dot, T, t = self._engage
-            self._engage = (e0, e0_dot, T, t + dt)
+            self._engage = (*self._engage[:3], self._engage[3] + dt)
         self.last = self._step_compiled(dt) if self._use_kernels else self._step_reference(dt)
         if self._engage is not None and (self._engage[3] >= self._engage[2] or self.comau_mode != "motion_comp"):
             self._engage = None
+        if not self.pendulum.in_model():
+            self._lose_load_model()
         return self.last
+
+    def _lose_load_model(self) -> None:
+        """The swing left its model (H118): the lab stops, says so, and hangs the load at rest (no number downstream
+        the model no longer means)."""
+        self.pendulum.alpha = self.pendulum.beta = self.pendulum.alpha_dot = self.pendulum.beta_dot = 0.0
+        self.load_model_lost = True
+        self.estop()
+        self.refresh()
 
     def _law_shift(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The work point's shift the Comau's law tracks: the operator's (and the level frame's) and the
@@ -722,6 +729,10 @@ class MotionLab:
         if has:
             self.payload_target_b2 = target
         wire = (wf.lower, wf.upper, wf.speed, wf.accel, wf.tau)
+        u = (ref, (wf.x, wf.v), (f.x, f.v), world, (self._T_world_n[0], R1, self.layout.T_b1_r),
+             (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, pd.g))  # fmt: skip
+        _, (ref, rep) = WINCH_GUARD.step((), u, (g[0], self._guard_p[0], wire, self._guard_p[5]), dt, False)
+        self.guard_report[:] = rep if rep[4] > self.guard_report[4] else self.guard_report  # the arm's first
         (wf.x, wf.v, wf.a, _), _ = WINCH_DRUM.step((wf.x, wf.v, wf.a, self.at_limit), ref, wire, dt, False)
         # the load
         self.pendulum.step(dt, R_G_D.T @ self.a_t_g, self.winch.length, self.winch.speed)
@@ -733,15 +744,11 @@ class MotionLab:
         return self._guard_world(e1, R1, e2, R2)
 
     def _guard_world(self, e1, R1, e2, R2) -> tuple:
-        """The Comau's obstacles in {r} (the reference of :func:`app.scenes.lab_kernels.guard_world`): EM1500's deck
-        where the controller sees it, through {n1} (eq. 39) and EM8000's body (eq. 54 inverted)."""
-        _, deck1, ped, ped_r, deck_r, _ = self._guard_p
-        T12, Tr = self._geometry[5], self.layout.T_b1_r
-        c_n1 = T12[:3, 3] + T12[:3, :3] @ e2[:3]
-        n_n1 = T12[:3, :3] @ (R2 @ np.array([0.0, 0.0, -1.0]))
-        c = Tr[:3, :3].T @ (R1.T @ (c_n1 - e1[:3]) - Tr[:3, 3])
-        n = Tr[:3, :3].T @ (R1.T @ n_n1)
-        return deck1, ped, ped_r, np.array([*c, *n, deck_r[0]])
+        """The Comau's obstacles in {r} (:func:`app.control.lab.guard_world_reference`)."""
+        pd = self.pendulum
+        swing = (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, float(self.winch.filter.x[0]), pd.g)
+        frames = (self._T_world_n[0], self._geometry[5], self.layout.T_b1_r)
+        return guard_world_reference(self._guard_p, frames, e1, R1, e2, R2, swing)
 
     def _update_tool(self) -> None:
         p1 = self.platforms[0]

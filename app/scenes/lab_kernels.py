@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from app.control.lab_kernels import comau_guard, comau_law, winch_law
+from app.control.lab_kernels import comau_guard, comau_law, swing_hang, winch_guard, winch_law
 from app.models.kernels import _jit
 from app.models.lab_kernels import leg_lengths, mtv, mv, pose_in, stewart_rates, tool_on_platform
 from app.sim.kernels import drives_block, drum_block, pendulum_step
@@ -44,10 +44,14 @@ __all__ = ["guard_world", "lab_step", "warm_up_steps"]
 
 
 @_jit
-def guard_world(guard_p, T_n1_n2, T_b1_r, cx1, cR1, cx2, cR2):
+def guard_world(guard_p, frames, cx1, cR1, cx2, cR2, swing):
     """The Comau's obstacles in its base {r} (:func:`app.control.lab_kernels.guard_hazards`): EM8000's deck and the
     pedestal, fixed there, and EM1500's deck (z = 0 of {b2}, up = −z, a disc) where the controller sees it (eq. 39
-    through {n1}, eq. 54 inverted)."""
+    through {n1}, eq. 54 inverted); and the wire from the tool point to the load, eq. (58)'s L·(−sα, −cα sβ,
+    −cα cβ) in {g}, and the load's swing envelope (its centre from the tool point, its radius: module text of
+    :func:`app.control.lab_kernels.guard_hazards`), turned into {r} the same way.  ``frames`` = (T_g_n1, T_n1_n2,
+    T_b1_r); ``swing`` = (α, β, α̇, β̇, L, g)."""
+    T_g_n1, T_n1_n2, T_b1_r = frames
     _, deck1, ped, ped_r, deck_r, _ = guard_p
     deck2 = np.empty(7)
     cn = mv(T_n1_n2, cx2[0], cx2[1], cx2[2])
@@ -60,7 +64,7 @@ def guard_world(guard_p, T_n1_n2, T_b1_r, cx1, cR1, cx2, cR2):
     for i in range(3):
         deck2[i], deck2[3 + i] = cr[i], nr[i]
     deck2[6] = deck_r[0]
-    return (deck1, ped, ped_r, deck2)
+    return (deck1, ped, ped_r, deck2, swing_hang((T_g_n1, cR1, T_b1_r), swing))
 
 
 @_jit
@@ -91,7 +95,8 @@ def lab_step(x, u, p, y, dt):
     law_p = (cm, T_base, signs, T_n1_n2, T_b1_r, w_b2, park_q, joint_p[0], joint_p[1])
     view = (cx1, cv1, cR1, cRd1, cx2, cv2, cR2, cRd2)
     _, joint_cmd = comau_law((), (comau_mode, q, v_cmd, offset, view), law_p, dt)
-    world = guard_world(guard_p, T_n1_n2, T_b1_r, cx1, cR1, cx2, cR2)
+    swing = (load[0], load[1], load[2], load[3], wire[0][0], g)
+    world = guard_world(guard_p, (T_g_n1, T_n1_n2, T_b1_r), cx1, cR1, cx2, cR2, swing)
     _, (joint_cmd, report) = comau_guard((), (joint_cmd, q, qd, world), (cm, guard_p[0], joint_p, guard_p[5]), dt)
     for i in range(5):
         hazard[i] = report[i]
@@ -111,6 +116,12 @@ def lab_step(x, u, p, y, dt):
     cH2 = pose_in(T_g_n2, cx2) if measured else H2
     winch_u = (track, speed_cmd, wl, (alpha, beta), (p_t_g, v_t_g), (cH2, cRd2, cv2))
     (target, has_target), wire_ref = winch_law((target, has_target), winch_u, (T_g_n2, wire_p[2]), dt)
+    # ---- the winch's guard: its pay-out slowed along the approaches of the wire and the load
+    guard_u = (wire_ref, (wl, wv), (q, qd), world, (T_g_n1, cR1, T_b1_r), (alpha, beta, alpha_dot, beta_dot, g))
+    _, (wire_ref, wreport) = winch_guard((), guard_u, (cm, guard_p[0], wire_p, guard_p[5]), dt)
+    if wreport[4] > hazard[4]:  # the arm's guard's report first; else the winch's, where it slowed the pay-out
+        for i in range(5):
+            hazard[i] = wreport[i]
     drum_block((wl, wv, wa, at_limit), wire_ref, wire_p, dt)
     # ---- the load (eqs. 29–30 / 60–61 with p̈_t^g of eq. 57, in {d}: (x, −y, −z))
     alpha, beta, alpha_dot, beta_dot = pendulum_step(
@@ -158,8 +169,8 @@ def warm_up_steps() -> list:
         joints = (vec(3, -3.0), vec(3, 3.0), o3, o3, o3, 0.05)
         wire = (vec(1, 0.3), vec(1, 2.5), vec(1, 0.5), vec(1, 1.5), 0.05)
         guard = (
-            o3,
-            np.array([0.0, 0.0, 1.0, -1.0]),
+            vec(5, 1.0),
+            np.array([0.0, 0.0, 1.0, -1.0, 0.0, 0.0, -1.0, 2.0]),
             np.zeros((2, 3)),
             vec(1, 0.2),
             vec(1, 0.8),

@@ -58,6 +58,12 @@ PENDULUM = Block(
 )
 
 
+#: the load's model (the pendulum's angles) is lost within this of its pole, cos α = 0 (1.1°) …
+SWING_POLE = 0.02
+#: … or past this swing rate [rad/s] (a 0.3 m wire at 100 rad/s is the load at 30 m/s)
+SWING_RATE_MAX = 100.0
+
+
 @dataclass
 class Pendulum:
     """The 2-DOF spherical pendulum of eqs. (29)–(30) (corrected z̈ sign, see module doc), RK4.
@@ -101,6 +107,17 @@ class Pendulum:
         """Kinetic + potential energy, eqs. (26)–(27), with the tool moving at v_t (in {d})."""
         v_p = (np.zeros(3) if v_t is None else v_t) + L * self.direction_rate()
         return 0.5 * m * float(v_p @ v_p) + m * self.g * L * (1 - math.cos(self.alpha) * math.cos(self.beta))
+
+    def in_model(self) -> bool:
+        """Whether the swing is still one eqs. (29)–(30) can follow: in the angles α, β they are singular at
+        cos α = 0 (the load level with the tool point), where β̇ grows without bound — finite, cos α at least
+        :data:`SWING_POLE` and the rates under :data:`SWING_RATE_MAX` (safety H118)."""
+        x = (self.alpha, self.beta, self.alpha_dot, self.beta_dot)
+        return (
+            all(math.isfinite(v) for v in x)
+            and abs(math.cos(self.alpha)) >= SWING_POLE
+            and max(abs(self.alpha_dot), abs(self.beta_dot)) <= SWING_RATE_MAX
+        )
 
     @property
     def swing(self) -> float:
