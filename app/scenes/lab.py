@@ -186,9 +186,9 @@ class MotionLab:
         self.sensors: tuple | None = None
         self.measured: tuple[tuple[NDArray, NDArray, NDArray], ...] | None = None
         self.tool_offset = (np.zeros(3), np.zeros(3))  # added to the work point the Comau tracks (p, v in {n1})
-        self.t = 0.0
-        self.frozen = False
-        self.load_model_lost = False  # the swing left its model (H118): the lab stopped
+        self.t, self.frozen = 0.0, False
+        # the swing left its model (H118); the pendulum is the load's model (else a wire-angle sensor's view of one)
+        self.load_model_lost, self.pendulum_is_load = False, True
         self.at_limit = np.zeros(4, dtype=bool)  # joints 1–3, winch: at a position or speed limit
         self.q_work = self.work_configuration()
         if at_work:
@@ -464,7 +464,7 @@ class MotionLab:
         self.last = self._step_compiled(dt) if self._use_kernels else self._step_reference(dt)
         if self._engage is not None and (self._engage[3] >= self._engage[2] or self.comau_mode != "motion_comp"):
             self._engage = None
-        if not self.pendulum.in_model():
+        if self.pendulum_is_load and not self.pendulum.in_model():
             self._lose_load_model()
         return self.last
 

@@ -58,6 +58,7 @@ class LabLoad:
 
     def __post_init__(self) -> None:
         lab = self.lab
+        lab.pendulum_is_load = False  # the pendulum reports this load's wire now (sync): not a model of its own
         lay = lab.layout  # the payload's mass and damping are the lab file's
         self.spec = replace(self.spec, mass=float(lay.payload_mass), air_damping=float(lay.payload_damping))
         self._p = self.spec.record(G)
