@@ -352,18 +352,23 @@ def test_a_swing_past_its_model_stops_the_lab_and_says_so():
     assert not s.lab.load_model_lost and not s.estop_latched
 
 
+def _stick(s: LabSession):
+    """``run(seconds, axes, enable)``: a stick fed to the lab engine and its ticks, at 50 Hz, its clock running on."""
+    t = [0.0]
+
+    def run(seconds, axes=(0.0, 0.0, 0.0, 0.0), enable=False):
+        for _ in range(round(seconds / 0.02)):
+            t[0] += 0.02
+            s.feed(InputSample(tuple(axes), (enable, False), "test"), t[0])
+            s.tick(t[0], 0.02)
+
+    return run
+
+
 @pytest.mark.slow
 def test_the_lab_engine_names_the_hazard_and_raises_the_alarm():
     s = LabSession(comau_profile="datasheet")
-    t = 0.0
-
-    def run(seconds, axes=(0.0, 0.0, 0.0, 0.0), enable=False):
-        nonlocal t
-        for _ in range(round(seconds / 0.02)):
-            t += 0.02
-            s.feed(InputSample(tuple(axes), (enable, False), "test"), t)
-            s.tick(t, 0.02)
-
+    run = _stick(s)
     run(0.1)
     run(0.4, enable=True)  # armed on the press, centred
     seen = None
@@ -391,15 +396,7 @@ def test_the_lab_engine_names_the_load_when_the_winch_pays_out_over_em8000():
     s.lab.refresh()
     s.load.__post_init__()  # the load hung again, still, under the tool where it now is
     s.lab_winch(mode="remote")
-    t = 0.0
-
-    def run(seconds, axes=(0.0, 0.0, 0.0, 0.0), enable=False):
-        nonlocal t
-        for _ in range(round(seconds / 0.02)):
-            t += 0.02
-            s.feed(InputSample(tuple(axes), (enable, False), "test"), t)
-            s.tick(t, 0.02)
-
+    run = _stick(s)
     run(0.1)
     run(0.4, enable=True)  # armed on the press, centred
     run(6.0, axes=(0.0, 0.0, 0.0, 1.0), enable=True)  # paying out at full stick: 0.8 m of wire to the deck

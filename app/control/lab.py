@@ -391,8 +391,7 @@ def _guard_reference(x, u, p, dt):
             else:
                 continue
             slowed[i] = active[i] = True
-    held = np.where(hold, 0.0, np.where(keep, np.clip(qd, lo_v, hi_v), out))
-    out = held
+    out = np.where(hold, 0.0, np.where(keep, np.clip(qd, lo_v, hi_v), out))
     pick = active & (slowed if slowed.any() else True)
     if pick.any():
         left = np.where(pick, (val - stop) / (zone - stop), np.inf)

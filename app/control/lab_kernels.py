@@ -395,14 +395,11 @@ def comau_guard(x, u, p, dt):
                 continue
             slowed[i] = True
             active[i] = True
-    held = out.copy()
     for j in range(3):
         if hold[j]:
-            held[j] = 0.0
+            out[j] = 0.0
         elif keep[j]:
-            held[j] = min(max(qd[j], lo_v[j]), hi_v[j])
-    for j in range(3):
-        out[j] = held[j]
+            out[j] = min(max(qd[j], lo_v[j]), hi_v[j])
     any_slowed = False
     for i in range(m):
         any_slowed = any_slowed or slowed[i]
