@@ -119,8 +119,10 @@ class HazardGuard:
     def __post_init__(self) -> None:
         self._settings = self.settings.array()
         self.lever = self._levers()
+        self.row_lever = self._row_levers()
         self._report = np.zeros(6)
         self.tick_report = np.zeros(8)  # app.scenes.teleop_guard's
+        self._names: dict[tuple[int, int], str] = {}  # (kind, index) → the hazard's name (:meth:`report`)
         self._out = np.zeros(1 + len(self.pairs) + len(self.plane_caps))
         self._pts = np.zeros((len(self.caps), 2, 3))
         # the kernels' records (app/control/guard_kernels.py): the chain's constants, the capsule model, the limits
@@ -256,6 +258,29 @@ class HazardGuard:
         R = np.array([float(length[l:].sum()) for l in range(len(length))]) + tool + float(self.radii.max(initial=0.0))
         return np.abs(r._M_theta).T @ R + np.abs(r._M_d).sum(axis=0)
 
+    def _row_levers(self) -> NDArray[np.float64]:
+        """Per checked clearance (the pairs, then the floor's) and joint j, a bound on how fast that clearance
+        changes with q_j [m/rad or m/m]: W[c, j] = f · lever_j, with f how many of its two sides joint j moves
+        other than rigidly together.  A capsule of link i (its points from frames i and i + 1) moves with every
+        link l ≤ i; a joint whose links all come before both capsules' moves them as one rigid body, which keeps
+        their distance (f = 0); else f counts the capsules it moves (a floor does not move).  Σ_j W[c, j]·|Δq_j|
+        over a path on which each joint moves one way bounds that clearance's change along it
+        (:func:`app.scenes.teleop_kernels.guard_tick`'s proven skip)."""
+        r = self.robot
+        acts = (np.abs(r._M_theta) + np.abs(r._M_d)) > 0.0  # (L, n): link l moves with joint j
+        L, n = acts.shape
+        first = np.array([int(np.argmax(acts[:, j])) if acts[:, j].any() else L + 1 for j in range(n)])
+        last = np.array([int(L - 1 - np.argmax(acts[::-1, j])) if acts[:, j].any() else -1 for j in range(n)])
+        link = self.caps[:, 0] if len(self.caps) else np.zeros(0, dtype=np.int64)
+        rows = []
+        for a, b in self.pairs:
+            lo = min(link[a], link[b])
+            f = (first <= link[a]).astype(float) + (first <= link[b]).astype(float)
+            rows.append(np.where(last < lo, 0.0, f) * self.lever)
+        for c in self.plane_caps:
+            rows.append((first <= link[c]).astype(float) * self.lever)
+        return np.ascontiguousarray(np.array(rows, dtype=float).reshape(len(rows), n))
+
     def margin(self, q_ref: ArrayLike, q_arm: ArrayLike) -> float:
         """How far any point of the arm at ``q_arm`` can be from where it is at ``q_ref`` [m]: Σ_j lever_j |Δq_j|
         (a Lipschitz bound of every clearance).  The servo lags its reference and brakes per joint, so the arm
@@ -305,14 +330,14 @@ class HazardGuard:
         return out, self.report(self._report)
 
     def report(self, rep: NDArray[np.float64]) -> GuardReport:
-        kind = int(rep[0])
+        kind, idx, value, share, slowed, scale = rep[:6].tolist()  # every tick: Python floats at once
         if kind < 0:
-            return GuardReport(slowed=bool(rep[4]), scale=float(rep[5]))
-        idx = int(rep[1])
-        return GuardReport(
-            kind=KINDS[kind], name=self.hazard_name(kind, idx), value=float(rep[2]),
-            share=float(rep[3]), slowed=bool(rep[4]), scale=float(rep[5]),
-        )  # fmt: skip
+            return GuardReport(slowed=bool(slowed), scale=scale)
+        key = (int(kind), int(idx))
+        name = self._names.get(key)
+        if name is None:  # each hazard's name is formatted once
+            name = self._names[key] = self.hazard_name(*key)
+        return GuardReport(kind=KINDS[key[0]], name=name, value=value, share=share, slowed=bool(slowed), scale=scale)
 
     def hazard_name(self, kind: int, idx: int) -> str:
         r = self.robot

@@ -22,7 +22,10 @@ def guard_tick(
     capsules' margin for how far the servo ``act`` lags it, then kept only if the joints can still brake clear after
     it (else a gentler one, else the joints' stopping point).  Returns the new reference, the report and what the
     safe-braking rule did (0 kept, 1 gentler, 2 braked)."""
-    servo = (act.q, act.qdot, act.qddot, act.lower, act.upper, act.speed, act.accel, act.tau, float(dt), guard.lever)
+    servo = (
+        act.q, act.qdot, act.qddot, act.lower, act.upper, act.speed, act.accel, act.tau, float(dt), guard.lever,
+        guard.row_lever,
+    )  # fmt: skip
     rep = guard.tick_report
     new = tk.guard_tick(
         guard.robot.kernel_record, guard._chain, guard._model, servo, np.ascontiguousarray(q_ref, dtype=float),

@@ -66,6 +66,32 @@ def _braking_least(robot, model, q, v, accel, pts, buf, least):
 
 
 @_jit
+def _proven_clear(now, row_lever, path, hard):
+    """Whether every clearance stays above ``hard`` from q, through one servo step to q1 and the joints' braking
+    from there (path: q, q1, v1, accel; the path :func:`_braking_least` samples), by the clearances' Lipschitz
+    bound (``HazardGuard.row_lever``): along that path each joint moves one way per part, |q1 − q| then its
+    braking distance v1²/2a (none where its acceleration is not finite: :func:`_braking_least` holds it), so a
+    clearance changes by at most Σ_j W[c, j]·(|q1_j − q_j| + v1_j²/2a_j).  True only where every clearance's
+    bound is met with 1 nm to spare (NaN never is)."""
+    q, q1, v1, accel = path
+    n = q.shape[0]
+    travel = np.empty(n)
+    for i in range(n):
+        t = abs(q1[i] - q[i])
+        a = accel[i]
+        if np.isfinite(a) and a > 0.0:
+            t += v1[i] * v1[i] / (2.0 * a)
+        travel[i] = t
+    for c in range(now.shape[0]):
+        worst = now[c]
+        for i in range(n):
+            worst -= row_lever[c, i] * travel[i]
+        if not worst > hard + 1e-9:
+            return False
+    return True
+
+
+@_jit
 def _keeps_clear(robot, model, plant, ref, work, floor):
     """Whether, after one servo step towards ``ref`` (plant: the servo's state x, parameters p, dt and the joints'
     accelerations), the joints can still brake to rest with every clearance at least ``floor`` (work: scratch
@@ -85,8 +111,9 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     """One tick of the teleop engine's hazard guard (``Session._guarded``) in one call: the joint reference
     ``q_ref`` moved by the step ``dq``, scaled (:func:`guard_step`) and supervised, returned.
 
-    servo: the joint actuators' state and parameters (q, q̇, q̈, lower, upper, speed, accel, τ, dt) and each
-    joint's lever [m/rad] (:meth:`app.control.guard.HazardGuard.margin`).  The scaling's margin is how far the arm
+    servo: the joint actuators' state and parameters (q, q̇, q̈, lower, upper, speed, accel, τ, dt), each
+    joint's lever [m/rad] (:meth:`app.control.guard.HazardGuard.margin`) and each clearance's per joint
+    (``HazardGuard.row_lever``).  The scaling's margin is how far the arm
     can be from the reference: Σ lever |q_ref − q_stop| (q_stop the joints' stopping point).  The supervision
     (safe braking): the new reference is kept if, after one servo step towards it, the joints can still brake to
     rest with every capsule clearance at least ``hard`` (settings[9]) — or, where the braking the joints can do now
@@ -96,12 +123,13 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     the stopping point that the servo follows in proportion (each joint's change of speed within its acceleration
     limit) if it passes; else the stopping
     point (the joints brake now; the caller holds that reference while they brake: recomputed each tick it would
-    move a tick's travel ahead of a servo that brakes towards it).  The check is skipped when every clearance now
-    exceeds the zone by twice the joints' reach this tick and in braking (the levers' Lipschitz bound).
+    move a tick's travel ahead of a servo that brakes towards it).  The check's five clearance evaluations are
+    skipped where a bound proves it would pass (:func:`_proven_clear`: the clearances' Lipschitz bounds over the
+    step and its braking), the same answer without them.
 
     report (8,): :func:`guard_step`'s six, then what the supervision did (0 kept, 1 gentler, 2 braked) and the
     clearance it acted for (its index among the pairs then the floor's, −1 none)."""
-    q, qdot, qddot, lower, upper, speed, accel, tau, dt, lever = servo
+    q, qdot, qddot, lower, upper, speed, accel, tau, dt, lever, row_lever = servo
     n = q.shape[0]
     q_stop = _stopping_point(q, qdot, accel, lower, upper, dt)
     margin = 0.0
@@ -122,18 +150,14 @@ def guard_tick(robot, chain, model, servo, q_ref, dq, settings, report):
     pts = np.empty((caps.shape[0], 2, 3))
     now = np.empty(m)
     _clearances(robot, model, q, pts, now, 0)
-    reach = 0.0
-    for i in range(n):
-        reach += lever[i] * (abs(new[i] - q[i]) + abs(q_stop[i] - q[i]))
-    least_now = now.min()
-    if least_now - 2.0 * reach > settings[4]:
-        return new  # nothing within reach of this tick and its braking
     hard = settings[9]
     x = (q, qdot, qddot)
     p = (lower, upper, speed, accel, tau)
+    (q1, v1, _), _ = actuator_block(x, (new,), p, dt)
+    if _proven_clear(now, row_lever, (q, q1, v1, accel), hard):
+        return new  # the check below would pass: no clearance can fall to ``hard`` on the step or its braking
     buf = np.empty(m)
     after = np.empty(m)
-    (q1, v1, _), _ = actuator_block(x, (new,), p, dt)
     _braking_least(robot, model, q1, v1, accel, pts, buf, after)
     ok = True
     for c in range(m):
@@ -190,5 +214,6 @@ def warm_up_steps() -> list:
     :func:`app.scenes.teleop_guard.guard_tick` passes (for :func:`app.warmup.warm_up`): a three-link chain."""
     robot, chain, model, _, settings, q, dq = warm_up_records()
     n, ones = q.size, np.ones(q.size)
-    servo = (q, np.zeros(n), np.zeros(n), -ones, ones, ones, np.full(n, 10.0), 0.05, 0.002, ones)
+    m = model[2].shape[0] + model[4].shape[0]
+    servo = (q, np.zeros(n), np.zeros(n), -ones, ones, ones, np.full(n, 10.0), 0.05, 0.002, ones, np.ones((m, n)))
     return [lambda: guard_tick(robot, chain, model, servo, q, dq, settings, np.zeros(8))]
