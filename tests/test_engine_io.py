@@ -142,3 +142,131 @@ def test_bench_loop_runs_the_crane_head_engine_and_times_its_predictors():
     assert len(r["estop_ticks"]) == r["estops_sent"] == 5 and r["speed_after_estop"] is None
     with pytest.raises(ValueError, match="plant must be one of teleop, tac"):
         bench_loop(plant="lab")
+
+
+def _policy_spy(srv) -> list[int]:
+    """The scheduling policy of the thread that runs each tick."""
+    import os
+
+    seen: list[int] = []
+    tick = srv.session.tick
+
+    def spy(*a, **k):
+        seen.append(os.sched_getscheduler(0))
+        return tick(*a, **k)
+
+    srv.session.tick = spy
+    return seen
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "sched_setscheduler"), reason="Linux's scheduler calls")
+def test_realtime_runs_the_loop_thread_on_sched_fifo_and_gives_the_thread_back_as_it_was(caplog):
+    """``bosun server --realtime``: the ticks run on SCHED_FIFO where the machine grants it, and the calling thread
+    is on its old scheduler after the loop; where it is not granted (no root, no CAP_SYS_NICE) the loop runs on
+    the normal scheduler and says so once."""
+    import os
+
+    before = os.sched_getscheduler(0)
+    srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, realtime=50)
+    seen = _policy_spy(srv)
+    try:
+        with caplog.at_level("WARNING", logger="bosun.engine"):
+            srv.run(duration=0.3)
+    finally:
+        srv.close()
+    assert len(seen) > 10
+    assert os.sched_getscheduler(0) == before
+    if srv.realtime_active:
+        assert set(seen) == {os.SCHED_FIFO}
+    else:
+        assert set(seen) == {before}
+        assert "real-time priority 50 not granted" in caplog.text
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "sched_setscheduler"), reason="Linux's scheduler calls")
+def test_a_refused_realtime_priority_is_one_warning_and_the_loop_runs(monkeypatch, caplog):
+    import os
+
+    def refuse(*_):
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(os, "sched_setscheduler", refuse)
+    srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, realtime=50)
+    seen = _policy_spy(srv)
+    try:
+        with caplog.at_level("WARNING", logger="bosun.engine"):
+            srv.run(duration=0.3)
+    finally:
+        srv.close()
+    assert len(seen) > 10 and not srv.realtime_active
+    warned = [r for r in caplog.records if "not granted" in r.getMessage()]
+    assert len(warned) == 1 and "Operation not permitted" in warned[0].getMessage()
+
+
+def test_without_realtime_the_loop_never_touches_the_scheduler(monkeypatch):
+    import os
+
+    def forbidden(*_):
+        raise AssertionError("the scheduler was changed")
+
+    monkeypatch.setattr(os, "sched_setscheduler", forbidden, raising=False)
+    srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200)
+    try:
+        srv.run(duration=0.1)
+    finally:
+        srv.close()
+    assert srv.stats.ticks > 5
+
+
+@pytest.mark.parametrize("priority", [-1, 100])
+def test_a_realtime_priority_out_of_range_is_refused_in_one_line(priority):
+    from app.net.transport import TransportError
+
+    with pytest.raises(TransportError, match="real-time priority must be between 1 and 99"):
+        EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, realtime=priority)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "sched_setscheduler"), reason="Linux's scheduler calls")
+def test_h119_a_realtime_loop_is_refused_on_one_cpu(monkeypatch, caplog):
+    """Safety H119: on one CPU a SCHED_FIFO loop would share it with the GUI, whose STOP must not wait on it."""
+    import os
+
+    monkeypatch.setattr(os, "sched_getaffinity", lambda _pid: {0})
+    monkeypatch.setattr(os, "sched_setscheduler", lambda *_: pytest.fail("the scheduler was changed"))
+    srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, realtime=50)
+    try:
+        with caplog.at_level("WARNING", logger="bosun.engine"):
+            srv.run(duration=0.1)
+    finally:
+        srv.close()
+    assert not srv.realtime_active and "one CPU only" in caplog.text
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "sched_setscheduler"), reason="Linux's scheduler calls")
+def test_h119_a_realtime_loop_whose_ticks_overrun_still_rests_every_period(monkeypatch):
+    """Safety H119: ticks longer than the period leave no time to sleep; on SCHED_FIFO that loop would hold its
+    core from every normal program.  It rests a tenth of a period after each such tick (granted here by a stand-in
+    for the scheduler call, so the test runs without root), and never without --realtime."""
+    import os
+
+    monkeypatch.setattr(os, "sched_setscheduler", lambda *_: None)
+    sleeps = {}
+    for realtime in (50, 0):
+        srv = EngineServer(Session(), bind="tcp://127.0.0.1:0", rate=200, realtime=realtime)
+        tick = srv.session.tick
+
+        def slow(*a, _tick=tick, **k):
+            end = time.perf_counter() + 0.006  # 1.2 periods at 200 Hz
+            while time.perf_counter() < end:
+                pass
+            return _tick(*a, **k)
+
+        srv.session.tick = slow
+        try:
+            srv.run(duration=0.5)
+        finally:
+            srv.close()
+        sleeps[realtime] = (srv.rests, srv.stats.ticks)
+    rests, ticks = sleeps[50]
+    assert ticks > 20 and rests >= ticks - 2, sleeps
+    assert sleeps[0][0] == 0

@@ -93,7 +93,14 @@ def _percentiles(ms: np.ndarray) -> dict:
 
 
 def _engine_process(
-    rate: float, seconds: float, robot: str, solver: str, urls: Any, results: Any, plant: str = "teleop"
+    rate: float,
+    seconds: float,
+    robot: str,
+    solver: str,
+    urls: Any,
+    results: Any,
+    plant: str = "teleop",
+    realtime: int = 0,
 ) -> None:
     from app.engine.server import EngineServer
     from app.engine.session import Session
@@ -114,7 +121,7 @@ def _engine_process(
     else:
         session = Session(robot_name=robot, solver_name=solver, mode="velocity")
         _timed_guard(session, cost)
-    server = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=PUBLISH_RATE)
+    server = EngineServer(session, bind="tcp://127.0.0.1:0", rate=rate, publish_rate=PUBLISH_RATE, realtime=realtime)
     urls.put(server.url)
     try:
         t0 = time.perf_counter()
@@ -124,6 +131,7 @@ def _engine_process(
         server.close()
     summary = server.stats.summary()
     summary["tick_rate_hz"] = server.stats.ticks / elapsed
+    summary["realtime"] = server.realtime if server.realtime_active else 0  # the loop's SCHED_FIFO priority, if had
     summary["estop_ticks"] = list(server.estop_ticks)
     summary["dropped"] = server.limits.total_dropped
     summary["rejected"] = server.rejected
@@ -177,6 +185,7 @@ def bench_loop(
     flood: int = 0,
     burn: bool = False,
     plant: str = "teleop",
+    realtime: int = 0,
 ) -> dict[str, Any]:
     """Run the engine at ``rate`` for ``seconds`` with one viewer and one operator sending at 500 Hz.
 
@@ -184,13 +193,14 @@ def bench_loop(
     tick; latency runs from the client's send time (the system-wide monotonic clock) to the end
     of the engine tick that turned the sample into a joint command.  ``flood``: junk messages a
     second from one more client; ``burn``: a process keeping one core busy; ``plant``: teleop, or tac (the
-    crane-head engine with its predictors, module text)."""
+    crane-head engine with its predictors, module text); ``realtime``: the loop thread's SCHED_FIFO priority
+    (``bosun server --realtime``; 0 none; the result's ``realtime`` says whether it was granted)."""
     if plant not in PLANTS:
         raise ValueError(f"plant must be one of {', '.join(PLANTS)}, got {plant!r}")
     ctx = mp.get_context("spawn")
     urls, results, flood_sent = ctx.Queue(), ctx.Queue(), ctx.Queue()
     proc = ctx.Process(
-        target=_engine_process, args=(rate, seconds + 1.0, robot, solver, urls, results, plant), daemon=True
+        target=_engine_process, args=(rate, seconds + 1.0, robot, solver, urls, results, plant, realtime), daemon=True
     )
     proc.start()
     helpers: list = []

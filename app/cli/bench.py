@@ -6,7 +6,16 @@ import argparse
 import math
 
 from app.cli.args import command, group
-from app.cli.common import _kernels_on, _machine, _positive_float, _positive_int, _print_json, _progress_bar, _table
+from app.cli.common import (
+    _kernels_on,
+    _machine,
+    _positive_float,
+    _positive_int,
+    _print_json,
+    _progress_bar,
+    _rt_priority,
+    _table,
+)
 from app.errors import BosunError
 
 
@@ -365,7 +374,7 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
         raise BosunError(f"--rate {rate:g}: the crane-head engine (--plant tac) runs at 50 Hz, teleop at 500 or 1000")
     result = bench_loop(
         rate=rate, seconds=args.seconds, robot=args.robot, solver=args.solver, flood=args.flood, burn=args.burn,
-        plant=plant,
+        plant=plant, realtime=args.realtime,
     )  # fmt: skip
     result["machine"] = _machine()
     if args.json:
@@ -374,6 +383,9 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
     extra = (f", {args.flood} junk messages/s from one client" if args.flood else "") + (
         ", one core kept busy by another process" if args.burn else ""
     )
+    if args.realtime:
+        granted = result["loop"].get("realtime", 0)
+        extra += f", the loop on SCHED_FIFO {args.realtime}" if granted else ", SCHED_FIFO asked for and NOT granted"
     what = (
         "the crane-head engine with a 0.2 s delay predicted and its lift window"
         if plant == "tac"
@@ -454,6 +466,10 @@ def register(sub) -> None:
             "--flood", type=int, default=0, metavar="N", help="one more client sending N junk messages a second"
         )
         b.add_argument("--burn", action="store_true", help="another process keeps one core busy")
+        b.add_argument(
+            "--realtime", type=_rt_priority, nargs="?", const=50, default=0, metavar="PRIORITY",
+            help="the engine's loop on SCHED_FIFO at PRIORITY (default 50), as bosun server --realtime",
+        )  # fmt: skip
     with command(bench, "sim", cmd_bench_sim, help="how fast the lab and crane-head engines run unthrottled") as b:
         b.add_argument(
             "--kinds", nargs="+", choices=["lab", "tac"], default=["lab", "tac"], help="engines (default both)"

@@ -55,6 +55,14 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _rt_priority(text: str) -> int:
+    """A SCHED_FIFO priority, 1 to 99 (``--realtime``)."""
+    value = _positive_int(text)
+    if value > 99:
+        raise argparse.ArgumentTypeError(f"'{text}' must be a real-time priority from 1 to 99")
+    return value
+
+
 # ---------------------------------------------------------------------------- output
 def _print_json(obj: Any) -> None:
     print(json.dumps(obj, indent=2, allow_nan=False))

@@ -12,6 +12,7 @@ from pathlib import Path
 from app.cli.args import command
 from app.cli.common import (
     _positive_float,
+    _rt_priority,
 )
 from app.errors import BosunError, require
 
@@ -123,6 +124,7 @@ def cmd_server(args: argparse.Namespace) -> int:
         curve=curve,
         operator_secret=operator_secret,
         operator_timeout=args.operator_timeout,
+        realtime=args.realtime,
     )
     if args.record:
         try:
@@ -397,6 +399,12 @@ def register(sub) -> None:
         "--comau-limits", default=None, metavar="PROFILE",
         help="with --plant lab: the Comau's joint-limit profile, lab (the lab's program limits, the layout's default) "
         "or datasheet (the robot file's: the arm then reaches its platform and pedestal, guarded)",
+    )  # fmt: skip
+    p.add_argument(
+        "--realtime", type=_rt_priority, nargs="?", const=50, default=0, metavar="PRIORITY",
+        help="run the control loop's thread on the SCHED_FIFO scheduler at PRIORITY (1-99, default 50, as "
+        "ros2_control does): programs on the normal scheduler (clients, viewers, the GUI) no longer preempt a tick "
+        "(needs root or CAP_SYS_NICE; not granted, the loop runs as without it and says so)",
     )  # fmt: skip
     p.add_argument("--duration", type=_positive_float, default=None, help="stop after this many seconds")
     p.add_argument(

@@ -44,6 +44,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import os
 import secrets
 import sys
 import threading
@@ -74,6 +75,7 @@ log = logging.getLogger("bosun.engine")
 SPIN = 0.0002
 IO_MARGIN = 0.0003
 IO_SHARE = 0.1  # of a period the I/O thread is given when messages wait, even after a long tick
+RT_REST = 0.1  # of a period a real-time loop (--realtime) always sleeps, even after a tick that overran (H119)
 DEFAULT_RATE = 1000.0  # Hz, the teleop engine's control loop
 SLOW_FACTOR = 0.9  # of real time: below it for SLOW_FOR seconds in a row, control suffers (alarm engine_slow)
 SLOW_FOR = 5
@@ -148,8 +150,11 @@ class EngineServer:
         lapse_warning: float = 2.0,
         rate_limit: float = RATE_LIMIT,
         rate_burst: int = RATE_BURST,
+        realtime: int = 0,
     ) -> None:
         check_url(bind)
+        if not 0 <= realtime <= 99:
+            raise TransportError(f"real-time priority must be between 1 and 99 (0: none), got {realtime}")
         if not 1.0 <= rate <= 1000.0:
             raise TransportError(f"rate must be between 1 and 1000 Hz, got {rate:g}")
         if not 0.1 <= publish_rate <= rate:
@@ -160,6 +165,9 @@ class EngineServer:
                 "see 'bosun keys' and the README, remote operation)"
             )
         self.session = session
+        self.realtime = realtime  # the loop thread's SCHED_FIFO priority asked for (0: the normal scheduler)
+        self.realtime_active = False  # whether it was granted (:meth:`_enter_realtime`)
+        self.rests = 0  # ticks after which a real-time loop rested though its next deadline had come (H119)
         self.rate = rate
         self.dt = 1.0 / rate
         self.publish_every = max(1, round(rate / publish_rate))
@@ -494,6 +502,7 @@ class EngineServer:
             sys.setswitchinterval(0.0005)
         self._io_thread = threading.Thread(target=self.io.run, name="bosun-engine-io", daemon=True)
         self._io_thread.start()
+        restore = self._enter_realtime()
         next_t = time.perf_counter()
         end = math.inf if duration is None else next_t + duration
         self._second = (time.monotonic(), self.stats.ticks, self.stats.missed)  # health counts from the loop's start
@@ -525,6 +534,13 @@ class EngineServer:
                     self.io_deferred += 1
                 self.window.open_until(shut)
                 remaining = next_t - time.perf_counter()
+                if restore is not None and remaining < RT_REST * self.dt + SPIN:
+                    # on SCHED_FIFO a loop that never sleeps keeps its core from every normal program, the GUI's
+                    # STOP among them (H119): it rests anyway, and the next tick starts late (a missed deadline)
+                    time.sleep(RT_REST * self.dt)
+                    self.rests += 1
+                    next_t = max(next_t, time.perf_counter())
+                    remaining = 0.0
                 if remaining > SPIN:
                     time.sleep(remaining - SPIN)
                 while time.perf_counter() < next_t:
@@ -532,8 +548,39 @@ class EngineServer:
         finally:
             self._stop.set()
             self.window.open_until(math.inf)
+            if restore is not None:
+                self._leave_realtime(restore)
             self._io_thread.join(timeout=5)
         return self.stats
+
+    def _enter_realtime(self) -> tuple[int, Any] | None:
+        """Put the loop's thread (this one; the I/O thread, started before, keeps the normal scheduler) on
+        SCHED_FIFO at ``realtime`` if asked, as ros2_control's controller manager does for its loop (priority 50,
+        on any kernel): programs on the normal scheduler (clients, viewers, the GUI) no longer preempt a tick.
+        Not granted (no CAP_SYS_NICE, no rtprio limit, not Linux), or refused on a machine whose process may use
+        one CPU only (the loop would share it with the GUI, whose STOP must never wait on it: H119): one warning,
+        and the loop runs as before.  Returns what :meth:`_leave_realtime` restores (None: nothing changed)."""
+        if not self.realtime:
+            return None
+        if len(os.sched_getaffinity(0)) < 2 if hasattr(os, "sched_getaffinity") else False:
+            log.warning("real-time priority %d not taken: this process may use one CPU only, which the GUI "
+                        "needs too (H119); the loop runs on the normal scheduler", self.realtime)  # fmt: skip
+            return None
+        try:
+            before = (os.sched_getscheduler(0), os.sched_getparam(0))
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self.realtime))
+        except (AttributeError, OSError) as exc:
+            log.warning("real-time priority %d not granted (%s): the loop runs on the normal scheduler",
+                        self.realtime, exc.strerror if isinstance(exc, OSError) and exc.strerror else exc)  # fmt: skip
+            return None
+        self.realtime_active = True
+        log.info("control loop on SCHED_FIFO, priority %d", self.realtime)
+        return before
+
+    def _leave_realtime(self, before: tuple[int, Any]) -> None:
+        """The thread's scheduler as it was before :meth:`run` (a caller's thread is not left real-time)."""
+        with contextlib.suppress(OSError):
+            os.sched_setscheduler(0, *before)
 
     def record(self, path: str, seed: int = 0) -> None:
         """Put the session on record in the MCAP file ``path`` (:mod:`app.engine.record`) from the next tick."""
