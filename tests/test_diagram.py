@@ -9,7 +9,7 @@ import pytest
 
 from app.cli import main
 from app.scenes.diagram import DIAGRAMS, LAB_DIAGRAM, Diagram, DiagramError, Node, wire
-from app.sim.motionlab import WINCH_DRUM
+from app.sim.motionlab import COMAU_DRIVES, WINCH_DRUM
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -18,7 +18,7 @@ def test_every_scene_has_a_diagram_whose_inputs_are_each_fed_once():
     assert set(DIAGRAMS) == {"lab", "tac", "teleop"}
     for d in DIAGRAMS.values():
         d.check()
-        fed = [(w.target, w.port) for w in d.wires]
+        fed = [(w.target, p) for w in d.wires for p in w.targets]
         assert sorted(fed) == sorted((n.name, p) for n in d.nodes for p in n.inputs)
 
 
@@ -32,6 +32,13 @@ def test_the_lab_diagram_holds_its_blocks_ports_and_their_floors():
     for n in (n for d in DIAGRAMS.values() for n in d.nodes):
         if n.block is not None:
             assert n.where.startswith({"controller": "app.control.", "plant": "app.sim."}[n.floor]), n.name
+    # the guards sit between each law and what it drives (H115, H117), each command through its guard only
+    order = {n.name: k for k, n in enumerate(LAB_DIAGRAM.nodes)}
+    assert order["comau_law"] < order["comau_guard"] < order["drives"]
+    assert order["winch_law"] < order["winch_guard"] < order["drum"]
+    into = {(w.target, p): w.source for w in LAB_DIAGRAM.wires for p in w.targets}
+    assert {into[("drives", p)] for p in COMAU_DRIVES.inputs} == {"comau_guard"}
+    assert {into[("drum", p)] for p in WINCH_DRUM.inputs} == {"winch_guard"}
     assert LAB_DIAGRAM.feedback(wire("drives.q -> comau_law.q"))
     assert not LAB_DIAGRAM.feedback(wire("comau_law.q_ref -> drives.q_ref"))
 
@@ -58,7 +65,7 @@ def test_describe_prints_the_diagram_and_its_json(capsys):
     out = capsys.readouterr().out
     for n in LAB_DIAGRAM.nodes:
         assert n.name in out
-    assert "winch_law.L_ref -> drum.L_ref" in out and "drives.q -> comau_law.q  [feedback]" in out
+    assert "winch_guard.wire_ref -> drum.(L_ref, L_dot_ref)" in out and "drives.q -> comau_law.q  [feedback]" in out
     assert main(["describe", "--scene", "lab"]) == 0
     assert "wires" not in capsys.readouterr().out
     assert main(["describe", "--scene", "tac", "--diagram", "--json"]) == 0

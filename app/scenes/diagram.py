@@ -21,7 +21,7 @@ import html
 from dataclasses import dataclass, field
 
 from app.control.antisway import SWING_CONTROL
-from app.control.lab import COMAU_LAW, WINCH_LAW
+from app.control.lab import COMAU_GUARD, COMAU_LAW, WINCH_GUARD, WINCH_LAW
 from app.control.tac import CRANE_AHC, CRANE_LAW, HEAD_PID
 from app.errors import BosunError
 from app.models.block import Block
@@ -64,24 +64,35 @@ class Node:
 @dataclass(frozen=True)
 class Wire:
     """Outputs ``ports`` of node ``source`` into input ``port`` of node ``target`` (several outputs make one
-    record input, e.g. the load's (α, β) into the winch law's ``swing``)."""
+    record input, e.g. the load's (α, β) into the winch law's ``swing``), or one record output into the several
+    inputs ``port`` (comma-separated) it holds, in order (a guard's ``command`` into the drives' five inputs)."""
 
     source: str
     ports: tuple[str, ...]
     target: str
     port: str
 
+    @property
+    def targets(self) -> tuple[str, ...]:
+        """The input ports this wire feeds."""
+        return tuple(p.strip() for p in self.port.split(","))
+
     def label(self) -> str:
         src = self.ports[0] if len(self.ports) == 1 else "(" + ", ".join(self.ports) + ")"
-        return f"{self.source}.{src} -> {self.target}.{self.port}"
+        dst = self.port if len(self.targets) == 1 else "(" + ", ".join(self.targets) + ")"
+        return f"{self.source}.{src} -> {self.target}.{dst}"
 
 
 def wire(text: str) -> Wire:
-    """``"source.a,b -> target.port"`` as a :class:`Wire`."""
+    """``"source.a,b -> target.port"`` (or ``"source.record -> target.a,b"``) as a :class:`Wire`."""
     left, right = (s.strip() for s in text.split("->"))
     source, ports = left.split(".", 1)
     target, port = right.split(".", 1)
-    return Wire(source, tuple(p.strip() for p in ports.split(",")), target, port)
+    if "," in ports and "," in port:
+        raise DiagramError(f"wire {text}: several outputs into several inputs (one side must be one port)")
+    return Wire(
+        source, tuple(p.strip() for p in ports.split(",")), target, ",".join(p.strip() for p in port.split(","))
+    )
 
 
 def part(name: str, floor: str, where: str, ports: str, note: str = "") -> Node:
@@ -120,9 +131,10 @@ class Diagram:
             missing = [p for p in w.ports if p not in self.node(w.source).outputs]
             if missing:
                 raise DiagramError(f"{self.scene}: wire {w.label()}: {w.source} has no output {missing[0]!r}")
-            if w.port not in self.node(w.target).inputs:
-                raise DiagramError(f"{self.scene}: wire {w.label()}: {w.target} has no input {w.port!r}")
-            fed[(w.target, w.port)] = fed.get((w.target, w.port), 0) + 1
+            for port in w.targets:
+                if port not in self.node(w.target).inputs:
+                    raise DiagramError(f"{self.scene}: wire {w.label()}: {w.target} has no input {port!r}")
+                fed[(w.target, port)] = fed.get((w.target, port), 0) + 1
         for n in self.nodes:
             for port in n.inputs:
                 count = fed.get((n.name, port), 0)
@@ -170,7 +182,14 @@ class Diagram:
                 for n in self.nodes
             ],
             "wires": [
-                {"from": w.source, "ports": list(w.ports), "to": w.target, "port": w.port, "feedback": self.feedback(w)}
+                {
+                    "from": w.source,
+                    "ports": list(w.ports),
+                    "to": w.target,
+                    "port": w.port,
+                    "to_ports": list(w.targets),
+                    "feedback": self.feedback(w),
+                }
                 for w in self.wires
             ],
         }
@@ -249,11 +268,14 @@ LAB_DIAGRAM = Diagram(
         part("em8000", "plant", "app.sim.stewart", "source -> eta", "EM8000 platform"),
         part("em1500", "plant", "app.sim.stewart", "source -> eta", "EM1500 platform"),
         part("sensors", "sensor", "app.marine.sensors", "eta1, eta2 -> view, view2", "MRU / tracker or true"),
+        part("obstacles", "sensor", "app.scenes.lab", "view, view2 -> world", "the guards' world in {r}"),
         Node("antisway", "controller", "app.control.antisway", SWING_CONTROL, note="EKF + LQR anti-swing"),
         Node("comau_law", "controller", "app.control.lab", COMAU_LAW, note="REMOTE / MOTION_COMP"),
+        Node("comau_guard", "controller", "app.control.lab", COMAU_GUARD, note="hazard guard (H115, H117)"),
         Node("drives", "plant", "app.sim.motionlab", COMAU_DRIVES, note="Comau joint drives"),
         part("tool", "sensor", "app.models.comau", "q, eta1 -> tool, a_t_d", "tool point, eqs. 54-57"),
         Node("winch_law", "controller", "app.control.lab", WINCH_LAW, note="heave compensation"),
+        Node("winch_guard", "controller", "app.control.lab", WINCH_GUARD, note="pay-out guard (H117)"),
         Node("drum", "plant", "app.sim.motionlab", WINCH_DRUM),
         Node("load", "plant", "app.sim.motionlab", PENDULUM, note="load, eqs. 29-30"),
     ),
@@ -274,11 +296,13 @@ LAB_DIAGRAM = Diagram(
             "operator.v_cmd -> comau_law.v_cmd",
             "antisway.p_d,v_d -> comau_law.offset",
             "sensors.view -> comau_law.view",
-            "comau_law.brake -> drives.brake",
-            "comau_law.q_ref -> drives.q_ref",
-            "comau_law.q_dot_ref -> drives.q_dot_ref",
-            "comau_law.use_q_dot_ref -> drives.use_q_dot_ref",
-            "comau_law.speed_scale -> drives.speed_scale",
+            "sensors.view -> obstacles.view",
+            "sensors.view2 -> obstacles.view2",
+            "comau_law.brake,q_ref,q_dot_ref,use_q_dot_ref,speed_scale -> comau_guard.command",
+            "drives.q -> comau_guard.q",
+            "drives.q_dot -> comau_guard.q_dot",
+            "obstacles.world -> comau_guard.world",
+            "comau_guard.command -> drives.brake,q_ref,q_dot_ref,use_q_dot_ref,speed_scale",
             "drives.q -> tool.q",
             "em8000.eta -> tool.eta1",
             "operator.winch_mode -> winch_law.track",
@@ -287,8 +311,13 @@ LAB_DIAGRAM = Diagram(
             "load.alpha,beta -> winch_law.swing",
             "tool.tool -> winch_law.tool",
             "sensors.view2 -> winch_law.view2",
-            "winch_law.L_ref -> drum.L_ref",
-            "winch_law.L_dot_ref -> drum.L_dot_ref",
+            "winch_law.L_ref,L_dot_ref -> winch_guard.wire_ref",
+            "drum.L_w,L_w_dot -> winch_guard.wire",
+            "drives.q,q_dot -> winch_guard.arm",
+            "obstacles.world -> winch_guard.world",
+            "sensors.view -> winch_guard.frames",
+            "load.alpha,beta,alpha_dot,beta_dot -> winch_guard.swing",
+            "winch_guard.wire_ref -> drum.L_ref,L_dot_ref",
             "tool.a_t_d -> load.a_t_d",
             "drum.L_w -> load.L",
             "drum.L_w_dot -> load.L_dot",

@@ -206,7 +206,7 @@ def pendulum_block(x, u, p, dt):
     L, L̇), parameters (c, g); y = (α, β)."""
     a_t = u[0]
     a, b, ad, bd = pendulum_step(x, (a_t[0], a_t[1], a_t[2]), u[1], u[2], p[0], p[1], dt)
-    return (a, b, ad, bd), (a, b)
+    return (a, b, ad, bd), (a, b, ad, bd)
 
 
 # ----------------------------------------------------------------------------- the lab's drives
@@ -232,7 +232,7 @@ def drives_block(x, u, p, dt):
         motion_filter_update((q, qd, qdd), (q_ref, v_ref, use_v, scale), p, dt)
         for i in range(3):
             at_limit[i] = q[i] <= q_lo[i] + 1e-6 or q[i] >= q_hi[i] - 1e-6 or abs(qd[i]) >= q_speed[i] * (1 - 1e-3)
-    return (q, qd, qdd, at_limit), (q,)
+    return (q, qd, qdd, at_limit), (q, qd)
 
 
 @_jit

@@ -43,7 +43,7 @@ R_G_D = np.diag([1.0, -1.0, -1.0])  # {d} (z-down) in {g} (z-up): half a turn ab
 def _pendulum_reference(x, u, p, dt):
     """The NumPy reference of :data:`PENDULUM`: one RK4 step of :func:`app.models.pendulum.swing_rk4`."""
     a, b, ad, bd = (float(v) for v in swing_rk4(np.array(x, dtype=float), dt, u[0], u[1], u[2], p[0], p[1]))
-    return (a, b, ad, bd), (a, b)
+    return (a, b, ad, bd), (a, b, ad, bd)
 
 
 #: the suspended load as a block (app.models.block): the plant of eqs. (29)–(30), RK4 over a step
@@ -51,7 +51,7 @@ PENDULUM = Block(
     "load (spherical pendulum)",
     state=("alpha", "beta", "alpha_dot", "beta_dot"),
     inputs=("a_t_d", "L", "L_dot"),
-    outputs=("alpha", "beta"),
+    outputs=("alpha", "beta", "alpha_dot", "beta_dot"),
     params=("damping", "g"),
     reference=_pendulum_reference,
     kernel=sim_kernels.pendulum_block,
@@ -166,11 +166,11 @@ def _drives_reference(x, u, p, dt):
     if brake:  # to rest at the acceleration limits, then stay
         v = qd + np.clip(-qd, -accel * dt, accel * dt)
         q_new = np.clip(q + v * dt, lower, upper)
-        return (q_new, v, (v - qd) / dt, at_limit), (q_new,)
+        return (q_new, v, (v - qd) / dt, at_limit), (q_new, v)
     q, qd, qdd = motion_filter_reference((q, qd, qdd), (q_ref, v_ref, use_v, scale), p, dt)
     tol = 1e-6
     at_limit[:3] = (q <= lower + tol) | (q >= upper - tol) | (np.abs(qd) >= speed * (1 - 1e-3))
-    return (q, qd, qdd, at_limit), (q,)
+    return (q, qd, qdd, at_limit), (q, qd)
 
 
 #: the Comau's joint drives: the joint command of :data:`app.control.lab.COMAU_LAW` through the joint limits
@@ -178,7 +178,7 @@ COMAU_DRIVES = Block(
     "Comau drives",
     state=("q", "q_dot", "q_ddot", "at_limit"),
     inputs=("brake", "q_ref", "q_dot_ref", "use_q_dot_ref", "speed_scale"),
-    outputs=("q",),
+    outputs=("q", "q_dot"),
     params=("lower", "upper", "speed", "accel", "brake", "tau"),
     reference=_drives_reference,
     kernel=sim_kernels.drives_block,
