@@ -153,8 +153,9 @@ if ENABLED:
         """a·b + c rounded once (LLVM's ``llvm.fma.f64``, one instruction on every x86-64 with FMA), for compiled
         code.  Products summed as an ``fma`` chain in index order, the first term a plain product, round as this
         machine's OpenBLAS ``ddot`` and ``dgemm`` do for 3-vectors and 4×4 matrices (checked bit for bit on a
-        million random inputs, ``tests/test_kernels.py``): the loops below that replace those library calls give
-        the same numbers without a call or an allocation."""
+        hundred thousand random inputs; ``tests/test_guard_fast_paths.py`` holds the chains to exact arithmetic): the
+        loops that replace those library calls (:func:`_matmul4_into`, the segment distance of
+        :mod:`app.control.guard_kernels`) give the same numbers without a call or an allocation."""
         sig = _types.float64(_types.float64, _types.float64, _types.float64)
 
         def codegen(context, builder, signature, args):
@@ -172,13 +173,7 @@ else:  # pragma: no cover - the interpreted path (no numba, or BOSUN_JIT=0): rou
 
 
 @_jit
-def dot3(x, y):
-    """x·y of two 3-vectors, rounded as BLAS ``ddot`` on them (:func:`fma`), with no library call."""
-    return fma(x[2], y[2], fma(x[1], y[1], x[0] * y[0]))
-
-
-@_jit
-def matmul4_into(A, B, C):
+def _matmul4_into(A, B, C):
     """C = A @ B for 4×4 matrices, rounded as BLAS ``dgemm`` on them (an :func:`fma` chain over k in order), with
     no library call or allocation (C must not be A or B)."""
     for i in range(4):
@@ -226,8 +221,8 @@ def frames(robot, q):
         A[0, 0], A[0, 1], A[0, 2], A[0, 3] = ct, -st * ca[i], st * sa[i], a[i] * ct
         A[1, 0], A[1, 1], A[1, 2], A[1, 3] = st, ct * ca[i], -ct * sa[i], a[i] * st
         A[2, 0], A[2, 1], A[2, 2], A[2, 3] = 0.0, sa[i], ca[i], d[i]
-        matmul4_into(F[i], A, F[i + 1])  # the numbers of F[i] @ A, without its library call and allocation
-    matmul4_into(F[L], T_tool, F[L + 1])
+        _matmul4_into(F[i], A, F[i + 1])  # the numbers of F[i] @ A, without its library call and allocation
+    _matmul4_into(F[L], T_tool, F[L + 1])
     return F
 
 
