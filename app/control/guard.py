@@ -269,8 +269,9 @@ class HazardGuard:
         r = self.robot
         acts = (np.abs(r._M_theta) + np.abs(r._M_d)) > 0.0  # (L, n): link l moves with joint j
         L, n = acts.shape
-        first = np.array([int(np.argmax(acts[:, j])) if acts[:, j].any() else L + 1 for j in range(n)])
-        last = np.array([int(L - 1 - np.argmax(acts[::-1, j])) if acts[:, j].any() else -1 for j in range(n)])
+        moved = [np.flatnonzero(acts[:, j]) for j in range(n)]  # the links each joint moves, in chain order
+        first = np.array([ls[0] if ls.size else L + 1 for ls in moved])
+        last = np.array([ls[-1] if ls.size else -1 for ls in moved])
         link = self.caps[:, 0] if len(self.caps) else np.zeros(0, dtype=np.int64)
         rows = []
         for a, b in self.pairs:

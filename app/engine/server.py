@@ -562,7 +562,7 @@ class EngineServer:
         and the loop runs as before.  Returns what :meth:`_leave_realtime` restores (None: nothing changed)."""
         if not self.realtime:
             return None
-        if len(os.sched_getaffinity(0)) < 2 if hasattr(os, "sched_getaffinity") else False:
+        if hasattr(os, "sched_getaffinity") and len(os.sched_getaffinity(0)) < 2:
             log.warning("real-time priority %d not taken: this process may use one CPU only, which the GUI "
                         "needs too (H119); the loop runs on the normal scheduler", self.realtime)  # fmt: skip
             return None
@@ -571,7 +571,7 @@ class EngineServer:
             os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self.realtime))
         except (AttributeError, OSError) as exc:
             log.warning("real-time priority %d not granted (%s): the loop runs on the normal scheduler",
-                        self.realtime, exc.strerror if isinstance(exc, OSError) and exc.strerror else exc)  # fmt: skip
+                        self.realtime, getattr(exc, "strerror", None) or exc)  # fmt: skip
             return None
         self.realtime_active = True
         log.info("control loop on SCHED_FIFO, priority %d", self.realtime)

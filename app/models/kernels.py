@@ -175,7 +175,8 @@ else:  # pragma: no cover - the interpreted path (no numba, or BOSUN_JIT=0): rou
 @_jit
 def _matmul4_into(A, B, C):
     """C = A @ B for 4×4 matrices, rounded as BLAS ``dgemm`` on them (an :func:`fma` chain over k in order), with
-    no library call or allocation (C must not be A or B)."""
+    no library call or allocation (C must not be A or B): :func:`frames`, whose numbers were ``@``'s.  The plant
+    kernels keep :func:`matmul_into` (plain sums), whose rounding their recorded simulations were made with."""
     for i in range(4):
         for j in range(4):
             c = A[i, 0] * B[0, j]
