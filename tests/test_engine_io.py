@@ -140,8 +140,42 @@ def test_bench_loop_runs_the_crane_head_engine_and_times_its_predictors():
     for part in ("delay", "lift_window"):  # each predictor's own share, and together they are the whole
         assert pm[part]["ticks"] == pm["ticks"] and 0.0 < pm[part]["p50"] <= pm[part]["max"] <= pm["max"] + 1e-9
     assert len(r["estop_ticks"]) == r["estops_sent"] == 5 and r["speed_after_estop"] is None
+    cpu = pm["cpu"]  # their CPU time: never more than the clock's (one thread_time call's own cost aside)
+    assert cpu["ticks"] == pm["ticks"] and 0.0 < cpu["p50"] <= pm["p50"] + 0.05 and cpu["max"] <= pm["max"] + 0.05
     with pytest.raises(ValueError, match="plant must be one of teleop, tac"):
         bench_loop(plant="lab")
+
+
+def test_the_loop_benchmark_times_the_hazard_checks_by_the_clock_and_by_the_threads_cpu():
+    """``bosun bench loop``'s hazard-check cost (issue 32, item 5): each tick's time in ``Session._guarded`` by the
+    clock and by the loop thread's CPU time, one entry a tick; a sleep inside the checks (the machine giving the
+    core away) lengthens the clock's and not the CPU's."""
+    from app.bench.loop import _timed_guard
+
+    ses = Session(robot_name="franka_panda", solver_name="jacobian", mode="velocity")
+    guarded = ses._guarded
+    calls, slept = [], []
+
+    def held_up(*a, **k):  # the 11th to 13th calls sleep (not the first, which loads the compiled kernels)
+        calls.append(len(calls))
+        if 10 <= calls[-1] < 13:
+            slept.append(len(cost["guard"]) - 1)
+            time.sleep(0.02)
+        return guarded(*a, **k)
+
+    ses._guarded = held_up
+    cost = {"guard": [], "guard_cpu": [], "zone": []}
+    _timed_guard(ses, cost)
+    t, dt = 0.0, 0.002
+    for k in range(60):
+        t += dt
+        ses.feed(InputSample((0.4, 0.0, 0.0) if k > 5 else (0.0, 0.0, 0.0), (k > 2,), "bench"), t)
+        ses.tick(t, dt)
+    wall, cpu = np.array(cost["guard"]), np.array(cost["guard_cpu"])
+    assert wall.size == cpu.size == len(cost["zone"]) == 60
+    assert len(calls) > 40 and len(slept) == 3
+    assert np.all(wall[slept] >= 0.02) and np.all(cpu[slept] < 0.01)  # held up by the clock, not in CPU
+    assert np.all(cpu <= wall + 5e-5) and np.count_nonzero(cpu) == len(calls)
 
 
 def _policy_spy(srv) -> list[int]:

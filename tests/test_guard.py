@@ -373,3 +373,11 @@ def test_bench_guard_prints_the_opening_ticks_kept_under_90_percent(capsys):
     assert main(["bench", "guard", "--streams", "1", "--robots", "franka_panda"]) == 0
     out = capsys.readouterr().out
     assert "under 90 %" in out and "closing as asked)" in out and "franka_panda" in out, out
+
+
+def test_bench_guard_in_the_lab_prints_the_slow_opening_steps_whose_drives_would_close(capsys):
+    from app.cli import main
+
+    assert main(["bench", "guard", "--scene", "lab", "--streams", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "under 90 %" in out and "0 (0 closing as asked)" in out, out  # stream 0 keeps every opening step

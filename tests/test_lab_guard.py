@@ -314,6 +314,18 @@ def test_random_streams_never_penetrate_and_never_slow_an_opening_command():
         assert r.min_opening_speed >= 0.9, r
 
 
+def test_the_bench_tells_a_slow_opening_step_whose_drives_would_close_from_one_they_would_not():
+    """``bosun bench guard --scene lab``'s split of the opening steps kept under 90 %: stream 40's (at the pedestal's
+    and the load's stop; the drives, each ramping at its own limit or still carrying the arm's approach, leave the
+    command's direction) would each have closed a clearance in the zone with the command as asked; stream 458's
+    would not (the load's swing envelope 47 mm into EM8000's deck by its own swing, the command opening it, but
+    joint 3, which carries the opening, braking into its lower limit 3 mrad away: the outcome check holds the two
+    joints that close the gap once it stops)."""
+    closing, opening = run_stream(40), run_stream(458)
+    assert closing.opening_slow > 0 and closing.opening_slow_closing == closing.opening_slow
+    assert opening.opening_slow > 0 and opening.opening_slow_closing == 0
+
+
 def test_a_swing_past_its_model_stops_the_lab_and_says_so():
     """H118: the load swung level with the tool point on a short wire (the pendulum's angles are singular there:
     bench stream 348 went to 10⁵³ rad/s) stops the lab with the ``load_model_lost`` alarm; every published number

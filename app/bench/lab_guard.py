@@ -31,7 +31,9 @@ Measured at the actual joints (the drives', after each step) against the true pl
   clearances' own values over a 10⁻⁷ rad step along what the drives can do of it (a joint at its limit stays),
   not the guard's gradients; and of them the least ratio of
   one drive step with the guarded command to one with the command as the law gave it (1: never slowed; the
-  acceptance asks ≥ 0.9);
+  acceptance asks ≥ 0.9); of the steps kept under 90 %, those whose drive step with the command as the law gave
+  it would itself close a clearance in the zone (``opening_slow_closing``: the command opens, but the drives,
+  still carrying the arm's last motion, would move it nearer the hazard this step);
 * ``slowed`` ticks and the least clearance reached.
 
 The platforms stand still because the guard never moves the arm by itself (nothing moves without the operator's
@@ -71,6 +73,7 @@ class LabGuardRun:
     load_near: int = 0  # of those, ticks the wire or the load (its swing's envelope) was the nearest
     load_least: float = math.inf  # [m]: the least clearance of the wire and the load (where it hangs)
     load_model_lost: bool = False  # the swing left its model and the lab stopped itself (H118)
+    opening_slow_closing: int = 0  # of the opening steps kept under 90 %, those whose drive step as asked closed one
 
 
 def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray | None, float]]:
@@ -150,7 +153,7 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     cm = lab._comau
     guard_p = (cm, lab._guard_p[0], f.limits(), lab._guard_p[5])
     limits = f.limits()
-    ticks = opening = slowed = opening_slow = load_near = 0
+    ticks = opening = slowed = opening_slow = opening_slow_closing = load_near = 0
     load_least = math.inf
     least, excess, min_open = math.inf, 0.0, 1.0
     near = {"EM8000 deck": 0, "pedestal": 0, "EM1500 deck": 0}
@@ -184,14 +187,17 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
                     ahead = clear(world, q + DIRECTION_STEP * v0 / norm)
                     if np.all(ahead[inzone] >= vals[inzone] - 1e-15):
                         opening += 1
-                        moved = []
+                        moved, ends = [], []
                         for cmd in (asked, got):
                             x = (q.copy(), qd.copy(), np.zeros(3))
                             motion_filter_update(x, cmd[1:], limits, DT)
                             moved.append(float(np.linalg.norm(x[0] - q)))
+                            ends.append(x[0])
                         kept = moved[1] / moved[0] if moved[0] > 0.0 else 1.0
                         min_open = min(min_open, kept)
-                        opening_slow += kept < 0.9
+                        if kept < 0.9:
+                            opening_slow += 1
+                            opening_slow_closing += bool(np.any(clear(world, ends[0])[inzone] < vals[inzone]))
             lab.tool_velocity_cmd = v_cmd
             lab.step(DT)
             slowed += bool(lab.guard_report[4])
@@ -205,6 +211,7 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
         seed=seed, ticks=ticks, penetration=max(0.0, -least), least_clearance=least, limit_excess=max(excess, 0.0),
         opening=opening, min_opening_speed=min_open, opening_slow=opening_slow, slowed=slowed, near=near,
         load_near=load_near, load_least=load_least, load_model_lost=bool(lab.load_model_lost),
+        opening_slow_closing=opening_slow_closing,
     )  # fmt: skip
 
 
@@ -218,6 +225,7 @@ def summarise(runs: list[LabGuardRun]) -> dict:
 
     near = {k: sum(r.near[k] for r in runs) for k in runs[0].near} if runs else {}
     return {"scene": "motionlab (Comau REMOTE, data-sheet limits)", **totals(runs), "nearest_in_zone_ticks": near,
+            "opening_slow_closing_ticks": sum(r.opening_slow_closing for r in runs),
             "load_nearest_ticks": sum(r.load_near for r in runs),
             "load_least_clearance_m": min((r.load_least for r in runs), default=math.inf),
             "streams_load_model_lost": sum(r.load_model_lost for r in runs)}  # fmt: skip

@@ -15,6 +15,10 @@ past, left out) — issue 31's cost criterion, ≤ 0.1 ms p99, measured in the e
 
 The teleop engine's direction-aware scaling and safe-braking rule (issue 32, item 5) are timed the same way:
 ``guard_ms`` (p50, p99, max, and ``in_zone``, the share of ticks with a hazard in its zone).
+
+Both are timed by the clock and, as ``cpu`` (the same percentiles), by the loop thread's CPU time: a tick the
+machine took the core from (another process, or on a VM its host: this VM's kernel accounts the host's steal) is
+slow by the clock but costs no more CPU, so the two tell the checks' own cost from the machine's.
 """
 
 from __future__ import annotations
@@ -36,55 +40,55 @@ PLANTS = ("teleop", "tac")
 TAC_DELAY = 0.2  # s: the crane-head engine's measurement delay, hidden by the predictor (issue 31's case)
 
 
+def _timed(fn, wall: list[float], cpu: list[float]):
+    """``fn``, its time in each call added to the last entry of ``wall`` (the clock's) and of ``cpu`` (the thread's
+    CPU time: what the call itself cost, without the time the machine gave to other work, the host's steal
+    included where the kernel accounts it, as this VM's does)."""
+
+    def run(*a, **k):
+        c_in = time.thread_time()
+        t_in = time.perf_counter()
+        try:
+            return fn(*a, **k)
+        finally:
+            wall[-1] += time.perf_counter() - t_in
+            cpu[-1] += time.thread_time() - c_in
+
+    return run
+
+
 def _timed_predictors(session, cost: dict[str, list[float]]) -> None:
     """Wrap the crane-head session's two predictors (the delay's and the lift window's) so that each one's time is
-    added to its list's last entry (``cost["delay"]``, ``cost["lift"]``), and its tick so that each tick starts a
-    new entry in both."""
+    added to its list's last entry (``cost["delay"]``, ``cost["lift"]``; their CPU time to ``cost["delay_cpu"]``,
+    ``cost["lift_cpu"]``), and its tick so that each tick starts a new entry in every list."""
     sim = session.sim
     foresee, feed, tick = sim._foresee, session._feed_lift, session.tick
-
-    def timed(fn, into: list[float]):
-        def run(*a, **k):
-            t_in = time.perf_counter()
-            try:
-                return fn(*a, **k)
-            finally:
-                into[-1] += time.perf_counter() - t_in
-
-        return run
 
     def ticked(*a, **k):
         for c in cost.values():
             c.append(0.0)
         return tick(*a, **k)
 
-    sim._foresee, session._feed_lift, session.tick = timed(foresee, cost["delay"]), timed(feed, cost["lift"]), ticked
+    sim._foresee = _timed(foresee, cost["delay"], cost["delay_cpu"])
+    session._feed_lift = _timed(feed, cost["lift"], cost["lift_cpu"])
+    session.tick = ticked
 
 
 def _timed_guard(session, cost: dict[str, list[float]]) -> None:
     """Wrap the teleop session's direction-aware scaling and safe-braking rule (issue 32, item 5:
-    ``Session._guarded``) so that its time in each tick goes to ``cost["guard"]``, and whether a hazard was in its
-    zone that tick to ``cost["zone"]``."""
+    ``Session._guarded``) so that its time in each tick goes to ``cost["guard"]`` (its CPU time to
+    ``cost["guard_cpu"]``), and whether a hazard was in its zone that tick to ``cost["zone"]``."""
     guarded, tick = session._guarded, session.tick
-
-    def timed(fn):
-        def run(*a, **k):
-            t_in = time.perf_counter()
-            try:
-                return fn(*a, **k)
-            finally:
-                cost["guard"][-1] += time.perf_counter() - t_in
-
-        return run
 
     def ticked(*a, **k):
         cost["guard"].append(0.0)
+        cost["guard_cpu"].append(0.0)
         try:
             return tick(*a, **k)
         finally:
             cost["zone"].append(1.0 if session.hazard.kind else 0.0)
 
-    session._guarded, session.tick = timed(guarded), ticked
+    session._guarded, session.tick = _timed(guarded, cost["guard"], cost["guard_cpu"]), ticked
 
 
 def _percentiles(ms: np.ndarray) -> dict:
@@ -108,7 +112,8 @@ def _engine_process(
 
     warm_up()
     logging.getLogger("bosun").setLevel(logging.ERROR)  # the flood's refusals are counted below, not printed
-    cost: dict[str, list[float]] = {"delay": [], "lift": [], "guard": [], "zone": []}
+    cost: dict[str, list[float]] = {k: [] for k in ("delay", "lift", "delay_cpu", "lift_cpu", "guard", "guard_cpu")}
+    cost["zone"] = []
     if plant == "tac":
         from app.engine.tac_session import TacSession
 
@@ -142,9 +147,12 @@ def _engine_process(
         d, lift = (np.array(cost[k][1:]) * 1e3 for k in ("delay", "lift"))  # the first tick primes them on the past
         summary["predictor_ms"] = _percentiles(d + lift)
         summary["predictor_ms"]["delay"], summary["predictor_ms"]["lift_window"] = _percentiles(d), _percentiles(lift)
+        cpu = (np.array(cost["delay_cpu"][1:]) + np.array(cost["lift_cpu"][1:])) * 1e3
+        summary["predictor_ms"]["cpu"] = _percentiles(cpu)
     if plant == "teleop" and len(cost["guard"]) > 1:
         summary["guard_ms"] = _percentiles(np.array(cost["guard"][1:]) * 1e3)
         summary["guard_ms"]["in_zone"] = float(np.mean(cost["zone"][1:]))  # the share of ticks with a hazard near
+        summary["guard_ms"]["cpu"] = _percentiles(np.array(cost["guard_cpu"][1:]) * 1e3)
     results.put(summary)
 
 

@@ -153,8 +153,8 @@ def _lab_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], li
     cells = [str(row["streams"]), str(row["ticks"]), f"{row['max_penetration_m'] * 1e3:.2f}",
              f"{row['least_clearance_m'] * 1e3:.1f}", f"{row.get('load_least_clearance_m', math.inf) * 1e3:.1f}",
              f"{row['max_limit_excess']:.2g}", str(row["opening_ticks"]), f"{row['min_opening_speed']:.3f}",
-             str(row["opening_slow_ticks"]), str(row["slowed_ticks"]),
-             " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values()),
+             f"{row['opening_slow_ticks']} ({row.get('opening_slow_closing_ticks', 0)} closing as asked)",
+             str(row["slowed_ticks"]), " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values()),
              str(row.get("load_nearest_ticks", 0)), str(row.get("streams_load_model_lost", 0))]  # fmt: skip
     return head, columns, cells
 
@@ -423,6 +423,8 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
             f"  predictors (the delay's and the lift window's) per tick: p50 {pm['p50']:.3f} ms   "
             f"p99 {pm['p99']:.3f} ms   max {pm['max']:.3f} ms ({pm['ticks']} ticks; the max: a refit every 10 s)"
         )
+        if "cpu" in pm:
+            print(f"    {_cpu_line(pm['cpu'])}")
         for key, name in (("delay", "the delay's"), ("lift_window", "the lift window's")):
             if key in pm:
                 q = pm[key]
@@ -434,7 +436,17 @@ def cmd_bench_loop(args: argparse.Namespace) -> int:
             f"p99 {gm['p99']:.3f} ms   max {gm['max']:.3f} ms; a hazard in its zone {100 * gm['in_zone']:.0f} % of "
             "the ticks"
         )
+        if "cpu" in gm:
+            print(f"    {_cpu_line(gm['cpu'])}")
     return 0
+
+
+def _cpu_line(c: dict) -> str:
+    """The CPU-time line under a cost timed by the clock (app/bench/loop.py's ``cpu``)."""
+    return (
+        f"the loop thread's CPU time in them: p50 {c['p50']:.3f} ms   p99 {c['p99']:.3f} ms   max {c['max']:.3f} ms "
+        "(without the time the machine gave to other work)"
+    )
 
 
 def register(sub) -> None:
