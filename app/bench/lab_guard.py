@@ -33,7 +33,8 @@ Measured at the actual joints (the drives', after each step) against the true pl
   one drive step with the guarded command to one with the command as the law gave it (1: never slowed; the
   acceptance asks ≥ 0.9); of the steps kept under 90 %, those whose drive step with the command as the law gave
   it would itself close a clearance in the zone (``opening_slow_closing``: the command opens, but the drives,
-  still carrying the arm's last motion, would move it nearer the hazard this step);
+  still carrying the arm's last motion or each ramping at its own limit, would move it nearer the hazard this
+  step);
 * ``slowed`` ticks and the least clearance reached.
 
 The platforms stand still because the guard never moves the arm by itself (nothing moves without the operator's
