@@ -144,7 +144,8 @@ def _lab_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], li
         "limits, the platforms held at random poses, 5 ms steps",
         "penetration: the deepest overlap of the arm's capsules, the winch's wire or the hanging load with EM8000,",
         "its pedestal or EM1500's deck, at the actual joints; opening: steps whose command opens every clearance in",
-        "the zone, and the least drive step kept on them (the acceptance: ≥ 0.9)",
+        "the zone, and the least drive step kept on them (the acceptance: ≥ 0.9); closing as asked: of those under",
+        "90 %, the steps whose drive step with the command as the law gave it would itself close a clearance there",
     ]
     columns = ["streams", "steps", "max penetration [mm]", "least clearance [mm]", "wire and load: least [mm]",
                "past a limit", "opening steps", "least step kept", "under 90 %", "slowed steps",
@@ -218,7 +219,9 @@ def cmd_bench_guard(args: argparse.Namespace) -> int:
     )
     print("penetration: the deepest capsule overlap of the actual joints; opening: ticks whose command's direction")
     print("opens every hazard in its zone, and the least tool speed kept on them (the acceptance: ≥ 0.9; a tick the")
-    print("safe-braking rule braked counts 0); braked: ticks that rule braked the joints (opening ones among them)")
+    print("safe-braking rule braked counts 0); closing as asked: of those under 90 %, the ticks whose servo step with")
+    print("the command as asked would itself close a clearance in its zone; braked: ticks that rule braked the joints")
+    print("(opening ones among them)")
     print(
         _table(
             [
