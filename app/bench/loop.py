@@ -112,8 +112,9 @@ def _engine_process(
 
     warm_up()
     logging.getLogger("bosun").setLevel(logging.ERROR)  # the flood's refusals are counted below, not printed
-    cost: dict[str, list[float]] = {k: [] for k in ("delay", "lift", "delay_cpu", "lift_cpu", "guard", "guard_cpu")}
-    cost["zone"] = []
+    cost: dict[str, list[float]] = {
+        k: [] for k in ("delay", "lift", "delay_cpu", "lift_cpu", "guard", "guard_cpu", "zone")
+    }
     if plant == "tac":
         from app.engine.tac_session import TacSession
 
