@@ -376,3 +376,25 @@ def test_an_out_of_reach_resting_point_stops_the_search():
     ses.solver.solve_position = lambda *a, **k: calls.append(1) or solve(*a, **k)
     drive(ses, (0.0, 0.0, 1.0), 1.0, t)
     assert len(calls) <= REFINE_TRIES and ses.alarms.active("target_unreachable")
+
+
+def test_a_cleared_condition_keeps_the_words_it_was_raised_with():
+    """Seen driving the Panda under Xvfb: while the joint-limit alarm waited out its off-delay, the session's text
+    for a condition no longer true (no joint to name) replaced its words; the table and the log then said
+    ": the commanded direction is blocked".  An analog alarm's live figure still follows its value."""
+    notes = []
+    al = AlarmList("Teleop", note=lambda level, text: notes.append(text))
+    t = 0.0
+    words = "q5 near its lower limit (0.4° to go): the commanded direction is blocked"
+    for _ in range(10):
+        t += 0.05
+        al.at(t)
+        al.set("joint_limit", True, text=words)
+    assert al.active("joint_limit") and al.items["joint_limit"].text == words
+    for _ in range(40):  # cleared: through the 1 s off-delay and past it, with the session's empty subject
+        t += 0.05
+        al.at(t)
+        al.set("joint_limit", False, text=": the commanded direction is blocked")
+        assert al.items["joint_limit"].text == words
+    assert not al.active("joint_limit")
+    assert notes[-1] == f"alarm cleared, Teleop: {words}"

@@ -381,3 +381,21 @@ def test_bench_guard_in_the_lab_prints_the_slow_opening_steps_whose_drives_would
     assert main(["bench", "guard", "--scene", "lab", "--streams", "1"]) == 0
     out = capsys.readouterr().out
     assert "under 90 %" in out and "0 (0 closing as asked)" in out, out  # stream 0 keeps every opening step
+
+
+def test_a_joint_limit_is_named_with_its_distance_in_the_joints_unit():
+    """Seen driving the Panda under Xvfb: the hazard line read "q5 lower limit: 0.015 to go" with no unit.
+    A revolute joint's distance reads in degrees (as the joint plots), a prismatic one's in millimetres; the
+    protocol's value stays SI."""
+    crane = load_robot("knuckle_boom_crane")
+    guard = HazardGuard.for_robot(crane)
+    n = crane.n_joints
+    jib = crane.joint_kinds.index("prismatic")
+    rev = crane.joint_kinds.index("revolute")
+    report = guard.report(np.array([gk.LIMIT, n + jib, 0.015, 0.5, 1.0, 0.5, 0.0, 0.0]))
+    assert report.value == 0.015 and report.unit == "m"
+    assert report.text() == f"{crane.joint_names[jib]} upper limit: 15 mm to go"
+    report = guard.report(np.array([gk.LIMIT, rev, math.radians(0.9), 0.5, 1.0, 0.5, 0.0, 0.0]))
+    assert report.unit == "rad" and report.text() == f"{crane.joint_names[rev]} lower limit: 0.9° to go"
+    collision = guard.report(np.array([gk.PLANE, 0, 0.043, 0.5, 1.0, 0.5, 0.0, 0.0]))
+    assert collision.unit == "" and collision.text().endswith("clearance 43 mm")

@@ -82,6 +82,7 @@ class GuardReport:
     share : the share of its zone left, (value − stop)/(zone − stop): 1 at the zone's edge, 0 at the stop
     slowed : the step was scaled
     scale : |dq_out|/|dq|
+    unit : a joint limit's joint: "rad" (revolute: read in degrees) or "m" (prismatic: read in mm)
     """
 
     kind: str = ""
@@ -90,6 +91,7 @@ class GuardReport:
     share: float = math.nan
     slowed: bool = False
     scale: float = 1.0
+    unit: str = ""
 
     def text(self) -> str:
         """One line: the hazard and its distance."""
@@ -98,8 +100,17 @@ class GuardReport:
         if self.kind == "singularity":
             return f"singularity: σ ratio {self.value:.3f}"
         if self.kind == "joint limit":
-            return f"{self.name}: {self.value:.3f} to go"
+            return f"{self.name}: {self.distance()} to go"
         return f"{self.name}: clearance {self.value * 1e3:.0f} mm"
+
+    def distance(self) -> str:
+        """A joint limit's distance as the operator reads it, with its unit: degrees for a revolute joint (as the
+        joint plots), millimetres for a prismatic one."""
+        if self.unit == "rad":
+            return f"{math.degrees(self.value):.1f}°"
+        if self.unit == "m":
+            return f"{self.value * 1e3:.0f} mm"
+        return f"{self.value:.3g}"
 
 
 @dataclass
@@ -338,7 +349,12 @@ class HazardGuard:
         name = self._names.get(key)
         if name is None:  # each hazard's name is formatted once
             name = self._names[key] = self.hazard_name(*key)
-        return GuardReport(kind=KINDS[key[0]], name=name, value=value, share=share, slowed=bool(slowed), scale=scale)
+        unit = ""
+        if key[0] == gk.LIMIT:
+            unit = "m" if self.robot.joint_kinds[key[1] % self.robot.n_joints] == "prismatic" else "rad"
+        return GuardReport(
+            kind=KINDS[key[0]], name=name, value=value, share=share, slowed=bool(slowed), scale=scale, unit=unit
+        )
 
     def hazard_name(self, kind: int, idx: int) -> str:
         r = self.robot

@@ -101,8 +101,11 @@ class AlarmList:
         if severity not in SEVERITIES:
             raise ValueError(f"severity must be one of {SEVERITIES}, got {severity!r}")
         if not self._delayed(key, active, is_on, d):
-            if is_on and text and text != a.text:
-                a.text = text  # still active during its off-delay: the live figure goes on
+            if is_on and text and text != a.text and (active or (d is not None and d.analog)):
+                # still active during its off-delay: an analog alarm's live figure goes on; a condition that is
+                # no longer true keeps the words it was raised with (its present text describes nothing:
+                # "…: the commanded direction is blocked" with no joint named)
+                a.text = text
             return
         if active:
             self._raise(key, d, severity, text, source)

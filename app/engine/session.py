@@ -538,7 +538,7 @@ class Session(Scene):
                 blocked = f"{self.robot.joint_names[k]} at its {'lower' if at_lo[k] else 'upper'} limit"
             elif progress < 0.5 and hz.slowed and hz.kind == "joint limit":  # the guard slows it onto the limit
                 joint, side, _ = hz.name.rsplit(" ", 2)
-                blocked = f"{joint} near its {side} limit ({hz.value:.3g} to go)"
+                blocked = f"{joint} near its {side} limit ({hz.distance()} to go)"
             limited = not blocked and progress < 0.9 and not self.hazard.slowed
         al.set("joint_limit", bool(blocked), text=f"{blocked}: the commanded direction is blocked")
         hz = self.hazard
