@@ -426,6 +426,34 @@ def test_speed_limited_is_a_log_line_and_singularity_an_alarm_only_while_command
     assert "near_singularity" in active_keys(ses)
 
 
+def test_a_flickering_speed_limit_is_one_log_line_not_one_per_flicker():
+    """Seen driving the Panda under Xvfb: "speed limited" three times in one second as the state flickered.  A stick
+    that goes past what the joints allow and back (to and fro along x), every 0.1 s for 8 s, is one line; the next
+    comes 10 s on."""
+    ses = Session(robot_name="comau_smart5_3dof")
+    ses.set_scaling(k_v=[50.0, 50.0, 50.0])  # full stick: far beyond what the joints allow; 1 % of it: not
+    dt, t = 0.002, 0.0
+    for en in (False, True):
+        t += dt
+        ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "stick"), t)
+        ses.tick(t, dt)
+
+    def lines():
+        return sum("speed limited" in e.text for e in ses.log)
+
+    def flicker(seconds):
+        nonlocal t
+        for k in range(round(seconds / dt)):
+            t += dt
+            ses.feed(InputSample(((1.0, 0.002, -1.0, 0.002)[(k // 50) % 4], 0.0, 0.0), (True,), "stick"), t)
+            ses.tick(t, dt)
+
+    flicker(8.0)
+    assert lines() == 1
+    flicker(4.0)  # 12 s on
+    assert lines() == 2
+
+
 # ---------------------------------------------------------------------------- second review's findings
 def teleop_arm(ses, t, dt=0.002):
     for en in (False, True):

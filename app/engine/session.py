@@ -64,6 +64,9 @@ from app.teleop.profiles import DeviceProfile
 
 DEFAULT_ROBOT = "comau_smart5_3dof"
 DEFAULT_SOLVER = "jacobian"
+#: the "speed limited" log line at most once in this many seconds of engine time: the state flickers as the arm
+#: turns (three lines in one second were seen driving the Panda up from the floor)
+SPEED_NOTE_INTERVAL = 10.0
 REFINE_STEP = 0.02  # of each joint's range: the largest step a resting stick's refined answer may take
 REFINE_TRIES = 50  # solves in a row that find nothing nearer for a resting stick: its point is out of reach
 
@@ -122,6 +125,7 @@ class Session(Scene):
         self._refine_misses = 0  # position mode: solves in a row that found the resting stick's point no nearer
         self._hold_deadline: float | None = None  # engine time by which a holding arm must be at rest
         self._speed_limited = False
+        self._speed_noted = -math.inf  # engine time of the last "speed limited" line
         self.solver_cost = math.nan
         self.solver_time = 0.0
         self.solver_ok = True
@@ -546,7 +550,8 @@ class Session(Scene):
         al.set("hazard_slowed", self.enabled and hz.slowed and hz.kind == "collision", text=f"Slowed near {hz.text()}")
         if limited != self._speed_limited:  # a status, not an alarm: no operator action (rationalisation)
             self._speed_limited = limited
-            if limited:
+            if limited and now - self._speed_noted >= SPEED_NOTE_INTERVAL:  # a line, not one per flicker
+                self._speed_noted = now
                 self.note("info", "speed limited: the joints' speed limits slow the tool below the stick's speed")
         reach = self.mode == "position" and self.enabled and self.command_point is not None
         miss = float(np.linalg.norm(self.robot.position(self.q_goal) - self.command_point)) if reach else 0.0
