@@ -4,11 +4,12 @@ Session._guarded and Session._supervise).  `bosun bench guard` runs the acceptan
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 
-from app.bench.guard import DIRECTION_STEP, run_stream
+from app.bench.guard import DIRECTION_STEP, run_stream, summarise
 from app.control import guard_kernels as gk
 from app.control.guard import GuardSettings, HazardGuard
 from app.engine.session import Session
@@ -60,7 +61,25 @@ def _floor_pose(guard):
     raise AssertionError("no pose near the floor found")
 
 
+def _tool_metric(robot, q):
+    """W = JᵀJ + λI, λ = 10⁻³ tr(JᵀJ): the metric the guard corrects a step in (J: the tool point's, 3 × n)."""
+    J = robot.jacobian(q)[:3]
+    W = J.T @ J
+    return W + (1e-3 * np.trace(W) + 1e-12) * np.eye(len(q))
+
+
+def _one_hazard_step(robot, q, dq, g, rate):
+    """What the guard makes of ``dq`` for one hazard of gradient g whose rate must be ``rate``: the least change in
+    the tool's metric, dq + c W⁻¹g, then the whole step scaled if a joint would need longer at its speed limit."""
+    h = np.linalg.solve(_tool_metric(robot, q), g)
+    out = dq + (rate - g @ dq) / (g @ h) * h
+    t0, t1 = np.max(np.abs(dq) / robot.speed), np.max(np.abs(out) / robot.speed)
+    return out * (t0 / t1 if t1 > t0 else 1.0), t1 > t0
+
+
 def test_a_step_that_opens_every_hazard_is_not_touched_and_one_that_approaches_loses_only_that_component():
+    """Approaching the one hazard in its zone, the step loses only what the damper's bound asks of its rate, taken
+    where it changes the tool's motion least: the removed part is W⁻¹g (W the tool's metric), not g itself."""
     robot = load_robot("comau_smart5_6dof")
     guard = HazardGuard.for_robot(robot)
     q = _floor_pose(guard)
@@ -72,7 +91,7 @@ def test_a_step_that_opens_every_hazard_is_not_touched_and_one_that_approaches_l
     active = np.flatnonzero(v0 < zone)
     assert active.size == 1
     rng = np.random.default_rng(0)
-    opened = approached = 0
+    opened = approached = retimed = 0
     for _ in range(400):
         dq = rng.normal(size=n) * 2e-3
         rates = grads[active] @ dq
@@ -85,24 +104,28 @@ def test_a_step_that_opens_every_hazard_is_not_touched_and_one_that_approaches_l
             opened += 1
         elif active.size == 1 and rates[0] < -1e-9:  # approaches the one hazard: only its component goes
             g = grads[active[0]]
-            removed = dq - out
-            u = g / np.linalg.norm(g)
-            assert np.linalg.norm(removed - (removed @ u) * u) <= 1e-6 * np.linalg.norm(removed)
             assert g @ out >= g @ dq - 1e-12  # slower approach, never a faster one
-            st = guard.settings  # … and exactly the damper's: −min(s |r⁰|, ½ (d − stop)), s the zone's share left
+            st = guard.settings  # … to exactly the damper's rate: −min(s |r⁰|, ½ (d − stop)), s the zone's share left
             d = v0[active[0]]
             share = (d - st.clear_stop) / (st.clear_zone - st.clear_stop)
-            assert g @ out == pytest.approx(-min(share * -rates[0], 0.5 * (d - st.clear_stop)), rel=1e-4)
+            bound = -min(share * -rates[0], 0.5 * (d - st.clear_stop))
+            want, timed = _one_hazard_step(robot, q, dq, g, bound)
+            np.testing.assert_allclose(out, want, rtol=1e-4, atol=1e-4 * np.linalg.norm(dq))
+            if not timed:
+                assert g @ out == pytest.approx(bound, rel=1e-4)
+            retimed += timed
             assert rep.slowed and rep.kind == "collision" and "floor" in rep.name
             approached += 1
-    assert opened > 20 and approached > 20
+    assert opened > 20 and approached > 20 and retimed < approached
+    print(f"{opened} opening, {approached} approaching ({retimed} retimed)")
 
 
 def test_inside_the_stop_a_command_carries_the_clearance_back_out_and_a_centred_stick_holds():
     """A braking overshoot can leave a capsule inside the scaling's stop (between it and the safe-braking rule's
     clearance). There the damper's bound turns positive (Kanoun et al. eq. 10 with d < d_s): a command along the
-    floor gains a lift of min(½(stop − d), ⅕ |g||dq|) along the clearance's gradient and keeps the rest as asked,
-    not reported as slowed; a centred stick (dq = 0) still holds (the Panda's stuck tool of `bosun bench guard`)."""
+    floor gains a lift of min(½(stop − d), ⅕ |g||dq|) in the clearance's rate, taken where it changes the tool's
+    motion least, not reported as slowed; a centred stick (dq = 0) still holds (the Panda's stuck tool of
+    `bosun bench guard`)."""
     robot = load_robot("comau_smart5_6dof")
     guard = HazardGuard.for_robot(robot)
     q = _floor_pose(guard)
@@ -121,9 +144,9 @@ def test_inside_the_stop_a_command_carries_the_clearance_back_out_and_a_centred_
         dq += 1e-6 * scale * g / np.linalg.norm(g)  # and a hair up (opening, beyond the gradients' rounding)
         out, rep = guard.step(q, dq)
         push = min(0.5 * (guard.settings.clear_stop - d), 0.2 * np.linalg.norm(g) * np.linalg.norm(dq))
-        assert g @ out == pytest.approx(push, rel=1e-5)  # lifted by exactly the recovery's rate
-        added = out - dq
-        assert np.linalg.norm(added - (added @ g) / (g @ g) * g) <= 1e-9 * np.linalg.norm(dq)  # only along g
+        want, timed = _one_hazard_step(robot, q, dq, g, push)  # lifted by the recovery's rate, in the tool's metric
+        np.testing.assert_allclose(out, want, rtol=1e-5, atol=1e-9 * np.linalg.norm(dq))
+        assert g @ out > 0.0 and (timed or g @ out == pytest.approx(push, rel=1e-5))
         assert not rep.slowed
     out, rep = guard.step(q, np.zeros(n))
     assert not out.any() and not rep.slowed  # a centred stick: nothing moves
@@ -205,10 +228,13 @@ def test_the_stick_drives_the_panda_down_to_the_floor_it_stops_clear_names_it_an
     assert snap.hazard.kind == "collision" and snap.hazard.name == "tool ↔ floor", snap.hazard
     assert any(a.key == "hazard_slowed" and a.active and "clearance" in a.text for a in snap.alarms), snap.alarms
     p0 = ses.robot.position(ses.actuators.q)
+    floor = guard.values(ses.actuators.q)[1 + len(guard.pairs) :]
     t = _drive(ses, (0.0, 0.0, 1.0), 0.5, t)  # up again: away from the floor, at the stick's speed
     rise = ses.robot.position(ses.actuators.q)[2] - p0[2]
     assert rise > 0.5 * 0.5 * ses.scaling.k_v[2], rise  # half a second at k_v, less the servo's start
-    assert guard.min_clearance(ses.actuators.q) > least
+    # the floor falls away; the tool, come down beside the base's column (link 1), rises along it, clear of it
+    assert guard.values(ses.actuators.q)[1 + len(guard.pairs) :].min() > floor.min() + 0.5 * rise
+    assert guard.min_clearance(ses.actuators.q) > guard.settings.clear_stop
 
 
 @pytest.mark.parametrize("name", ROBOTS)
@@ -280,9 +306,11 @@ def test_every_gradient_in_closed_form_equals_central_differences(name):
     checked = 0
     for q in rng.uniform(robot.lower, robot.upper, size=(40, n)):
         G = np.zeros((n + m, n))
-        rows = (np.zeros(n + m), np.zeros(n + m), np.zeros(n + m), np.zeros(n + m, np.int64), np.zeros(n + m, np.int64))
+        rows = (np.zeros(n + m), np.zeros(n + m), np.zeros(n + m), np.zeros(n + m, np.int64), np.zeros(n + m, np.int64),
+                np.zeros((3, n)))  # fmt: skip
         na = gk._active(robot.kernel_record, guard._chain, guard._model, guard._limits, q, settings, G, rows)
         assert na == m
+        np.testing.assert_allclose(rows[5], robot.jacobian(q)[:3], atol=1e-12)  # the tool's metric's Jacobian
         v0 = guard.values(q)
         fd = np.array([(guard.values(q + h * e) - guard.values(q - h * e)) / (2 * h) for e in np.eye(n)]).T
         if v0[0] < 1e-6:
@@ -370,9 +398,22 @@ def test_crane_head_streams_never_pass_the_range_and_keep_inward_steps_whole():
 def test_bench_guard_prints_the_opening_ticks_kept_under_90_percent(capsys):
     from app.cli import main
 
-    assert main(["bench", "guard", "--streams", "1", "--robots", "franka_panda"]) == 0
+    assert main(["bench", "guard", "--streams", "1", "--robots", "franka_panda", "comau_smart5_6dof"]) == 0
     out = capsys.readouterr().out
     assert "under 90 %" in out and "closing as asked)" in out and "franka_panda" in out, out
+    # H121's measure: a share where the guard slowed the stream, a dash where it never did
+    assert "across" in out and re.search(r"comau_smart5_6dof .* \d+\.\d % ", out), out
+
+
+def test_the_bench_measures_the_guarded_motion_across_the_command():
+    """``bosun bench guard``'s *across* (H121): over the slowed ticks, the travel the solver's steps asked for and the
+    guarded steps' motion across their directions; a stream that never reaches a hazard has neither."""
+    run = run_stream("comau_smart5_6dof", 0, rate=250.0)
+    assert run.slowed > 0 and run.slowed_travel > 0.0 and 0.0 <= run.slowed_across < run.slowed_travel, run
+    row = summarise("comau_smart5_6dof", [run])
+    assert row["slowed_travel_m"] == run.slowed_travel and row["slowed_across_m"] == run.slowed_across
+    far = run_stream("offshore_crane", 0, rate=250.0)
+    assert far.slowed == 0 and far.slowed_travel == 0.0 and far.slowed_across == 0.0
 
 
 def test_bench_guard_in_the_lab_prints_the_slow_opening_steps_whose_drives_would_close(capsys):
@@ -399,3 +440,38 @@ def test_a_joint_limit_is_named_with_its_distance_in_the_joints_unit():
     assert report.unit == "rad" and report.text() == f"{crane.joint_names[rev]} lower limit: 0.9° to go"
     collision = guard.report(np.array([gk.PLANE, 0, 0.043, 0.5, 1.0, 0.5, 0.0, 0.0]))
     assert collision.unit == "" and collision.text().endswith("clearance 43 mm")
+
+
+@pytest.mark.parametrize(("name", "share"), [("comau_smart5_6dof", 0.02), ("franka_panda", 0.02), ("ur5", 0.05)])
+def test_pushed_straight_down_onto_the_floor_the_tool_stops_and_does_not_slide_away(name, share):
+    """Safety H121: the guard took from a step only the part that closed on a hazard, but in the joints' metric, and
+    what it left went elsewhere: pushed straight down onto the floor for 8 s, the Comau 6-DOF's tool slid 1.14 m
+    sideways (33 % of the travel asked in the slowed ticks), the Panda's 0.29 m (36 %), the UR5's 0.12 m (9 %).
+    Corrected in the tool's metric the tool stops over the floor: its motion across the command is under 2 % of
+    that travel (measured 0.1 % and 0.9 %); the UR5's elbow, not its tool, meets the floor, and keeping the tool
+    going down beside it costs a little across (measured 3.1 %: under 5 %)."""
+    ses = Session(robot_name=name, solver_name="jacobian", mode="velocity")
+    r, tick = ses.robot, ses.guard_tick
+    asked = across = 0.0
+    u = np.array([0.0, 0.0, -1.0])
+
+    def spy(guard, q_ref, dq, act, dt):
+        nonlocal asked, across
+        new, rep, action = tick(guard, q_ref, dq, act, dt)
+        if rep.slowed:
+            p0 = r.position(q_ref)
+            asked += float(np.linalg.norm(r.position(np.clip(q_ref + dq, r.lower, r.upper)) - p0))
+            got = r.position(new) - p0
+            across += float(np.linalg.norm(got - (got @ u) * u))
+        return new, rep, action
+
+    ses.guard_tick = spy
+    t = 0.0
+    for en in (False, True):
+        t += 0.004
+        ses.feed(InputSample((0.0, 0.0, 0.0), (en,), "test"), t)
+        ses.tick(t, 0.004)
+    _drive(ses, (0.0, 0.0, -1.0), 8.0, t)
+    assert asked > 0.3, asked  # the floor slowed it for most of the way
+    assert across < share * asked, (across, asked)
+    assert ses.guard.min_clearance(ses.actuators.q) >= 0.0

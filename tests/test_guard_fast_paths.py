@@ -5,6 +5,7 @@ where the clearances' Lipschitz bounds prove the rule would pass (:func:`app.sce
 
 from __future__ import annotations
 
+from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
@@ -134,9 +135,10 @@ def test_every_clearance_changes_no_faster_than_its_row_levers(name):
     assert rigid > 0 or name == "knuckle_boom_crane"
 
 
-def _recorded_ticks(name: str, seed: int, rate: float = 250.0):
-    """The guard's inputs over one seeded `bosun bench guard` stream (the bench's stick, rate and speed)."""
+def _recorded_ticks(name: str, seed: int, rate: float = 250.0, speed: float = 1.0):
+    """The guard's inputs over one seeded `bosun bench guard` stream (the bench's stick and rate; its ``--speed``)."""
     ses = Session(robot_name=name, solver_name="jacobian", mode="velocity", seed=seed)
+    ses.scaling = replace(ses.scaling, k_v=tuple(speed * float(v) for v in ses.scaling.k_v))
     calls = []
     tick = ses.guard_tick
 
@@ -159,13 +161,16 @@ def _recorded_ticks(name: str, seed: int, rate: float = 250.0):
     return ses.guard, calls
 
 
-@pytest.mark.parametrize(("name", "seed"), [("franka_panda", 349), ("ur5", 5), ("kuka_youbot", 3)])
-def test_the_proven_skip_gives_the_full_checks_answer_and_is_sound(name, seed):
+@pytest.mark.parametrize(
+    ("name", "seed", "speed"), [("franka_panda", 349, 3.0), ("ur5", 5, 1.0), ("kuka_youbot", 3, 1.0)]
+)
+def test_the_proven_skip_gives_the_full_checks_answer_and_is_sound(name, seed, speed):
     """Over a bench stream that reaches the floor and the links' pairs: every tick's new reference, report and
     action are the same with the skip and without it (levers so large it is never taken), bit for bit; where the
     skip is taken, the clearances along the step and a dense braking path after it stay above the rule's clearance;
-    and the skip is taken, and on the Panda's stream down to the floor also refused."""
-    g, calls = _recorded_ticks(name, seed)
+    and the skip is taken, and on the Panda's stream at three times the stick's speed also refused (since the guard
+    corrects in the tool's metric the Panda's default-speed streams keep clear enough for the proof every tick)."""
+    g, calls = _recorded_ticks(name, seed, speed=speed)
     hard = g._settings[9]
     m = len(g.pairs) + len(g.plane_caps)
     taken = refused = 0
@@ -186,5 +191,5 @@ def test_the_proven_skip_gives_the_full_checks_answer_and_is_sound(name, seed):
         else:
             refused += 1
     assert taken > 50, taken
-    if name == "franka_panda":  # its tool comes down to the rule's clearance over the floor: there the rule works
+    if name == "franka_panda":  # fast, near the floor and its own links: there the proof fails and the rule works
         assert refused > 50, refused

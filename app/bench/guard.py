@@ -13,7 +13,10 @@ Per stream, at the actual joints (the actuators', not the reference):
   asked (``min_opening_speed``: 1 means never slowed; the acceptance asks ≥ 0.9; an opening tick the safe-braking
   rule braked counts as 0);
 * ``slowed`` ticks, ``braked`` ticks (the safe-braking rule, :func:`~app.scenes.teleop_guard.guard_tick`),
-  and the least clearance reached.
+  and the least clearance reached;
+* over the slowed ticks, the tool travel the solver's steps asked for (at the reference) and the guarded steps'
+  tool motion across each step's direction (``slowed_across``): what the guard leaves of a command should go where
+  it was asked, not elsewhere.
 
 Streams: 6 to 12 segments of 0.2–1 s, each stick deflection uniform in [−1, 1]³ with a third of the axes at full
 deflection, velocity mode, the Jacobian solver, at the rate given, the workspace scaling's default speed (or a
@@ -50,6 +53,8 @@ class GuardRun:
     opening_braked: int = 0  # of the opening ticks, those it braked (counted as speed 0 kept)
     opening_slow: int = 0  # of the opening ticks, those kept under 90 % of their speed (braked ones included)
     opening_slow_closing: int = 0  # of those, the ticks whose arm, with the command as asked, closed on a hazard
+    slowed_travel: float = 0.0  # [m] the tool's travel the solver's steps asked for in the slowed ticks
+    slowed_across: float = 0.0  # [m] the guarded steps' tool motion across those steps' directions
 
 
 class _Watch:
@@ -64,6 +69,8 @@ class _Watch:
         self.opening_braked = 0
         self.opening_slow = 0  # opening ticks kept under 90 % of their speed
         self.opening_slow_closing = 0  # … whose arm, with the command as asked, would have closed on a hazard
+        self.slowed_travel = 0.0  # the reference's tool travel asked in the slowed ticks [m]
+        self.slowed_across = 0.0  # … and the guarded reference's tool motion across it [m]
 
     def __getattr__(self, name):
         return getattr(self.guard, name)
@@ -75,12 +82,26 @@ class _Watch:
         zones = np.concatenate(([self.s.sigma_zone], np.full(v.size - 1, self.s.clear_zone + margin)))
         return lim < self.s.limit_zone * span, v < zones
 
+    def _across(self, q_ref, dq, new) -> None:
+        """A slowed tick: the tool travel the solver's step asked for, and the guarded step's motion across its
+        direction (the guard may take from the command only along it: what it leaves must not go elsewhere)."""
+        r = self.guard.robot
+        p0 = r.position(q_ref)
+        asked = r.position(np.clip(q_ref + dq, r.lower, r.upper)) - p0
+        travel = float(np.linalg.norm(asked))
+        if travel > 1e-12:
+            u = asked / travel
+            got = r.position(new) - p0
+            self.slowed_travel += travel
+            self.slowed_across += float(np.linalg.norm(got - (got @ u) * u))
+
     def tick(self, guard, q_ref, dq, act, dt):
         q_ref = np.array(q_ref, dtype=float)
         margin = self.guard.margin(q_ref, act.stopping_point(dt))
         new, rep, action = teleop_guard.guard_tick(guard, q_ref, dq, act, dt)
         if rep.slowed:
             self.slowed += 1
+            self._across(q_ref, dq, new)
         if not np.any(dq):
             return new, rep, action
         r = self.guard.robot
@@ -172,7 +193,8 @@ def run_stream(robot: str, seed: int, rate: float = 250.0, speed: float | None =
         least_clearance=least, limit_excess=max(excess, 0.0), opening=watch.opening,
         min_opening_speed=watch.min_opening_speed, slowed=watch.slowed, braked=ses.braked,
         opening_braked=watch.opening_braked, opening_slow=watch.opening_slow,
-        opening_slow_closing=watch.opening_slow_closing,
+        opening_slow_closing=watch.opening_slow_closing, slowed_travel=watch.slowed_travel,
+        slowed_across=watch.slowed_across,
     )  # fmt: skip
 
 
@@ -205,6 +227,8 @@ def summarise(robot: str, runs: list[GuardRun]) -> dict:
         "braked_ticks": sum(r.braked for r in runs),
         "opening_braked_ticks": sum(r.opening_braked for r in runs),
         "opening_slow_closing_ticks": sum(r.opening_slow_closing for r in runs),
+        "slowed_travel_m": sum(r.slowed_travel for r in runs),
+        "slowed_across_m": sum(r.slowed_across for r in runs),
     }
 
 

@@ -197,6 +197,10 @@ def _bench_scene_guard(args: argparse.Namespace) -> int:
     return 0
 
 
+def _share(part: float, whole: float) -> str:
+    return f"{100.0 * part / whole:.1f} %" if whole > 0.0 else "–"
+
+
 def cmd_bench_guard(args: argparse.Namespace) -> int:
     from app.bench import guard as bench
 
@@ -221,7 +225,8 @@ def cmd_bench_guard(args: argparse.Namespace) -> int:
     print("opens every hazard in its zone, and the least tool speed kept on them (the acceptance: ≥ 0.9; a tick the")
     print("safe-braking rule braked counts 0); closing as asked: of those under 90 %, the ticks whose servo step with")
     print("the command as asked would itself close a clearance in its zone; braked: ticks that rule braked the joints")
-    print("(opening ones among them)")
+    print("(opening ones among them); across: in the slowed ticks, the tool's guarded motion across each step's")
+    print("direction, as a share of the travel the steps asked for")
     print(
         _table(
             [
@@ -234,6 +239,7 @@ def cmd_bench_guard(args: argparse.Namespace) -> int:
                 "least speed kept",
                 "under 90 %",
                 "slowed ticks",
+                "across",
                 "braked ticks",
             ],
             [
@@ -247,6 +253,7 @@ def cmd_bench_guard(args: argparse.Namespace) -> int:
                     f"{r['min_opening_speed']:.3f}",
                     f"{r['opening_slow_ticks']} ({r['opening_slow_closing_ticks']} closing as asked)",
                     str(r["slowed_ticks"]),
+                    _share(r["slowed_across_m"], r["slowed_travel_m"]),
                     f"{r['braked_ticks']} ({r['opening_braked_ticks']} opening)",
                 ]
                 for r in rows

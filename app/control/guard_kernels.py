@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from app.models.kernels import ENABLED, _jit, fma, frames
+from app.models.kernels import ENABLED, _jit, fma, frames, jacobian_from_frames
 
 __all__ = ["ENABLED", "guard_step", "hazard_values", "warm_up_steps"]
 
@@ -324,7 +324,7 @@ def _active(robot, chain, model, limits, q, settings, G, rows):
     sig_zone, sig_stop = settings[2], settings[3]
     cap_zone, cap_stop = settings[4] + settings[8], settings[5] + settings[8]  # shifted by the servo's margin
     kink = settings[6]
-    val, zone, stop, kind, index = rows
+    val, zone, stop, kind, index, J = rows
     na = 0
     for j in range(n):
         span = hi[j] - lo[j]
@@ -385,7 +385,169 @@ def _active(robot, chain, model, limits, q, settings, G, rows):
         if gg < 1e-24:
             for j in range(n):
                 G[i, j] = 0.0
+    if na > 0:  # the tool point's position Jacobian: the metric the step is corrected in (guard_step)
+        Jf = jacobian_from_frames(F, M_theta, M_d)
+        for r in range(3):
+            for j in range(n):
+                J[r, j] = Jf[r, j]
     return na
+
+
+@_jit
+def _solve_small(A, b, x):
+    """x = A⁻¹b for a small dense A (k × k), Gaussian elimination with partial pivoting; False where A is singular
+    to rounding (a pivot under 10⁻¹⁰ of A's largest entry)."""
+    k = A.shape[0]
+    M = A.copy()
+    y = b.copy()
+    big = 0.0
+    for a in range(k):
+        for c in range(k):
+            big = max(big, abs(M[a, c]))
+    if not big > 0.0:
+        return False
+    for c in range(k):
+        p = c
+        for a in range(c + 1, k):
+            if abs(M[a, c]) > abs(M[p, c]):
+                p = a
+        if abs(M[p, c]) < 1e-10 * big:
+            return False
+        if p != c:
+            for e in range(k):
+                M[c, e], M[p, e] = M[p, e], M[c, e]
+            y[c], y[p] = y[p], y[c]
+        for a in range(c + 1, k):
+            f = M[a, c] / M[c, c]
+            for e in range(c, k):
+                M[a, e] -= f * M[c, e]
+            y[a] -= f * y[c]
+    for c in range(k - 1, -1, -1):
+        acc = y[c]
+        for e in range(c + 1, k):
+            acc -= M[c, e] * x[e]
+        x[c] = acc / M[c, c]
+    return True
+
+
+@_jit
+def _least_change(G, H, dq, rules, out, slowed):
+    """The step nearest ``dq`` in the tool's metric W whose every hazard's rate meets what it is due (its bound, or
+    its push where one is due): min ½(x − dq)ᵀW(x − dq) with g_iᵀx ≥ w_i, exactly.  x = dq + Σ λ_i W⁻¹g_i, λ ≥ 0
+    solving the linear complementarity problem of M = G W⁻¹ Gᵀ (rows H = W⁻¹g_i), by Murty's least-index
+    principal pivoting (finite for a positive definite M: K. G. Murty, *Linear Complementarity, Linear and
+    Nonlinear Programming*, 1988).  Into ``out`` and ``slowed`` (a bound that took a λ > 0); False, nothing
+    written, where M is singular on the way (dependent gradients) or the pivoting does not end: the caller then
+    projects in passes."""
+    bound, push, norm2 = rules
+    na = H.shape[0]
+    n = dq.shape[0]
+    M = np.zeros((na, na))
+    r0 = np.zeros(na)
+    want = np.zeros(na)
+    for i in range(na):
+        for j in range(n):
+            r0[i] += G[i, j] * dq[j]
+        want[i] = push[i] if push[i] > 0.0 else bound[i]
+        for c in range(na):
+            t = 0.0
+            for j in range(n):
+                t += G[i, j] * H[c, j]
+            M[i, c] = t
+    active = np.zeros(na, np.bool_)
+    lam = np.zeros(na)
+    for _ in range(4 * na + 8):
+        k = 0
+        for i in range(na):
+            k += active[i]
+        idx = np.empty(k, np.int64)
+        k = 0
+        for i in range(na):
+            if active[i]:
+                idx[k] = i
+                k += 1
+        A = np.empty((k, k))
+        b = np.empty(k)
+        x = np.empty(k)
+        for a in range(k):
+            b[a] = want[idx[a]] - r0[idx[a]]
+            for c in range(k):
+                A[a, c] = M[idx[a], idx[c]]
+        if k > 0 and not _solve_small(A, b, x):
+            return False
+        for i in range(na):
+            lam[i] = 0.0
+        for a in range(k):
+            lam[idx[a]] = x[a]
+        pick = -1
+        for i in range(na):
+            if norm2[i] <= 0.0:
+                continue  # no gradient (rounding's level): nothing the step can change
+            if active[i]:
+                if lam[i] < 0.0:
+                    pick = i
+                    break
+            else:
+                s = r0[i] - want[i]
+                for c in range(na):
+                    s += M[i, c] * lam[c]
+                if s < -1e-15:
+                    pick = i
+                    break
+        if pick < 0:
+            for i in range(na):
+                if lam[i] > 0.0:
+                    for j in range(n):
+                        out[j] += lam[i] * H[i, j]
+                    if r0[i] < bound[i] - 1e-15:
+                        slowed[i] = True
+            return True
+        active[pick] = not active[pick]
+    return False
+
+
+@_jit
+def _tool_metric(J, G, na, H, hg):
+    """The corrections of :func:`guard_step` in the metric W = JᵀJ + λI (J the tool point's position Jacobian,
+    λ = 10⁻³ tr(JᵀJ)): into row i of ``H`` the direction W⁻¹g_i, into ``hg[i]`` g_iᵀW⁻¹g_i (Cholesky of W, n × n)."""
+    n = J.shape[1]
+    W = np.zeros((n, n))
+    tr = 0.0
+    for a in range(n):
+        for b in range(a + 1):
+            w = J[0, a] * J[0, b] + J[1, a] * J[1, b] + J[2, a] * J[2, b]
+            W[a, b] = w
+            W[b, a] = w
+        tr += W[a, a]
+    lam = 1e-3 * tr + 1e-12
+    for a in range(n):
+        W[a, a] += lam
+    Lc = np.zeros((n, n))  # W = Lc Lcᵀ
+    for a in range(n):
+        for b in range(a + 1):
+            acc = W[a, b]
+            for k in range(b):
+                acc -= Lc[a, k] * Lc[b, k]
+            if a == b:
+                Lc[a, a] = math.sqrt(max(acc, 1e-300))
+            else:
+                Lc[a, b] = acc / Lc[b, b]
+    y = np.empty(n)
+    for i in range(na):
+        for a in range(n):  # Lc y = g
+            acc = G[i, a]
+            for k in range(a):
+                acc -= Lc[a, k] * y[k]
+            y[a] = acc / Lc[a, a]
+        for a in range(n - 1, -1, -1):  # Lcᵀ h = y
+            acc = y[a]
+            for k in range(a + 1, n):
+                acc -= Lc[k, a] * H[i, k]
+            H[i, a] = acc / Lc[a, a]
+        t = 0.0
+        for a in range(n):
+            t += G[i, a] * H[i, a]
+        hg[i] = t
 
 
 @_jit
@@ -401,9 +563,16 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
         r_i ≥ −min(s_i |r_i⁰|, κ (d_i − stop_i)),   s_i = clamp((d_i − stop_i)/(zone_i − stop_i), 0, 1),
 
     (r_i⁰ the unscaled step's rate): the approach slows linearly through the zone and, κ = ½, never crosses the
-    stop distance (to first order).  Only the component along g_i is removed (dq − (r_i − b_i) g_i/|g_i|²), a few
-    passes over the active hazards; if a bound still fails, the whole step is scaled down to meet every bound
-    (dq = 0 meets them all: every bound is ≤ 0).
+    stop distance (to first order).  The rate is corrected where that changes the tool's motion least: the step
+    moves by c W⁻¹g_i, c = (b_i − r_i)/(g_iᵀW⁻¹g_i), the least change in the metric W = JᵀJ + λI (J the tool
+    point's position Jacobian, λ = 10⁻³ tr JᵀJ: :func:`_tool_metric`) — the damper as a constraint on the task's
+    least-squares step, as Kanoun et al. pose it — solved exactly for all the hazards in their zones at once
+    (:func:`_least_change`), else in a few passes over them; if a bound still fails,
+    the whole step is scaled down to meet every bound (dq = 0 meets them all: every bound is ≤ 0), and so it is if
+    a joint would need longer at its speed limit than the command did.  Corrected in the joints' own metric
+    (dq − (r_i − b_i) g_i/|g_i|², before 2026-11-30) what was left of the command went elsewhere: pushed straight
+    down onto the floor, the Comau's tool slid 1.1 m sideways; the SCARA, pushed along +x near its singularity,
+    went 0.47 m along −x (safety H121).
 
     Inside the capsules' own stop (settings[5], where only a braking overshoot puts a capsule: the safe-braking
     rule's clearance is half of it) the bound turns positive, as Kanoun et al.'s eq. 10 does for d < d_s: a
@@ -432,7 +601,12 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     stop = np.zeros(n + m)
     kind = np.zeros(n + m, np.int64)
     index = np.zeros(n + m, np.int64)
-    na = _active(robot, chain, model, limits, q, settings, G, (val, zone, stop, kind, index))
+    J = np.zeros((3, n))
+    na = _active(robot, chain, model, limits, q, settings, G, (val, zone, stop, kind, index, J))
+    H = np.zeros((na, n))  # each hazard's correction direction W⁻¹g_i (in the tool's metric) and g_iᵀW⁻¹g_i
+    hg = np.zeros(na)
+    if na > 0:
+        _tool_metric(J, G, na, H, hg)
     passes = int(settings[7])
     out = dq.copy()
     bound = np.zeros(na)  # the damper's bounds (≤ 0): a step slowed to meet one is reported as slowed
@@ -460,18 +634,19 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
             # (Kanoun et al. eq. 10 with d < d_s), the command carries the clearance back out — at most a fifth of
             # the command's own rate along the gradient, and only while the operator commands motion
             push[i] = min(0.5 * (settings[5] - val[i]), 0.2 * math.sqrt(gg) * dq_norm)
+    if na > 0 and _least_change(G, H, dq, (bound, push, norm2), out, slowed):
+        passes = 0  # solved exactly: no passes
     for _ in range(passes):
         changed = False
         for i in range(na):
             r = 0.0
             for j in range(n):
                 r += G[i, j] * out[j]
-            gg = norm2[i]
             want = push[i] if push[i] > 0.0 else bound[i]  # a push only where one is due (bounds are ≤ 0)
-            if r < want - 1e-15 and gg > 0.0:
-                c = (want - r) / gg
+            if r < want - 1e-15 and norm2[i] > 0.0 and hg[i] > 0.0:
+                c = (want - r) / hg[i]
                 for j in range(n):
-                    out[j] += c * G[i, j]
+                    out[j] += c * H[i, j]
                 if r < bound[i] - 1e-15:
                     slowed[i] = True
                 changed = True
@@ -485,6 +660,17 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
         if r < bound[i] - 1e-12:
             slowed[i] = True
             alpha = min(alpha, bound[i] / r) if r < 0.0 else 0.0
+    # the corrections may speed a joint that compensates: the step takes no longer at the joints' speed limits than
+    # the command did (scaled as a whole, every bound still met: they are ≤ 0)
+    speed = chain[2]
+    t0 = 0.0
+    t1 = 0.0
+    for j in range(n):
+        if speed[j] > 0.0:
+            t0 = max(t0, abs(dq[j]) / speed[j])
+            t1 = max(t1, abs(out[j]) / speed[j])
+    if t1 > t0 > 0.0:
+        alpha = min(alpha, t0 / t1)
     if alpha < 1.0:
         for j in range(n):
             out[j] *= max(alpha, 0.0)
