@@ -21,8 +21,10 @@ CASES = [(r, s, m) for r in ARMS for s in solvers_for(load_robot(r)) for m in ("
 @pytest.mark.parametrize(("robot", "solver", "mode"), CASES, ids=["-".join(c) for c in CASES])
 def test_a_still_stick_holds_the_machine(robot, solver, mode):
     """Seeded random stick sequences ending still: overrun past the braking stop (or the resting target) and
-    drift once at rest both under 1 cm; on the old servo the knuckle-boom crane swung for seconds."""
-    runs = hold_study(robot, solver, mode, sequences=1, seed=26, rate=250.0)
+    drift once at rest both under 1 cm; on the old servo the knuckle-boom crane swung for seconds.  A GA runs 10
+    generations a solve, not by the clock (what a 0.8 ms budget fits on an idle machine): the same run on a loaded
+    one (the youBot's ga-restart case once failed in a suite run beside others)."""
+    runs = hold_study(robot, solver, mode, sequences=1, seed=26, rate=250.0, generations=10)
     assert all(r.travel > 1e-3 for r in runs), "a sequence that never moved tests nothing"
     for r in runs:
         assert np.isfinite(r.settle_s), f"sequence {r.seed}: never came to rest"

@@ -70,15 +70,21 @@ def stick_sequence(rng: np.random.Generator, mode: str, segments: int = 3) -> li
     return out
 
 
-def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 1.0):
+def run_sequence(session, seq, seed: int, rate: float = 1000.0, hold_s: float = 1.0, generations: int | None = None):
     """Drive ``session`` through ``seq`` (from :func:`stick_sequence`) at ``rate`` Hz; a :class:`HoldRun`.
 
-    The solver gets the engine's per-tick budget (40 % of the tick).  The hold segment runs until the
+    The solver gets the engine's per-tick budget (40 % of the tick), or with ``generations`` no clock: a GA runs
+    that many generations a solve (the same run on any machine, however loaded).  The hold segment runs until the
     joints are at rest, then ``hold_s`` more.  A machine not at rest after crossing its slowest joint's
     whole range, braking twice and 5 s more did not settle.
     """
     dt = 1.0 / rate
     budget = 0.4 * dt
+    if generations is not None:
+        budget = None
+        session.solver.time_budget = None
+        if hasattr(session.solver, "max_generations"):
+            session.solver.max_generations = generations
     t = 0.0
     robot = session.robot
     brake = np.where(np.isfinite(robot.accel), robot.speed / robot.accel, 0.0)
@@ -152,14 +158,15 @@ def hold_study(
     rate: float = 1000.0,
     progress=None,
     first: int = 0,
+    generations: int | None = None,
 ) -> list[HoldRun]:
     """``sequences`` seeded sequences (numbers ``first`` … ``first + sequences − 1``) on one robot × solver ×
-    mode, each on a fresh scene."""
+    mode, each on a fresh scene (``generations``: see :func:`run_sequence`)."""
     runs = []
     for k in range(first, first + sequences):
         rng = np.random.default_rng([seed, k])
         ses = Session(robot_name=robot, solver_name=solver, mode=mode, seed=seed + k)
-        runs.append(run_sequence(ses, stick_sequence(rng, mode), seed=k, rate=rate))
+        runs.append(run_sequence(ses, stick_sequence(rng, mode), seed=k, rate=rate, generations=generations))
         if progress is not None:
             progress(k + 1 - first, sequences)
     return runs

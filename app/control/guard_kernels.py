@@ -324,7 +324,7 @@ def _active(robot, chain, model, limits, q, settings, G, rows):
     sig_zone, sig_stop = settings[2], settings[3]
     cap_zone, cap_stop = settings[4] + settings[8], settings[5] + settings[8]  # shifted by the servo's margin
     kink = settings[6]
-    val, zone, stop, kind, index, J = rows
+    val, zone, stop, kind, index = rows
     na = 0
     for j in range(n):
         span = hi[j] - lo[j]
@@ -385,11 +385,6 @@ def _active(robot, chain, model, limits, q, settings, G, rows):
         if gg < 1e-24:
             for j in range(n):
                 G[i, j] = 0.0
-    if na > 0:  # the tool point's position Jacobian: the metric the step is corrected in (guard_step)
-        Jf = jacobian_from_frames(F, M_theta, M_d)
-        for r in range(3):
-            for j in range(n):
-                J[r, j] = Jf[r, j]
     return na
 
 
@@ -601,12 +596,7 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     stop = np.zeros(n + m)
     kind = np.zeros(n + m, np.int64)
     index = np.zeros(n + m, np.int64)
-    J = np.zeros((3, n))
-    na = _active(robot, chain, model, limits, q, settings, G, (val, zone, stop, kind, index, J))
-    H = np.zeros((na, n))  # each hazard's correction direction W⁻¹g_i (in the tool's metric) and g_iᵀW⁻¹g_i
-    hg = np.zeros(na)
-    if na > 0:
-        _tool_metric(J, G, na, H, hg)
+    na = _active(robot, chain, model, limits, q, settings, G, (val, zone, stop, kind, index))
     passes = int(settings[7])
     out = dq.copy()
     bound = np.zeros(na)  # the damper's bounds (≤ 0): a step slowed to meet one is reported as slowed
@@ -634,8 +624,22 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
             # (Kanoun et al. eq. 10 with d < d_s), the command carries the clearance back out — at most a fifth of
             # the command's own rate along the gradient, and only while the operator commands motion
             push[i] = min(0.5 * (settings[5] - val[i]), 0.2 * math.sqrt(gg) * dq_norm)
-    if na > 0 and _least_change(G, H, dq, (bound, push, norm2), out, slowed):
-        passes = 0  # solved exactly: no passes
+    H = np.zeros((na, n))  # each hazard's correction direction W⁻¹g_i (in the tool's metric) and g_iᵀW⁻¹g_i
+    hg = np.zeros(na)
+    due = False  # a rate short of what it is due: only then the metric and the correction (most ticks: none)
+    for i in range(na):
+        r = 0.0
+        for j in range(n):
+            r += G[i, j] * dq[j]
+        if norm2[i] > 0.0 and r < (push[i] if push[i] > 0.0 else bound[i]) - 1e-15:
+            due = True
+    if due:
+        J = jacobian_from_frames(frames(robot, q), chain[0], chain[1])
+        _tool_metric(J, G, na, H, hg)
+        if _least_change(G, H, dq, (bound, push, norm2), out, slowed):
+            passes = 0  # solved exactly: no passes
+    else:
+        passes = 0  # nothing to correct
     for _ in range(passes):
         changed = False
         for i in range(na):
