@@ -62,11 +62,9 @@ instead of scaling the whole step to the slowest-to-arrive joint: with a joint b
 crept to their goals ever slower and the arm never came to rest (17 of 520 resting position-mode sticks in ``bosun
 bench hold``, safety H114).  Every array up to the first position-mode stick tick (t = 1.9 s) equal bit for bit
 (checked array by array); from t = 1.95 s the position mode's differ.
-Session 33 (2026-11-30, safety H121): ``engine_teleop`` recorded again.  The guard corrects a step in the tool's
-metric (the least change of the tool's motion, solved exactly for every hazard in its zone) instead of the joints':
-what the guard left of a command went elsewhere (pushed down onto the floor, the Comau's tool slid 1.1 m
-sideways).  The Comau 6-DOF's arrays equal bit for bit up to t = 2.0 s, where its column first slows the
-position-mode stick; the 3-DOF's (after the robot change) from its seventh sample, where the guard first acts.
+Session 33 (2026-11-30, safety H121): a velocity command's step is now corrected in the tool's metric; the
+position mode's walk keeps the joints' (as before).  ``engine_teleop``'s guard acts only in position mode, so it
+gives the record of session 27 bit for bit (checked array by array).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

@@ -53,6 +53,10 @@ class GuardSettings:
     kink : the σ ratio under which σ_min has no gradient (|x|-like at a singularity: every direction opens it)
     passes : projection passes over the hazards in their zones
     hard_stop : the safe-braking rule's clearance [m] (:func:`app.scenes.teleop_guard.guard_tick`)
+
+    The array's 11th entry (not a setting: :meth:`HazardGuard.in_tool_metric`) says how a step is corrected: 1 in
+    the tool's metric (a velocity command: the tool's motion is what was asked, safety H121), 0 in the joints'
+    (the position mode's walk to a joint goal, corrected in passes as before H121).
     """
 
     limit_zone: float = 0.05
@@ -68,7 +72,7 @@ class GuardSettings:
     def array(self) -> NDArray[np.float64]:
         return np.array(
             [self.limit_zone, self.limit_stop, self.sigma_zone, self.sigma_stop, self.clear_zone, self.clear_stop,
-             self.kink, float(self.passes), 0.0, self.hard_stop]
+             self.kink, float(self.passes), 0.0, self.hard_stop, 1.0]
         )  # fmt: skip
 
 
@@ -340,6 +344,12 @@ class HazardGuard:
             self.robot.kernel_record, self._chain, self._model, self._limits, q, dq, settings, self._report
         )
         return out, self.report(self._report)
+
+    def in_tool_metric(self, tool: bool) -> None:
+        """Correct the next steps in the tool's metric (a velocity command) or the joints' (a walk to a joint goal:
+        the tool's motion along such a step is no command, and keeping it can lead a joint away from its goal
+        for ever — the youBot's walk at its singularity's stop crept 20 s in ``bosun bench hold``)."""
+        self._settings[10] = 1.0 if tool else 0.0
 
     def report(self, rep: NDArray[np.float64]) -> GuardReport:
         kind, idx, value, share, slowed, scale = rep[:6].tolist()  # every tick: Python floats at once

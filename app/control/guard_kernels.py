@@ -633,11 +633,17 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
             r += G[i, j] * dq[j]
         if norm2[i] > 0.0 and r < (push[i] if push[i] > 0.0 else bound[i]) - 1e-15:
             due = True
-    if due:
+    tool = settings.shape[0] > 10 and settings[10] > 0.5
+    if due and tool:
         J = jacobian_from_frames(frames(robot, q), chain[0], chain[1])
         _tool_metric(J, G, na, H, hg)
         if _least_change(G, H, dq, (bound, push, norm2), out, slowed):
             passes = 0  # solved exactly: no passes
+    elif due:  # the joints' metric (a walk to a joint goal): W = I, in passes as before H121
+        for i in range(na):
+            hg[i] = norm2[i]
+            for j in range(n):
+                H[i, j] = G[i, j]
     else:
         passes = 0  # nothing to correct
     for _ in range(passes):
@@ -673,7 +679,7 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
         if speed[j] > 0.0:
             t0 = max(t0, abs(dq[j]) / speed[j])
             t1 = max(t1, abs(out[j]) / speed[j])
-    if t1 > t0 > 0.0:
+    if tool and t1 > t0 > 0.0:
         alpha = min(alpha, t0 / t1)
     if alpha < 1.0:
         for j in range(n):
@@ -715,7 +721,7 @@ def warm_up_records() -> tuple:
     model = (caps, np.full(2, 0.1), np.array([[0, 1]], dtype=np.int64), np.array([0.0, 0.0, 1.0, -1.0]),
              np.array([1], dtype=np.int64))  # fmt: skip
     limits = (-np.ones(n), np.ones(n))
-    settings = np.array([0.05, 0.0, 0.04, 0.01, 0.1, 0.005, 1e-6, 4.0, 0.0, 0.0025])
+    settings = np.array([0.05, 0.0, 0.04, 0.01, 0.1, 0.005, 1e-6, 4.0, 0.0, 0.0025, 1.0])
     return robot, chain, model, limits, settings, np.full(n, 0.3), np.full(n, 1e-3)
 
 

@@ -407,7 +407,11 @@ class Session(Scene):
         as a whole to the joint with the farthest to go, a step whose far joint the guard held (an answer behind
         the floor) left the others creeping to their goals ever slower, and the arm never came to rest."""
         reach = self.robot.speed * dt
-        self._guarded(np.clip(self.q_goal - self.q_ref, -reach, reach))
+        self.guard.in_tool_metric(False)  # a joint-space walk: corrected in the joints' metric (H121)
+        try:
+            self._guarded(np.clip(self.q_goal - self.q_ref, -reach, reach))
+        finally:
+            self.guard.in_tool_metric(True)
 
     def take_solver_work(self) -> list[list[int]]:
         """The solver's clock decisions since the last call, one list per solve (:meth:`app.ik.base.Solver.take_work`:
