@@ -158,3 +158,17 @@ def test_a_sequence_never_at_rest_is_reported_in_json_not_a_traceback():
     assert json.loads(json.dumps(row, allow_nan=False))["max_settle_s"] == 0.5
     alone = summarise(("ur5", "jacobian", "position"), runs[:1])
     assert alone["max_settle_s"] is None and json.dumps(alone, allow_nan=False)
+
+
+def test_a_resting_position_stick_at_a_singularity_settles_its_walk_in_the_joints_metric(monkeypatch):
+    """Safety H121's second half: corrected in the tool's metric, the position mode's walk to a joint goal kept the
+    tool's motion of a step that is no command, and at the youBot's singularity stop it led joint 2 away from its
+    goal: the tool crept 10 mm/s for as long as the stick rested (bench hold's sequence 7, no clock).  The walk is
+    corrected in the joints' metric; the arm rests."""
+    from app.control.guard import HazardGuard
+
+    run = hold_study("kuka_youbot", "jacobian", "position", sequences=1, seed=0, rate=250.0, first=7, generations=10)[0]
+    assert np.isfinite(run.settle_s) and run.worst < HOLD_TOLERANCE, run
+    monkeypatch.setattr(HazardGuard, "in_tool_metric", lambda self, tool: None)  # the tool's metric for the walk too
+    crept = hold_study("kuka_youbot", "jacobian", "position", sequences=1, seed=0, rate=250.0, first=7, generations=10)
+    assert not np.isfinite(crept[0].settle_s), crept

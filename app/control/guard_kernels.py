@@ -567,7 +567,9 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     a joint would need longer at its speed limit than the command did.  Corrected in the joints' own metric
     (dq − (r_i − b_i) g_i/|g_i|², before 2026-11-30) what was left of the command went elsewhere: pushed straight
     down onto the floor, the Comau's tool slid 1.1 m sideways; the SCARA, pushed along +x near its singularity,
-    went 0.47 m along −x (safety H121).
+    went 0.47 m along −x (safety H121).  With settings[10] = 0 (the position mode's walk to a joint goal, whose
+    tool motion is no command: :meth:`app.control.guard.HazardGuard.in_tool_metric`) the step is corrected in the
+    joints' metric, in passes, as before.
 
     Inside the capsules' own stop (settings[5], where only a braking overshoot puts a capsule: the safe-braking
     rule's clearance is half of it) the bound turns positive, as Kanoun et al.'s eq. 10 does for d < d_s: a
@@ -577,11 +579,11 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
     along the floor at 8–13 % of the stick's speed (the braking path of a tangential step dips below that
     clearance, so the rule took gentler references): the Panda in ``bosun bench guard``.
 
-    settings (10,): zone and stop of the joint limits [share of each joint's range], of the σ ratio, of the
+    settings (11,): zone and stop of the joint limits [share of each joint's range], of the σ ratio, of the
     capsule clearances [m]; the σ ratio below which σ_min has no gradient (a kink: :func:`_sigma_grad`); passes;
     a margin [m] added to the capsules' zone and stop (how far the arm may be from ``q``:
     :meth:`app.control.guard.HazardGuard.margin`); the safe-braking clearance
-    (:func:`app.scenes.teleop_kernels.guard_tick`).
+    (:func:`app.scenes.teleop_kernels.guard_tick`); the metric (1 the tool's, 0 the joints').
 
     report (6,) out: of the hazards that slowed the step (if none, of all in their zones) the one with the least
     of its zone left — its kind (:data:`LIMIT`, :data:`SINGULAR`, :data:`PAIR`, :data:`PLANE`; −1 none in its
