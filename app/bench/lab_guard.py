@@ -35,7 +35,17 @@ Measured at the actual joints (the drives', after each step) against the true pl
   it would itself close a clearance in the zone (``opening_slow_closing``: the command opens, but the drives,
   still carrying the arm's last motion or each ramping at its own limit, would move it nearer the hazard this
   step);
-* ``slowed`` ticks and the least clearance reached.
+* the opening steps kept under 90 %, split by why (each on the true clearances along the plant's own drive model,
+  :func:`app.sim.kernels.motion_filter_update`, not the guard's first order): ``opening_slow_ahead``, those whose
+  drives, following the command as asked for as long as the guard's outcome check looks ahead and then braked to
+  rest, take a clearance in the zone below the stop distance (less the guard's 2 mm slack) and below where it is —
+  a joint braking into its limit while the others close the gap, the drives' ramps leaving the command's
+  direction; of the rest, ``opening_slow_carried``, those whose arm, braked to rest now, is carried into the zone of
+  a hazard outside it that the command closes on (the guard counts an approach's braking distance, as the teleop
+  bench's zone counts the servo's lag);
+* ``slowed`` ticks and the least clearance reached; over the steps the guard slowed, the tool's travel in the
+  drive step as asked and the guarded drive step's tool motion across its direction (``slowed_across``, as the
+  teleop bench's *across*, H121).
 
 The platforms stand still because the guard never moves the arm by itself (nothing moves without the operator's
 command): a platform that drives its deck into a resting arm is the platforms' command boxes' to prevent, not the
@@ -57,6 +67,7 @@ from app.sim.kernels import motion_filter_update
 
 DIRECTION_STEP = 1e-7  # [rad]: a command's direction is judged by the clearances' change over this step along it
 DT = 0.005  # [s]: the lab PLC's cycle
+ROLLOUT_REST = 400  # steps: the longest a braked path is followed to rest (2 s)
 
 
 @dataclass(frozen=True)
@@ -75,6 +86,10 @@ class LabGuardRun:
     load_least: float = math.inf  # [m]: the least clearance of the wire and the load (where it hangs)
     load_model_lost: bool = False  # the swing left its model and the lab stopped itself (H118)
     opening_slow_closing: int = 0  # of the opening steps kept under 90 %, those whose drive step as asked closed one
+    opening_slow_ahead: int = 0  # … those whose drives as asked would pass below the stop distance (this step or on)
+    opening_slow_carried: int = 0  # … of the rest, those whose arm its own motion carries into another hazard's zone
+    slowed_travel: float = 0.0  # [m]: the tool's travel the drive steps as asked would make in the slowed opening steps
+    slowed_across: float = 0.0  # [m]: … and the guarded drive steps' tool motion across their direction
 
 
 def stick_stream(rng: np.random.Generator) -> list[tuple[np.ndarray | None, float]]:
@@ -130,6 +145,75 @@ def actual(world: tuple) -> tuple:
     return (*world[:4], hang)
 
 
+def _drive_step(arm: tuple, command: tuple, limits: tuple) -> np.ndarray:
+    """The joints after one drive step (:func:`app.sim.kernels.motion_filter_update`) from ``arm`` = (q, q̇) with
+    the Comau law's ``command`` (brake, q_ref, q̇_ref, use q̇_ref, speed scale)."""
+    x = (arm[0].copy(), arm[1].copy(), np.zeros(3))
+    motion_filter_update(x, command[1:], limits, DT)
+    return x[0]
+
+
+def _across(cm, q, asked: np.ndarray, got: np.ndarray) -> tuple[float, float]:
+    """The tool's travel in the drive step as asked (joints moved by ``asked``), and the guarded step's (``got``)
+    tool motion across that travel's direction [m] (as :mod:`app.bench.guard` measures the teleop arms)."""
+    z3 = np.zeros(3)
+    p0 = comau_tool(cm, q, z3, z3)[0]
+    d_asked = comau_tool(cm, q + asked, z3, z3)[0] - p0
+    travel = float(np.linalg.norm(d_asked))
+    if travel <= 1e-12:
+        return 0.0, 0.0
+    u = d_asked / travel
+    d_got = comau_tool(cm, q + got, z3, z3)[0] - p0
+    return travel, float(np.linalg.norm(d_got - (d_got @ u) * u))
+
+
+def _path_lowest(clear, world, arm: tuple, command, limits: tuple, hold: int) -> np.ndarray:
+    """Each clearance's least value where the drives take the arm from ``arm`` = (q, q̇): ``hold`` steps following
+    ``command(q)`` (the law's command at the joints q), then braked to rest at their limits (the command q_ref = q,
+    no rate: :func:`app.sim.kernels.motion_filter_update` decelerates each joint at its own limit)."""
+    x = (arm[0].copy(), arm[1].copy(), np.zeros(3))
+    lowest = clear(world, x[0])
+    z3 = np.zeros(3)
+    for k in range(hold + ROLLOUT_REST):
+        rest = k >= hold
+        if rest and not np.any(x[1]):
+            break
+        cmd = (x[0].copy(), z3, np.bool_(False), 1.0) if rest else command(x[0])[1:]
+        motion_filter_update(x, cmd, limits, DT)
+        lowest = np.minimum(lowest, clear(world, x[0]))
+    return lowest
+
+
+def _closes_ahead(clear, world, arm: tuple, asked: tuple, guard_p: tuple, inzone: np.ndarray) -> bool:
+    """Whether the drives, following the command as asked (its joint rate, held) for as long as the guard's outcome
+    check looks ahead (until they have it, and as long again as they would take to stop from it at κ of their
+    acceleration), then braked to rest, take a clearance in the zone below the stop distance (less the guard's
+    2 mm slack) and below where it is: the true clearances along the drives' own path, not the guard's first order."""
+    q, qd = arm
+    _, _, limits, settings = guard_p
+    accel, kappa, stop = limits[3], float(settings[2]), float(settings[1])
+    rate = asked[2]
+    hold = int(min(np.max(np.ceil(np.abs(rate - qd) / (accel * DT) + np.abs(rate) / (kappa * accel * DT))), 400))
+
+    def command(qq):
+        return (np.bool_(False), qq + rate * DT, rate, np.bool_(True), 1.0)
+
+    now = clear(world, q)
+    lowest = _path_lowest(clear, world, arm, command, limits, hold)
+    return bool(np.any(inzone & (lowest < stop - ck.BRAKE_SLACK) & (lowest < now)))
+
+
+def _carried_in(clear, world, arm: tuple, v0: np.ndarray, guard_p: tuple) -> bool:
+    """Whether the arm's own motion, braked to rest now, carries it into the zone of a hazard outside it that the
+    command's direction ``v0`` closes (the guard counts an approach's braking distance; the opening test above looks
+    only at the hazards already in the zone)."""
+    zone = float(guard_p[3][0])
+    now = clear(world, arm[0])
+    lowest = _path_lowest(clear, world, arm, None, guard_p[2], 0)
+    ahead = clear(world, arm[0] + DIRECTION_STEP * v0 / max(float(np.linalg.norm(v0)), 1e-300))
+    return bool(np.any((now >= zone) & (lowest < zone) & (ahead < now)))
+
+
 def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     """One seeded stream on a fresh Motion-Lab (see the module's text)."""
     rng = np.random.default_rng([seed, 3205])
@@ -155,6 +239,8 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
     guard_p = (cm, lab._guard_p[0], f.limits(), lab._guard_p[5])
     limits = f.limits()
     ticks = opening = slowed = opening_slow = opening_slow_closing = load_near = 0
+    opening_slow_ahead = opening_slow_carried = 0
+    slowed_travel = slowed_across = 0.0
     load_least = math.inf
     least, excess, min_open = math.inf, 0.0, 1.0
     near = {"EM8000 deck": 0, "pedestal": 0, "EM1500 deck": 0}
@@ -176,6 +262,12 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
             _, (got, report) = ck.comau_guard((), (asked, q, qd, world), guard_p, DT)
             vals = clear(world, q)
             inzone = vals < zone
+            ends = None
+            if report[4]:  # slowed: the drive step as asked and as guarded, and the tool's motion across the first
+                ends = [_drive_step((q, qd), cmd, limits) for cmd in (asked, got)]
+                travel, across = _across(cm, q, ends[0] - q, ends[1] - q)
+                slowed_travel += travel
+                slowed_across += across
             if inzone.any():
                 near[names[int(report[0])]] += 1
                 load_near += int(report[1]) >= ck.WIRE
@@ -188,17 +280,18 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
                     ahead = clear(world, q + DIRECTION_STEP * v0 / norm)
                     if np.all(ahead[inzone] >= vals[inzone] - 1e-15):
                         opening += 1
-                        moved, ends = [], []
-                        for cmd in (asked, got):
-                            x = (q.copy(), qd.copy(), np.zeros(3))
-                            motion_filter_update(x, cmd[1:], limits, DT)
-                            moved.append(float(np.linalg.norm(x[0] - q)))
-                            ends.append(x[0])
+                        if ends is None:
+                            ends = [_drive_step((q, qd), asked, limits)] * 2
+                        moved = [float(np.linalg.norm(e - q)) for e in ends]
                         kept = moved[1] / moved[0] if moved[0] > 0.0 else 1.0
                         min_open = min(min_open, kept)
                         if kept < 0.9:
                             opening_slow += 1
-                            opening_slow_closing += bool(np.any(clear(world, ends[0])[inzone] < vals[inzone]))
+                            step_closes = bool(np.any(clear(world, ends[0])[inzone] < vals[inzone]))
+                            opening_slow_closing += step_closes
+                            ahead_closes = step_closes or _closes_ahead(clear, world, (q, qd), asked, guard_p, inzone)
+                            opening_slow_ahead += ahead_closes
+                            opening_slow_carried += not ahead_closes and _carried_in(clear, world, (q, qd), v0, guard_p)
             lab.tool_velocity_cmd = v_cmd
             lab.step(DT)
             slowed += bool(lab.guard_report[4])
@@ -212,7 +305,8 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
         seed=seed, ticks=ticks, penetration=max(0.0, -least), least_clearance=least, limit_excess=max(excess, 0.0),
         opening=opening, min_opening_speed=min_open, opening_slow=opening_slow, slowed=slowed, near=near,
         load_near=load_near, load_least=load_least, load_model_lost=bool(lab.load_model_lost),
-        opening_slow_closing=opening_slow_closing,
+        opening_slow_closing=opening_slow_closing, opening_slow_ahead=opening_slow_ahead,
+        opening_slow_carried=opening_slow_carried, slowed_travel=slowed_travel, slowed_across=slowed_across,
     )  # fmt: skip
 
 
@@ -227,6 +321,10 @@ def summarise(runs: list[LabGuardRun]) -> dict:
     near = {k: sum(r.near[k] for r in runs) for k in runs[0].near} if runs else {}
     return {"scene": "motionlab (Comau REMOTE, data-sheet limits)", **totals(runs), "nearest_in_zone_ticks": near,
             "opening_slow_closing_ticks": sum(r.opening_slow_closing for r in runs),
+            "opening_slow_ahead_ticks": sum(r.opening_slow_ahead for r in runs),
+            "opening_slow_carried_ticks": sum(r.opening_slow_carried for r in runs),
+            "slowed_travel_m": sum(r.slowed_travel for r in runs),
+            "slowed_across_m": sum(r.slowed_across for r in runs),
             "load_nearest_ticks": sum(r.load_near for r in runs),
             "load_least_clearance_m": min((r.load_least for r in runs), default=math.inf),
             "streams_load_model_lost": sum(r.load_model_lost for r in runs)}  # fmt: skip

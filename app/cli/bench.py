@@ -137,6 +137,14 @@ def cmd_bench_sim(args: argparse.Namespace) -> int:
     return 0
 
 
+def _lab_slow_cell(row: dict) -> str:
+    """The lab table's "under 90 %" cell: the count and why (the split of :mod:`app.bench.lab_guard`)."""
+    n = row["opening_slow_ticks"]
+    ahead, carried = row.get("opening_slow_ahead_ticks", 0), row.get("opening_slow_carried_ticks", 0)
+    return (f"{n} ({row.get('opening_slow_closing_ticks', 0)} closing as asked, {ahead} ahead, {carried} carried, "
+            f"{n - ahead - carried} unexplained)")  # fmt: skip
+
+
 def _lab_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], list[str], list[str]]:
     """``bosun bench guard --scene lab``'s header, columns and cells (app/bench/lab_guard.py)."""
     head = [
@@ -145,17 +153,21 @@ def _lab_guard_table(args: argparse.Namespace, row: dict) -> tuple[list[str], li
         "penetration: the deepest overlap of the arm's capsules, the winch's wire or the hanging load with EM8000,",
         "its pedestal or EM1500's deck, at the actual joints; opening: steps whose command opens every clearance in",
         "the zone, and the least drive step kept on them (the acceptance: ≥ 0.9); closing as asked: of those under",
-        "90 %, the steps whose drive step with the command as the law gave it would itself close a clearance there",
+        "90 %, the steps whose drive step with the command as the law gave it would itself close a clearance there;",
+        "ahead: those whose drives, following it as asked and then braked, would pass below the stop distance;",
+        "carried: of the rest, those the arm's own motion carries into the zone of a hazard the command closes on;",
+        "across: the guarded drive steps' tool motion across the direction asked, a share of the travel asked",
     ]
     columns = ["streams", "steps", "max penetration [mm]", "least clearance [mm]", "wire and load: least [mm]",
-               "past a limit", "opening steps", "least step kept", "under 90 %", "slowed steps",
+               "past a limit", "opening steps", "least step kept", "under 90 %", "slowed steps", "across",
                "in the zone: EM8000 deck / pedestal / EM1500 deck", "of them the wire or load",
                "streams stopped: load model lost"]  # fmt: skip
     cells = [str(row["streams"]), str(row["ticks"]), f"{row['max_penetration_m'] * 1e3:.2f}",
              f"{row['least_clearance_m'] * 1e3:.1f}", f"{row.get('load_least_clearance_m', math.inf) * 1e3:.1f}",
              f"{row['max_limit_excess']:.2g}", str(row["opening_ticks"]), f"{row['min_opening_speed']:.3f}",
-             f"{row['opening_slow_ticks']} ({row.get('opening_slow_closing_ticks', 0)} closing as asked)",
-             str(row["slowed_ticks"]), " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values()),
+             _lab_slow_cell(row), str(row["slowed_ticks"]),
+             _share(row.get("slowed_across_m", 0.0), row.get("slowed_travel_m", 0.0)),
+             " / ".join(str(v) for v in row["nearest_in_zone_ticks"].values()),
              str(row.get("load_nearest_ticks", 0)), str(row.get("streams_load_model_lost", 0))]  # fmt: skip
     return head, columns, cells
 
