@@ -88,7 +88,7 @@ class LabGuardRun:
     opening_slow_closing: int = 0  # of the opening steps kept under 90 %, those whose drive step as asked closed one
     opening_slow_ahead: int = 0  # … those whose drives as asked would pass below the stop distance (this step or on)
     opening_slow_carried: int = 0  # … of the rest, those whose arm its own motion carries into another hazard's zone
-    slowed_travel: float = 0.0  # [m]: the tool's travel the drive steps as asked would make in the slowed opening steps
+    slowed_travel: float = 0.0  # [m]: the tool's travel the drive steps as asked would make in the slowed steps
     slowed_across: float = 0.0  # [m]: … and the guarded drive steps' tool motion across their direction
 
 
@@ -193,7 +193,8 @@ def _closes_ahead(clear, world, arm: tuple, asked: tuple, guard_p: tuple, inzone
     _, _, limits, settings = guard_p
     accel, kappa, stop = limits[3], float(settings[2]), float(settings[1])
     rate = asked[2]
-    hold = int(min(np.max(np.ceil(np.abs(rate - qd) / (accel * DT) + np.abs(rate) / (kappa * accel * DT))), 400))
+    reach = np.abs(rate - qd) / (accel * DT) + np.abs(rate) / (kappa * accel * DT)  # the guard's horizon [steps]
+    hold = int(min(np.max(np.ceil(reach)), ck.ROLLOUT))
 
     def command(qq):
         return (np.bool_(False), qq + rate * DT, rate, np.bool_(True), 1.0)
@@ -263,7 +264,7 @@ def run_stream(seed: int, lab_name: str = "motionlab") -> LabGuardRun:
             vals = clear(world, q)
             inzone = vals < zone
             ends = None
-            if report[4]:  # slowed: the drive step as asked and as guarded, and the tool's motion across the first
+            if report[4]:  # slowed: the drive steps as asked and as guarded; the second's tool motion across the first
                 ends = [_drive_step((q, qd), cmd, limits) for cmd in (asked, got)]
                 travel, across = _across(cm, q, ends[0] - q, ends[1] - q)
                 slowed_travel += travel
