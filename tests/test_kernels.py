@@ -370,6 +370,46 @@ def test_a_kernel_files_cache_is_cleared_when_a_kernel_file_it_imports_changes(t
     assert clear_stale_caches(tmp_path, files) == []  # an edit of the file itself is numba's to notice
 
 
+def test_a_kernel_files_cache_is_cleared_when_a_file_its_imports_import_changes(tmp_path):
+    """H123: numba compiles a called kernel into its caller, and the scene's lab step calls the guard's clearances
+    through the guard (app/scenes/lab_kernels.py → app/control/lab_kernels.py → lab_clearance_kernels.py): an edit
+    of the clearances left the lab step's cache — and its old clearances — in place (2026-12-01)."""
+    from app.models.kernels import clear_stale_caches
+
+    (tmp_path / "control").mkdir()
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "control/clearances.py").write_text("def f(): pass\n", encoding="utf-8")
+    (tmp_path / "control/guard.py").write_text("from app.control.clearances import f\n", encoding="utf-8")
+    (tmp_path / "scenes/step.py").write_text("from app.control.guard import (  # noqa\n    g,\n)\n", encoding="utf-8")
+    files = ("control/clearances.py", "control/guard.py", "scenes/step.py")
+    assert clear_stale_caches(tmp_path, files) == list(files)
+    step = tmp_path / "scenes/__pycache__/step.lab_step-1.py311.nbi"
+    step.write_text("machine code", encoding="utf-8")
+    assert clear_stale_caches(tmp_path, files) == []
+    (tmp_path / "control/clearances.py").write_text("def f(): return 1\n", encoding="utf-8")
+    assert clear_stale_caches(tmp_path, files) == ["control/guard.py", "scenes/step.py"]
+    assert not step.exists()
+
+
+def test_every_file_with_a_compiled_kernel_has_its_cache_cleared_when_what_it_imports_changes():
+    """H123: app/control/lab_clearance_kernels.py (the lab guard's clearances) and predict_kernels.py were not in
+    ``KERNEL_FILES``: after an edit of the clearances the lab's guard (app/control/lab_kernels.py, which calls them)
+    kept its old machine code from numba's cache — 20 % of 3,000 random guard calls differed from the reference
+    when the clearances' load model changed (2026-12-01).  Every file that compiles a kernel is listed."""
+    import re
+    from pathlib import Path
+
+    from app.models.kernels import KERNEL_FILES
+
+    root = Path(__file__).resolve().parents[1] / "app"
+    compiled = {
+        f.relative_to(root).as_posix()
+        for f in root.rglob("*.py")
+        if re.search(r"^@_jit\b", f.read_text(encoding="utf-8"), re.M)
+    }
+    assert compiled and compiled <= set(KERNEL_FILES), sorted(compiled - set(KERNEL_FILES))
+
+
 NOTHING_AT_IMPORT = r"""
 import importlib, json, os, pathlib
 touched = []

@@ -328,7 +328,12 @@ def summarise(runs: list[LabGuardRun]) -> dict:
             "slowed_across_m": sum(r.slowed_across for r in runs),
             "load_nearest_ticks": sum(r.load_near for r in runs),
             "load_least_clearance_m": min((r.load_least for r in runs), default=math.inf),
-            "streams_load_model_lost": sum(r.load_model_lost for r in runs)}  # fmt: skip
+            "streams_load_model_lost": sum(r.load_model_lost for r in runs),
+            # which streams to take apart: the load or the arm past 1 mm; slow opening steps by why
+            "seeds_penetrating": [r.seed for r in runs if r.penetration > 1e-3],
+            "seeds_opening_slow_carried": [r.seed for r in runs if r.opening_slow_carried],
+            "seeds_opening_slow_unexplained": [
+                r.seed for r in runs if r.opening_slow > r.opening_slow_ahead + r.opening_slow_carried]}  # fmt: skip
 
 
 def bench_lab_guard(streams: int, workers: int = 1, progress=None) -> dict:

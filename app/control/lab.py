@@ -403,33 +403,43 @@ def _guard_reference(x, u, p, dt):
     return x, ((brake, q.copy(), out, True, scale), report)
 
 
-def swing_hang_reference(frames, swing) -> NDArray[np.float64]:
-    """The reference of :func:`app.control.lab_kernels.swing_hang`: the wire, the swing envelope's centre from the
-    tool point and its radius, in {r}."""
+def swing_hang_reference(frames, swing, v_arm) -> NDArray[np.float64]:
+    """The reference of :func:`app.control.lab_kernels.swing_hang`: the wire, the centre from the tool point and
+    the radius of the envelope that holds the load however the arm stops, in {r}, then the arm's ``v_arm``."""
     T_g_n1, R1, T_b1_r = frames
     alpha, beta, alpha_dot, beta_dot, L, g = swing
-    known = math.isfinite(alpha + beta + alpha_dot + beta_dot)  # else anywhere within L of the tool point
-    if not known:
+    v_arm = np.asarray(v_arm, dtype=float)
+    known = math.isfinite(alpha + beta + alpha_dot + beta_dot + float(v_arm.sum()))
+    if not known:  # anywhere within L of the tool point
         alpha = beta = alpha_dot = beta_dot = 0.0
     sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
     to_r = T_b1_r[:3, :3].T @ R1.T @ T_g_n1[:3, :3].T  # {g} axes into {r}
-    e = g * L * (1.0 - ca * cb) + 0.5 * L * L * (alpha_dot**2 + (ca * beta_dot) ** 2)  # the swing's energy
-    k = (1.0 - e / (g * L) if L > 0.0 else 1.0) if known else -1.0
-    depth, radius = (L * k, L * math.sqrt(max(0.0, 1.0 - k * k))) if k > 0.0 else (0.0, L)
-    return np.array([*(to_r @ (L * np.array([-sa, -ca * sb, -ca * cb]))), *(to_r @ [0.0, 0.0, -depth]), radius])
+    w = to_r @ np.array([-sa, -ca * sb, -ca * cb])  # the wire's unit vector
+    w_dot = np.array([-ca * alpha_dot, sa * sb * alpha_dot - ca * cb * beta_dot,
+                      sa * cb * alpha_dot + ca * sb * beta_dot])  # fmt: skip
+    u = L * (to_r @ w_dot)  # the load's velocity relative to the tool point
+    u_n = u - (u @ w) * w
+    tilt = 2.0 * (math.sin(0.5 * alpha) ** 2 + ca * math.sin(0.5 * beta) ** 2)  # 1 − cα cβ
+    e = g * L * tilt + 0.5 * float(u_n @ u_n)  # the swing's own energy
+    v = v_arm - (v_arm @ w) * w  # the arm's tool velocity normal to the wire
+    e = 0.5 * (math.sqrt(2.0 * e) + float(np.linalg.norm(v))) ** 2  # however the arm stops
+    eps = e / (g * L) if L > 0.0 else 0.0  # 1 − cos θ
+    k = 1.0 - eps if known else -1.0
+    depth, radius = (L * k, L * math.sqrt(max(0.0, eps * (2.0 - eps)))) if k > 0.0 else (0.0, L)
+    return np.array([*(L * w), *(-depth * (to_r @ [0.0, 0.0, 1.0])), radius, *v_arm])
 
 
-def guard_world_reference(guard_p, frames, e1, R1, e2, R2, swing) -> tuple:
+def guard_world_reference(guard_p, frames, e1, R1, e2, R2, swing, v_arm) -> tuple:
     """The reference of :func:`app.scenes.lab_kernels.guard_world`: EM1500's deck where the controller sees it,
-    through {n1} (eq. 39) and EM8000's body (eq. 54 inverted), and the hanging load (:func:`swing_hang_reference`)
-    turned into {r} the same way."""
+    through {n1} (eq. 39) and EM8000's body (eq. 54 inverted), and the hanging load (:func:`swing_hang_reference`,
+    with the arm's tool velocity ``v_arm`` in {r}) turned into {r} the same way."""
     _, deck1, ped, ped_r, deck_r, _ = guard_p
     T_g_n1, T12, Tr = frames
     c_n1 = T12[:3, 3] + T12[:3, :3] @ e2[:3]
     n_n1 = T12[:3, :3] @ (R2 @ np.array([0.0, 0.0, -1.0]))
     c = Tr[:3, :3].T @ (R1.T @ (c_n1 - e1[:3]) - Tr[:3, 3])
     n = Tr[:3, :3].T @ (R1.T @ n_n1)
-    return deck1, ped, ped_r, np.array([*c, *n, deck_r[0]]), swing_hang_reference((T_g_n1, R1, Tr), swing)
+    return deck1, ped, ped_r, np.array([*c, *n, deck_r[0]]), swing_hang_reference((T_g_n1, R1, Tr), swing, v_arm)
 
 
 def _winch_guard_reference(x, u, p, dt):
@@ -446,7 +456,8 @@ def _winch_guard_reference(x, u, p, dt):
     if not any(val[i] < zone for i in rows):
         return x, ((ref, ref_v), report)
     alpha, beta, alpha_dot, beta_dot, g = swing
-    hang = swing_hang_reference(frames, (alpha, beta, alpha_dot, beta_dot, L + lab_kernels.PAYOUT_STEP, g))
+    longer = (alpha, beta, alpha_dot, beta_dot, L + lab_kernels.PAYOUT_STEP, g)
+    hang = swing_hang_reference(frames, longer, world[4][7:10])  # the arm's tool velocity the world's
     val2 = guard_hazards_reference(cm, radii, (*world[:4], hang), q)[1]
     v, best, best_share = v0, -1, math.inf
     for i in rows:

@@ -165,8 +165,9 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
 
     ``world`` = (deck1 (8,): EM8000's deck n·x = h in {r}, then its centre (3,) and radius; pedestal (2, 3): its
     axis from the deck to the column's top, and its radius (1,); deck2 (7,): EM1500's deck centre, up normal and
-    radius in {r}; hang (7,): the wire from the tool point to the load, the centre of the load's swing envelope
-    from the tool point, and the envelope's radius, in {r} (:func:`app.scenes.lab_kernels.guard_world`)).  The
+    radius in {r}; hang (10,): the wire from the tool point to the load, the centre of the load's swing envelope
+    from the tool point, and the envelope's radius, in {r}, then the arm's tool velocity it was taken with
+    (:func:`swing_hang`, :func:`app.scenes.lab_kernels.guard_world`)).  The
     capsules' ``radii`` (5,): the arm's three, the wire's and the load's.  The upper arm is joined to the column at
     the shoulder: its pedestal pair is not checked.
 
@@ -174,7 +175,7 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
     and the body under it, a solid cylinder of the deck's radius, :func:`_solid_gap`: the load hangs beside it and
     below its deck's plane over EM1500, where it lands) and the pedestal; not against EM1500's deck, which the load
     is there to land on (its landing is the load's watch's: :mod:`app.scenes.crane_load`).  The wire is where it
-    hangs now; the load is the sphere round every point its swing can reach with the energy it has (a swinging
+    hangs now; the load is the sphere round every point its swing can reach however the arm stops (a swinging
     load is no joint's to brake: the arm is kept from bringing where it can reach near an obstacle).  Both move
     with the tool point (its Jacobian: a step of the arm carries the hanging load with it)."""
     deck1, ped, ped_r, deck2, hang = world
@@ -261,35 +262,53 @@ def guard_hazards(cm, radii, world, q, G, val, kind, cap):
 
 
 @_jit
-def swing_hang(frames, swing):
-    """The hanging load in the Comau's base {r} for :func:`guard_hazards` (its ``hang`` (7,)): the wire from the tool
-    point to the load, eq. (58)'s L·(−sα, −cα sβ, −cα cβ) in {g}; the centre of its swing's envelope from the tool
-    point and the envelope's radius.  ``frames`` = (T_g_n1, R1, T_b1_r): {g} into {r} through EM8000's body as the
-    controller sees it; ``swing`` = (α, β, α̇, β̇, L, g).
+def swing_hang(frames, swing, v_arm):
+    """The hanging load in the Comau's base {r} for :func:`guard_hazards` (its ``hang`` (10,)): the wire from the
+    tool point to the load, eq. (58)'s L·(−sα, −cα sβ, −cα cβ) in {g}; the centre of its swing's envelope from the
+    tool point and the envelope's radius; and ``v_arm``, the tool point's velocity from the arm's joints in {r}
+    (J q̇, eq. 5), which it was taken with.  ``frames`` = (T_g_n1, R1, T_b1_r): {g} into {r} through EM8000's body
+    as the controller sees it; ``swing`` = (α, β, α̇, β̇, L, g).
 
-    The envelope: with the swing's energy e = g L (1 − cα cβ) + ½ L² (α̇² + cα² β̇²) (eqs. 26–27, relative to the
-    tool point) the load reaches θ from the vertical with 1 − cos θ = e/(g L); the cap it can reach lies in the
-    sphere round L cos θ below the tool point of radius L sin θ (1 − cos θ ≤ sin θ up to 90°; beyond, round the tool
-    point, of radius L; a swing that is not finite, the same: the load may be anywhere its wire reaches)."""
+    The envelope holds the load however the arm stops (H122).  The swing's own energy relative to the tool point
+    is e_r = g L (1 − cα cβ) + ½ |u|², u = L ẇ, |u|² = L² (α̇² + cα² β̇²) (eqs. 26–27).  Were the arm stopped now
+    the load would keep its velocity: relative to the tool it would be u + v (v the wire-normal part of v_arm; the
+    wire takes the part along it), whose energy depends on where the swing is in its period.  Whatever that
+    phase, |(√(2 g L (1 − cα cβ)), u + v)| ≤ |(√(2 g L (1 − cα cβ)), u)| + |v|, so the envelope takes
+    e = ½ (√(2 e_r) + |v|)²: braking the arm hands the swing what it takes from v and never grows e, and a swing
+    the arm pumps by speeding up grows it as it happens.  The load then reaches θ from the vertical with
+    1 − cos θ = e/(g L); the cap it can reach lies in the sphere round L cos θ below the tool point of radius
+    L sin θ (1 − cos θ ≤ sin θ up to 90°; beyond, round the tool point, of radius L; a swing that is not finite,
+    the same: the load may be anywhere its wire reaches)."""
     T_g_n1, R1, T_b1_r = frames
     alpha, beta, alpha_dot, beta_dot, L, g = swing
-    known = math.isfinite(alpha + beta + alpha_dot + beta_dot)  # else anywhere within L of the tool point
-    if not known:
+    known = math.isfinite(alpha + beta + alpha_dot + beta_dot + v_arm[0] + v_arm[1] + v_arm[2])
+    if not known:  # anywhere within L of the tool point
         alpha = beta = alpha_dot = beta_dot = 0.0
     sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
-    hang = np.empty(7)
+    hang = np.empty(10)
     wn = mtv(T_g_n1, -L * sa, -L * ca * sb, -L * ca * cb)
     wb = mtv(R1, wn[0], wn[1], wn[2])
     wr = mtv(T_b1_r, wb[0], wb[1], wb[2])
-    e = g * L * (1.0 - ca * cb) + 0.5 * L * L * (alpha_dot * alpha_dot + ca * ca * beta_dot * beta_dot)
-    k = 1.0 - e / (g * L) if L > 0.0 else 1.0
-    if not known:
-        k = -1.0
-    depth, radius = (L * k, L * math.sqrt(max(0.0, 1.0 - k * k))) if k > 0.0 else (0.0, L)
-    dn = mtv(T_g_n1, 0.0, 0.0, -depth)
-    db = mtv(R1, dn[0], dn[1], dn[2])
-    dr = mtv(T_b1_r, db[0], db[1], db[2])
+    # u = L ẇ in {r}, and its part normal to the wire (all of it, to rounding)
+    un = mtv(T_g_n1, -L * ca * alpha_dot, L * (sa * sb * alpha_dot - ca * cb * beta_dot),
+             L * (sa * cb * alpha_dot + ca * sb * beta_dot))  # fmt: skip
+    ub = mtv(R1, un[0], un[1], un[2])
+    ur = mtv(T_b1_r, ub[0], ub[1], ub[2])
+    along = (ur[0] * wr[0] + ur[1] * wr[1] + ur[2] * wr[2]) / (L * L) if L > 0.0 else 0.0
+    n0, n1, n2 = ur[0] - along * wr[0], ur[1] - along * wr[1], ur[2] - along * wr[2]
+    # 1 − cα cβ = 2 sin²(α/2) + 2 cα sin²(β/2): without the cancellation near the vertical
+    tilt = 2.0 * (math.sin(0.5 * alpha) ** 2 + ca * math.sin(0.5 * beta) ** 2)
+    e = g * L * tilt + 0.5 * (n0 * n0 + n1 * n1 + n2 * n2)  # e_r
+    along = (v_arm[0] * wr[0] + v_arm[1] * wr[1] + v_arm[2] * wr[2]) / (L * L) if L > 0.0 else 0.0
+    m0, m1, m2 = v_arm[0] - along * wr[0], v_arm[1] - along * wr[1], v_arm[2] - along * wr[2]  # v
+    e = 0.5 * (math.sqrt(2.0 * e) + math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)) ** 2
+    eps = e / (g * L) if L > 0.0 else 0.0  # 1 − cos θ (the radius from it: 1 − k² loses it where it is small)
+    k = 1.0 - eps if known else -1.0
+    depth, radius = (L * k, L * math.sqrt(max(0.0, eps * (2.0 - eps)))) if k > 0.0 else (0.0, L)
+    zn = mtv(T_g_n1, 0.0, 0.0, 1.0)  # up
+    zb = mtv(R1, zn[0], zn[1], zn[2])
+    zr = mtv(T_b1_r, zb[0], zb[1], zb[2])
     for i in range(3):
-        hang[i], hang[3 + i] = wr[i], dr[i]
+        hang[i], hang[3 + i], hang[7 + i] = wr[i], -depth * zr[i], v_arm[i]
     hang[6] = radius
     return hang

@@ -429,8 +429,8 @@ def winch_guard(x, u, p, dt):
 
     Inputs (wire_ref (L_ref, L̇_ref) of :func:`winch_law`, wire (L, L̇), arm (q, q̇: the joints after their drives'
     step), world (:func:`guard_hazards`'), frames and swing of :func:`swing_hang` (α, β, α̇, β̇, g: the length is
-    the wire's)).  Parameters (cm, radii, the drum's (lower, upper, speed, accel, τ), settings (zone, stop, κ)).
-    The drum would pay out at v = (L_ref − L)/τ + L̇_ref (within its speed).
+    the wire's, the arm's tool velocity the world's)).  Parameters (cm, radii, the drum's (lower, upper, speed,
+    accel, τ), settings (zone, stop, κ)).  The drum would pay out at v = (L_ref − L)/τ + L̇_ref (within its speed).
 
     For the wire's and the load's rows in their zone, with c = ∂d/∂L (over :data:`PAYOUT_STEP` of wire: the wire
     end and the swing's envelope follow it) and the arm's rate r_a = g·q̇ (as its guard left it): where the
@@ -464,7 +464,7 @@ def winch_guard(x, u, p, dt):
         return x, ((ref, ref_v), report)
     alpha, beta, alpha_dot, beta_dot, g = swing
     longer = (world[0], world[1], world[2], world[3],
-              swing_hang(frames, (alpha, beta, alpha_dot, beta_dot, L + PAYOUT_STEP, g)))  # fmt: skip
+              swing_hang(frames, (alpha, beta, alpha_dot, beta_dot, L + PAYOUT_STEP, g), world[4][7:10]))  # fmt: skip
     G2 = np.zeros((ROWS, 3))
     val2 = np.zeros(ROWS)
     guard_hazards(cm, radii, longer, q, G2, val2, kind, cap)

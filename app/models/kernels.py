@@ -69,6 +69,8 @@ KERNEL_FILES = (
     "models/pendulum_kernels.py",
     "control/antisway_kernels.py",
     "control/guard_kernels.py",
+    "control/lab_clearance_kernels.py",
+    "control/predict_kernels.py",
     "scenes/teleop_kernels.py",
     "scenes/lab_transfer_kernels.py",
     "scenes/crane_transfer_kernels.py",
@@ -77,18 +79,27 @@ KERNEL_FILES = (
 
 def clear_stale_caches(root: Path, files: tuple[str, ...] = KERNEL_FILES) -> list[str]:
     """Remove the numba caches (``__pycache__/STEM.*.nbi, *.nbc``) of each of ``files`` (under ``root``,
-    the ``app`` folder) whose imported kernel files (top-level ``from app.X import``) changed since the
-    last check, recorded in a stamp beside the cache; returns the files whose caches were cleared."""
+    the ``app`` folder) whose imported kernel files (top-level ``from app.X import``), or the kernel files those
+    import in turn, changed since the last check, recorded in a stamp beside the cache; returns the files whose
+    caches were cleared."""
     sources = {name: (root / name).read_bytes() for name in files if (root / name).is_file()}
     modules = {"app." + name[:-3].replace("/", "."): name for name in sources}
-    cleared = []
+    direct = {}
     for name, text in sources.items():
-        deps = set()
+        direct[name] = set()
         for mod, names in re.findall(rb"^from (app[\w.]*) import \(?([\w, ]*)", text, re.M):
             named = [n.split()[0] for n in names.decode().split(",") if n.strip()]  # "kernels as k": kernels
             for m in [mod.decode()] + [f"{mod.decode()}.{n}" for n in named]:
                 if m in modules and modules[m] != name:
-                    deps.add(modules[m])
+                    direct[name].add(modules[m])
+    cleared = []
+    for name in sources:
+        deps, todo = set(), list(direct[name])  # what it imports, and what those import (H123: numba inlines them)
+        while todo:
+            dep = todo.pop()
+            if dep not in deps and dep != name:
+                deps.add(dep)
+                todo.extend(direct[dep])
         digest = hashlib.sha256(b"".join(d.encode() + b"\0" + sources[d] + b"\0" for d in sorted(deps))).hexdigest()
         cache = (root / name).parent / "__pycache__"
         stem = Path(name).stem

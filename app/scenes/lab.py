@@ -748,7 +748,8 @@ class MotionLab:
         pd = self.pendulum
         swing = (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, float(self.winch.filter.x[0]), pd.g)
         frames = (self._T_world_n[0], self._geometry[5], self.layout.T_b1_r)
-        return guard_world_reference(self._guard_p, frames, e1, R1, e2, R2, swing)
+        v_arm = self.comau.velocity(self.joints.x, self.joints.v)  # the tool point's, from the joints (eq. 5)
+        return guard_world_reference(self._guard_p, frames, e1, R1, e2, R2, swing, v_arm)
 
     def _update_tool(self) -> None:
         p1 = self.platforms[0]

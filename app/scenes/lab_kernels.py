@@ -37,20 +37,21 @@ import numpy as np
 
 from app.control.lab_kernels import comau_guard, comau_law, swing_hang, winch_guard, winch_law
 from app.models.kernels import _jit
-from app.models.lab_kernels import leg_lengths, mtv, mv, pose_in, stewart_rates, tool_on_platform
+from app.models.lab_kernels import comau_tool, leg_lengths, mtv, mv, pose_in, stewart_rates, tool_on_platform
 from app.sim.kernels import drives_block, drum_block, pendulum_step
 
 __all__ = ["guard_world", "lab_step", "warm_up_steps"]
 
 
 @_jit
-def guard_world(guard_p, frames, cx1, cR1, cx2, cR2, swing):
+def guard_world(guard_p, frames, cx1, cR1, cx2, cR2, swing, v_arm):
     """The Comau's obstacles in its base {r} (:func:`app.control.lab_kernels.guard_hazards`): EM8000's deck and the
     pedestal, fixed there, and EM1500's deck (z = 0 of {b2}, up = −z, a disc) where the controller sees it (eq. 39
     through {n1}, eq. 54 inverted); and the wire from the tool point to the load, eq. (58)'s L·(−sα, −cα sβ,
     −cα cβ) in {g}, and the load's swing envelope (its centre from the tool point, its radius: module text of
     :func:`app.control.lab_kernels.guard_hazards`), turned into {r} the same way.  ``frames`` = (T_g_n1, T_n1_n2,
-    T_b1_r); ``swing`` = (α, β, α̇, β̇, L, g)."""
+    T_b1_r); ``swing`` = (α, β, α̇, β̇, L, g); ``v_arm`` the tool point's velocity from the arm's joints in {r}
+    (the envelope holds the load however the arm stops: :func:`app.control.lab_kernels.swing_hang`)."""
     T_g_n1, T_n1_n2, T_b1_r = frames
     _, deck1, ped, ped_r, deck_r, _ = guard_p
     deck2 = np.empty(7)
@@ -64,7 +65,7 @@ def guard_world(guard_p, frames, cx1, cR1, cx2, cR2, swing):
     for i in range(3):
         deck2[i], deck2[3 + i] = cr[i], nr[i]
     deck2[6] = deck_r[0]
-    return (deck1, ped, ped_r, deck2, swing_hang((T_g_n1, cR1, T_b1_r), swing))
+    return (deck1, ped, ped_r, deck2, swing_hang((T_g_n1, cR1, T_b1_r), swing, v_arm))
 
 
 @_jit
@@ -96,7 +97,8 @@ def lab_step(x, u, p, y, dt):
     view = (cx1, cv1, cR1, cRd1, cx2, cv2, cR2, cRd2)
     _, joint_cmd = comau_law((), (comau_mode, q, v_cmd, offset, view), law_p, dt)
     swing = (load[0], load[1], load[2], load[3], wire[0][0], g)
-    world = guard_world(guard_p, (T_g_n1, T_n1_n2, T_b1_r), cx1, cR1, cx2, cR2, swing)
+    v_arm = comau_tool(cm, q, qd, qdd)[1]  # the tool point's velocity from the joints in {r} (eq. 5)
+    world = guard_world(guard_p, (T_g_n1, T_n1_n2, T_b1_r), cx1, cR1, cx2, cR2, swing, v_arm)
     _, (joint_cmd, report) = comau_guard((), (joint_cmd, q, qd, world), (cm, guard_p[0], joint_p, guard_p[5]), dt)
     for i in range(5):
         hazard[i] = report[i]
