@@ -744,11 +744,10 @@ class MotionLab:
         return self._guard_world(e1, R1, e2, R2)
 
     def _guard_world(self, e1, R1, e2, R2) -> tuple:
-        """The Comau's obstacles in {r} (:func:`app.control.lab.guard_world_reference`)."""
-        pd = self.pendulum
+        """The Comau's obstacles in {r} (:func:`app.control.lab.guard_world_reference`), the arm moving as it is."""
+        pd, v_arm = self.pendulum, self.comau.velocity(self.joints.x, self.joints.v)  # the tool's J q̇ (eq. 5)
         swing = (pd.alpha, pd.beta, pd.alpha_dot, pd.beta_dot, float(self.winch.filter.x[0]), pd.g)
         frames = (self._T_world_n[0], self._geometry[5], self.layout.T_b1_r)
-        v_arm = self.comau.velocity(self.joints.x, self.joints.v)  # the tool point's, from the joints (eq. 5)
         return guard_world_reference(self._guard_p, frames, e1, R1, e2, R2, swing, v_arm)
 
     def _update_tool(self) -> None:
