@@ -635,7 +635,7 @@ def guard_step(robot, chain, model, limits, q, dq, settings, report):
             r += G[i, j] * dq[j]
         if norm2[i] > 0.0 and r < (push[i] if push[i] > 0.0 else bound[i]) - 1e-15:
             due = True
-    tool = settings.shape[0] > 10 and settings[10] > 0.5
+    tool = settings[10] > 0.5
     if due and tool:
         J = jacobian_from_frames(frames(robot, q), chain[0], chain[1])
         _tool_metric(J, G, na, H, hg)

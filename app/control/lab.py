@@ -308,7 +308,7 @@ def _outcome_reference(model, plant, rows, settings, out):
     closing = np.zeros(len(clear), dtype=bool)
     for i in np.flatnonzero(active):
         v, qr, d, g = qd.copy(), q.copy(), float(clear[i]), G[i].copy()
-        lowest = d
+        lowest, floor = d, min(stop - lab_kernels.BRAKE_SLACK, float(clear[i]))
         for k in range(steps):
             v = v + np.clip(out - v, -accel * dt, accel * dt)
             up = np.sqrt(2.0 * limit_brake * np.maximum(upper - qr, 0.0))
@@ -319,12 +319,17 @@ def _outcome_reference(model, plant, rows, settings, out):
                 d, g = float(vr[i]), Gr[i]
             else:
                 d += float(g @ v) * dt
+                if d < floor <= lowest:  # the first order passes the floor: the true clearance there decides
+                    Gr, vr, _, _ = guard_hazards_reference(cm, radii, world, qr)
+                    d, g = float(vr[i]), Gr[i]
             lowest = min(lowest, d)
+            if lowest < floor:
+                break
         now = float(g @ v)
         if now < 0.0:
             Am = kappa * float(np.where(g * v < -_least(now)[0], np.abs(g) * accel, 0.0).sum())
             lowest = min(lowest, d - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
-        closing[i] = lowest < stop - lab_kernels.BRAKE_SLACK and lowest < clear[i]
+        closing[i] = lowest < floor
     return closing
 
 
@@ -415,12 +420,9 @@ def swing_hang_reference(frames, swing, v_arm) -> NDArray[np.float64]:
     sa, ca, sb, cb = math.sin(alpha), math.cos(alpha), math.sin(beta), math.cos(beta)
     to_r = T_b1_r[:3, :3].T @ R1.T @ T_g_n1[:3, :3].T  # {g} axes into {r}
     w = to_r @ np.array([-sa, -ca * sb, -ca * cb])  # the wire's unit vector
-    w_dot = np.array([-ca * alpha_dot, sa * sb * alpha_dot - ca * cb * beta_dot,
-                      sa * cb * alpha_dot + ca * sb * beta_dot])  # fmt: skip
-    u = L * (to_r @ w_dot)  # the load's velocity relative to the tool point
-    u_n = u - (u @ w) * w
+    u = L * math.hypot(alpha_dot, ca * beta_dot)  # |L ẇ|: the load's speed relative to the tool point (⟂ w)
     tilt = 2.0 * (math.sin(0.5 * alpha) ** 2 + ca * math.sin(0.5 * beta) ** 2)  # 1 − cα cβ
-    e = g * L * tilt + 0.5 * float(u_n @ u_n)  # the swing's own energy
+    e = g * L * tilt + 0.5 * u * u  # the swing's own energy
     v = v_arm - (v_arm @ w) * w  # the arm's tool velocity normal to the wire
     e = 0.5 * (math.sqrt(2.0 * e) + float(np.linalg.norm(v))) ** 2  # however the arm stops
     eps = e / (g * L) if L > 0.0 else 0.0  # 1 − cos θ

@@ -289,16 +289,9 @@ def swing_hang(frames, swing, v_arm):
     wn = mtv(T_g_n1, -L * sa, -L * ca * sb, -L * ca * cb)
     wb = mtv(R1, wn[0], wn[1], wn[2])
     wr = mtv(T_b1_r, wb[0], wb[1], wb[2])
-    # u = L ẇ in {r}, and its part normal to the wire (all of it, to rounding)
-    un = mtv(T_g_n1, -L * ca * alpha_dot, L * (sa * sb * alpha_dot - ca * cb * beta_dot),
-             L * (sa * cb * alpha_dot + ca * sb * beta_dot))  # fmt: skip
-    ub = mtv(R1, un[0], un[1], un[2])
-    ur = mtv(T_b1_r, ub[0], ub[1], ub[2])
-    along = (ur[0] * wr[0] + ur[1] * wr[1] + ur[2] * wr[2]) / (L * L) if L > 0.0 else 0.0
-    n0, n1, n2 = ur[0] - along * wr[0], ur[1] - along * wr[1], ur[2] - along * wr[2]
-    # 1 − cα cβ = 2 sin²(α/2) + 2 cα sin²(β/2): without the cancellation near the vertical
+    # 1 − cα cβ = 2 sin²(α/2) + 2 cα sin²(β/2): without the cancellation near the vertical; |u|² = L² |ẇ|²
     tilt = 2.0 * (math.sin(0.5 * alpha) ** 2 + ca * math.sin(0.5 * beta) ** 2)
-    e = g * L * tilt + 0.5 * (n0 * n0 + n1 * n1 + n2 * n2)  # e_r
+    e = g * L * tilt + 0.5 * L * L * (alpha_dot * alpha_dot + ca * ca * beta_dot * beta_dot)  # e_r
     along = (v_arm[0] * wr[0] + v_arm[1] * wr[1] + v_arm[2] * wr[2]) / (L * L) if L > 0.0 else 0.0
     m0, m1, m2 = v_arm[0] - along * wr[0], v_arm[1] - along * wr[1], v_arm[2] - along * wr[2]  # v
     e = 0.5 * (math.sqrt(2.0 * e) + math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)) ** 2

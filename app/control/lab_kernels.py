@@ -141,7 +141,8 @@ CONTRIBUTES = 1e-6  # [m/s]: the least part of a clearance's rate a joint must c
 BRAKE_SLACK = 0.002  # [m]: how far below the stop distance the check lets braking end before it brakes (at the stop,
 #: an opening command's first step may still close by a fraction of a millimetre: that is not worth braking it for)
 ROLLOUT = 400  # steps: the longest the check follows the drives to the command (2 s at the lab's 5 ms)
-RESAMPLE = 20  # steps: the check takes the clearance anew where the arm has got to (0.1 s; first order between)
+RESAMPLE = 20  # steps: the check takes the clearance anew where the arm has got to (0.1 s; first order between,
+#: and anew wherever the first order passes below the floor: a dip the first order makes up is not held for)
 CONTRIBUTES_SHARE = 0.05  # … and the least share of the rate (a joint that barely moves a gap is not braked for it)
 
 
@@ -204,6 +205,10 @@ def _outcome(model, plant, rows, settings, out, closing):
     lowest = clear.copy()
     kt = np.empty(ROWS, np.int64)
     ct = np.empty(ROWS, np.int64)
+    g2, d2 = np.empty((ROWS, 3)), np.empty(ROWS)
+    floor = np.empty(ROWS)  # what a clearance must not pass below: the stop distance (less the slack) and where it is
+    for i in range(m):
+        floor[i] = min(stop - BRAKE_SLACK, clear[i])
     for k in range(steps):
         for j in range(3):  # the drives: toward the command at the acceleration limit, braking at the joint limits
             vj = v[j] + min(max(out[j] - v[j], -accel[j] * dt), accel[j] * dt)
@@ -214,11 +219,23 @@ def _outcome(model, plant, rows, settings, out, closing):
         if k % RESAMPLE == RESAMPLE - 1:  # the clearances and their gradients where the arm has got to
             guard_hazards(cm, radii, world, qr, g, d, kt, ct)
         else:
+            dips = False
             for i in range(m):
                 if active[i]:
                     d[i] += (g[i, 0] * v[0] + g[i, 1] * v[1] + g[i, 2] * v[2]) * dt
+                    dips = dips or (d[i] < floor[i] <= lowest[i])
+            if dips:  # the first order has a clearance pass its floor here: that one taken anew where the arm is
+                guard_hazards(cm, radii, world, qr, g2, d2, kt, ct)
+                for i in range(m):
+                    if active[i] and d[i] < floor[i] <= lowest[i]:
+                        d[i] = d2[i]
+                        g[i, 0], g[i, 1], g[i, 2] = g2[i, 0], g2[i, 1], g2[i, 2]
+        done = True
         for i in range(m):
             lowest[i] = min(lowest[i], d[i])
+            done = done and (not active[i] or lowest[i] < floor[i])
+        if done:
+            break  # every clearance in its zone has passed its floor: the rest of the path changes nothing
     for i in range(m):
         if not active[i]:
             continue  # outside its zone, braking from its approach included
@@ -231,7 +248,7 @@ def _outcome(model, plant, rows, settings, out, closing):
                 if g[i, j] * v[j] < -least:
                     Am += kappa * abs(g[i, j]) * accel[j]
             low = min(low, d[i] - now * now / (2.0 * Am)) if Am > 0.0 else -math.inf
-        closing[i] = low < stop - BRAKE_SLACK and low < clear[i]
+        closing[i] = low < floor[i]
 
 
 @_jit
@@ -263,7 +280,8 @@ def comau_guard(x, u, p, dt):
        others (:func:`_correct`), a few passes over the hazards; where those speeds cannot meet a bound, as near
        as they allow (the drives' hardest braking along g).
     3. The command's outcome is checked, each clearance in its zone (to first order, taken anew every
-       :data:`RESAMPLE` steps where the arm has got to), until the drives have the command and as long again as
+       :data:`RESAMPLE` steps where the arm has got to, and wherever the first order has it pass below what it
+       must not: only the true clearance there counts), until the drives have the command and as long again as
        they would take to stop from it: where the drives, following
        the rate until they have it (each joint's speed changing by a_j dt a step, braking to its limit as the
        drives' velocity bound does: a joint that opens a gap stops at its limit), would pass below the stop
