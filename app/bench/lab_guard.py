@@ -331,6 +331,7 @@ def summarise(runs: list[LabGuardRun]) -> dict:
             "streams_load_model_lost": sum(r.load_model_lost for r in runs),
             # which streams to take apart: the load or the arm past 1 mm; slow opening steps by why
             "seeds_penetrating": [r.seed for r in runs if r.penetration > 1e-3],
+            "seeds_opening_slow_ahead": [r.seed for r in runs if r.opening_slow_ahead],
             "seeds_opening_slow_carried": [r.seed for r in runs if r.opening_slow_carried],
             "seeds_opening_slow_unexplained": [
                 r.seed for r in runs if r.opening_slow > r.opening_slow_ahead + r.opening_slow_carried]}  # fmt: skip
