@@ -307,29 +307,28 @@ def test_random_streams_never_penetrate_and_never_slow_an_opening_command():
     # wire and the load (H117): 0 and 1 (the load the nearest hazard for 1,900 and 1,700 steps), 348 (its swing left
     # its model, H118: the lab stops, nothing turns non-finite).  Since H122's envelope stream 29's arm takes another
     # path, and later, far from every obstacle, the winch hauling the swinging load in on a 0.6 m wire pumps its
-    # swing past its model as in 348: the lab stops there too.  Since the gentler hold (session 36) 348's arm moves
-    # on where it was held, and its load no longer swings past its model
+    # swing past its model as in 348: the lab stops there too
     runs = [run_stream(seed) for seed in (19, 29, 324, 0, 1, 348)]
     assert all(r.slowed > 0 for r in runs)
     assert runs[3].load_near > 1000 and runs[4].load_near > 1000
-    assert [r.load_model_lost for r in runs] == [False, True, False, False, False, False]
+    assert [r.load_model_lost for r in runs] == [False, True, False, False, False, True]
     for r in runs:
         assert r.penetration <= 1e-3 and r.limit_excess <= 1e-9, r
         assert r.min_opening_speed >= 0.9, r
 
 
 def test_the_bench_tells_a_slow_opening_step_whose_drives_would_close_from_one_they_would_not():
-    """``bosun bench guard --scene lab``'s split of the opening steps kept under 90 %: stream 550's (at the load's
-    envelope's stop by the pedestal; the drives, each ramping at its own limit or still carrying the arm's approach,
-    leave the command's direction) would have closed a clearance in the zone with the command as asked, and the
-    bench's path of the drives following the command as asked finds that: it is *ahead*.  Session 32 took these
-    apart by hand; the bench now says it for every step (stream 40 had one until the hold became gentler)."""
-    closing = run_stream(550)
+    """``bosun bench guard --scene lab``'s split of the opening steps kept under 90 %: stream 40's (at the pedestal's
+    and the load's stop; the drives, each ramping at its own limit or still carrying the arm's approach, leave the
+    command's direction) would each have closed a clearance in the zone with the command as asked, and the bench's
+    path of the drives following the command as asked finds that: each is *ahead*.  Session 32 took these apart by
+    hand; the bench now says it for every step."""
+    closing = run_stream(40)
     assert closing.opening_slow > 0 and closing.opening_slow_closing == closing.opening_slow
     assert closing.opening_slow_ahead == closing.opening_slow  # a step that closes is one that closes ahead
 
 
-#: Stream 550's step 1,967 (2026-12-01, the one step of 1,000 streams the bench could not explain): EM1500's deck
+#: Stream 550's slow opening step (2026-12-01, the one of 1,000 streams the bench could not explain): EM1500's deck
 #: (centre, normal, radius) and the hanging load (wire, envelope's centre and radius, the arm's tool velocity) in
 #: {r}; the joints, their rates and the drives' rate asked.  EM8000's deck and the pedestal are the lab's own.
 STREAM_550_DECK2 = [2.7247476519998672, -1.875241022642117, -1.8072419438849185, -0.06870652191159843,
@@ -368,17 +367,6 @@ def test_a_dip_only_the_first_order_makes_does_not_hold_an_opening_command():
         assert not rep[4], kernels
         for a, b in zip(got, asked, strict=True):
             assert np.array_equal(a, b)
-
-
-def test_a_command_the_check_passes_slowed_is_not_stopped():
-    """Stream 40 (2026-12-01): at the pedestal's and the load's stop the outcome check found that the drives, ramping
-    each at its own limit, would take a gap below its floor, and held the joints that close it: an opening command
-    moved 82 % of its step.  The check now first tries the command a quarter, a half and three quarters of the way
-    to that hold; the drives reach few of those rates within a step, so the arm moves as asked, and no clearance
-    passes its floor."""
-    run = run_stream(40)
-    assert run.penetration <= 1e-3 and run.limit_excess <= 1e-9
-    assert run.opening_slow == 0 and run.min_opening_speed >= 0.9, run
 
 
 def test_the_drives_path_as_asked_closes_toward_a_hazard_and_not_away_from_it():

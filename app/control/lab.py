@@ -396,16 +396,7 @@ def _guard_reference(x, u, p, dt):
             else:
                 continue
             slowed[i] = active[i] = True
-    held = np.where(hold, 0.0, np.where(keep, np.clip(qd, lo_v, hi_v), out))
-    if hold.any() or keep.any():  # the gentlest of the kernel's blends that the check passes, else held
-        check_b, model, rows = active & np.isfinite(bound), (cm, radii, world), (G, clear, active)
-        for lam in lab_kernels.BLENDS:
-            trial = held + lam * (out - held)
-            keeps = np.all(G[check_b] @ trial >= bound[check_b] - 1e-15)
-            if keeps and not _outcome_reference(model, plant, rows, (zone, stop, kappa), trial).any():
-                held = trial
-                break
-    out = held
+    out = np.where(hold, 0.0, np.where(keep, np.clip(qd, lo_v, hi_v), out))
     pick = active & (slowed if slowed.any() else True)
     if pick.any():
         left = np.where(pick, (val - stop) / (zone - stop), np.inf)

@@ -176,37 +176,6 @@ def _correct(g, bound, out, lo_v, hi_v):
             return
 
 
-BLENDS = (0.75, 0.5, 0.25)  # the shares of the command kept, over the hold, tried before the hold (:func:`_gentler`)
-
-
-@_jit
-def _gentler(model, checks, bound, held, out):
-    """``out`` moved towards ``held`` (step 3 of :func:`comau_guard`: the joints that close a gap the check acts
-    for at rest, those that open it at their speed) as little as :data:`BLENDS` allows: the first blend, nearest
-    ``out``, that keeps every rate bound of step 2 and whose outcome the check passes; else ``held`` itself."""
-    plant, rows, settings = checks
-    G, _, active, m = rows
-    closing = np.zeros(ROWS, np.bool_)
-    trial = np.empty(3)
-    for lam in BLENDS:
-        for j in range(3):
-            trial[j] = held[j] + lam * (out[j] - held[j])
-        ok = True
-        for i in range(m):
-            if active[i] and bound[i] != -math.inf:
-                ok = ok and G[i, 0] * trial[0] + G[i, 1] * trial[1] + G[i, 2] * trial[2] >= bound[i] - 1e-15
-        if not ok:
-            continue
-        closing[:] = False
-        _outcome(model, plant, rows, settings, trial, closing)
-        for i in range(m):
-            ok = ok and not closing[i]
-        if ok:
-            out[:] = trial
-            return
-    out[:] = held
-
-
 @_jit
 def _outcome(model, plant, rows, settings, out, closing):
     """Step 3 of :func:`comau_guard`: ``closing[i]`` for each hazard in its zone where the drives, following the
@@ -321,10 +290,7 @@ def comau_guard(x, u, p, dt):
        a joint the command already turns back keeps its command), a joint at rest that the command would start
        closing it stays, and the joints that open it keep their speed, as A' assumes (slowing them would close it
        too) — unless they close another gap the check acts for: then they rest (a joint opening a swinging load's
-       envelope must not carry the arm into the deck).  Only as much of that change is made as the check needs: the
-       first of 3/4, 1/2 and 1/4 of the way back from it (:func:`_gentler`) whose outcome the check passes and
-       that keeps every bound of step 2, else all of it.  The drives reach few of those rates within one step, so
-       a command the check passes slowed rather than stopped moves the arm this step as it was asked.
+       envelope must not carry the arm into the deck).
 
     A rate that opens every hazard, with the arm not closing on one too fast, or a BRAKE is returned as it came,
     bit for bit; a slowed one as a pure rate (q_ref = q, q̇_ref = v).
@@ -424,8 +390,7 @@ def comau_guard(x, u, p, dt):
     # 3. the safe-braking check on the command's outcome (the text's third step)
     rows = (G, clear, active, m)
     plant = (q, qd, drives, dt)
-    model_p = (cm, radii, world)
-    _outcome(model_p, plant, rows, settings, out, closing)
+    _outcome((cm, radii, world), plant, rows, settings, out, closing)
     hold = np.zeros(3, np.bool_)  # a joint that closes a gap the check acts for: to rest
     keep = np.zeros(3, np.bool_)  # one that opens one: keeps its speed, unless it closes another
     for i in range(m):
@@ -448,14 +413,11 @@ def comau_guard(x, u, p, dt):
                 continue
             slowed[i] = True
             active[i] = True
-    held = out.copy()
     for j in range(3):
         if hold[j]:
-            held[j] = 0.0
+            out[j] = 0.0
         elif keep[j]:
-            held[j] = min(max(qd[j], lo_v[j]), hi_v[j])
-    if hold[0] or hold[1] or hold[2] or keep[0] or keep[1] or keep[2]:
-        _gentler(model_p, (plant, rows, settings), bound, held, out)
+            out[j] = min(max(qd[j], lo_v[j]), hi_v[j])
     any_slowed = False
     for i in range(m):
         any_slowed = any_slowed or slowed[i]
