@@ -29,6 +29,12 @@ def _lab(**kw) -> MotionLab:
     return lab
 
 
+def _guard_params(lab: MotionLab) -> tuple:
+    """The arm guard's parameters as the lab's step passes them: (cm, radii, the drives' limits, zone/stop/κ)."""
+    settings = np.array([lab.guard.zone, lab.guard.stop, lab.guard.braking])
+    return lab._comau, lab.guard.radii, lab.joints.limits(), settings
+
+
 def _clearances(lab: MotionLab, q) -> np.ndarray:
     return guard_hazards_reference(lab._comau, lab.guard.radii, lab.guard_world(), np.asarray(q, dtype=float))[1]
 
@@ -80,7 +86,7 @@ def test_the_guard_kernel_is_its_reference_and_an_opening_command_passes_bit_for
     lab = _lab()
     f = lab.joints
     world = lab.guard_world()
-    params = (lab._comau, lab.guard.radii, f.limits(), np.array([lab.guard.zone, lab.guard.stop, lab.guard.braking]))
+    params = _guard_params(lab)
     rng = np.random.default_rng(7)
     slowed = passed = 0
     for _ in range(3000):
@@ -356,7 +362,7 @@ def test_a_dip_only_the_first_order_makes_does_not_hold_an_opening_command():
     q, qd, v = (np.array(a) for a in STREAM_550_ARM)
     rate = v / (1.0 + DT / f.tau)  # the law's rate whose drives' rate is v
     asked = (np.bool_(False), q + rate * DT, rate, np.bool_(True), 1.0)
-    params = (lab._comau, lab.guard.radii, f.limits(), np.array([lab.guard.zone, lab.guard.stop, lab.guard.braking]))
+    params = _guard_params(lab)
     clear = _Clearances(lab)
     vals = clear(world, q)
     inzone = vals < lab.guard.zone
@@ -392,7 +398,7 @@ def test_the_drives_path_as_asked_closes_toward_a_hazard_and_not_away_from_it():
         rate = 0.3 * g  # straight away from the nearest hazard: nothing dips
         asked = (np.bool_(False), q + rate * DT, rate, np.bool_(True), 1.0)
         inzone = vals < lab.guard.zone
-        guard_p = (lab._comau, lab._guard_p[0], limits, lab._guard_p[5])
+        guard_p = _guard_params(lab)
         assert not _closes_ahead(clear, world, (q, z3), asked, guard_p, inzone)
         lowest = _path_lowest(clear, world, (q, z3), lambda qq, r=-rate: (np.bool_(False), qq + r * DT, r,
                               np.bool_(True), 1.0), limits, 40)  # fmt: skip
