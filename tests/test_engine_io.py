@@ -144,6 +144,23 @@ def test_bench_loop_runs_the_crane_head_engine_and_times_its_predictors():
     assert cpu["ticks"] == pm["ticks"] and 0.0 < cpu["p50"] <= pm["p50"] + 0.05
     with pytest.raises(ValueError, match="plant must be one of teleop, tac"):
         bench_loop(plant="lab")
+    mt = r["loop"]["machine_ms"]  # the machine's own tail beside them, for work the predictors' length
+    assert mt["steps"] >= 1 and mt["in_rhythm"]["ticks"] == 150 and mt["back_to_back"]["ticks"] == 1000
+
+
+def test_the_loop_benchmark_measures_the_machines_own_tail_for_work_of_the_checks_length():
+    """``machine_ms``: arithmetic alone, sized to the timed work's CPU p50 and run in the loop's rhythm (sleep, spin,
+    run), so that a p99 near the budget can be told from the machine's own.  Ten times the work is several times
+    the steps (figures not asserted: the machine's)."""
+    from app.bench.loop import _arithmetic, _machine_tail
+
+    assert _arithmetic(3) == pytest.approx(((1.0 * 0.9999999 + 1.0) * 0.9999999 + 1.0), rel=1e-15)
+    short, long = _machine_tail(500.0, 0.01, seconds=0.2), _machine_tail(500.0, 0.1, seconds=0.2)
+    assert long["steps"] > 3 * short["steps"] >= 3
+    for r in (short, long):
+        assert r["in_rhythm"]["ticks"] == 100 and r["back_to_back"]["ticks"] == 1000
+        for part in ("in_rhythm", "back_to_back"):
+            assert 0.0 < r[part]["p50"] <= r[part]["p99"] <= r[part]["max"]
 
 
 def test_the_loop_benchmark_times_the_hazard_checks_by_the_clock_and_by_the_threads_cpu():

@@ -19,6 +19,13 @@ The teleop engine's direction-aware scaling and safe-braking rule (issue 32, ite
 Both are timed by the clock and, as ``cpu`` (the same percentiles), by the loop thread's CPU time: a tick the
 machine took the core from (another process, or on a VM its host: this VM's kernel accounts the host's steal) is
 slow by the clock but costs no more CPU, so the two tell the checks' own cost from the machine's.
+
+``machine_ms`` is the machine's own tail, measured in the engine's process right after its loop: a compiled loop of
+arithmetic on one register (no memory traffic, a few instructions of code), sized to the timed work's CPU p50, then
+run in the loop's rhythm (the rest of the period asleep, :data:`~app.engine.server.SPIN` spinning, then the kernel)
+and timed by CPU time.  Its p99 is what the machine makes of work that size: on the project's VM a 16 µs kernel had
+p99 48–74 µs in that rhythm and 18 µs back to back (2026-12-01), so a p99 within a few tens of µs of a budget is the
+machine's to decide.
 """
 
 from __future__ import annotations
@@ -91,6 +98,48 @@ def _timed_guard(session, cost: dict[str, list[float]]) -> None:
     session._guarded, session.tick = _timed(guarded, cost["guard"], cost["guard_cpu"]), ticked
 
 
+def _arithmetic(n: int) -> float:
+    """``n`` steps of x ← 0.9999999 x + 1 on one register (compiled on first use: :func:`_machine_tail`)."""
+    x = 0.0
+    for _ in range(n):
+        x = x * 0.9999999 + 1.0
+    return x
+
+
+def _machine_tail(rate: float, work_ms: float, seconds: float = 3.0) -> dict:
+    """The machine's own tail for work of ``work_ms`` (module text, ``machine_ms``): the arithmetic kernel sized to
+    take that long back to back, then timed by CPU time for ``seconds`` in the loop's rhythm at ``rate``."""
+    import numba
+
+    from app.engine.server import SPIN
+
+    kernel = numba.njit(cache=False)(_arithmetic)
+    kernel(1)
+    n = 64
+
+    def cpu(k: int, runs: int, idle: float = 0.0) -> np.ndarray:
+        out = np.empty(runs)
+        for i in range(runs):
+            if idle > 0.0:
+                time.sleep(idle)
+                until = time.perf_counter() + SPIN
+                while time.perf_counter() < until:
+                    pass
+            c = time.thread_time()
+            kernel(k)
+            out[i] = time.thread_time() - c
+        return out * 1e3
+
+    while float(np.median(cpu(n, 50))) < work_ms and n < 1 << 30:
+        n *= 2
+    n = max(1, round(n * work_ms / float(np.median(cpu(n, 50)))))
+    back = cpu(n, 1000)
+    period = 1.0 / rate
+    idle = max(period - float(np.median(back)) * 1e-3 - SPIN, 0.0)
+    rhythm = cpu(n, max(100, round(seconds / period)), idle)
+    return {"steps": n, "back_to_back": _percentiles(back), "in_rhythm": _percentiles(rhythm)}
+
+
 def _percentiles(ms: np.ndarray) -> dict:
     return {"p50": float(np.percentile(ms, 50)), "p99": float(np.percentile(ms, 99)), "max": float(ms.max()),
             "ticks": int(ms.size)}  # fmt: skip
@@ -154,6 +203,9 @@ def _engine_process(
         summary["guard_ms"] = _percentiles(np.array(cost["guard"][1:]) * 1e3)
         summary["guard_ms"]["in_zone"] = float(np.mean(cost["zone"][1:]))  # the share of ticks with a hazard near
         summary["guard_ms"]["cpu"] = _percentiles(np.array(cost["guard_cpu"][1:]) * 1e3)
+    timed = summary.get("guard_ms", summary.get("predictor_ms"))
+    if timed is not None:
+        summary["machine_ms"] = _machine_tail(rate, timed["cpu"]["p50"])
     results.put(summary)
 
 
@@ -217,15 +269,15 @@ def bench_loop(
         url = urls.get(timeout=120)
         viewer = Client(url, role="viewer", name="bench-viewer")
         operator = Client(url, role="operator", name="bench-input")
-        states, stopped = 0, []
+        received: list[float] = []  # each state's arrival (monotonic): those of the stick's window are counted
+        stopped: list[float] = []
         stop = threading.Event()
 
         def watch() -> None:
-            nonlocal states
             while not stop.is_set():
                 st = viewer.recv_state(0.2)
                 if st is not None:
-                    states += 1
+                    received.append(time.monotonic())
                     if st.estop and hasattr(st, "qdot"):  # the teleop engine's joints (the crane's: not here)
                         stopped.append(float(np.max(np.abs(st.qdot))))
 
@@ -257,6 +309,7 @@ def bench_loop(
         time.sleep(0.3)
         stop.set()
         watcher.join(timeout=2)
+        states = sum(t0 <= t < t0 + elapsed for t in received)  # not those before the stick or after it
         viewer.close()
         operator.close()
         loop = results.get(timeout=60)
