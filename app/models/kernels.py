@@ -222,17 +222,25 @@ def frames(robot, q):
     """World poses of frame 0, every DH frame and the tool: (L + 2, 4, 4).  ``robot``: the chain record."""
     theta0, d0, a, ca, sa, M_theta, M_d, T_base, T_tool = _chain(robot)
     L = theta0.shape[0]
-    theta = theta0 + M_theta @ q
-    d = d0 + M_d @ q
+    n = q.shape[0]
     F = np.empty((L + 2, 4, 4))
     F[0] = T_base
     A = np.zeros((4, 4))
     A[3, 3] = 1.0
     for i in range(L):
-        ct, st = math.cos(theta[i]), math.sin(theta[i])
+        # θ₀ + M_θ q and d₀ + M_d q, link by link: no library call (BLAS gemv) and no arrays.  The same numbers as
+        # ``@`` where each link's variable takes at most two joints at ±1 (every robot of the library); a coupling
+        # with other factors may round in the last bit otherwise
+        th, dd = 0.0, 0.0
+        for j in range(n):
+            th += M_theta[i, j] * q[j]
+            dd += M_d[i, j] * q[j]
+        th += theta0[i]
+        dd += d0[i]
+        ct, st = math.cos(th), math.sin(th)
         A[0, 0], A[0, 1], A[0, 2], A[0, 3] = ct, -st * ca[i], st * sa[i], a[i] * ct
         A[1, 0], A[1, 1], A[1, 2], A[1, 3] = st, ct * ca[i], -ct * sa[i], a[i] * st
-        A[2, 0], A[2, 1], A[2, 2], A[2, 3] = 0.0, sa[i], ca[i], d[i]
+        A[2, 0], A[2, 1], A[2, 2], A[2, 3] = 0.0, sa[i], ca[i], dd
         _matmul4_into(F[i], A, F[i + 1])  # the numbers of F[i] @ A, without its library call and allocation
     _matmul4_into(F[L], T_tool, F[L + 1])
     return F
@@ -243,20 +251,29 @@ def jacobian_from_frames(F, M_theta, M_d):
     """Geometric Jacobian (6, n) of the tool point in the world frame from :func:`frames`."""
     L = F.shape[0] - 2
     n = M_theta.shape[1]
-    o_tool = F[L + 1, :3, 3]
-    J_theta = np.empty((6, L))
-    J_d = np.zeros((6, L))
-    for i in range(L):
-        z = F[i, :3, 2]
-        r = o_tool - F[i, :3, 3]
-        J_theta[0, i] = z[1] * r[2] - z[2] * r[1]
-        J_theta[1, i] = z[2] * r[0] - z[0] * r[2]
-        J_theta[2, i] = z[0] * r[1] - z[1] * r[0]
-        J_theta[3:, i] = z
-        J_d[:3, i] = z
+    ox, oy, oz = F[L + 1, 0, 3], F[L + 1, 1, 3], F[L + 1, 2, 3]
     J = np.zeros((6, n))
-    J += J_theta @ M_theta
-    J += J_d @ M_d
+    # each link's columns (z × r, z) for θ and (z, 0) for d, added to its joints' through M_θ and M_d: the numbers of
+    # J_θ M_θ + J_d M_d without the two library calls (BLAS gemm) and their arrays, exactly where a joint moves at
+    # most two link variables at ±1 (every robot of the library)
+    for i in range(L):
+        zx, zy, zz = F[i, 0, 2], F[i, 1, 2], F[i, 2, 2]
+        rx, ry, rz = ox - F[i, 0, 3], oy - F[i, 1, 3], oz - F[i, 2, 3]
+        cx, cy, cz = zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx
+        for j in range(n):
+            mt = M_theta[i, j]
+            if mt != 0.0:
+                J[0, j] += cx * mt
+                J[1, j] += cy * mt
+                J[2, j] += cz * mt
+                J[3, j] += zx * mt
+                J[4, j] += zy * mt
+                J[5, j] += zz * mt
+            md = M_d[i, j]
+            if md != 0.0:
+                J[0, j] += zx * md
+                J[1, j] += zy * md
+                J[2, j] += zz * md
     return J
 
 
