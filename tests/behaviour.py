@@ -65,6 +65,11 @@ bench hold``, safety H114).  Every array up to the first position-mode stick tic
 Session 33 (2026-11-30, safety H121): a velocity command's step is now corrected in the tool's metric; the
 position mode's walk keeps the joints' (as before).  ``engine_teleop``'s guard acts only in position mode, so it
 gives the record of session 27 bit for bit (checked array by array).
+Session 37 (2026-12-01, safety H124): with no command (released, centred, E-STOP) the teleop engine's hazard report
+names the hazard nearest its stop where the joints are, where it was empty before, so ``engine_teleop``'s
+``snap.hazard.value`` and ``snap.hazard.share`` hold 73 samples instead of 53; only those two arrays were replaced
+in the file.  Every other array of every case is the code's before the change byte for byte (1,034 arrays run
+with and without it and compared).
 
 The cases are the commands' own computations, shortened to keep the suite fast (the commands' defaults
 run 300–600 s; every case here passes through the start-up, the ramp and the steady state):

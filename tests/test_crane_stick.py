@@ -93,3 +93,22 @@ def test_the_target_stops_at_the_modes_range_with_its_alarm_and_survives_a_sea_c
     held = np.array(ses.sim.p_d_n)
     ses.set_sea("jonswap", 1.0, 8.0, 90.0)  # a new sea continues the run: the operator's target stays
     np.testing.assert_array_equal(ses.sim.p_d_n, held)
+
+
+def test_h124_at_rest_the_hazard_line_still_names_the_range_edge_the_target_stands_near():
+    """H124 in the crane head: the hazard was the stick's last command's, emptied whenever it rested, so a target
+    held 2 cm from its range's edge read "none near".  At rest (centred, released, E-STOP) it names that edge, not
+    slowing; away from every edge, nothing."""
+    ses = session("tac", hs=0.5)
+    assert ses.snapshot().hazard.kind == ""  # the target at the range's centre
+    t = arm(ses, run(ses, 0.5))
+    t = run(ses, 4.0, stick(x=1.0), t)  # up to the edge of x (test above)
+    assert ses.snapshot().hazard.slowed
+    gap = ses.target_range["tac"][0] - (ses.sim.p_d_n[0] - ses.sim.p_d_n0[0])
+    for rest in ("centred", "E-STOP"):
+        if rest == "E-STOP":
+            ses.estop()
+        t = run(ses, 0.5, stick(), t)
+        hz = ses.snapshot().hazard
+        assert (hz.kind, hz.name, hz.slowed) == ("workspace", "tac range x", False), rest
+        assert hz.value == pytest.approx(gap, abs=1e-9) and hz.text == f"tac range x: {gap:.2f} m to its edge", rest

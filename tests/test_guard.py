@@ -475,3 +475,38 @@ def test_pushed_straight_down_onto_the_floor_the_tool_stops_and_does_not_slide_a
     assert asked > 0.3, asked  # the floor slowed it for most of the way
     assert across < share * asked, (across, asked)
     assert ses.guard.min_clearance(ses.actuators.q) >= 0.0
+
+
+def test_h124_the_hazard_line_names_what_is_near_when_nobody_drives():
+    """H124: the teleop engine's hazard report was what the guard did to the last step, and empty whenever the arm
+    held: with the Panda's tool driven 5 mm over the floor and the deadman released (or the stick centred, or an
+    E-STOP), the *hazard* line read "none near".  Now, with no command, it names the hazard nearest its stop where
+    the joints are, with its clearance, not slowing."""
+    ses = Session(robot_name="franka_panda", solver_name="jacobian", mode="velocity")
+    t, dt = 0.0, 0.002
+
+    def run(stick, enable: bool, seconds: float) -> None:
+        nonlocal t
+        for _ in range(round(seconds / dt)):
+            t += dt
+            ses.feed(InputSample(stick, (enable,), "test"), t)
+            ses.tick(t, dt)
+
+    run((0.0, 0.0, 0.0), False, 0.05)
+    run((0.0, 0.0, 0.0), True, 0.05)  # armed: enable pressed with the stick centred
+    run((0.0, 0.0, -1.0), True, 8.0)  # straight down onto the floor
+    assert ses.hazard.name == "tool ↔ floor" and ses.hazard.slowed
+    for stick, enable, then in (
+        ((0.0, 0.0, 0.0), True, "centred"),
+        ((0.0, 0.0, 0.0), False, "released"),
+        (None, False, "E-STOP"),
+    ):
+        if stick is None:
+            ses.estop("test")
+            stick = (0.0, 0.0, 0.0)
+        run(stick, enable, 0.5)
+        floor = ses.guard.values(ses.actuators.q)[-len(ses.guard.plane_caps) :].min()
+        hz = ses.hazard
+        assert (hz.kind, hz.name, hz.slowed) == ("collision", "tool ↔ floor", False), then
+        assert 0.0 < hz.value < 0.02 and hz.value == pytest.approx(floor, abs=1e-12), then
+        assert ses.snapshot().hazard.text == f"tool ↔ floor: clearance {hz.value * 1e3:.0f} mm", then

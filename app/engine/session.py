@@ -156,7 +156,7 @@ class Session(Scene):
         guard = HazardGuard.for_robot(robot)
         # everything built: now switch (a failure above leaves the old robot in place)
         self.robot, self.solver, self.actuators, self.box, self.guard = robot, solver, act, box, guard
-        self.hazard = GuardReport()
+        self.hazard = self._hazard_at_rest()
         self.robot_name, self.solver_name = robot.name, solver_name
         self.q_ref = act.q.copy()
         self.q_goal = self.q_ref.copy()  # position mode: the solver's answer the reference walks to
@@ -376,8 +376,14 @@ class Session(Scene):
         accelerate) moves the machine on after the operator stopped commanding."""
         self.q_ref = self.actuators.stopping_point(dt)
         self.q_goal = self.q_ref.copy()
-        self.hazard = GuardReport()
+        self.hazard = self._hazard_at_rest()
         self._brake_ref = None
+
+    def _hazard_at_rest(self) -> GuardReport:
+        """The hazard nearest its stop among those in their zones where the joints are, with no command: what the
+        *hazard* line says while nobody drives (H124: it said "none near" with the Panda's tool 5 mm over the
+        floor once the deadman was released, the screen contradicting the machine)."""
+        return self.guard.step(self.actuators.q, np.zeros_like(self.actuators.q))[1]
 
     def _guarded(self, dq: np.ndarray) -> None:
         """Move the reference by the joint step ``dq``, scaled along the directions that bring a hazard nearer, and
@@ -479,6 +485,8 @@ class Session(Scene):
                 res = None  # centred stick: brake to the nearest stop and hold there
                 if self.command_point is not None:
                     self._hold(dt)
+                else:
+                    self.hazard = self._hazard_at_rest()
                 self.command_point = None
                 self.target = self.robot.position(self.q_ref)
         if res is not None:

@@ -157,7 +157,7 @@ class TacSession(Scene):
             "cooperative": TARGET_RANGE_COOPERATIVE,
         }
         self.target_limited = False
-        self.hazard = HazardState()  # the nearest hazard the stick's last command was scaled for (issue 32, item 5)
+        self.hazard = HazardState()  # the range edge nearest the target: scaled for a command, or at rest (H124)
         hull = self.system.workspace.hull
         self._hull = {
             "points": np.round(hull.points[hull.vertices], 4).tolist(),
@@ -648,7 +648,7 @@ class TacSession(Scene):
         there on top of the compensation.  Only when armed and enabled (deadman, fresh), never frozen or in
         ``off``; the target's offset stays within the mode's range (:meth:`TacSimulator.move_target`)."""
         self.target_limited = False
-        self.hazard = HazardState()
+        self.hazard = self._range_hazard(None)  # where the target stands; a command's own replaces it (_scaled)
         # the winch: heave compensation while the head compensates; the stick's w pays out (positive) or hauls in
         drive = not frozen and inp.enabled and not self.estop_latched
         self.load.ahc, self.load.stopped = self.mode != "off" and not frozen, self.estop_latched
@@ -682,14 +682,27 @@ class TacSession(Scene):
         # at its range: an axis asked outward keeps under a fifth of its step (within 8 cm of the head's edge)
         held = np.abs(out) < LIMITED_SHARE * np.abs(dp)
         self.target_limited = self.target_limited or bool(np.any(held))
-        if axis >= 0:
-            slowed = bool(np.any(np.abs(out) < np.abs(dp) - 1e-15))
-            name = f"{self.mode} range {'xyz'[axis]}"
-            self.hazard = HazardState(
-                kind="workspace", name=name, value=gap, share=gap / (0.25 * float(limit[axis])), slowed=slowed,
-                text=f"{name}: {gap:.2f} m to its edge",
-            )  # fmt: skip
+        self.hazard = self._range_hazard((axis, gap, bool(np.any(np.abs(out) < np.abs(dp) - 1e-15))))
         return out
+
+    def _range_hazard(self, scaled: tuple[int, float, bool] | None) -> HazardState:
+        """The edge of the mode's range nearest the TCP's target, if in its zone (the outer quarter): ``scaled`` the
+        stick's step's (axis, gap [m], slowed), or None where nothing is commanded — then the edge the target
+        stands nearest, not slowing (H124: the line said "none near" at rest, whatever the target's offset)."""
+        if self.mode not in self.target_range:
+            return HazardState()
+        limit = self.target_range[self.mode]
+        if scaled is None:
+            _, axis, gap = scale_in_box(np.zeros(3), self.sim.p_d_n - self.sim.p_d_n0, limit)
+            scaled = (axis, gap, False)
+        axis, gap, slowed = scaled
+        if axis < 0:
+            return HazardState()
+        name = f"{self.mode} range {'xyz'[axis]}"
+        return HazardState(
+            kind="workspace", name=name, value=gap, share=gap / (0.25 * float(limit[axis])), slowed=slowed,
+            text=f"{name}: {gap:.2f} m to its edge",
+        )  # fmt: skip
 
     def _load_state(self) -> CraneLoadState:
         ld = self.load
